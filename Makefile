@@ -1,0 +1,52 @@
+# The two commands of the README: `make demo` and `make test` set everything up themselves.
+# Both are idempotent: the venv is built once and reinstalled only when pyproject.toml changes.
+
+PYTHON ?= python3
+VENV   ?= .venv
+BIN     = $(VENV)/bin
+PIP     = $(BIN)/python -m pip
+# pytest workers: the notebook and grading tests are independent and slow; use both cores
+JOBS   ?= 2
+
+.PHONY: demo test lab data release lint clean help
+
+help:
+	@echo "make demo     set up .venv and run the demo on the bundled hall bag (out/demo.rrd, out/demo.png)"
+	@echo "make test     set up .venv with the dev tools and run every test"
+	@echo "make lab      open JupyterLab on the course notebooks"
+	@echo "make data     regenerate the bundled recordings in data/ (bit-for-bit identical)"
+	@echo "make release  regenerate the student copies of the exercises (exercises/release/)"
+	@echo "make lint     ruff"
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(PIP) install --quiet --upgrade pip
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(PIP) install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
+	$(PIP) install --quiet -e ".[dev]"
+	touch $@ $(VENV)/.installed
+
+demo: $(VENV)/.installed
+	$(BIN)/labkit demo data/hall.bag -o out
+
+test: $(VENV)/.installed-dev
+	$(BIN)/python -m pytest -n $(JOBS)
+
+lab: $(VENV)/.installed
+	$(BIN)/jupyter lab --notebook-dir=. notebooks/00_tour.ipynb
+
+data: $(VENV)/.installed
+	$(BIN)/labkit simulate --bundled -o data
+
+release: $(VENV)/.installed
+	cd exercises && ../$(BIN)/nbgrader generate_assignment --all --force --CourseDirectory.root=.
+
+lint: $(VENV)/.installed-dev
+	$(BIN)/ruff check labkit tests benchmarks
+
+clean:
+	rm -rf out .pytest_cache

@@ -1,0 +1,238 @@
+"""Reading and writing scans: ROS1/ROS2/MCAP bags, CARMEN logs, JSON.
+
+One entry point reads them all::
+
+    for scan in labkit.read_scans("data/hall.bag"):
+        ...
+
+The format is told from the path (see :func:`detect_format`). A damaged file yields every
+scan that could be read and then raises :class:`CorruptFileError` naming the file and
+where it broke.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+from ..scan import Scan
+from . import bags
+from .bags import write_bag
+from .carmen import LASER_MESSAGES, carmen_message_types, read_carmen
+from .errors import CorruptFileError
+from .jsonscan import read_json_lines, read_json_scan, write_json_lines, write_json_scan
+
+__all__ = [
+    "FORMATS",
+    "CorruptFileError",
+    "ScanStream",
+    "detect_format",
+    "read_scans",
+    "write_scans",
+    "write_bag",
+    "read_carmen",
+    "read_json_scan",
+    "read_json_lines",
+    "write_json_scan",
+    "write_json_lines",
+    "convert",
+]
+
+#: What each format name means.
+FORMATS = {
+    "ros1": "ROS1 bag (.bag)",
+    "ros2": "ROS2 bag folder with sqlite3 storage (metadata.yaml + .db3)",
+    "mcap": "MCAP file (.mcap) or ROS2 bag folder with MCAP storage",
+    "carmen": "CARMEN log (.log, .clf, optionally .gz)",
+    "json": "one scan as JSON {ranges, bearings} (.json)",
+    "jsonl": "scans as JSON lines, one per line (.jsonl)",
+}
+
+
+def _supported() -> str:
+    return "; ".join(f"{k}: {v}" for k, v in FORMATS.items())
+
+
+def detect_format(path: str | Path) -> str:
+    """Tell a file's format from its name (and, for folders, their contents).
+
+    Returns one of the keys of :data:`FORMATS`; raises ``ValueError`` listing the
+    supported formats for anything else, and ``FileNotFoundError`` for a missing path.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"{p} does not exist")
+    name = p.name.lower()
+    if p.is_dir():
+        meta = p / "metadata.yaml"
+        if meta.exists():
+            return "mcap" if "storage_identifier: mcap" in meta.read_text(errors="replace") else "ros2"
+        if any(p.glob("*.mcap")):
+            return "mcap"
+        if any(p.glob("*.db3")):
+            return "ros2"
+        raise ValueError(f"{p} is a folder but not a ROS2 bag (no metadata.yaml, .db3 or .mcap); "
+                         f"supported formats: {_supported()}")
+    for suffixes, fmt in [
+        ((".bag",), "ros1"),
+        ((".mcap",), "mcap"),
+        ((".log", ".log.gz", ".clf", ".clf.gz"), "carmen"),
+        ((".jsonl",), "jsonl"),
+        ((".json",), "json"),
+    ]:
+        if name.endswith(suffixes):
+            return fmt
+    if name.endswith(".db3"):
+        raise ValueError(f"{p} is an sqlite3 bag file: pass its folder ({p.parent}) instead")
+    raise ValueError(f"cannot tell the format of {p}; supported formats: {_supported()}")
+
+
+class ScanStream:
+    """The scans of one file, ready to iterate (see :func:`read_scans`).
+
+    Attributes
+    ----------
+    path : Path
+    format : str
+        One of :data:`FORMATS`.
+    topic : str or None
+        The LaserScan topic being read (bags) or the CARMEN message type.
+    count : int or None
+        How many scans the file says it holds (for progress bars), when known up front.
+    readable : bool
+        False when the file is damaged and is being read sequentially.
+    """
+
+    def __init__(self, path: Path, fmt: str, topic: str | None, count: int | None, readable: bool) -> None:
+        self.path, self.format, self.topic, self.count, self.readable = path, fmt, topic, count, readable
+
+    def __iter__(self) -> Iterator[Scan]:
+        if self.format in bags.BAG_FORMATS:
+            return bags.iter_bag(self.path, self.format, self.topic, self.readable)
+        if self.format == "carmen":
+            return read_carmen(self.path, self.topic)
+        if self.format == "json":
+            return iter([read_json_scan(self.path)])
+        return read_json_lines(self.path)
+
+    def __len__(self) -> int:
+        if self.count is None:
+            raise TypeError("this file does not say how many scans it holds")
+        return self.count
+
+    def __repr__(self) -> str:
+        return (f"ScanStream({str(self.path)!r}, format={self.format!r}, topic={self.topic!r}, "
+                f"count={self.count})")
+
+
+def read_scans(path: str | Path, topic: str | None = None) -> ScanStream:
+    """Open any supported file and return its scans as an iterable :class:`ScanStream`.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ROS1 ``.bag``, a ROS2 bag folder (sqlite3 or MCAP storage), an ``.mcap`` file,
+        a CARMEN log, a ``.json`` scan or a ``.jsonl`` file of scans.
+    topic : str, optional
+        For bags, the ``sensor_msgs/LaserScan`` topic; by default the only one. For
+        CARMEN logs, the laser message type (``"FLASER"``, ``"ROBOTLASER1"``...).
+
+    Raises
+    ------
+    ValueError
+        Unknown format (the message lists the supported ones); no LaserScan topic (it
+        lists the bag's topics); several LaserScan topics and no ``topic`` (it lists them).
+    CorruptFileError
+        While iterating, after the last scan that could be read from a damaged file.
+
+    Examples
+    --------
+    >>> from labkit import read_scans, bundled_data
+    >>> scans = read_scans(bundled_data("hall.bag"))
+    >>> scans.count, next(iter(scans)).n_beams
+    (600, 361)
+    """
+    p = Path(path)
+    fmt = detect_format(p)
+    if fmt in bags.BAG_FORMATS:
+        topics, readable = bags.list_topics(p, fmt)
+        chosen = bags.resolve_topic(p, topics, topic)
+        count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
+        return ScanStream(p, fmt, chosen, count, readable)
+    if fmt == "carmen":
+        if topic is not None and topic not in LASER_MESSAGES:
+            raise ValueError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}")
+        counts = carmen_message_types(p)
+        if topic is None:
+            topic = next((k for k in ("FLASER", "ROBOTLASER1", "RAWLASER1") if k in counts),
+                         min(counts) if counts else None)
+        if topic is None:
+            raise ValueError(f"{p} has no laser messages ({', '.join(LASER_MESSAGES)})")
+        if topic not in counts:
+            found = ", ".join(f"{k} ({v})" for k, v in sorted(counts.items()))
+            raise ValueError(f"{p} has no {topic} messages; laser messages found: {found}")
+        return ScanStream(p, fmt, topic, counts[topic], True)
+    if topic is not None:
+        raise ValueError(f"topic does not apply to {FORMATS[fmt]} files")
+    if fmt == "json":
+        return ScanStream(p, fmt, None, 1, True)
+    return ScanStream(p, fmt, None, None, True)
+
+
+def write_scans(
+    scans: Iterable[Scan], path: str | Path, format: str | None = None, *, topic: str = "/scan",
+    overwrite: bool = False,
+) -> int:
+    """Write scans to any writable format (bags, ``.jsonl``, a single-scan ``.json``).
+
+    Returns the number written. Bags: see :func:`write_bag`. CARMEN logs are read-only.
+    """
+    p = Path(path)
+    fmt = format or _format_for_output(p)
+    if fmt in bags.BAG_FORMATS:
+        return write_bag(scans, p, fmt, topic=topic, overwrite=overwrite)
+    if p.exists() and not overwrite:
+        raise ValueError(f"{p} exists; pass overwrite=True to replace it")
+    if fmt == "jsonl":
+        return write_json_lines(scans, p)
+    if fmt == "json":
+        items = list(scans)
+        if len(items) != 1:
+            raise ValueError(f"a .json file holds exactly one scan, got {len(items)}; use .jsonl")
+        write_json_scan(items[0], p)
+        return 1
+    raise ValueError(f"cannot write {fmt!r}; writable formats: ros1, ros2, mcap, jsonl, json")
+
+
+def _format_for_output(p: Path) -> str:
+    name = p.name.lower()
+    if name.endswith(".bag"):
+        return "ros1"
+    if name.endswith(".mcap"):
+        return "mcap"
+    if name.endswith(".jsonl"):
+        return "jsonl"
+    if name.endswith(".json"):
+        return "json"
+    if name.endswith((".log", ".log.gz", ".clf", ".clf.gz")):
+        raise ValueError("labkit reads CARMEN logs but does not write them")
+    if p.suffix == "":
+        return "ros2"
+    raise ValueError(f"cannot tell the output format of {p}; use .bag, .mcap, .jsonl, .json or a folder name"
+                     " (ROS2 bag)")
+
+
+def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
+            overwrite: bool = False, progress: bool = False) -> int:
+    """Copy the scans of ``src`` into ``dst`` (formats from the names); return the count.
+
+    A damaged ``src`` still produces a complete ``dst`` holding every readable scan,
+    then the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar.
+    """
+    stream = read_scans(src, topic=topic)
+    scans: Iterable[Scan] = stream
+    if progress:
+        from tqdm.auto import tqdm
+
+        scans = tqdm(stream, total=stream.count, unit="scan", desc=f"convert {Path(src).name}")
+    return write_scans(scans, dst, format, overwrite=overwrite)

@@ -1,0 +1,118 @@
+"""matplotlib figures of scans, segments and ground truth.
+
+Every function draws into an ``Axes`` (made for you when ``ax`` is None) and returns it,
+so figures compose. Coordinates are the sensor frame: x to the right, y up, metres.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.patches import Circle as CirclePatch
+
+from ..geometry import arc_points
+from ..scan import Scan
+from .style import label_colors, mpl
+
+__all__ = ["plot_scan", "plot_ranges", "plot_truth", "scan_figure"]
+
+
+def _axes(ax):
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 6))
+    return ax
+
+
+def plot_scan(
+    scan: Scan,
+    ax=None,
+    *,
+    labels=None,
+    show_invalid: bool = True,
+    point_size: float = 9.0,
+    title: str | None = None,
+):
+    """Draw a scan's valid points (coloured by ``labels`` when given), the sensor, and
+    faint rays for beams without a valid return.
+
+    ``labels`` is per beam, shape (N,), as returned by :func:`labkit.segmentation.segment_labels`.
+    """
+    ax = _axes(ax)
+    if show_invalid and (~scan.valid).any():
+        a = scan.angles[~scan.valid]
+        reach = 0.5 * float(np.nanmax(np.abs(scan.xy))) if len(scan.xy) else 1.0
+        segs = [[(0, 0), (reach * np.cos(t), reach * np.sin(t))] for t in a]
+        ax.add_collection(LineCollection(segs, colors=[mpl("invalid")], linewidths=0.4, alpha=0.5,
+                                         label=f"invalid beams ({len(a)})", zorder=1))
+    if labels is not None:
+        labels = np.asarray(labels)
+        if labels.shape != (scan.n_beams,):
+            raise ValueError(f"labels must have shape ({scan.n_beams},), got {labels.shape}")
+        colors = label_colors(labels[scan.valid_indices]) / 255
+    else:
+        colors = [mpl("points")]
+    ax.scatter(scan.xy[:, 0], scan.xy[:, 1], s=point_size, c=colors, label=f"valid beams ({len(scan.xy)})",
+               zorder=3, linewidths=0)
+    ax.plot([0], [0], marker=(3, 0, -90), color=mpl("sensor"), markersize=12, linestyle="none", zorder=4,
+            label="sensor")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_ranges(scan: Scan, ax=None, *, title: str | None = None):
+    """Range against beam angle: the scan as the sensor reports it, invalid beams marked."""
+    ax = _axes(ax)
+    deg = np.degrees(scan.angles)
+    ok = scan.valid
+    ax.plot(deg[ok], scan.ranges[ok], ".", ms=3, color=mpl("points"), label="valid")
+    bad = ~ok
+    if bad.any():
+        shown = np.where(np.isfinite(scan.ranges[bad]), scan.ranges[bad], 0.0)
+        ax.plot(deg[bad], shown, "x", ms=4, color=mpl("sensor"), label="invalid (NaN drawn at 0)")
+    top = float(np.max(scan.ranges[ok])) if ok.any() else 0.0
+    if np.isfinite(scan.range_max) and scan.range_max < 1.5 * top:
+        ax.axhline(scan.range_max, color=mpl("invalid"), lw=0.8, ls="--", label="range_max")
+    ax.set_xlabel("beam angle (deg)")
+    ax.set_ylabel("range (m)")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_truth(truth, ax=None):
+    """Overlay simulator ground truth (:class:`labkit.sim.ScanTruth`): walls as lines,
+    circles and arcs in green, legs in purple."""
+    ax = _axes(ax)
+    for k, w in enumerate(truth.walls):
+        ax.plot(*np.array([w.start, w.end]).T, "-", color=mpl("truth"), lw=1.2, alpha=0.7,
+                label="true walls" if k == 0 else None, zorder=2)
+    for k, c in enumerate(truth.circles):
+        ax.add_patch(CirclePatch(c.center, c.radius, fill=False, color=mpl("circles"), lw=1.2,
+                                 label="true circles" if k == 0 else None))
+    for k, a in enumerate(truth.arcs):
+        ax.plot(*arc_points(a.center, a.radius, a.start, a.end).T, "-", color=mpl("circles"), lw=1.5,
+                label="true arcs" if k == 0 else None, zorder=2)
+    for k, g in enumerate(truth.legs):
+        ax.add_patch(CirclePatch(g.center, g.diameter / 2, fill=False, color=mpl("legs"), lw=1.2,
+                                 label="true legs" if k == 0 else None))
+    return ax
+
+
+def scan_figure(scan: Scan, *, labels=None, truth=None, title: str | None = None):
+    """A two-panel figure: ranges against angle, and the points in the plane."""
+    fig, (a0, a1) = plt.subplots(1, 2, figsize=(13, 5.5), gridspec_kw={"width_ratios": [1, 1.3]})
+    plot_ranges(scan, a0, title="what the sensor reports")
+    plot_scan(scan, a1, labels=labels, title="the same beams as points")
+    if truth is not None:
+        plot_truth(truth, a1)
+    a1.legend(loc="upper right", fontsize=8)
+    a0.legend(loc="upper right", fontsize=8)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig

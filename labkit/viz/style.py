@@ -1,0 +1,40 @@
+"""Colours shared by every viewer, so a feature looks the same in matplotlib and rerun."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: RGB (0-255) per layer.
+COLORS = {
+    "points": (70, 110, 160),
+    "invalid": (170, 170, 170),
+    "sensor": (220, 40, 40),
+    "lines": (215, 50, 40),
+    "corners": (240, 150, 20),
+    "circles": (40, 160, 70),
+    "legs": (150, 60, 190),
+    "truth": (120, 120, 120),
+}
+
+# A qualitative palette for segment labels: matplotlib's tab10 without its grey (grey is
+# for invalid beams and ground truth).
+PALETTE = np.array(
+    [
+        (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
+        (140, 86, 75), (227, 119, 194), (188, 189, 34), (23, 190, 207),
+    ],
+    dtype=np.uint8,
+)
+
+
+def label_colors(labels) -> np.ndarray:
+    """RGB (N, 3) uint8 for integer labels; -1 (noise) is light grey."""
+    labels = np.asarray(labels)
+    out = PALETTE[np.mod(labels, len(PALETTE))]
+    out[labels < 0] = COLORS["invalid"]
+    return out
+
+
+def mpl(name: str) -> tuple[float, float, float]:
+    """A layer colour as a matplotlib RGB tuple in [0, 1]."""
+    return tuple(c / 255 for c in COLORS[name])
