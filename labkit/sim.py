@@ -130,8 +130,12 @@ class PathSpec:
     def length(self) -> float:
         return float(np.sum(np.linalg.norm(np.diff(self._vertices(), axis=0), axis=1)))
 
-    def at(self, s: float) -> tuple[np.ndarray, float]:
-        """Position (2,) and heading (radians) after walking ``s`` metres from the start."""
+    def at(self, s: float, *, walking: bool = True) -> tuple[np.ndarray, float]:
+        """Position (2,) and heading (radians) after walking ``s`` metres from the start.
+
+        The heading is the walking direction; with ``walking=False`` it is the direction of
+        the polyline itself (which does not turn round when a bounce path does).
+        """
         verts = self._vertices()
         seg = np.diff(verts, axis=0)
         lengths = np.linalg.norm(seg, axis=1)
@@ -147,6 +151,8 @@ class PathSpec:
         k = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(seg) - 1))
         u = (s - cum[k]) / lengths[k]
         pos = verts[k] + u * seg[k]
+        if not walking:
+            direction = 1.0
         heading = np.arctan2(direction * seg[k, 1], direction * seg[k, 0])
         return pos, float(heading)
 
@@ -170,9 +176,11 @@ class Person:
     """A person walking along a path; the laser sees two legs at knee height.
 
     Gait model: footfalls are ``step_length_m`` apart along the path, alternating
-    left and right at ``+-leg_separation_m / 2`` from it. While the body covers one
-    step, the stance leg stays planted and the swing leg moves from its last footfall
-    to the next at twice the walking speed, so the legs alternate as in real walking.
+    between the two sides of the path at ``+-leg_separation_m / 2`` from it. While the
+    body covers one step, the stance leg stays planted and the swing leg moves from its
+    last footfall to the next at twice the walking speed, so the legs alternate as in real
+    walking. Each leg keeps to its side of the path, also on the way back of a bounce
+    path, so the legs never cross.
     """
 
     path: PathSpec
@@ -189,8 +197,9 @@ class Person:
         if self.leg_separation_m <= self.leg_diameter_m:
             raise ValueError("leg_separation_m must exceed leg_diameter_m (legs would overlap)")
 
-    def _foot(self, k: int, side: float) -> np.ndarray:
-        pos, heading = self.path.at(k * self.step_length_m)
+    def _foot(self, s: float, side: float) -> np.ndarray:
+        """A foot at ``s`` metres along the path, on the given side of it."""
+        pos, heading = self.path.at(max(s, 0.0), walking=False)  # no footfalls before the start
         normal = np.array([-np.sin(heading), np.cos(heading)])
         return pos + side * 0.5 * self.leg_separation_m * normal
 
@@ -201,8 +210,9 @@ class Person:
         k = int(np.floor(s / step + 0.5))  # the footfall the body is passing over
         u = s / step + 0.5 - k  # progress of the current step in [0, 1)
         stance_side = 1.0 if k % 2 == 0 else -1.0
-        stance = self._foot(k, stance_side)
-        swing = (1 - u) * self._foot(k - 1, -stance_side) + u * self._foot(k + 1, -stance_side)
+        stance = self._foot(k * step, stance_side)
+        # the swing leg travels along the path (not across a corner) from footfall k-1 to k+1
+        swing = self._foot((k - 1 + 2 * u) * step, -stance_side)
         return (stance, swing) if stance_side > 0 else (swing, stance)
 
     def center_at(self, t: float) -> np.ndarray:
@@ -247,6 +257,13 @@ def _wall_loop(points: Sequence[tuple[float, float]], name: str, closed: bool = 
     pts = list(points) + ([points[0]] if closed else [])
     return [Wall(tuple(map(float, a)), tuple(map(float, b)), f"{name}{i}") for i, (a, b) in
             enumerate(zip(pts[:-1], pts[1:], strict=True))]
+
+
+def _stadium(x0: float, x1: float, y: float, radius: float, n_arc: int = 12) -> tuple:
+    """Waypoints of a running-track loop: straights at y +- radius joined by half circles."""
+    right = [(x1 + radius * np.sin(a), y - radius * np.cos(a)) for a in np.linspace(0, np.pi, n_arc + 1)]
+    left = [(x0 - radius * np.sin(a), y + radius * np.cos(a)) for a in np.linspace(0, np.pi, n_arc + 1)]
+    return tuple((round(float(px), 6), round(float(py), 6)) for px, py in right + left)
 
 
 def _hall() -> World:
@@ -312,8 +329,8 @@ def _office() -> World:
     walls += _wall_loop([(8.5, 0.8), (9.7, 0.8), (9.7, 1.4), (8.5, 1.4)], "box_b")
     walls += _wall_loop([(7.0, 3.9), (7.6, 4.3), (6.8, 4.5)], "crate")
     bin_ = Circle((9.6, 4.0), 0.2, "bin", "bin")
-    walker = Person(PathSpec(((0.8, 0.7), (5.0, 0.7), (5.0, 1.5), (0.8, 1.5)), "loop"), speed_mps=0.8,
-                    name="colleague", leg_diameter_m=0.15)
+    walker = Person(PathSpec(_stadium(1.3, 4.6, 1.1, 0.4), "loop"), speed_mps=0.8, name="colleague",
+                    leg_diameter_m=0.15)
     return World("office", tuple(walls), circles=(bin_,), people=(walker,))
 
 
