@@ -228,23 +228,34 @@ def write_bag(
     return _write_ros2(scans, path, topic, plugin)
 
 
+def _write_all(writer, conn, scans, serialize) -> int:
+    """Write every scan; if the input fails part-way, close the bag properly (rosbags
+    aborts a bag left by an exception) with what was written, then re-raise."""
+    count = 0
+    try:
+        for scan in scans:
+            writer.write(conn, int(scan.stamp_ns), serialize(scan, count))
+            count += 1
+    except BaseException:
+        writer.close()
+        raise
+    writer.close()
+    return count
+
+
 def _write_ros1(scans, path: Path, topic: str) -> int:
     ts = _typestore(ros1=True)
-    count = 0
-    with rosbag1.Writer(path) as writer:
-        conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
-        for scan in scans:
-            writer.write(conn, int(scan.stamp_ns), ts.serialize_ros1(_message(ts, scan, count, True), _MSGTYPE))
-            count += 1
-    return count
+    writer = rosbag1.Writer(path)
+    writer.open()
+    conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
+    return _write_all(writer, conn, scans,
+                      lambda scan, k: ts.serialize_ros1(_message(ts, scan, k, True), _MSGTYPE))
 
 
 def _write_ros2(scans, path: Path, topic: str, plugin) -> int:
     ts = _typestore(ros1=False)
-    count = 0
-    with rosbag2.Writer(path, version=9, storage_plugin=plugin) as writer:
-        conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
-        for scan in scans:
-            writer.write(conn, int(scan.stamp_ns), ts.serialize_cdr(_message(ts, scan, count, False), _MSGTYPE))
-            count += 1
-    return count
+    writer = rosbag2.Writer(path, version=9, storage_plugin=plugin)
+    writer.open()
+    conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
+    return _write_all(writer, conn, scans,
+                      lambda scan, k: ts.serialize_cdr(_message(ts, scan, k, False), _MSGTYPE))
