@@ -125,17 +125,17 @@ class Scan:
         if angles.size > 1 and not np.all(np.diff(angles) > 0):
             bad = int(np.argmin(np.diff(angles) > 0))
             raise ValueError(
-                f"angles must be strictly increasing, but angles[{bad + 1}] = {angles[bad + 1]!r}"
-                f" <= angles[{bad}] = {angles[bad]!r}"
+                f"angles must be strictly increasing, but angles[{bad + 1}] = {float(angles[bad + 1]):g}"
+                f" <= angles[{bad}] = {float(angles[bad]):g}"
             )
         if angles.size > 1 and angles[-1] - angles[0] > 2 * np.pi + 1e-6:
             raise ValueError(
-                f"angles must span at most 2 pi, got {angles[-1] - angles[0]!r} rad"
+                f"angles must span at most 2 pi, got {float(angles[-1] - angles[0]):g} rad"
             )
         range_min = _as_limit("range_min", self.range_min)
         range_max = _as_limit("range_max", self.range_max)
         if not range_max > range_min:
-            raise ValueError(f"range_max must be > range_min, got {range_max!r} <= {range_min!r}")
+            raise ValueError(f"range_max must be > range_min, got {range_max:g} <= {range_min:g}")
         try:
             stamp_ns = int(self.stamp_ns)
         except (TypeError, ValueError, OverflowError):
@@ -188,9 +188,9 @@ class Scan:
         except (TypeError, ValueError):
             raise ValueError("angle_min and angle_increment must be numbers (radians)") from None
         if not np.isfinite(a0):
-            raise ValueError(f"angle_min must be finite, got {angle_min!r}")
+            raise ValueError(f"angle_min must be finite, got {float(angle_min):g}")
         if not np.isfinite(da) or da == 0:
-            raise ValueError(f"angle_increment must be finite and non-zero, got {angle_increment!r}")
+            raise ValueError(f"angle_increment must be finite and non-zero, got {float(angle_increment):g}")
         angles = a0 + da * np.arange(r.size)
         intensities = kwargs.pop("intensities", None)
         if da < 0:

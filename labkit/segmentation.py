@@ -57,7 +57,7 @@ class RangeSegment:
 
 def _validate(threshold_m: float, min_points: int) -> None:
     if not (np.isfinite(threshold_m) and threshold_m > 0):
-        raise ValueError(f"threshold_m must be a positive number of metres, got {threshold_m!r}")
+        raise ValueError(f"threshold_m must be a positive number of metres, got {threshold_m}")
     if int(min_points) != min_points or min_points < 1:
         raise ValueError(f"min_points must be an integer >= 1, got {min_points!r}")
 

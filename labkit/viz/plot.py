@@ -32,11 +32,14 @@ def plot_scan(
     show_invalid: bool = True,
     point_size: float = 9.0,
     title: str | None = None,
+    adjustable: str = "datalim",
 ):
     """Draw a scan's valid points (coloured by ``labels`` when given), the sensor, and
     faint rays for beams without a valid return.
 
     ``labels`` is per beam, shape (N,), as returned by :func:`labkit.segmentation.segment_labels`.
+    The axes keep equal scales; pass ``adjustable="box"`` when you set the limits yourself
+    (the default, ``"datalim"``, widens them to fit the axes' shape).
     """
     ax = _axes(ax)
     if show_invalid and (~scan.valid).any():
@@ -56,7 +59,7 @@ def plot_scan(
                zorder=3, linewidths=0)
     ax.plot([0], [0], marker=(3, 0, -90), color=mpl("sensor"), markersize=12, linestyle="none", zorder=4,
             label="sensor")
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable=adjustable)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     if title:

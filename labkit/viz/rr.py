@@ -23,12 +23,13 @@ from __future__ import annotations
 import os
 import sys
 
-if "rerun" in sys.modules and "RERUN_NOTEBOOK_ASSET" not in os.environ:  # pragma: no cover
+# rerun-notebook reads the variable when it is first imported (by rerun.notebook)
+if "rerun_notebook" in sys.modules and "RERUN_NOTEBOOK_ASSET" not in os.environ:  # pragma: no cover
     import warnings
 
     warnings.warn(
-        "rerun was imported before labkit.viz.rr: set RERUN_NOTEBOOK_ASSET=serve-local before "
-        "importing rerun, or the notebook viewer will try to load its assets from the internet",
+        "rerun's notebook support was loaded before labkit.viz.rr: set RERUN_NOTEBOOK_ASSET=serve-local "
+        "before importing rerun.notebook, or the inline viewer will load its assets from the internet",
         stacklevel=2,
     )
 os.environ.setdefault("RERUN_NOTEBOOK_ASSET", "serve-local")
