@@ -1,0 +1,21 @@
+"""Shared fixtures: paths to the repository, its bundled data and the real datasets."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO / "data"
+SHARED_DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", REPO.parent / "shared" / "datasets"))
+
+
+@pytest.fixture(scope="session")
+def shared_datasets() -> Path:
+    """The real public recordings in ../shared/datasets (skip when absent)."""
+    if not SHARED_DATASETS.is_dir():
+        pytest.skip(f"real datasets not found at {SHARED_DATASETS} (they live beside the repository, "
+                    "in ../shared/datasets; set LABKIT_SHARED_DATASETS to point elsewhere)")
+    return SHARED_DATASETS
