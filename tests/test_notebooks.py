@@ -1,0 +1,130 @@
+"""The course notebooks: stored clean, free of path tricks, and runnable top to bottom.
+
+Every ``notebooks/*.ipynb`` is executed headless by nbclient, in a fresh kernel that runs
+*this* interpreter (so it sees the labkit installed here), with a temporary working
+directory (so whatever a notebook writes, e.g. ``out/``, lands there and not in the
+repository). Those tests are marked ``slow``.
+
+The fast tests check what is committed: notebooks and exercise sources are valid nbformat 4
+with no outputs (STYLE.md item 11) and no ``sys.path`` manipulation (STYLE.md item 1).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+from nbclient import NotebookClient
+from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
+
+REPO = Path(__file__).resolve().parents[1]
+NOTEBOOKS = sorted((REPO / "notebooks").glob("*.ipynb"))
+EXERCISE_SOURCES = sorted(
+    p for p in (REPO / "exercises" / "source").rglob("*.ipynb") if ".ipynb_checkpoints" not in p.parts
+)
+STORED = NOTEBOOKS + EXERCISE_SOURCES
+
+KERNEL_NAME = "python3"
+CELL_TIMEOUT_S = 300  # per cell; a hung kernel fails its notebook, not the run
+
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+_PATH_TRICK = re.compile(
+    r"\bsys\.path\s*(?:\.\s*(?:append|insert|extend)\s*\(|\+=|=(?!=))"  # sys.path.append(...), sys.path = ...
+    r"|\bsite\.addsitedir\s*\("
+)
+
+
+def _rel(path: Path) -> str:
+    return str(path.relative_to(REPO))
+
+
+def _code_cells(nb) -> list[tuple[int, nbformat.NotebookNode]]:
+    return [(i, c) for i, c in enumerate(nb.cells) if c.cell_type == "code"]
+
+
+# ---------------------------------------------------------------------------- kernel
+@pytest.fixture(scope="session")
+def kernel_dir(tmp_path_factory) -> Path:
+    """A Jupyter data dir with a ``python3`` kernelspec that launches this interpreter.
+
+    jupyter_client looks kernelspecs up on ``JUPYTER_PATH`` first, so this one wins over a
+    ``python3`` spec in the user's home (which may point at another Python) and over the
+    one in the venv (whose ``argv[0] == "python"`` jupyter_client would swap for
+    ``sys.executable`` anyway).
+    """
+    root = tmp_path_factory.mktemp("jupyter")
+    spec = root / "kernels" / KERNEL_NAME
+    spec.mkdir(parents=True)
+    (spec / "kernel.json").write_text(json.dumps({
+        "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
+        "display_name": f"Python 3 ({sys.executable})",
+        "language": "python",
+        "metadata": {"debugger": False},
+    }))
+    return root
+
+
+@pytest.fixture
+def this_python_kernel(kernel_dir, monkeypatch) -> str:
+    """Make ``kernel_name="python3"`` resolve to :func:`kernel_dir`'s spec; return the name."""
+    monkeypatch.setenv("JUPYTER_PATH", os.pathsep.join(filter(None, [str(kernel_dir),
+                                                                     os.environ.get("JUPYTER_PATH")])))
+    return KERNEL_NAME
+
+
+def _execute(nb, workdir: Path, kernel_name: str):
+    client = NotebookClient(nb, timeout=CELL_TIMEOUT_S, kernel_name=kernel_name,
+                            resources={"metadata": {"path": str(workdir)}})
+    return client.execute()
+
+
+@pytest.mark.slow
+def test_kernel_runs_this_interpreter(this_python_kernel, tmp_path):
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(
+        "import sys; print(sys.executable); print(sys.prefix)")])
+    _execute(nb, tmp_path, this_python_kernel)
+    executable, prefix = nb.cells[0].outputs[0]["text"].split()
+    assert (executable, prefix) == (sys.executable, sys.prefix)
+
+
+# ---------------------------------------------------------------------------- notebooks run
+@pytest.mark.slow
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path):
+    nb = nbformat.read(path, as_version=4)
+    workdir = tmp_path / "cwd"
+    workdir.mkdir()
+    try:
+        _execute(nb, workdir, this_python_kernel)
+        return
+    except (CellExecutionError, CellTimeoutError, DeadKernelError) as exc:
+        error = f"{type(exc).__name__}: {_ANSI.sub('', str(exc))}"
+    executed = tmp_path / path.name  # outside the except block: the report shows the error once
+    nbformat.write(nb, executed)
+    pytest.fail(f"{_rel(path)} failed; executed copy in {executed}\n\n{error}", pytrace=False)
+
+
+# ---------------------------------------------------------------------------- stored clean
+@pytest.mark.parametrize("path", STORED, ids=[_rel(p) for p in STORED])
+def test_stored_without_outputs(path):
+    nb = nbformat.read(path, as_version=nbformat.NO_CONVERT)
+    assert nb.nbformat == 4, f"{_rel(path)} is nbformat {nb.nbformat}, expected 4"
+    nbformat.validate(nb)  # raises ValidationError naming the offending field
+    dirty = [i for i, c in _code_cells(nb) if c.outputs or c.execution_count is not None]
+    assert not dirty, (f"{_rel(path)}: code cells {dirty} have outputs or an execution count; clear them "
+                       "(e.g. `jupyter nbconvert --clear-output --inplace`) before committing")
+    assert "widgets" not in nb.metadata, f"{_rel(path)} stores widget state (an output): clear it"
+
+
+@pytest.mark.parametrize("path", STORED, ids=[_rel(p) for p in STORED])
+def test_no_sys_path_tricks(path):
+    nb = nbformat.read(path, as_version=4)
+    found = [(i, line.strip()) for i, c in _code_cells(nb) for line in c.source.splitlines()
+             if _PATH_TRICK.search(line)]
+    assert not found, (f"{_rel(path)} manipulates the import path (STYLE.md item 1: `import labkit` "
+                       f"from the installed package): {found}")
