@@ -66,6 +66,9 @@ APP_ID = "labkit"
 TIME = "ros_time"
 SEQUENCE = "scan"
 INVALID_RAY_M = 0.4  # length of the grey ray drawn for an invalid beam
+# radii in UI points (negative in rerun): dots keep their size on screen at any zoom
+POINT_RADIUS_UI = -1.5
+SEGMENT_RADIUS_UI = -2.5
 _BATCH = 256  # scans per send_columns call
 
 # rerun's 2D views have y pointing down; mirror so that y points up as in matplotlib.
@@ -105,7 +108,7 @@ def new_recording(name: str | None = None, *, recording_id: str | None = None) -
 def log_static(rec: rr.RecordingStream, description: str | None = None) -> None:
     """Log what does not change: the y-up view transform, the sensor, the notes."""
     rec.log("world", rr.Transform3D(mat3x3=_Y_UP), static=True)
-    rec.log("world/sensor", rr.Points2D([[0.0, 0.0]], radii=[0.08], colors=[COLORS["sensor"]],
+    rec.log("world/sensor", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[COLORS["sensor"]],
                                         labels=["sensor"]), static=True)
     if description:
         rec.log("description", rr.TextDocument(description, media_type=rr.MediaType.MARKDOWN), static=True)
@@ -175,7 +178,7 @@ def _send_batch(rec, batch: list[Scan], first_index: int, segment_threshold_m, s
         "world/scan/points",
         indexes=times,
         columns=rr.Points2D.columns(positions=pts, colors=np.tile(COLORS["points"], (len(pts), 1)),
-                                    radii=np.full(len(pts), 0.02, dtype=np.float32)).partition(lengths),
+                                    radii=np.full(len(pts), POINT_RADIUS_UI, dtype=np.float32)).partition(lengths),
     )
     n_valid = np.array(lengths, dtype=np.float64)
     rec.send_columns("metrics/valid_beams", indexes=times, columns=rr.Scalars.columns(scalars=n_valid))
@@ -200,7 +203,8 @@ def _send_batch(rec, batch: list[Scan], first_index: int, segment_threshold_m, s
             indexes=times,
             columns=rr.Points2D.columns(positions=pts,
                                         colors=np.concatenate(colors) if colors else np.zeros((0, 3)),
-                                        radii=np.full(len(pts), 0.03, dtype=np.float32)).partition(lengths),
+                                        radii=np.full(len(pts), SEGMENT_RADIUS_UI, dtype=np.float32)
+                                        ).partition(lengths),
         )
         rec.send_columns("metrics/segments", indexes=times,
                          columns=rr.Scalars.columns(scalars=np.array(n_segments)))
@@ -221,10 +225,10 @@ def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int
         rec.set_time(TIME, timestamp=np.datetime64(int(tr.stamp_ns), "ns"))
         rec.log("world/truth/walls", rr.LineStrips2D(
             [np.array([w.start, w.end]) for w in tr.walls], colors=[COLORS["truth"]] * len(tr.walls),
-            labels=[w.name for w in tr.walls], radii=[0.01] * len(tr.walls)))
+            labels=[w.name for w in tr.walls], show_labels=False, radii=[-1.0] * len(tr.walls)))
         rec.log("world/truth/arcs", rr.LineStrips2D(
             [arc_points(a.center, a.radius, a.start, a.end) for a in tr.arcs],
-            colors=[COLORS["circles"]] * len(tr.arcs), labels=[a.name for a in tr.arcs]))
+            colors=[COLORS["circles"]] * len(tr.arcs), labels=[a.name for a in tr.arcs], show_labels=False))
         for key, items, colour in [("circles", tr.circles, "circles"), ("legs", tr.legs, "legs")]:
             centers = [c.center for c in items]
             half = [(getattr(c, "radius", None) or c.diameter / 2,) * 2 for c in items]
