@@ -36,14 +36,15 @@ demo: $(VENV)/.installed
 test: $(VENV)/.installed-dev
 	$(BIN)/python -m pytest -n $(JOBS)
 
+# nbgrader 0.9 runs `alembic` from PATH when it creates a gradebook: put the venv first
 lab: $(VENV)/.installed
-	$(BIN)/jupyter lab --notebook-dir=. notebooks/00_tour.ipynb
+	PATH="$(abspath $(BIN)):$$PATH" $(BIN)/jupyter lab --notebook-dir=. notebooks/00_tour.ipynb
 
 data: $(VENV)/.installed
 	$(BIN)/labkit simulate --bundled -o data
 
 release: $(VENV)/.installed
-	cd exercises && ../$(BIN)/nbgrader generate_assignment --all --force --CourseDirectory.root=.
+	cd exercises && PATH="$(abspath $(BIN)):$$PATH" ../$(BIN)/nbgrader generate_assignment "*" --force
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check labkit tests benchmarks
