@@ -191,7 +191,13 @@ class Scan:
             raise ValueError(f"angle_min must be finite, got {float(angle_min):g}")
         if not np.isfinite(da) or da == 0:
             raise ValueError(f"angle_increment must be finite and non-zero, got {float(angle_increment):g}")
-        angles = a0 + da * np.arange(r.size)
+        with np.errstate(over="ignore", invalid="ignore"):
+            angles = a0 + da * np.arange(r.size)
+        if not np.all(np.isfinite(angles)):
+            raise ValueError(
+                f"angle_min + i * angle_increment overflows for {r.size} beams "
+                f"(angle_min={a0:g}, angle_increment={da:g}); the angles must be finite radians"
+            )
         intensities = kwargs.pop("intensities", None)
         if da < 0:
             r, angles = r[::-1], angles[::-1]
