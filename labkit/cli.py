@@ -26,6 +26,21 @@ def _progress(total: int | None, desc: str):
     return partial(tqdm, total=total, unit="scan", desc=desc)
 
 
+def _rerun_command() -> str:
+    """How to call the rerun viewer: plain ``rerun`` if it is on PATH, else its full path."""
+    import shutil
+
+    if shutil.which("rerun"):
+        return "rerun"
+    beside = Path(sys.executable).parent / "rerun"
+    if not beside.exists():
+        return "rerun"
+    try:
+        return str(beside.relative_to(Path.cwd()))
+    except ValueError:
+        return str(beside)
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .data import generate_bundled, write_simulation
 
@@ -64,7 +79,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     if args.spawn:
         subprocess.Popen([sys.executable, "-m", "rerun", str(summary.path)])
     else:
-        print(f"open it with: rerun {summary.path}")
+        print(f"open it with: {_rerun_command()} {summary.path}")
     if summary.error is not None:
         raise summary.error
     return 0
@@ -130,7 +145,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
           f"wrote .rrd at {n / t_rrd:,.0f} scans/s")
     print(f"  wrote {out / 'demo.rrd'} ({summary.n_scans} scans, ground truth for {summary.n_truth})"
           f" and {out / 'demo.png'}")
-    print(f"next: 'rerun {out / 'demo.rrd'}' to scrub through it, 'make lab' for the notebooks")
+    print(f"next: '{_rerun_command()} {out / 'demo.rrd'}' to scrub through it, 'make lab' for the notebooks")
     return 0
 
 
