@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import gzip
-import json
 import shutil
 from pathlib import Path
 
@@ -243,6 +242,13 @@ def test_carmen_robotlaser_and_message_choice(tmp_path):
     assert a.range_max == 8.0 and a.valid.tolist() == [True, True, False]
     with pytest.raises(ValueError, match="no RLASER messages; laser messages found: FLASER"):
         read_scans(log, topic="RLASER")
+
+
+def test_carmen_rear_laser(tmp_path):
+    log = tmp_path / "rear.log"
+    log.write_text(_flaser([1.0] * 180) + _flaser([2.0] * 180).replace("FLASER", "RLASER", 1))
+    (rear,) = read_scans(log, topic="RLASER")
+    assert rear.frame_id == "rlaser" and np.all(rear.ranges == 2.0) and rear.pose == (1.0, 2.0, 0.5)
 
 
 def test_carmen_malformed_line_and_truncated_gzip(tmp_path):

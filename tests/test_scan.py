@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from labkit import Scan, polar_to_cartesian
 
+
 # ---------------------------------------------------------------- masking
 def test_valid_mask_rules():
     s = Scan(

@@ -219,6 +219,6 @@ def test_unknown_names_list_the_choices():
 
 def test_scan_pose_places_points_on_world_walls():
     sc = sim.scenario("corridor")
-    for scan, truth in sim.simulate(sc, seed=0, n_scans=40):
+    for scan, _truth in sim.simulate(sc, seed=0, n_scans=40):
         world_pts = transform_points(scan.xy, scan.pose)
         assert np.all(world_pts[:, 0] > -0.1) and np.all(world_pts[:, 0] < 30.1)

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 from rosbags import rosbag1, rosbag2
 from rosbags.highlevel import AnyReader
-from rosbags.typesys import Stores, get_typestore
 
 from ..scan import Scan
 from . import salvage
@@ -27,8 +26,7 @@ _MSGTYPE = "sensor_msgs/msg/LaserScan"
 _ANGLE_TOL = 1e-5  # rad: float32 angle_increment cannot represent uneven beams better
 
 
-def _typestore(ros1: bool):
-    return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+_typestore = salvage.typestore
 
 
 # ============================================================================ reading

@@ -19,6 +19,7 @@ import sqlite3
 import struct
 import tempfile
 from collections.abc import Generator
+from functools import lru_cache
 from pathlib import Path
 
 import lz4.frame
@@ -33,6 +34,13 @@ LASERSCAN_TYPES = {"sensor_msgs/LaserScan", "sensor_msgs/msg/LaserScan"}
 _MSGTYPE = "sensor_msgs/msg/LaserScan"
 
 Salvage = Generator[tuple[str, int, object], None, str]
+
+
+@lru_cache(maxsize=2)
+def typestore(ros1: bool):
+    """The rosbags typestore for ROS1 (Noetic) or ROS2 (Humble) messages, built once:
+    rosbags generates ~175 message classes for each."""
+    return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
 
 
 def _decompress(data, compression: str, partial: bool) -> bytes:
@@ -106,7 +114,7 @@ def _ros1_records(buf, start: int, end: int, *, partial: bool = False):
 
 def salvage_ros1(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
     """Walk a ROS1 bag's chunks in file order (see the ROS bag format 2.0)."""
-    typestore = get_typestore(Stores.ROS1_NOETIC)
+    ts = typestore(ros1=True)
     connections: dict[int, tuple[str, str]] = {}
     with open(path, "rb") as fh:
         size = Path(path).stat().st_size
@@ -129,13 +137,13 @@ def salvage_ros1(path: Path, topic: str | None, want_topics: bool = False) -> Sa
                             raise _Truncated(offset, f"a chunk does not decompress ({exc})") from None
                         try:
                             for _, ifields, idata, _ in _ros1_records(inner, 0, len(inner)):
-                                yield from _ros1_record(ifields, idata, connections, typestore, topic,
+                                yield from _ros1_record(ifields, idata, connections, ts, topic,
                                                         want_topics)
                         except _Truncated as exc:
                             state = "is cut off" if len(inner) < chunk_size else f"is garbled ({exc.what})"
                             raise _Truncated(offset, f"the chunk at byte {offset} {state}") from None
                     elif op in (b"\x07", b"\x02") and complete:  # unchunked records (old bags)
-                        yield from _ros1_record(fields, data, connections, typestore, topic, want_topics)
+                        yield from _ros1_record(fields, data, connections, ts, topic, want_topics)
             except _Truncated as exc:
                 return f"at byte {exc.offset}: {exc.what}"
             return f"at byte {size}: the file ends before its index (the recording was cut short)"
@@ -143,7 +151,7 @@ def salvage_ros1(path: Path, topic: str | None, want_topics: bool = False) -> Sa
             buf.close()
 
 
-def _ros1_record(fields, data, connections, typestore, topic, want_topics):
+def _ros1_record(fields, data, connections, ts, topic, want_topics):
     op = fields.get("op", b"\x00")[:1]
     if op == b"\x07":
         (conn,) = struct.unpack("<I", fields["conn"])
@@ -156,7 +164,7 @@ def _ros1_record(fields, data, connections, typestore, topic, want_topics):
         name, msgtype = connections.get(conn, ("", ""))
         if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
             sec, nsec = struct.unpack("<II", fields["time"])
-            msg = typestore.deserialize_ros1(bytes(data), _MSGTYPE)
+            msg = ts.deserialize_ros1(bytes(data), _MSGTYPE)
             yield name, sec * 1_000_000_000 + nsec, msg
 
 
@@ -187,7 +195,7 @@ def _mcap_records(buf, start: int, end: int, *, partial: bool = False):
 
 def salvage_mcap(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
     """Walk an MCAP file's records in file order (see the MCAP specification)."""
-    typestore = get_typestore(Stores.ROS2_HUMBLE)
+    ts = typestore(ros1=False)
     schemas: dict[int, str] = {}
     channels: dict[int, tuple[str, str]] = {}
     with open(path, "rb") as fh:
@@ -214,7 +222,7 @@ def salvage_mcap(path: Path, topic: str | None, want_topics: bool = False) -> Sa
                     cid, _seq, log_time, _pub = struct.unpack_from("<HIQQ", content, 0)
                     name, msgtype = channels.get(cid, ("", ""))
                     if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
-                        msg = typestore.deserialize_cdr(bytes(content[22:]), _MSGTYPE)
+                        msg = ts.deserialize_cdr(bytes(content[22:]), _MSGTYPE)
                         yield name, log_time, msg
 
             try:
@@ -256,7 +264,7 @@ def salvage_sqlite3(path: Path, topic: str | None, want_topics: bool = False) ->
     refuses the whole file. A temporary copy with the page count set to what is really
     there reads row by row up to the missing pages.
     """
-    typestore = get_typestore(Stores.ROS2_HUMBLE)
+    ts = typestore(ros1=False)
     data = Path(path).read_bytes()
     if len(data) < 100 or not data.startswith(b"SQLite format 3\x00"):
         return "at byte 0: not an sqlite3 database"
@@ -291,7 +299,7 @@ def salvage_sqlite3(path: Path, topic: str | None, want_topics: bool = False) ->
             try:
                 for row_id, tid, stamp, blob in con.execute(query, wanted):
                     last_id = row_id
-                    yield topics[tid][0], int(stamp), typestore.deserialize_cdr(bytes(blob), _MSGTYPE)
+                    yield topics[tid][0], int(stamp), ts.deserialize_cdr(bytes(blob), _MSGTYPE)
             except sqlite3.DatabaseError as exc:
                 after = f"after message row {last_id}" if last_id is not None else "before the first message"
                 return f"{after} ({exc})"
