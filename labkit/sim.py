@@ -450,6 +450,11 @@ class Lidar:
         """Beam angles (N,), computed as a reader of the ROS message would."""
         return self.angle_min + self.angle_increment * np.arange(self.n_beams)
 
+    @property
+    def is_full_circle(self) -> bool:
+        """True when the last beam is the first beam's neighbour (see :attr:`Scan.is_full_circle`)."""
+        return self.n_beams >= 3 and self.n_beams * self.angle_increment + 0.5 * self.angle_increment >= 2 * np.pi
+
     def to_dict(self) -> dict:
         return asdict(self)
 
@@ -855,7 +860,7 @@ def _pt(p) -> tuple[float, float]:
 
 def _truth(world, lidar, frame, pose, angles, true_r, hits, stamp) -> ScanTruth:
     n = lidar.n_beams
-    full_circle = Scan(ranges=np.ones(n), angles=angles).is_full_circle if n > 2 else False
+    full_circle = lidar.is_full_circle
     objects = world.objects()
     hit_xy = np.stack([true_r * np.cos(angles), true_r * np.sin(angles)], axis=1)
     n_walls, n_arcs = frame.n_walls, len(world.arcs)
