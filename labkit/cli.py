@@ -124,15 +124,15 @@ def cmd_demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     labels = [segment_labels(s) for s in scans]
     t_seg = time.perf_counter() - t0
+    truth_file = sim.truth_path_for(source)
+    truth = sim.read_truth(truth_file) if truth_file.exists() else None
     t0 = time.perf_counter()
-    summary = lkrr.record(source, out / "demo.rrd", progress=not args.quiet)
+    summary = lkrr.record_scans(scans, out / "demo.rrd", name=source.name, truth=truth, labels=labels,
+                                description=f"# labkit demo: {source.name}\n\nColours in `world/segments` "
+                                "are range segments (0.08 m threshold); `world/truth` is the ground truth.")
     t_rrd = time.perf_counter() - t0
     k = len(scans) // 2
-    truth = None
-    truth_file = sim.truth_path_for(source)
-    if truth_file.exists():
-        truth = sim.read_truth(truth_file).scans.get(scans[k].stamp_ns)
-    fig = plot.scan_figure(scans[k], labels=labels[k], truth=truth,
+    fig = plot.scan_figure(scans[k], labels=labels[k], truth=truth.scans.get(scans[k].stamp_ns) if truth else None,
                            title=f"{source.name}, scan {k}: range segments (0.08 m threshold)")
     fig.savefig(out / "demo.png", dpi=110)
     n_valid = np.array([s.valid.sum() for s in scans])

@@ -58,6 +58,7 @@ __all__ = [
     "log_truth",
     "log_text",
     "record",
+    "record_scans",
     "RecordSummary",
     "show_inline",
 ]
@@ -138,28 +139,40 @@ def log_scans(
     *,
     start_index: int = 0,
     segment_threshold_m: float | None = 0.08,
+    labels: Iterable[np.ndarray] | None = None,
     show_invalid: bool = True,
 ) -> int:
     """Log scans in bulk (``send_columns``) on both timelines; return how many.
 
     Each scan is logged at ``scan = start_index + k`` and ``ros_time = scan.stamp_ns``.
-    With ``segment_threshold_m`` the points are also logged coloured by range segment
-    (``world/segments``) and the segment count goes to ``metrics/segments``. If iterating
-    ``scans`` raises (a damaged file), every scan before the fault is sent, then the error
-    propagates.
+    The points are also logged coloured by range segment (``world/segments``, with the
+    segment count in ``metrics/segments``): from ``labels`` (one per-beam label array per
+    scan, e.g. already computed by the caller) or else segmented here with
+    ``segment_threshold_m`` (``None``: no segment layer). If iterating ``scans`` raises (a
+    damaged file), every scan before the fault is sent, then the error propagates.
     """
     count = 0
-    batch: list[Scan] = []
+    batch: list[tuple[Scan, np.ndarray | None]] = []
 
     def flush() -> None:
         nonlocal batch
         if batch:
-            _send_batch(rec, batch, start_index + count - len(batch), segment_threshold_m, show_invalid)
+            _send_batch(rec, batch, start_index + count - len(batch), show_invalid)
             batch = []
 
+    def with_labels():
+        if labels is not None:
+            yield from zip(scans, labels, strict=False)
+        elif segment_threshold_m is not None:
+            for scan in scans:
+                yield scan, segment_labels(scan, segment_threshold_m)
+        else:
+            for scan in scans:
+                yield scan, None
+
     try:
-        for scan in scans:
-            batch.append(scan)
+        for item in with_labels():
+            batch.append(item)
             count += 1
             if len(batch) >= _BATCH:
                 flush()
@@ -168,7 +181,8 @@ def log_scans(
     return count
 
 
-def _send_batch(rec, batch: list[Scan], first_index: int, segment_threshold_m, show_invalid) -> None:
+def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None]], first_index: int, show_invalid) -> None:
+    batch = [scan for scan, _ in items]
     idx = np.arange(first_index, first_index + len(batch))
     stamps = np.array([s.stamp_ns for s in batch], dtype=np.int64)
     times = _time_columns(idx, stamps)
@@ -192,10 +206,10 @@ def _send_batch(rec, batch: list[Scan], first_index: int, segment_threshold_m, s
                 colors=np.tile(COLORS["invalid"], (sum(map(len, rays)), 1)),
             ).partition([len(r) for r in rays]),
         )
-    if segment_threshold_m is not None:
+    if items[0][1] is not None:
         colors, n_segments = [], []
-        for s in batch:
-            labels = segment_labels(s, segment_threshold_m)[s.valid_indices]
+        for s, beam_labels in items:
+            labels = np.asarray(beam_labels)[s.valid_indices]
             colors.append(label_colors(labels))
             n_segments.append(float(labels.max() + 1) if labels.size else 0.0)
         rec.send_columns(
@@ -248,6 +262,51 @@ class RecordSummary:
     error: Exception | None
 
 
+def record_scans(
+    scans: Iterable[Scan],
+    out: str | Path,
+    *,
+    name: str,
+    truth=None,
+    labels: Iterable[np.ndarray] | None = None,
+    segment_threshold_m: float | None = 0.08,
+    description: str | None = None,
+) -> RecordSummary:
+    """Write scans to an ``.rrd`` file with the default blueprint.
+
+    ``truth`` is a :class:`labkit.sim.GroundTruth` to log beside the scans; ``labels``
+    per-scan segment labels already computed (else segmented with ``segment_threshold_m``).
+    If iterating ``scans`` raises ``ValueError``/``OSError`` (a damaged file), the ``.rrd``
+    still holds every scan before the fault, the error is logged to ``log`` and returned in
+    the summary (not raised).
+    """
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    rec = new_recording(name)
+    rec.save(out, default_blueprint=blueprint())
+    log_static(rec, description)
+    stamps: list[int] = []
+
+    def stamped():
+        for s in scans:
+            stamps.append(s.stamp_ns)
+            yield s
+
+    error: Exception | None = None
+    try:
+        n = log_scans(rec, stamped(), labels=labels, segment_threshold_m=segment_threshold_m)
+    except (ValueError, OSError) as exc:  # CorruptFileError is a ValueError
+        error, n = exc, len(stamps)
+        rec.set_time(SEQUENCE, sequence=max(n - 1, 0))
+        log_text(rec, f"reading stopped: {exc}", level="ERROR")
+    n_truth = log_truth(rec, truth, {s: k for k, s in enumerate(stamps)}) if truth is not None else 0
+    rec.set_time(SEQUENCE, sequence=0)
+    log_text(rec, f"{n} scans from {name}" + (f", ground truth for {n_truth}" if n_truth else ""))
+    rec.flush()
+    rec.disconnect()
+    return RecordSummary(out, n, n_truth, error)
+
+
 def record(
     source,
     out: str | Path,
@@ -259,54 +318,28 @@ def record(
 ) -> RecordSummary:
     """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
     ``.rrd`` file with the default blueprint, plus its ground truth when a
-    ``<name>.truth.jsonl`` lies beside it.
-
-    A damaged input still yields a complete ``.rrd`` with every readable scan; the error
-    is logged to ``log`` and returned in the summary (not raised).
+    ``<name>.truth.jsonl`` lies beside it. See :func:`record_scans` for damaged inputs.
     """
     from ..io import read_scans
     from ..sim import read_truth, truth_path_for
 
     stream = read_scans(source, topic=topic)
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    rec = new_recording(Path(source).name)
-    rec.save(out, default_blueprint=blueprint())
+    name = Path(source).name
     if description is None:
         description = (
-            f"# {Path(source).name}\n\nFormat: `{stream.format}`, topic: `{stream.topic}`.\n\n"
+            f"# {name}\n\nFormat: `{stream.format}`, topic: `{stream.topic}`.\n\n"
             "Grey rays mark beams without a valid return; colours in `world/segments` are range "
             f"segments ({segment_threshold_m} m threshold)."
         )
-    log_static(rec, description)
-    stamps: list[int] = []
+    scans = iter(stream)
+    if progress:
+        from tqdm.auto import tqdm
 
-    def scans():
-        it = iter(stream)
-        if progress:
-            from tqdm.auto import tqdm
-
-            it = tqdm(it, total=stream.count, unit="scan", desc=f"view {Path(source).name}")
-        for s in it:
-            stamps.append(s.stamp_ns)
-            yield s
-
-    error: Exception | None = None
-    try:
-        n = log_scans(rec, scans(), segment_threshold_m=segment_threshold_m)
-    except (ValueError, OSError) as exc:  # CorruptFileError is a ValueError
-        error, n = exc, len(stamps)
-        rec.set_time(SEQUENCE, sequence=max(n - 1, 0))
-        log_text(rec, f"reading stopped: {exc}", level="ERROR")
-    n_truth = 0
+        scans = tqdm(scans, total=stream.count, unit="scan", desc=f"view {name}")
     truth_file = truth_path_for(source)
-    if truth_file.exists():
-        n_truth = log_truth(rec, read_truth(truth_file), {s: k for k, s in enumerate(stamps)})
-    rec.set_time(SEQUENCE, sequence=0)
-    log_text(rec, f"{n} scans from {Path(source).name}" + (f", ground truth for {n_truth}" if n_truth else ""))
-    rec.flush()
-    rec.disconnect()
-    return RecordSummary(out, n, n_truth, error)
+    truth = read_truth(truth_file) if truth_file.exists() else None
+    return record_scans(scans, out, name=name, truth=truth, segment_threshold_m=segment_threshold_m,
+                        description=description)
 
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600) -> None:
