@@ -62,13 +62,10 @@ def bundled_data(name: str = "hall.bag") -> Path:
     if recording is None:
         raise ValueError(f"name must be one of {sorted(BUNDLED)} or their .truth.jsonl files, got {name!r}")
     folder = data_dir()
-    path = folder / name if name != stem else folder / recording
+    path = folder / (recording if name == stem else name)
     if not path.exists():
         scenario, fmt, seed = BUNDLED[recording]
-        folder.mkdir(parents=True, exist_ok=True)
         write_simulation(scenario, folder / recording, fmt, seed=seed, overwrite=True)
-        if name == stem:
-            path = folder / recording
     return path
 
 

@@ -10,6 +10,7 @@ angles that do not increase, negative limits) is an error.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -320,21 +321,10 @@ class Scan:
 
     def replace(self, **changes: Any) -> Scan:
         """A copy with some fields replaced (validated again)."""
-        fields = {
-            "ranges": self.ranges,
-            "angles": self.angles,
-            "range_min": self.range_min,
-            "range_max": self.range_max,
-            "stamp_ns": self.stamp_ns,
-            "frame_id": self.frame_id,
-            "intensities": self.intensities,
-            "pose": self.pose,
-        }
-        unknown = set(changes) - set(fields)
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
             raise ValueError(f"unknown Scan fields: {sorted(unknown)}")
-        fields.update(changes)
-        return Scan(**fields)
+        return dataclasses.replace(self, **changes)
 
     def __repr__(self) -> str:
         n_valid = int(self.valid.sum())

@@ -18,7 +18,7 @@ from pathlib import Path
 from ..scan import Scan
 from . import bags
 from .bags import write_bag
-from .carmen import LASER_MESSAGES, carmen_message_types, read_carmen
+from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_carmen
 from .errors import CorruptFileError
 from .jsonscan import read_json_lines, read_json_scan, write_json_lines, write_json_scan
 
@@ -49,6 +49,20 @@ FORMATS = {
 }
 
 
+# File name endings of each file format (ROS2 bags are folders).
+_SUFFIXES = {
+    "ros1": (".bag",),
+    "mcap": (".mcap",),
+    "carmen": (".log", ".log.gz", ".clf", ".clf.gz"),
+    "jsonl": (".jsonl",),
+    "json": (".json",),
+}
+
+
+def _format_from_suffix(name: str) -> str | None:
+    return next((fmt for fmt, ends in _SUFFIXES.items() if name.lower().endswith(ends)), None)
+
+
 def _supported() -> str:
     return "; ".join(f"{k}: {v}" for k, v in FORMATS.items())
 
@@ -73,15 +87,9 @@ def detect_format(path: str | Path) -> str:
             return "ros2"
         raise ValueError(f"{p} is a folder but not a ROS2 bag (no metadata.yaml, .db3 or .mcap); "
                          f"supported formats: {_supported()}")
-    for suffixes, fmt in [
-        ((".bag",), "ros1"),
-        ((".mcap",), "mcap"),
-        ((".log", ".log.gz", ".clf", ".clf.gz"), "carmen"),
-        ((".jsonl",), "jsonl"),
-        ((".json",), "json"),
-    ]:
-        if name.endswith(suffixes):
-            return fmt
+    fmt = _format_from_suffix(name)
+    if fmt is not None:
+        return fmt
     if name.endswith(".db3"):
         raise ValueError(f"{p} is an sqlite3 bag file: pass its folder ({p.parent}) instead")
     raise ValueError(f"cannot tell the format of {p}; supported formats: {_supported()}")
@@ -164,8 +172,7 @@ def read_scans(path: str | Path, topic: str | None = None) -> ScanStream:
             raise ValueError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}")
         counts = carmen_message_types(p)
         if topic is None:
-            topic = next((k for k in ("FLASER", "ROBOTLASER1", "RAWLASER1") if k in counts),
-                         min(counts) if counts else None)
+            topic = default_message(counts)
         if topic is None:
             raise ValueError(f"{p} has no laser messages ({', '.join(LASER_MESSAGES)})")
         if topic not in counts:
@@ -205,17 +212,11 @@ def write_scans(
 
 
 def _format_for_output(p: Path) -> str:
-    name = p.name.lower()
-    if name.endswith(".bag"):
-        return "ros1"
-    if name.endswith(".mcap"):
-        return "mcap"
-    if name.endswith(".jsonl"):
-        return "jsonl"
-    if name.endswith(".json"):
-        return "json"
-    if name.endswith((".log", ".log.gz", ".clf", ".clf.gz")):
+    fmt = _format_from_suffix(p.name)
+    if fmt == "carmen":
         raise ValueError("labkit reads CARMEN logs but does not write them")
+    if fmt is not None:
+        return fmt
     if p.suffix == "":
         return "ros2"
     raise ValueError(f"cannot tell the output format of {p}; use .bag, .mcap, .jsonl, .json or a folder name"

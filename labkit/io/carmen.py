@@ -29,6 +29,7 @@ from __future__ import annotations
 import gzip
 from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -52,12 +53,14 @@ def _open_text(path: Path):
     return open(path, encoding="latin-1")
 
 
-class _Record:
-    __slots__ = ("kind", "ranges", "angle_min", "increment", "range_max", "pose", "stamp_ns")
-
-    def __init__(self, kind, ranges, angle_min, increment, range_max, pose, stamp_ns):
-        self.kind, self.ranges, self.angle_min, self.increment = kind, ranges, angle_min, increment
-        self.range_max, self.pose, self.stamp_ns = range_max, pose, stamp_ns
+class _Record(NamedTuple):
+    kind: str
+    ranges: np.ndarray
+    angle_min: float
+    increment: float
+    range_max: float | None  # stated by the message, or None (found from the data)
+    pose: tuple[float, float, float] | None
+    stamp_ns: int
 
 
 def _parse(tokens: list[str]) -> _Record:
@@ -89,6 +92,12 @@ def _parse(tokens: list[str]) -> _Record:
     if len(ranges) != n:
         raise ValueError(f"expected {n} readings, got {len(ranges)}")
     return _Record(kind, ranges, start, res, max_range, pose, int(round(stamp * 1e9)))
+
+
+def default_message(counts: dict[str, int]) -> str | None:
+    """The laser read when none is named: the front laser (FLASER, else ROBOTLASER1, else
+    RAWLASER1), else the first type present; None for a log without laser messages."""
+    return next((k for k in _DEFAULT_ORDER if k in counts), min(counts) if counts else None)
 
 
 def carmen_message_types(path: str | Path) -> dict[str, int]:
@@ -171,10 +180,7 @@ def read_carmen(
         fault = (f"after line {lineno}", f"not a text log ({exc})")
 
     if message is None:
-        chosen = next((k for k in _DEFAULT_ORDER if k in seen), None)
-        if chosen is None and seen:
-            chosen = sorted(seen)[0]
-        records = [r for r in records if r.kind == chosen]
+        records = [r for r in records if r.kind == default_message(seen)]
     elif message not in seen and fault is None:
         found = ", ".join(f"{k} ({v})" for k, v in sorted(seen.items())) or "none"
         raise ValueError(f"{path} has no {message} messages; laser messages found: {found}")
