@@ -77,9 +77,22 @@ def test_a_damaged_bag_still_gives_an_rrd_with_every_readable_scan(tmp_path):
     assert 10 < summary.n_scans < 40
 
 
-def test_blueprint_builds():
-    bp = lkrr.blueprint()
-    assert bp is not None
+def test_the_rrd_carries_the_default_layout(tmp_path):
+    """The saved file opens with a 2D scan view, metric time series, a log and the notes."""
+    from rerun.chunk import RrdReader
+
+    bag, _, _ = write_simulation("office", tmp_path / "o.bag", n_scans=3)
+    lkrr.record(bag, tmp_path / "o.rrd")
+    reader = RrdReader(tmp_path / "o.rrd")
+    (store,) = reader.blueprints()
+    views = {}
+    for chunk in reader.store(store=store).stream():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:class_identifier" in batch.schema.names:
+            kind = batch.column("ViewBlueprint:class_identifier").to_pylist()[0][0]
+            origin = batch.column("ViewBlueprint:space_origin").to_pylist()[0][0]
+            views[kind] = origin.strip("/")
+    assert views == {"2D": "", "TimeSeries": "metrics", "TextLog": "log", "TextDocument": "description"}
 
 
 @pytest.mark.parametrize("n", [1, 300])
