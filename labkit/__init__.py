@@ -5,6 +5,8 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.scan` the :class:`Scan` model
 - :mod:`labkit.geometry` angles, normal-form lines, transforms
 - :mod:`labkit.segmentation` range segmentation
+- :mod:`labkit.fitting` line and circle fits
+- :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
 - :mod:`labkit.sim` the simulator with ground truth
 - :mod:`labkit.io` bags, CARMEN logs, JSON
 - :mod:`labkit.data` the bundled recordings
@@ -13,6 +15,8 @@ The library's public names are re-exported here; modules:
 
 from . import geometry, sim
 from .data import bundled_data
+from .features import Circle, Corner, Leg, LineSegment, Person, find_corners, line_segment
+from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
 from .io import CorruptFileError, convert, read_carmen, read_json_scan, read_scans, write_bag, write_scans
 from .scan import Scan, polar_to_cartesian
@@ -31,6 +35,19 @@ __all__ = [
     "RangeSegment",
     "segment_labels",
     "range_segments",
+    "LineFit",
+    "CircleFit",
+    "fit_line_polar",
+    "fit_line_tls",
+    "fit_line_ols",
+    "fit_circle",
+    "LineSegment",
+    "Corner",
+    "Circle",
+    "Leg",
+    "Person",
+    "line_segment",
+    "find_corners",
     "sim",
     "bundled_data",
     "read_scans",

@@ -1,0 +1,261 @@
+"""Feature records shared by every extractor, and corner finding.
+
+Every record is a small frozen dataclass that keeps the beam indices it came from
+(``first``/``last``, as in the Player "laser feature 2D" record), so a feature can be drawn
+back onto its scan. Points are in the sensor frame, metres; angles in radians.
+
+* :class:`LineSegment` -- split-and-merge, IEPF, angular segmentation, IAV lines
+* :class:`Corner` -- where two consecutive line segments meet
+* :class:`Circle` -- IAV circles and arcs
+* :class:`Leg`, :class:`Person` -- leg detection and pairing
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .fitting import fit_line_polar
+from .geometry import angle_difference, intersect_lines, project_onto_line
+
+__all__ = ["LineSegment", "Corner", "Circle", "Leg", "Person", "line_segment", "find_corners"]
+
+
+def _frozen(a) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class LineSegment:
+    """A line fitted to a run of beams.
+
+    Attributes
+    ----------
+    r, alpha : float
+        The line in normal form (``r >= 0`` m, ``alpha`` in (-pi, pi]).
+    covariance : ndarray (2, 2)
+        Covariance of ``(r, alpha)``.
+    start, end : ndarray (2,)
+        The first and last points projected onto the line (scan order).
+    first, last : int
+        First and last beam index (``first > last`` when the segment crosses the seam of a
+        full-circle scan).
+    n_points : int
+        Number of points fitted.
+    error : float, metres
+        RMS orthogonal distance of the points to the line.
+    indices : ndarray (n_points,), int
+        The beams fitted, in scan order.
+    """
+
+    r: float
+    alpha: float
+    covariance: np.ndarray = field(repr=False)
+    start: np.ndarray
+    end: np.ndarray
+    first: int
+    last: int
+    n_points: int
+    error: float
+    indices: np.ndarray = field(repr=False)
+
+    @property
+    def length(self) -> float:
+        """Distance between ``start`` and ``end``, metres."""
+        return float(math.hypot(*(self.end - self.start)))
+
+    @property
+    def direction(self) -> float:
+        """Direction of the line from ``start`` to ``end``, radians."""
+        return float(math.atan2(self.end[1] - self.start[1], self.end[0] - self.start[0]))
+
+    def as_dict(self) -> dict:
+        """A JSON-ready record (Player laser feature 2D fields)."""
+        return {
+            "type": "line", "first": self.first, "last": self.last, "r": self.r, "alpha": self.alpha,
+            "start": self.start.tolist(), "end": self.end.tolist(), "n_points": self.n_points,
+            "error": self.error, "length": self.length,
+        }
+
+    def __repr__(self) -> str:
+        return (f"LineSegment(r={self.r:.3f}, alpha={math.degrees(self.alpha):.1f} deg, beams {self.first}..{self.last}, "
+                f"{self.n_points} pts, length={self.length:.3f} m)")
+
+
+def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None) -> LineSegment:
+    """Fit :func:`labkit.fitting.fit_line_polar` to ``points`` (M, 2, sensor frame) of the
+    beams ``indices`` and cut the line at the projections of the first and last point.
+
+    Examples
+    --------
+    >>> seg = line_segment(np.array([[1.0, -1.0], [1.0, 0.0], [1.0, 1.0]]), [10, 11, 12])
+    >>> round(seg.r, 9), seg.first, seg.last, round(seg.length, 9)
+    (1.0, 10, 12, 2.0)
+    """
+    p = np.asarray(points, dtype=float)
+    idx = np.array(indices, dtype=np.int64)
+    if p.ndim != 2 or p.shape[1] != 2 or len(p) != len(idx):
+        raise ValueError(f"points must be (M, 2) with one row per index, got {p.shape} and {idx.shape}")
+    rho = np.hypot(p[:, 0], p[:, 1])
+    theta = np.arctan2(p[:, 1], p[:, 0])
+    fit = fit_line_polar(rho, theta, weights, range_sigma=range_sigma)
+    ends = project_onto_line(p[[0, -1]], fit.r, fit.alpha)
+    idx.setflags(write=False)
+    return LineSegment(fit.r, fit.alpha, _frozen(fit.covariance), _frozen(ends[0]), _frozen(ends[1]),
+                       int(idx[0]), int(idx[-1]), len(p), fit.rms, idx)
+
+
+@dataclass(frozen=True, eq=False)
+class Corner:
+    """Where two consecutive line segments meet.
+
+    Attributes
+    ----------
+    point : ndarray (2,)
+        Intersection of the two lines.
+    angle : float, radians
+        Angle between the two lines' directions, in (0, pi/2] (0 would be parallel).
+    kind : str
+        ``"concave"`` (the sensor sees into the corner, as into a room's corner) or
+        ``"convex"`` (the corner points at the sensor, as a box's edge does).
+    extrapolated : bool
+        True when the lines had to be extended by more than ``max_extension_m`` to meet:
+        the corner itself was not observed (a gap or an occlusion hides it).
+    lines : tuple[int, int]
+        Indices of the two segments in the list given to :func:`find_corners`.
+    first, last : int
+        The beams between which the corner lies: ``last`` of the first line, ``first`` of
+        the second.
+    """
+
+    point: np.ndarray
+    angle: float
+    kind: str
+    extrapolated: bool
+    lines: tuple[int, int]
+    first: int
+    last: int
+
+    def as_dict(self) -> dict:
+        return {"type": "corner", "first": self.first, "last": self.last, "point": self.point.tolist(),
+                "angle": self.angle, "kind": self.kind, "extrapolated": self.extrapolated}
+
+
+def _side(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> float:
+    return float((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]))
+
+
+def find_corners(
+    lines: list[LineSegment],
+    *,
+    min_angle: float = math.radians(30.0),
+    max_gap_m: float = 0.3,
+    max_extension_m: float = 0.1,
+    wrap: bool = False,
+) -> list[Corner]:
+    """Corners between consecutive line segments (in the order given, usually scan order).
+
+    Two consecutive segments make a corner when their lines differ in direction by more
+    than ``min_angle`` and the end of the first is within ``max_gap_m`` of the start of the
+    second. The corner is the intersection of the two lines. It is ``"concave"`` when it
+    lies beyond the chord joining the two segments' far ends (seen from the sensor at the
+    origin) and ``"convex"`` when it lies on the sensor's side. ``wrap=True`` also pairs the
+    last segment with the first (a full-circle scan).
+
+    Examples
+    --------
+    >>> a = line_segment(np.array([[3.0, -2.0], [3.0, -1.0], [3.0, 0.0]]), [0, 1, 2])
+    >>> b = line_segment(np.array([[2.9, 0.1], [2.0, 0.1], [1.0, 0.1]]), [3, 4, 5])
+    >>> [(c.kind, np.round(c.point, 6).tolist()) for c in find_corners([a, b])]
+    [('concave', [3.0, 0.1])]
+    """
+    if not (0 < min_angle <= math.pi / 2):
+        raise ValueError(f"min_angle must be in (0, pi/2] radians, got {min_angle}")
+    for name, v in (("max_gap_m", max_gap_m), ("max_extension_m", max_extension_m)):
+        if not (v >= 0 and math.isfinite(v)):
+            raise ValueError(f"{name} must be a finite number >= 0, got {v}")
+    out: list[Corner] = []
+    n = len(lines)
+    pairs = [(i, i + 1) for i in range(n - 1)]
+    if wrap and n > 2:
+        pairs.append((n - 1, 0))
+    for i, j in pairs:
+        a, b = lines[i], lines[j]
+        # angle between undirected lines, in [0, pi/2]
+        d = abs(float(angle_difference(a.alpha, b.alpha)))
+        angle = min(d, math.pi - d)
+        if angle < min_angle:
+            continue
+        if math.hypot(*(b.start - a.end)) > max_gap_m:
+            continue
+        p = intersect_lines(a.r, a.alpha, b.r, b.alpha)
+        if p is None:
+            continue
+        p = np.asarray(p, dtype=float)
+        extension = max(math.hypot(*(p - a.end)), math.hypot(*(p - b.start)))
+        origin = np.zeros(2)
+        side_origin = _side(a.start, b.end, origin)
+        side_corner = _side(a.start, b.end, p)
+        kind = "concave" if side_origin * side_corner < 0 else "convex"
+        out.append(Corner(_frozen(p), angle, kind, extension > max_extension_m, (i, j), a.last, b.first))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Circle:
+    """A circle (or arc) found in a scan.
+
+    ``center`` (2,) and ``radius`` in metres; ``iav_mean``/``iav_std`` the inscribed-angle
+    statistics in radians; ``confidence`` in [0, 1]; ``first``/``last`` beam indices;
+    ``n_points``; ``kind`` is ``"circle"``, ``"arc"`` (embedded in a wall) or ``"arc-like"``.
+    """
+
+    center: np.ndarray
+    radius: float
+    iav_mean: float
+    iav_std: float
+    confidence: float
+    first: int
+    last: int
+    n_points: int
+    kind: str = "circle"
+
+    def as_dict(self) -> dict:
+        return {"type": self.kind, "first": self.first, "last": self.last, "center": self.center.tolist(),
+                "radius": self.radius, "iav_mean": self.iav_mean, "iav_std": self.iav_std,
+                "confidence": self.confidence, "n_points": self.n_points}
+
+
+@dataclass(frozen=True, eq=False)
+class Leg:
+    """A leg candidate: ``center`` (2,) and ``diameter`` in metres, ``middle`` the segment's
+    middle point (Xavier et al. Table I), beam indices, IAV statistics."""
+
+    center: np.ndarray
+    diameter: float
+    middle: np.ndarray
+    first: int
+    last: int
+    n_points: int
+    iav_mean: float
+    iav_std: float
+
+    def as_dict(self) -> dict:
+        return {"type": "leg", "first": self.first, "last": self.last, "center": self.center.tolist(),
+                "diameter": self.diameter, "middle": self.middle.tolist(), "n_points": self.n_points,
+                "iav_mean": self.iav_mean, "iav_std": self.iav_std}
+
+
+@dataclass(frozen=True, eq=False)
+class Person:
+    """Two legs closer than the pairing distance; ``center`` is their midpoint."""
+
+    center: np.ndarray
+    legs: tuple[Leg, Leg]
+
+    def as_dict(self) -> dict:
+        return {"type": "person", "center": self.center.tolist(), "legs": [leg.as_dict() for leg in self.legs]}

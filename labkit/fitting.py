@@ -1,0 +1,372 @@
+"""Fitting lines and circles to points.
+
+Lines are in normal form ``x cos(alpha) + y sin(alpha) = r`` with ``r >= 0`` and ``alpha``
+wrapped to (-pi, pi].
+
+* :func:`fit_line_polar` is the weighted least-squares fit of the course slides (Arras &
+  Siegwart 1998): it minimises ``S = sum w_i (rho_i cos(theta_i - alpha) - r)^2``, the
+  weighted sum of squared *orthogonal* distances, in closed form, and propagates the range
+  noise into a 2x2 covariance of ``(r, alpha)``.
+* :func:`fit_line_tls` is the same fit for Cartesian points with equal weights
+  (orthogonal regression, "total least squares").
+* :func:`fit_line_ols` is ordinary least squares ``y = a x + b`` (vertical distances), kept
+  for contrast: it depends on the frame and fails on vertical walls.
+* :func:`fit_circle` fits a circle algebraically (Kasa) or geometrically (orthogonal
+  distances, Gauss-Newton).
+
+Degenerate input, one policy for every fit: fewer points than the model needs (2 for a
+line, 3 for a circle), all points identical, or all points collinear for a circle raise
+``ValueError`` naming the argument. Non-finite values in ``rho``/``theta`` and ranges
+``<= 0`` are invalid beams and are left out, not raised. Extractors never reach this
+error: they skip segments with too few points before fitting.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .geometry import wrap_angle
+
+__all__ = [
+    "LineFit",
+    "CircleFit",
+    "fit_line_polar",
+    "fit_line_tls",
+    "fit_line_ols",
+    "fit_circle",
+    "line_covariance",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class LineFit:
+    """A fitted line.
+
+    Attributes
+    ----------
+    r : float, metres
+        Distance of the line from the origin, ``>= 0``.
+    alpha : float, radians
+        Direction of the line's normal, in (-pi, pi].
+    covariance : ndarray (2, 2)
+        Covariance of ``(r, alpha)`` (m^2, m rad, rad^2). NaN when it cannot be
+        estimated (two points and no noise model; OLS fits).
+    rms : float, metres
+        Root mean square orthogonal distance of the points to the line (unweighted).
+    n_points : int
+        Number of points used.
+    """
+
+    r: float
+    alpha: float
+    covariance: np.ndarray
+    rms: float
+    n_points: int
+
+    def distances(self, points: np.ndarray) -> np.ndarray:
+        """Signed orthogonal distances of ``points`` (N, 2) to the line."""
+        p = np.asarray(points, dtype=float)
+        return p[:, 0] * math.cos(self.alpha) + p[:, 1] * math.sin(self.alpha) - self.r
+
+    def __repr__(self) -> str:
+        return (f"LineFit(r={self.r:.4f} m, alpha={math.degrees(self.alpha):.2f} deg, "
+                f"rms={self.rms:.4f} m, n={self.n_points})")
+
+
+@dataclass(frozen=True, eq=False)
+class CircleFit:
+    """A fitted circle: ``center`` (2,), ``radius``, RMS of the orthogonal distances
+    ``|p - center| - radius``, point count, the method and its iteration count."""
+
+    center: np.ndarray
+    radius: float
+    rms: float
+    n_points: int
+    method: str
+    iterations: int = 0
+
+    def __repr__(self) -> str:
+        cx, cy = self.center
+        return (f"CircleFit(center=({cx:.4f}, {cy:.4f}), radius={self.radius:.4f}, rms={self.rms:.4f}, "
+                f"n={self.n_points}, {self.method})")
+
+
+# ---------------------------------------------------------------------------- validation
+def _as_points(points, name: str = "points") -> np.ndarray:
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"{name} must be an array of shape (N, 2), got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"{name} must be finite (drop invalid beams first, e.g. with Scan.xy)")
+    return p
+
+
+def _check_count(n: int, need: int, name: str, what: str) -> None:
+    if n < need:
+        raise ValueError(f"{name} must hold at least {need} valid points to fit a {what}, got {n}")
+
+
+# ---------------------------------------------------------------------------- line core
+def _line_core(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """Weighted orthogonal fit. Returns r, alpha, weighted centroid (xm, ym), N, D where
+    ``alpha = atan2(N, D) / 2 + pi / 2`` before the sign of ``r`` is fixed."""
+    sw = float(w.sum())
+    sx, sy = float(w @ x), float(w @ y)
+    xm, ym = sx / sw, sy / sw
+    # the slides' double sums factor into products of single sums:
+    #   sum_i sum_j w_i w_j rho_i rho_j cos(t_i) sin(t_j) = (sum w x)(sum w y)
+    #   sum_i sum_j w_i w_j rho_i rho_j cos(t_i + t_j)    = (sum w x)^2 - (sum w y)^2
+    num = 2.0 * float(w @ (x * y)) - 2.0 * sx * sy / sw
+    den = float(w @ (x * x - y * y)) - (sx * sx - sy * sy) / sw
+    spread = float(w @ (x * x + y * y)) - (sx * sx + sy * sy) / sw
+    if spread <= 1e-24 * max(1.0, float(w @ (x * x + y * y))):
+        raise ValueError("points are all identical: a line through them is undefined")
+    alpha = 0.5 * math.atan2(num, den) + math.pi / 2
+    r = xm * math.cos(alpha) + ym * math.sin(alpha)
+    if r < 0:
+        r, alpha = -r, alpha + math.pi
+    return r, float(wrap_angle(alpha)), xm, ym, num, den
+
+
+def line_covariance(x, y, w, r: float, alpha: float, sigma_x, sigma_y=None, *, ray_noise: bool = True) -> np.ndarray:
+    """Covariance of ``(r, alpha)`` of the weighted orthogonal fit, by first-order error
+    propagation (Arras & Siegwart 1998) with the weights held fixed.
+
+    With ``ray_noise`` (the polar fit) each point moves along its own ray with standard
+    deviation ``sigma_x`` (range noise); otherwise each coordinate is independently noisy
+    with ``sigma_x`` and ``sigma_y`` (isotropic point noise by default).
+    """
+    x, y, w = (np.asarray(v, dtype=float) for v in (x, y, w))
+    sw = w.sum()
+    xm, ym = (w @ x) / sw, (w @ y) / sw
+    dx, dy = x - xm, y - ym
+    num = 2.0 * (w @ (dx * dy))
+    den = w @ (dx * dx - dy * dy)
+    q = num * num + den * den
+    if q == 0:
+        return np.full((2, 2), np.nan)
+    # d alpha / d x_i and d alpha / d y_i, from alpha = atan2(num, den) / 2 + pi / 2
+    ax = 0.5 * (den * 2 * w * dy - num * 2 * w * dx) / q
+    ay = 0.5 * (den * 2 * w * dx + num * 2 * w * dy) / q
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    lever = -xm * sa + ym * ca  # d r / d alpha at the centroid
+    rx = w / sw * ca + lever * ax
+    ry = w / sw * sa + lever * ay
+    if ray_noise:
+        rho = np.hypot(x, y)
+        c, s = x / rho, y / rho
+        jr, ja = rx * c + ry * s, ax * c + ay * s
+        var = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
+        cov = np.array([[var @ (jr * jr), var @ (jr * ja)], [var @ (jr * ja), var @ (ja * ja)]])
+    else:
+        vx = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
+        vy = vx if sigma_y is None else np.broadcast_to(np.asarray(sigma_y, dtype=float) ** 2, x.shape)
+        cov = np.array([
+            [vx @ (rx * rx) + vy @ (ry * ry), vx @ (rx * ax) + vy @ (ry * ay)],
+            [vx @ (rx * ax) + vy @ (ry * ay), vx @ (ax * ax) + vy @ (ay * ay)],
+        ])
+    return cov
+
+
+def _residual_sigma(d: np.ndarray) -> float:
+    n = d.size
+    return math.sqrt(float(d @ d) / (n - 2)) if n > 2 else math.nan
+
+
+def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
+    """Weighted least-squares line through points given in polar form.
+
+    Minimises ``S = sum_i w_i (rho_i cos(theta_i - alpha) - r)^2`` in closed form:
+
+    * ``alpha = 1/2 atan2(sum w rho^2 sin 2theta - 2/W (sum w rho cos theta)(sum w rho sin theta),
+      sum w rho^2 cos 2theta - 1/W ((sum w rho cos theta)^2 - (sum w rho sin theta)^2)) + pi/2``
+    * ``r = sum w rho cos(theta - alpha) / W`` with ``W = sum w``
+
+    The slides write the second terms as double sums over all pairs (O(n^2)); they factor
+    into products of single sums, so the fit is O(n). A negative ``r`` is made positive
+    by turning the normal around (``alpha + pi``).
+
+    Parameters
+    ----------
+    rho, theta : array_like (N,)
+        Ranges (m) and bearings (rad). Non-finite values and ranges ``<= 0`` are invalid
+        beams and are left out.
+    weights : None, "uniform", "inverse_variance" or array_like (N,)
+        ``None`` (default): ``w = 1 / rho``, the slides' choice (closer points are more
+        certain). ``"inverse_variance"``: ``w = 1 / range_sigma^2`` (a range variance
+        model, e.g. noise growing with range). An array: your own non-negative weights.
+    range_sigma : float or array_like (N,), metres, optional
+        Standard deviation of each range reading, used for the covariance (and for the
+        ``"inverse_variance"`` weights). Default: estimated from the residuals,
+        ``sqrt(sum d^2 / (n - 2))``, so the covariance is NaN for two points.
+
+    Returns
+    -------
+    LineFit
+
+    Examples
+    --------
+    >>> theta = np.radians([-20.0, 0.0, 20.0])
+    >>> fit = fit_line_polar(2.0 / np.cos(theta), theta)     # the wall x = 2
+    >>> round(fit.r, 9), round(float(np.degrees(fit.alpha)), 9)
+    (2.0, 0.0)
+    """
+    rho = np.asarray(rho, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    if rho.ndim != 1 or theta.shape != rho.shape:
+        raise ValueError(f"rho and theta must be 1-D arrays of the same length, got shapes {rho.shape} and "
+                         f"{theta.shape}")
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(rho) & np.isfinite(theta) & (rho > 0)
+    sigma = None
+    if range_sigma is not None:
+        sigma = np.broadcast_to(np.asarray(range_sigma, dtype=float), rho.shape)
+        if not np.all(np.isfinite(sigma[ok]) & (sigma[ok] > 0)):
+            raise ValueError("range_sigma must be positive and finite")
+    if weights is None:
+        w = np.zeros_like(rho)
+        w[ok] = 1.0 / rho[ok]
+    elif isinstance(weights, str):
+        if weights == "uniform":
+            w = np.ones_like(rho)
+        elif weights == "inverse_variance":
+            if sigma is None:
+                raise ValueError('weights="inverse_variance" needs range_sigma')
+            w = np.zeros_like(rho)
+            w[ok] = 1.0 / sigma[ok] ** 2
+        else:
+            raise ValueError(f'weights must be None, "uniform", "inverse_variance" or an array, got {weights!r}')
+    else:
+        w = np.asarray(weights, dtype=float)
+        if w.shape != rho.shape:
+            raise ValueError(f"weights must have the shape of rho {rho.shape}, got {w.shape}")
+        if not np.all(np.isfinite(w[ok]) & (w[ok] >= 0)):
+            raise ValueError("weights must be finite and >= 0")
+        ok = ok & (w > 0)
+    _check_count(int(ok.sum()), 2, "rho", "line")
+    rho, theta, w = rho[ok], theta[ok], w[ok]
+    x, y = rho * np.cos(theta), rho * np.sin(theta)
+    r, alpha, *_ = _line_core(x, y, w)
+    d = x * math.cos(alpha) + y * math.sin(alpha) - r
+    s = _residual_sigma(d) if sigma is None else sigma[ok]
+    cov = line_covariance(x, y, w, r, alpha, s, ray_noise=True)
+    return LineFit(r, alpha, cov, float(np.sqrt(np.mean(d * d))), int(rho.size))
+
+
+def fit_line_tls(points, *, point_sigma=None) -> LineFit:
+    """Orthogonal regression (total least squares): the line minimising the sum of squared
+    orthogonal distances, all points weighted equally.
+
+    ``point_sigma`` (metres) is the isotropic noise of each coordinate for the covariance;
+    by default it is estimated from the residuals.
+
+    Examples
+    --------
+    >>> fit_line_tls([[0.0, 1.0], [1.0, 1.0], [2.0, 1.0]])
+    LineFit(r=1.0000 m, alpha=90.00 deg, rms=0.0000 m, n=3)
+    """
+    p = _as_points(points)
+    _check_count(len(p), 2, "points", "line")
+    x, y = p[:, 0], p[:, 1]
+    w = np.ones(len(p))
+    r, alpha, *_ = _line_core(x, y, w)
+    d = x * math.cos(alpha) + y * math.sin(alpha) - r
+    s = _residual_sigma(d) if point_sigma is None else float(point_sigma)
+    cov = line_covariance(x, y, w, r, alpha, s, ray_noise=False)
+    return LineFit(r, alpha, cov, float(np.sqrt(np.mean(d * d))), len(p))
+
+
+def fit_line_ols(points) -> LineFit:
+    """Ordinary least squares ``y = a x + b``, returned in normal form for comparison.
+
+    It minimises *vertical* distances, so the result depends on the frame and it cannot
+    represent a vertical line (``ValueError`` when all ``x`` are equal). ``covariance`` is
+    NaN: this fit has no range-noise model. ``rms`` is still the orthogonal RMS.
+
+    Examples
+    --------
+    >>> fit_line_ols([[0.0, 1.0], [1.0, 2.0], [2.0, 3.0]]).r   # y = x + 1
+    0.7071067811865475
+    """
+    p = _as_points(points)
+    _check_count(len(p), 2, "points", "line")
+    x, y = p[:, 0], p[:, 1]
+    xm, ym = x.mean(), y.mean()
+    sxx = float(((x - xm) ** 2).sum())
+    if sxx <= 1e-24 * max(1.0, float((x * x).sum())):
+        raise ValueError("points all have the same x: ordinary least squares cannot fit a vertical line "
+                         "(use fit_line_tls)")
+    a = float(((x - xm) * (y - ym)).sum()) / sxx
+    b = ym - a * xm
+    # a x - y + b = 0  ->  normal (-a, 1) / sqrt(1 + a^2), r = b / sqrt(1 + a^2)
+    norm = math.hypot(a, 1.0)
+    alpha, r = math.atan2(1.0, -a), b / norm
+    if r < 0:
+        r, alpha = -r, alpha + math.pi
+    alpha = float(wrap_angle(alpha))
+    d = x * math.cos(alpha) + y * math.sin(alpha) - r
+    return LineFit(float(r), alpha, np.full((2, 2), np.nan), float(np.sqrt(np.mean(d * d))), len(p))
+
+
+# ---------------------------------------------------------------------------- circles
+def fit_circle(points, method: str = "algebraic", *, max_iterations: int = 50, tol: float = 1e-12) -> CircleFit:
+    """Fit a circle to points.
+
+    ``method="algebraic"`` (Kasa 1976) minimises ``sum (|p - c|^2 - R^2)^2``, a linear
+    least-squares problem: fast, but biased towards small radii on short arcs.
+    ``method="geometric"`` minimises ``sum (|p - c| - R)^2``, the orthogonal distances, by
+    Gauss-Newton started from the algebraic fit.
+
+    Raises ``ValueError`` for fewer than 3 points or (nearly) collinear points.
+
+    Examples
+    --------
+    >>> t = np.linspace(0, np.pi, 7)
+    >>> fit = fit_circle(np.c_[1 + 2 * np.cos(t), -1 + 2 * np.sin(t)], "geometric")
+    >>> np.round(fit.center, 9).tolist(), round(fit.radius, 9)
+    ([1.0, -1.0], 2.0)
+    """
+    if method not in ("algebraic", "geometric"):
+        raise ValueError(f'method must be "algebraic" or "geometric", got {method!r}')
+    p = _as_points(points)
+    _check_count(len(p), 3, "points", "circle")
+    # centre and scale for conditioning
+    mean = p.mean(axis=0)
+    q = p - mean
+    scale = float(np.sqrt((q * q).sum(axis=1).mean()))
+    if scale == 0:
+        raise ValueError("points are all identical: a circle through them is undefined")
+    q = q / scale
+    a = np.c_[q, np.ones(len(q))]
+    b = (q * q).sum(axis=1)
+    sv = np.linalg.svd(a, compute_uv=False)
+    if sv[-1] < 1e-9 * sv[0]:
+        raise ValueError("points are collinear: no finite circle fits them")
+    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
+    c = sol[:2] / 2.0
+    rad2 = sol[2] + c @ c
+    if not rad2 > 0 or np.hypot(*c) > 1e6:
+        raise ValueError("points are collinear: no finite circle fits them")
+    radius = math.sqrt(rad2)
+    iterations = 0
+    if method == "geometric":
+        for iterations in range(1, max_iterations + 1):  # noqa: B007 - reported
+            diff = q - c
+            dist = np.hypot(diff[:, 0], diff[:, 1])
+            dist = np.where(dist == 0, 1e-300, dist)
+            res = dist - radius
+            jac = np.c_[-diff / dist[:, None], -np.ones(len(q))]
+            step, *_ = np.linalg.lstsq(jac, -res, rcond=None)
+            c = c + step[:2]
+            radius += step[2]
+            if float(step @ step) < tol * max(1.0, radius * radius):
+                break
+        radius = abs(radius)
+    center = c * scale + mean
+    radius *= scale
+    d = np.hypot(p[:, 0] - center[0], p[:, 1] - center[1]) - radius
+    center.setflags(write=False)
+    return CircleFit(center, float(radius), float(np.sqrt(np.mean(d * d))), len(p), method, iterations)
