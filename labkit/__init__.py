@@ -6,6 +6,7 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.geometry` angles, normal-form lines, transforms
 - :mod:`labkit.segmentation` range segmentation
 - :mod:`labkit.fitting` line and circle fits
+- :mod:`labkit.split_merge` split-and-merge and IEPF line extraction
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
 - :mod:`labkit.sim` the simulator with ground truth
 - :mod:`labkit.io` bags, CARMEN logs, JSON
@@ -20,7 +21,8 @@ from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_pola
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
 from .io import CorruptFileError, convert, read_carmen, read_json_scan, read_scans, write_bag, write_scans
 from .scan import Scan, polar_to_cartesian
-from .segmentation import RangeSegment, range_segments, segment_labels
+from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
+from .split_merge import Step, lines_similar, split_and_merge
 
 __version__ = "0.1.0"
 
@@ -35,6 +37,10 @@ __all__ = [
     "RangeSegment",
     "segment_labels",
     "range_segments",
+    "breakpoint_thresholds",
+    "split_and_merge",
+    "lines_similar",
+    "Step",
     "LineFit",
     "CircleFit",
     "fit_line_polar",

@@ -82,8 +82,8 @@ class LineSegment:
         }
 
     def __repr__(self) -> str:
-        return (f"LineSegment(r={self.r:.3f}, alpha={math.degrees(self.alpha):.1f} deg, beams {self.first}..{self.last}, "
-                f"{self.n_points} pts, length={self.length:.3f} m)")
+        return (f"LineSegment(r={self.r:.3f}, alpha={math.degrees(self.alpha):.1f} deg, "
+                f"beams {self.first}..{self.last}, {self.n_points} pts, length={self.length:.3f} m)")
 
 
 def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None) -> LineSegment:

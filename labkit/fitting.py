@@ -38,6 +38,7 @@ __all__ = [
     "fit_line_ols",
     "fit_circle",
     "line_covariance",
+    "line_covariances",
 ]
 
 
@@ -137,37 +138,56 @@ def line_covariance(x, y, w, r: float, alpha: float, sigma_x, sigma_y=None, *, r
 
     With ``ray_noise`` (the polar fit) each point moves along its own ray with standard
     deviation ``sigma_x`` (range noise); otherwise each coordinate is independently noisy
-    with ``sigma_x`` and ``sigma_y`` (isotropic point noise by default).
+    with ``sigma_x`` and ``sigma_y`` (isotropic point noise by default). ``r`` is not
+    needed (the centroid fixes it) and is kept for symmetry with the fit's result.
     """
-    x, y, w = (np.asarray(v, dtype=float) for v in (x, y, w))
-    sw = w.sum()
-    xm, ym = (w @ x) / sw, (w @ y) / sw
-    dx, dy = x - xm, y - ym
-    num = 2.0 * (w @ (dx * dy))
-    den = w @ (dx * dx - dy * dy)
+    x = np.asarray(x, dtype=float)
+    vx = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
+    vy = None if sigma_y is None else np.broadcast_to(np.asarray(sigma_y, dtype=float) ** 2, x.shape)
+    return line_covariances(x, np.asarray(y, dtype=float), np.asarray(w, dtype=float), np.array([0]),
+                            np.array([alpha]), vx, vy, ray_noise=ray_noise)[0]
+
+
+def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bool = True) -> np.ndarray:
+    """:func:`line_covariance` for many lines at once: the points of line ``k`` are
+    ``x[starts[k]:starts[k + 1]]`` (the last runs to the end), its normal ``alpha[k]``;
+    ``var_x``/``var_y`` are per-point variances. Returns (K, 2, 2); NaN for a line whose
+    direction is undetermined (all points identical, or an isotropic cloud)."""
+    starts = np.asarray(starts)
+    counts = np.diff(np.append(starts, len(x)))
+    line = np.repeat(np.arange(len(starts)), counts)
+
+    def per_line(v):
+        return np.add.reduceat(v, starts)
+
+    sw = per_line(w)
+    xm, ym = per_line(w * x) / sw, per_line(w * y) / sw
+    dx, dy = x - xm[line], y - ym[line]
+    num = 2.0 * per_line(w * dx * dy)
+    den = per_line(w * (dx * dx - dy * dy))
     q = num * num + den * den
-    if q == 0:
-        return np.full((2, 2), np.nan)
-    # d alpha / d x_i and d alpha / d y_i, from alpha = atan2(num, den) / 2 + pi / 2
-    ax = 0.5 * (den * 2 * w * dy - num * 2 * w * dx) / q
-    ay = 0.5 * (den * 2 * w * dx + num * 2 * w * dy) / q
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    lever = -xm * sa + ym * ca  # d r / d alpha at the centroid
-    rx = w / sw * ca + lever * ax
-    ry = w / sw * sa + lever * ay
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # d alpha / d x_i and d alpha / d y_i, from alpha = atan2(num, den) / 2 + pi / 2
+        ax = w * (den[line] * dy - num[line] * dx) / q[line]
+        ay = w * (den[line] * dx + num[line] * dy) / q[line]
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    lever = (-xm * sa + ym * ca)[line]  # d r / d alpha at the centroid
+    rx = w / sw[line] * ca[line] + lever * ax
+    ry = w / sw[line] * sa[line] + lever * ay
+    cov = np.empty((len(starts), 2, 2))
     if ray_noise:
         rho = np.hypot(x, y)
         c, s = x / rho, y / rho
         jr, ja = rx * c + ry * s, ax * c + ay * s
-        var = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
-        cov = np.array([[var @ (jr * jr), var @ (jr * ja)], [var @ (jr * ja), var @ (ja * ja)]])
+        cov[:, 0, 0] = per_line(var_x * jr * jr)
+        cov[:, 0, 1] = cov[:, 1, 0] = per_line(var_x * jr * ja)
+        cov[:, 1, 1] = per_line(var_x * ja * ja)
     else:
-        vx = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
-        vy = vx if sigma_y is None else np.broadcast_to(np.asarray(sigma_y, dtype=float) ** 2, x.shape)
-        cov = np.array([
-            [vx @ (rx * rx) + vy @ (ry * ry), vx @ (rx * ax) + vy @ (ry * ay)],
-            [vx @ (rx * ax) + vy @ (ry * ay), vx @ (ax * ax) + vy @ (ay * ay)],
-        ])
+        var_y = var_x if var_y is None else var_y
+        cov[:, 0, 0] = per_line(var_x * rx * rx + var_y * ry * ry)
+        cov[:, 0, 1] = cov[:, 1, 0] = per_line(var_x * rx * ax + var_y * ry * ay)
+        cov[:, 1, 1] = per_line(var_x * ax * ax + var_y * ay * ay)
+    cov[q == 0] = np.nan
     return cov
 
 

@@ -7,6 +7,17 @@ rejected (label -1); with the default of 2 that rejects isolated points, as the 
 does. On a full-circle scan the last and first beams are neighbours, so a segment may
 cross the seam; its beam indices then wrap (``first > last``).
 
+With ``adaptive=True`` the threshold grows with range and angular step, as in the
+adaptive breakpoint detector of Borges & Aldon (2004): two neighbouring beams at range ``r``
+and angular step ``dphi`` are still linked when their points are closer than
+
+    D_max = r sin(dphi) / sin(lambda - dphi) + 3 sigma_r
+
+the gap that a wall seen at the grazing incidence ``lambda`` would leave, plus three
+standard deviations of range noise. ``r`` is the smaller of the two ranges. The fixed
+``threshold_m`` stays a floor, so near the sensor nothing changes; far away (or at a coarse
+angular step) a wall is no longer shattered into isolated points.
+
 Labels follow the scikit-learn convention: an int per beam, -1 for "no segment".
 """
 
@@ -18,7 +29,7 @@ import numpy as np
 
 from .scan import Scan
 
-__all__ = ["RangeSegment", "segment_labels", "range_segments"]
+__all__ = ["RangeSegment", "segment_labels", "range_segments", "breakpoint_thresholds"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,7 +73,44 @@ def _validate(threshold_m: float, min_points: int) -> None:
         raise ValueError(f"min_points must be an integer >= 1, got {min_points!r}")
 
 
-def segment_labels(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2) -> np.ndarray:
+def breakpoint_thresholds(
+    r_a: np.ndarray,
+    r_b: np.ndarray,
+    dphi: np.ndarray,
+    threshold_m: float = 0.08,
+    *,
+    incidence_deg: float = 10.0,
+    range_sigma_m: float = 0.01,
+) -> np.ndarray:
+    """Adaptive breakpoint distance (Borges & Aldon 2004) between beams of ranges ``r_a``,
+    ``r_b`` that are ``dphi`` radians apart, floored at ``threshold_m``.
+
+    Examples
+    --------
+    >>> t = breakpoint_thresholds(np.array([1.0, 10.0]), np.array([1.0, 10.0]), np.radians([0.5, 0.5]))
+    >>> np.round(t, 3).tolist()
+    [0.083, 0.559]
+    """
+    if not (0 < incidence_deg < 90):
+        raise ValueError(f"incidence_deg must be in (0, 90) degrees, got {incidence_deg}")
+    if not (np.isfinite(range_sigma_m) and range_sigma_m >= 0):
+        raise ValueError(f"range_sigma_m must be a finite number >= 0, got {range_sigma_m}")
+    dphi = np.abs(np.asarray(dphi, dtype=float))
+    lam = np.radians(incidence_deg)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.fmin(r_a, r_b) * np.sin(dphi) / np.sin(np.maximum(lam - dphi, 1e-9)) + 3.0 * range_sigma_m
+    return np.fmax(d, threshold_m)
+
+
+def segment_labels(
+    scan: Scan,
+    threshold_m: float = 0.08,
+    *,
+    min_points: int = 2,
+    adaptive: bool = False,
+    incidence_deg: float = 10.0,
+    range_sigma_m: float = 0.01,
+) -> np.ndarray:
     """Label each beam with its range segment.
 
     Parameters
@@ -73,6 +121,12 @@ def segment_labels(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2
         (Xavier et al. 2005, Table II ``seg_threshold``).
     min_points : int
         Smallest segment kept. Default 2 (isolated points are rejected).
+    adaptive : bool
+        Grow the threshold with range and angular step (see :func:`breakpoint_thresholds`);
+        ``threshold_m`` is then the floor.
+    incidence_deg, range_sigma_m : float
+        The adaptive detector's grazing angle ``lambda`` (default 10 deg) and range noise
+        (default 0.01 m).
 
     Returns
     -------
@@ -92,9 +146,17 @@ def segment_labels(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2
     if n == 0:
         return labels
     pts = scan.points
+    ranges, angles = scan.ranges, scan.angles
+    if adaptive:
+        limit = breakpoint_thresholds(ranges[:-1], ranges[1:], np.diff(angles), threshold_m,
+                                      incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)
+        seam_limit = float(breakpoint_thresholds(ranges[-1:], ranges[:1], [scan.angle_increment], threshold_m,
+                                                 incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)[0])
+    else:
+        limit, seam_limit = threshold_m, threshold_m
     with np.errstate(invalid="ignore"):
         gap = np.hypot(*np.diff(pts, axis=0).T)  # NaN where either beam is invalid
-        linked = gap < threshold_m  # (N - 1,)
+        linked = gap < limit  # (N - 1,)
     valid = scan.valid
     # a new segment starts at every valid beam not linked to its predecessor
     starts = valid & np.concatenate([[True], ~linked])
@@ -103,7 +165,7 @@ def segment_labels(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2
     wrap = False
     if scan.is_full_circle and n > 2 and valid[0] and valid[-1] and raw[-1] != raw[0]:
         with np.errstate(invalid="ignore"):
-            wrap = bool(np.hypot(*(pts[0] - pts[-1])) < threshold_m)
+            wrap = bool(np.hypot(*(pts[0] - pts[-1])) < seam_limit)
     if wrap:
         raw[raw == raw[-1]] = raw[0]  # the run before the seam continues the first run
     sizes = np.bincount(raw[raw >= 0], minlength=0) if np.any(raw >= 0) else np.zeros(0, dtype=int)
@@ -115,10 +177,16 @@ def segment_labels(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2
     return labels
 
 
-def range_segments(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2) -> list[RangeSegment]:
+def range_segments(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2, **adaptive) -> list[RangeSegment]:
     """The segments of :func:`segment_labels` as :class:`RangeSegment` records, in scan
-    order (a seam-crossing segment is listed first and its indices run N-k..N-1, 0..m)."""
-    labels = segment_labels(scan, threshold_m, min_points=min_points)
+    order (a seam-crossing segment is listed first and its indices run N-k..N-1, 0..m).
+    Keyword arguments ``adaptive``, ``incidence_deg`` and ``range_sigma_m`` are passed on."""
+    labels = segment_labels(scan, threshold_m, min_points=min_points, **adaptive)
+    return segments_from_labels(scan, labels)
+
+
+def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
+    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware."""
     out = []
     n = scan.n_beams
     for k in range(int(labels.max()) + 1 if n and labels.max() >= 0 else 0):

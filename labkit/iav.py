@@ -1,0 +1,800 @@
+"""Inscribed Angle Variance (IAV): circles, arcs and lines from the geometry of arcs.
+
+Every point ``P_i`` of an arc sees the arc's extremes ``P_1`` and ``P_n`` under the same
+angle (Euclid III.21, the inscribed angle theorem), so the inscribed angles
+``angle(P_1, P_i, P_n)`` of a range segment have a small spread when the segment is an
+arc, and a mean that tells how much of the circle is visible: 90 deg for a half circle,
+180 deg for a straight line (Xavier et al. 2005, Sec. II-B).
+
+* :func:`inscribed_angles`, :func:`iav_stats` -- the angles and their mean and spread
+* :func:`middle_point_offset` -- the circle prerequisite of Fig. 5 (Sec. II-D)
+* :func:`circle_from_iav` -- centre and radius from the chord and the mean angle (Sec. II-C)
+* :func:`is_v_corner` -- the V-corner test that guards the "arc-like" mode (Sec. II-B.3)
+* :func:`detect_circles` -- circles (and, optionally, "arc-like" shapes such as tree trunks)
+* :func:`detect_lines_iav` -- lines as segments whose inscribed angles are all near 180 deg
+* :func:`detect_arcs` -- arcs embedded in lines, e.g. rounded wall corners (Sec. II-B.2)
+
+Conventions
+-----------
+Angles are radians. Points of a scan segment are in scan order, which is counter-clockwise
+around the sensor (``Scan.angles`` increase). The *signed* inscribed angle at ``P_i`` is
+measured counter-clockwise from the ray ``P_i -> P_1`` to the ray ``P_i -> P_n``, in
+[0, 2 pi). For points in scan order a shape that bulges towards the sensor (a column, a
+leg, a box's edge) gives angles below pi, a straight line pi, and a shape that is hollow
+towards the sensor (a room's rounded corner seen from inside) angles above pi. This is
+the paper's "measured counter-clockwise". The *unsigned* angle is the plain geometric
+angle in [0, pi].
+
+Degenerate input, one policy (the one of :mod:`labkit.fitting`): the functions that take
+points raise ``ValueError`` naming ``points`` when there are fewer than 3 points (no
+interior point, no inscribed angle), when the points are not finite, or when an interior
+point coincides with an extreme (its angle is undefined). The detectors never raise on
+data: they skip such segments, and the skipped segment's trace record says why.
+
+Corrections to the paper (Sec. II-C), derived in :func:`circle_from_iav`: the central
+angle ``P_1 O P_n`` is ``360 - 2 IAV`` (the paper prints ``360 - IAV``; its own next step,
+``theta = IAV - 90``, follows only from ``360 - 2 IAV``); the centre's height above the
+chord is ``(chord / 2) tan(theta)`` (the paper prints ``P_4 tan(theta)``, the whole
+chord, which doubles it); and the side of the chord the centre lies on is the side away
+from the segment's points when ``IAV > 90 deg`` (the paper leaves the sign implicit).
+
+References
+----------
+J. Xavier, M. Pacheco, D. Castro, A. Ruano, U. Nunes, "Fast line, arc/circle and leg
+detection from laser scan data in a Player driver", IEEE ICRA 2005, Sec. II-B to II-D and
+Table II (the defaults here).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .features import Circle, LineSegment, line_segment
+from .fitting import fit_circle
+from .scan import Scan
+from .segmentation import RangeSegment, range_segments
+
+__all__ = [
+    "IAVStats",
+    "SegmentCheck",
+    "inscribed_angles",
+    "iav_stats",
+    "middle_point_offset",
+    "circle_from_iav",
+    "is_v_corner",
+    "circle_confidence",
+    "detect_circles",
+    "detect_lines_iav",
+    "detect_arcs",
+]
+
+#: Table II ``circle_std_max``: largest standard deviation of the inscribed angles of a circle (rad, 8.6 deg).
+CIRCLE_STD_MAX = 0.15
+#: Sec. II-B.3: largest standard deviation of an "arc-like" shape (23 deg).
+ARC_LIKE_STD_MAX = math.radians(23.0)
+#: Sec. II-B: the mean inscribed angle of a circle lies between 90 and 135 deg.
+CIRCLE_MEAN_RANGE = (math.radians(90.0), math.radians(135.0))
+
+_CENTER_METHODS = ("iav", "algebraic", "geometric")
+
+
+# ============================================================================ records
+class IAVStats(NamedTuple):
+    """Mean and (population) standard deviation of the inscribed angles of a segment,
+    radians, and the number of interior points they come from. Unpacks as
+    ``mean, std, n_angles``."""
+
+    mean: float
+    std: float
+    n_angles: int
+
+
+@dataclass(frozen=True)
+class SegmentCheck:
+    """What a detector decided about one run of points (one trace entry).
+
+    Attributes
+    ----------
+    first, last : int
+        First and last beam of the run.
+    n_points : int
+        Points in the run.
+    chord_m : float
+        Distance between the run's extreme points, metres.
+    middle_ratio : float
+        Signed offset of the middle point from the chord over the chord length (see
+        :func:`middle_point_offset`); NaN when not computed.
+    iav_mean, iav_std : float
+        Inscribed angle statistics, radians (NaN when not computed).
+    verdict : str
+        ``"accepted"`` or the first test the run failed: ``"too few points"``,
+        ``"chord too short"``, ``"chord too long"``, ``"degenerate"``, ``"prerequisite"``,
+        ``"iav mean"``, ``"iav std"``, ``"v-corner"``, ``"fit failed"``, ``"occluded"``
+        (legs), ``"not embedded"`` (arcs).
+    """
+
+    first: int
+    last: int
+    n_points: int
+    chord_m: float = math.nan
+    middle_ratio: float = math.nan
+    iav_mean: float = math.nan
+    iav_std: float = math.nan
+    verdict: str = "accepted"
+
+
+# ============================================================================ validation
+def _as_points(points) -> np.ndarray:
+    p = np.asarray(points, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"points must be an array of shape (M, 2), got shape {p.shape}")
+    if p.shape[0] < 3:
+        raise ValueError(f"points must hold at least 3 points (an interior point and two extremes), got {p.shape[0]}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError("points must be finite (drop invalid beams first, e.g. with Scan.xy)")
+    return p
+
+
+def _check_scan(scan) -> None:
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+
+
+def _check_positive(name: str, value, *, allow_inf: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not (v > 0 and (allow_inf or math.isfinite(v))):
+        raise ValueError(f"{name} must be a positive{'' if allow_inf else ' finite'} number, got {value!r}")
+    return v
+
+
+def _check_nonneg(name: str, value, *, allow_inf: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not (v >= 0 and (allow_inf or math.isfinite(v))):
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return v
+
+
+def _check_int(name: str, value, minimum: int) -> int:
+    if isinstance(value, bool) or int(value) != value or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def _check_range(name: str, value, lo: float, hi: float) -> tuple[float, float]:
+    try:
+        a, b = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a pair (low, high), got {value!r}") from None
+    if not (lo <= a < b <= hi):
+        raise ValueError(f"{name} must satisfy {lo:g} <= low < high <= {hi:g}, got {value!r}")
+    return a, b
+
+
+def _check_center_method(center_method: str) -> None:
+    if center_method not in _CENTER_METHODS:
+        raise ValueError(f"center_method must be one of {_CENTER_METHODS}, got {center_method!r}")
+
+
+def _check_segments(segments) -> list[RangeSegment]:
+    segs = list(segments)
+    for s in segs:
+        if not isinstance(s, RangeSegment):
+            raise ValueError(f"segments must be RangeSegment records (labkit.range_segments), got {type(s).__name__}")
+    return segs
+
+
+# ============================================================================ core geometry
+def _signed_angles(p: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Counter-clockwise angles (M-2,) in [0, 2 pi) and whether all are defined."""
+    inner = p[1:-1]
+    a = p[0] - inner  # rays P_i -> P_1
+    b = p[-1] - inner  # rays P_i -> P_n
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    dot = a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]
+    ok = bool(np.all(np.any(a != 0, axis=1) & np.any(b != 0, axis=1)))
+    return np.mod(np.arctan2(cross, dot), 2 * np.pi), ok
+
+
+def inscribed_angles(points, *, signed: bool = False) -> np.ndarray:
+    """Inscribed angles ``angle(P_1, P_i, P_n)`` at the interior points of a polyline.
+
+    Parameters
+    ----------
+    points : array_like of shape (M, 2), metres
+        ``P_1 .. P_M`` in order (for a scan segment: scan order). ``M >= 3``.
+    signed : bool
+        ``False`` (default): the geometric angle in [0, pi]. ``True``: measured
+        counter-clockwise from the ray ``P_i -> P_1`` to the ray ``P_i -> P_M``, in
+        [0, 2 pi); for points in scan order, below pi where the shape bulges towards
+        the sensor and above pi where it is hollow towards it.
+
+    Returns
+    -------
+    ndarray of shape (M - 2,), radians
+
+    Raises
+    ------
+    ValueError
+        Fewer than 3 points, non-finite points, or an interior point that coincides
+        with ``P_1`` or ``P_M`` (its angle is undefined).
+
+    Examples
+    --------
+    Points on a circle see the chord under one angle (here a half circle: 90 deg), and
+    points on a line under 180 deg:
+
+    >>> t = np.radians([-90, -45, 0, 30, 90])
+    >>> np.degrees(inscribed_angles(np.c_[np.cos(t), np.sin(t)])).round(6)
+    array([90., 90., 90.])
+    >>> np.degrees(inscribed_angles([[0, 0], [1, 0], [2, 0], [3, 0]])).round(6)
+    array([180., 180.])
+    """
+    p = _as_points(points)
+    ang, ok = _signed_angles(p)
+    if not ok:
+        raise ValueError("points has an interior point that coincides with an extreme: its inscribed angle is undefined")
+    return ang if signed else np.minimum(ang, 2 * np.pi - ang)
+
+
+def iav_stats(points, *, signed: bool = False) -> IAVStats:
+    """Mean and standard deviation of the inscribed angles of ``points``.
+
+    The standard deviation is the population one (``ddof=0``); Xavier et al. do not say
+    which they use. Same arguments and degenerate-input policy as :func:`inscribed_angles`.
+
+    Examples
+    --------
+    >>> t = np.radians(np.linspace(-60, 60, 9))
+    >>> mean, std, n = iav_stats(np.c_[-np.cos(t), np.sin(t)])   # 120 deg of a unit circle
+    >>> round(float(np.degrees(mean)), 6), round(std, 9), n
+    (120.0, 0.0, 7)
+    """
+    ang = inscribed_angles(points, signed=signed)
+    return IAVStats(float(ang.mean()), float(ang.std()), int(ang.size))
+
+
+def middle_point_offset(points, viewpoint=(0.0, 0.0)) -> float:
+    """The circle prerequisite of Xavier et al. Fig. 5: where the middle point lies
+    relative to the chord, as a fraction of the chord length.
+
+    The chord joins the extremes ``P_1`` and ``P_M``; the middle point is
+    ``P_(M // 2)`` (0-based row ``M // 2``). Returns its distance from the chord's line
+    divided by the chord length, positive when it lies on the side of ``viewpoint`` (the
+    sensor, at the origin of the scan frame). A column, a leg or any arc seen from
+    outside bulges towards the sensor and gives a positive value; a half circle gives
+    0.5, a straight segment 0, a hollow (a rounded room corner seen from inside) a
+    negative value. The paper's equations (2)-(4) rotate the chord onto an axis and test
+    ``0.1 d < x_2 < 0.7 d``; this is the same test without choosing an axis, and with
+    the side fixed by the sensor (the paper's sign depends on its axis conventions).
+
+    When the viewpoint lies on the chord's line, the side is taken as the middle
+    point's own (the value is then the absolute offset). Degenerate input as
+    :func:`inscribed_angles`, plus ``P_1 == P_M`` (no chord).
+
+    Examples
+    --------
+    >>> t = np.radians([-90, -45, 0, 45, 90])
+    >>> round(middle_point_offset(np.c_[3 - np.cos(t), np.sin(t)]), 9)   # half circle, seen from the origin
+    0.5
+    >>> middle_point_offset([[1, 0], [1, 1], [1, 2]])
+    0.0
+    """
+    p = _as_points(points)
+    v = np.asarray(viewpoint, dtype=np.float64)
+    if v.shape != (2,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"viewpoint must be two finite numbers, got {viewpoint!r}")
+    ratio = _middle_ratio(p, v)
+    if math.isnan(ratio):
+        raise ValueError("points has identical extremes: the chord is undefined")
+    return ratio
+
+
+def _middle_ratio(p: np.ndarray, viewpoint: np.ndarray | None = None) -> float:
+    """Signed middle-point offset over chord (positive towards ``viewpoint``, the origin
+    by default); NaN for a zero chord."""
+    d = p[-1] - p[0]
+    chord = math.hypot(d[0], d[1])
+    if chord == 0:
+        return math.nan
+    m = p[p.shape[0] // 2] - p[0]
+    side = (d[0] * m[1] - d[1] * m[0]) / chord  # > 0: left of P_1 -> P_M
+    vp = -p[0] if viewpoint is None else viewpoint - p[0]
+    sensor_side = d[0] * vp[1] - d[1] * vp[0]
+    if sensor_side < 0:
+        side = -side
+    elif sensor_side == 0:
+        side = abs(side)
+    return side / chord + 0.0
+
+
+def circle_from_iav(p_first, p_last, iav_mean: float, side: float) -> tuple[np.ndarray, float]:
+    """Centre and radius of the circle through ``p_first`` and ``p_last`` whose points
+    between them see the chord under ``iav_mean`` (Xavier et al. 2005, Sec. II-C, corrected).
+
+    Derivation. An interior point sees the chord under half the central angle of the
+    *other* arc, so the arc that holds the points spans ``360 - 2 IAV`` at the centre
+    (the paper prints ``360 - IAV``). The triangle ``P_1 O P_n`` is isosceles, so its
+    base angle is ``theta = (180 - (360 - 2 IAV)) / 2 = IAV - 90`` (the paper's result).
+    With ``P_1`` at the origin and ``P_n`` on the x axis at ``(c, 0)``, the centre is at
+    ``(c / 2, (c / 2) tan(theta))`` -- half the chord, not the whole chord as the paper
+    prints -- and the radius is ``(c / 2) / cos(theta)``. For ``IAV > 90 deg`` (less than
+    half the circle seen) the centre lies on the far side of the chord from the points;
+    below 90 deg ``tan(theta) < 0`` puts it on their side. ``side`` says on which side of
+    ``P_1 -> P_n`` the points lie (> 0: left, < 0: right).
+
+    Parameters
+    ----------
+    p_first, p_last : array_like (2,), metres
+        The extremes of the arc.
+    iav_mean : float, radians
+        Mean (unsigned) inscribed angle, in (0, pi).
+    side : float
+        Sign of the points' side of the directed chord (any non-zero number).
+
+    Returns
+    -------
+    center : ndarray (2,), radius : float
+
+    Examples
+    --------
+    A quarter of the unit circle around (0, 0) seen from inside-out: points left of the
+    chord from (1, 0) to (0, 1), mean angle 135 deg:
+
+    >>> c, r = circle_from_iav([1.0, 0.0], [0.0, 1.0], np.radians(135.0), side=+1)
+    >>> np.round(c, 9).tolist(), round(r, 9)
+    ([0.0, 0.0], 1.0)
+    """
+    p1 = np.asarray(p_first, dtype=np.float64)
+    pn = np.asarray(p_last, dtype=np.float64)
+    if not (0 < iav_mean < math.pi):
+        raise ValueError(f"iav_mean must be in (0, pi) radians, got {iav_mean!r}")
+    if side == 0 or not math.isfinite(side):
+        raise ValueError(f"side must be a non-zero number, got {side!r}")
+    d = pn - p1
+    chord = math.hypot(d[0], d[1])
+    if chord == 0:
+        raise ValueError("p_first and p_last coincide: the chord is undefined")
+    u = d / chord
+    left = np.array([-u[1], u[0]])
+    theta = iav_mean - math.pi / 2
+    height = 0.5 * chord * math.tan(theta)  # towards the far side from the points when > 0
+    center = p1 + 0.5 * chord * u - math.copysign(1.0, side) * height * left
+    return center, 0.5 * chord / math.cos(theta)
+
+
+def is_v_corner(angles, n_neighbours: int = 4) -> bool:
+    """The V-corner test of Xavier et al. Sec. II-B.3 (Fig. 4).
+
+    The inscribed angles of a "V" grow on both sides of the apex, so: find the smallest
+    angle and check whether its ``n_neighbours`` neighbours (half on each side) grow
+    strictly away from it. True means "V-shaped corner, reject". When the minimum has
+    fewer than ``n_neighbours // 2`` neighbours on one side (it is near an end) the
+    pattern cannot be checked and the answer is False.
+
+    Examples
+    --------
+    >>> is_v_corner(np.radians([170, 150, 120, 90, 120, 150, 170]))
+    True
+    >>> is_v_corner(np.radians([120, 118, 121, 117, 122, 119, 120]))
+    False
+    """
+    a = np.asarray(angles, dtype=np.float64)
+    if a.ndim != 1:
+        raise ValueError(f"angles must be one-dimensional, got shape {a.shape}")
+    k = _check_int("n_neighbours", n_neighbours, 2) // 2
+    if a.size == 0:
+        return False
+    m = int(np.argmin(a))
+    if m < k or m + k >= a.size:
+        return False
+    return bool(np.all(np.diff(a[m - k:m + 1]) < 0) and np.all(np.diff(a[m:m + k + 1]) > 0))
+
+
+def circle_confidence(n_angles: int, iav_mean: float, iav_std: float, *, std_max: float = CIRCLE_STD_MAX,
+                      mean_range: tuple[float, float] = CIRCLE_MEAN_RANGE) -> float:
+    """Confidence in [0, 1] of an IAV circle (Xavier et al. Sec. II-B: it grows with the
+    number of interior points, with a tighter spread and with a mean near 90 deg).
+
+    ``confidence = f_n * f_std * f_mean`` with
+
+    * ``f_n = 1 - exp(-n_angles / 5)`` (2 interior points: 0.33, 5: 0.63, 15: 0.95),
+    * ``f_std = 1 - 0.5 * min(iav_std / std_max, 1)`` (1 for a perfect arc, 0.5 at the threshold),
+    * ``f_mean = 1 - 0.5 * min(|iav_mean - 90 deg| / (mean_range[1] - 90 deg), 1)``
+      (1 at a half circle, 0.5 at the upper limit of the mean).
+
+    Examples
+    --------
+    >>> round(circle_confidence(20, np.radians(90), 0.0), 3)
+    0.982
+    >>> round(circle_confidence(2, np.radians(135), 0.15), 3)
+    0.082
+    """
+    f_n = 1.0 - math.exp(-max(int(n_angles), 0) / 5.0)
+    f_std = 1.0 - 0.5 * min(abs(iav_std) / std_max, 1.0)
+    span = max(mean_range[1] - math.pi / 2, 1e-12)
+    f_mean = 1.0 - 0.5 * min(abs(iav_mean - math.pi / 2) / span, 1.0)
+    return float(min(max(f_n * f_std * f_mean, 0.0), 1.0))
+
+
+# ============================================================================ per-run analysis
+@dataclass(frozen=True)
+class _CircleTest:
+    """Thresholds of one circle/arc test, validated once at the public boundary."""
+
+    min_points: int
+    chord_range: tuple[float, float]
+    middle_range: tuple[float, float]
+    mean_range: tuple[float, float]
+    std_max: float
+    arc_like_std_max: float | None  # None: arc-like mode off
+    v_corner_neighbours: int
+    hollow: bool  # True: accept shapes hollow towards the sensor too (arcs of rounded corners)
+    center_method: str
+    kind: str
+
+
+def _test_run(points: np.ndarray, first: int, last: int, t: _CircleTest) -> tuple[Circle | None, SegmentCheck]:
+    n = points.shape[0]
+    if n < max(t.min_points, 3):
+        return None, SegmentCheck(first, last, n, verdict="too few points")
+    d = points[-1] - points[0]
+    chord = math.hypot(d[0], d[1])
+    if chord < t.chord_range[0]:
+        return None, SegmentCheck(first, last, n, chord, verdict="chord too short")
+    if chord > t.chord_range[1]:
+        return None, SegmentCheck(first, last, n, chord, verdict="chord too long")
+    ratio = _middle_ratio(points)
+    angles, ok = _signed_angles(points)
+    if not ok or math.isnan(ratio):
+        return None, SegmentCheck(first, last, n, chord, ratio, verdict="degenerate")
+    test_ratio = abs(ratio) if t.hollow else ratio
+    if not (t.middle_range[0] < test_ratio < t.middle_range[1]):
+        return None, SegmentCheck(first, last, n, chord, ratio, verdict="prerequisite")
+    if t.hollow and ratio < 0:
+        angles = 2 * np.pi - angles  # mirror a hollow arc onto the convex case
+    mean, std = float(angles.mean()), float(angles.std())
+    check = SegmentCheck(first, last, n, chord, ratio, mean, std)
+    if not (t.mean_range[0] <= mean <= t.mean_range[1]):
+        return None, _with(check, "iav mean")
+    kind, std_max = t.kind, t.std_max
+    if std >= t.std_max:
+        if t.arc_like_std_max is None or std >= t.arc_like_std_max:
+            return None, _with(check, "iav std")
+        if is_v_corner(angles, t.v_corner_neighbours):
+            return None, _with(check, "v-corner")
+        kind, std_max = "arc-like", t.arc_like_std_max
+    try:
+        center, radius = _center(points, mean, t.center_method)
+    except ValueError:
+        return None, _with(check, "fit failed")
+    confidence = circle_confidence(angles.size, mean, std, std_max=std_max, mean_range=t.mean_range)
+    center.setflags(write=False)
+    return Circle(center, radius, mean, std, confidence, first, last, n, kind), check
+
+
+def _with(check: SegmentCheck, verdict: str) -> SegmentCheck:
+    return SegmentCheck(check.first, check.last, check.n_points, check.chord_m, check.middle_ratio,
+                        check.iav_mean, check.iav_std, verdict)
+
+
+def _center(points: np.ndarray, mean: float, method: str) -> tuple[np.ndarray, float]:
+    if method == "iav":
+        d = points[-1] - points[0]
+        inner = points[1:-1] - points[0]
+        side = float(np.sum(d[0] * inner[:, 1] - d[1] * inner[:, 0]))
+        center, radius = circle_from_iav(points[0], points[-1], mean, side if side != 0 else 1.0)
+        return np.array(center, dtype=np.float64), float(radius)
+    fit = fit_circle(points, method)
+    return np.array(fit.center, dtype=np.float64), float(fit.radius)
+
+
+def _segments(scan: Scan, segments, seg_threshold_m: float) -> list[RangeSegment]:
+    if segments is not None:
+        return _check_segments(segments)
+    _check_positive("seg_threshold_m", seg_threshold_m)
+    return range_segments(scan, seg_threshold_m, min_points=2)
+
+
+def _circle_test(*, min_points, min_chord_m, max_chord_m, middle_range, mean_range, std_max, arc_like,
+                 arc_like_std_max, v_corner_neighbours, hollow, center_method, kind) -> _CircleTest:
+    min_points = _check_int("min_points", min_points, 3)
+    lo = _check_nonneg("min_chord_m", min_chord_m)
+    hi = _check_positive("max_chord_m", max_chord_m, allow_inf=True)
+    if not lo < hi:
+        raise ValueError(f"min_chord_m must be < max_chord_m, got {lo:g} >= {hi:g}")
+    middle_range = _check_range("middle_range", middle_range, 0.0, math.inf)
+    mean_range = _check_range("mean_range", mean_range, 0.0, math.pi)
+    std_max = _check_positive("std_max", std_max)
+    like = None
+    if arc_like:
+        like = _check_positive("arc_like_std_max", arc_like_std_max)
+        if like <= std_max:
+            raise ValueError(f"arc_like_std_max must exceed std_max, got {like:g} <= {std_max:g}")
+    v_corner_neighbours = _check_int("v_corner_neighbours", v_corner_neighbours, 2)
+    _check_center_method(center_method)
+    return _CircleTest(min_points, (lo, hi), middle_range, mean_range, std_max, like, v_corner_neighbours,
+                       hollow, center_method, kind)
+
+
+# ============================================================================ detectors
+def detect_circles(
+    scan: Scan,
+    *,
+    seg_threshold_m: float = 0.08,
+    min_points: int = 4,
+    min_chord_m: float = 0.15,
+    max_chord_m: float = math.inf,
+    middle_range: tuple[float, float] = (0.1, 0.7),
+    mean_range: tuple[float, float] = CIRCLE_MEAN_RANGE,
+    std_max: float = CIRCLE_STD_MAX,
+    center_method: str = "iav",
+    arc_like: bool = False,
+    arc_like_std_max: float = ARC_LIKE_STD_MAX,
+    v_corner_neighbours: int = 4,
+    segments: list[RangeSegment] | None = None,
+    return_trace: bool = False,
+) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
+    """Circles in a scan by the Inscribed Angle Variance (Xavier et al. 2005, Sec. II-B to II-D).
+
+    Each range segment is tested in order, cheapest test first:
+
+    1. at least ``min_points`` points (Table II ``circle_min_pts``);
+    2. chord -- the distance between the segment's extreme points, which is what
+       Table II's ``circle_min_len``/``circle_max_len`` "length" measures, as
+       ``line_min_len`` is the "distance between extremes" (Sec. II-F) -- in
+       ``[min_chord_m, max_chord_m]``;
+    3. the prerequisite of Fig. 5: the middle point lies towards the sensor from the
+       chord, between ``middle_range`` times the chord length (see :func:`middle_point_offset`);
+    4. the signed inscribed angles (see the module notes) have a mean in ``mean_range``
+       and a standard deviation below ``std_max``.
+
+    With ``arc_like=True`` a segment whose standard deviation is in
+    ``[std_max, arc_like_std_max)`` is kept as ``kind="arc-like"`` (a tree trunk, a
+    not-so-round bin) unless :func:`is_v_corner` says it is a V-shaped corner
+    (Sec. II-B.3). The centre comes from :func:`circle_from_iav` (``center_method="iav"``,
+    the paper's construction) or from :func:`labkit.fitting.fit_circle` (``"algebraic"``,
+    Kasa; ``"geometric"``, orthogonal distances). ``confidence`` is
+    :func:`circle_confidence`.
+
+    Parameters
+    ----------
+    scan : Scan
+    seg_threshold_m : float, metres
+        Range segmentation threshold (Table II ``seg_threshold``, 80 mm). Ignored when
+        ``segments`` is given.
+    min_points : int
+        Table II ``circle_min_pts``: 4 (at least 3 for an inscribed angle).
+    min_chord_m, max_chord_m : float, metres
+        Table II ``circle_min_len`` 150 mm, ``circle_max_len`` unlimited (99999 mm).
+    middle_range : (float, float)
+        Fig. 5 / Eq. (4): 0.1 and 0.7 of the chord.
+    mean_range : (float, float), radians
+        90 to 135 deg (Sec. II-B).
+    std_max : float, radians
+        Table II ``circle_std_max``: 0.15 rad (8.6 deg).
+    center_method : {"iav", "algebraic", "geometric"}
+    arc_like : bool
+        Also report "arc-like" shapes (Sec. II-B.3). Default False.
+    arc_like_std_max : float, radians
+        Upper spread of "arc-like" shapes: 23 deg.
+    v_corner_neighbours : int
+        Neighbours of the smallest angle checked by the V-corner test: 4.
+    segments : list of RangeSegment, optional
+        Precomputed segments (e.g. from an adaptive threshold) instead of
+        ``range_segments(scan, seg_threshold_m)``.
+    return_trace : bool
+        Also return one :class:`SegmentCheck` per segment, saying why it was rejected.
+
+    Returns
+    -------
+    list of Circle (``kind="circle"`` or ``"arc-like"``), in scan order; with
+    ``return_trace``, ``(circles, trace)``.
+
+    Examples
+    --------
+    A column of radius 0.3 m, 3 m in front of the sensor:
+
+    >>> from labkit import sim
+    >>> world = sim.World("demo", circles=(sim.Circle((3.0, 0.0), 0.3),))
+    >>> scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
+    >>> (c,) = detect_circles(scan)
+    >>> np.round(c.center, 2).tolist(), round(c.radius, 2), c.kind
+    ([3.0, 0.0], 0.3, 'circle')
+    """
+    _check_scan(scan)
+    test = _circle_test(min_points=min_points, min_chord_m=min_chord_m, max_chord_m=max_chord_m,
+                        middle_range=middle_range, mean_range=mean_range, std_max=std_max, arc_like=arc_like,
+                        arc_like_std_max=arc_like_std_max, v_corner_neighbours=v_corner_neighbours, hollow=False,
+                        center_method=center_method, kind="circle")
+    circles: list[Circle] = []
+    trace: list[SegmentCheck] = []
+    for seg in _segments(scan, segments, seg_threshold_m):
+        circle, check = _test_run(seg.points, seg.first, seg.last, test)
+        trace.append(check)
+        if circle is not None:
+            circles.append(circle)
+    return (circles, trace) if return_trace else circles
+
+
+def detect_lines_iav(
+    scan: Scan,
+    *,
+    seg_threshold_m: float = 0.08,
+    min_points: int = 5,
+    min_length_m: float = 0.15,
+    mean_tolerance: float = math.radians(5.0),
+    std_max: float = CIRCLE_STD_MAX,
+    segments: list[RangeSegment] | None = None,
+    return_trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[SegmentCheck]]:
+    """Lines as range segments whose inscribed angles are all near 180 deg (Sec. II-B.1).
+
+    A whole segment is a line when it has at least ``min_points`` points (Table II
+    ``line_min_pts``: 5), its extremes are at least ``min_length_m`` apart
+    (``line_min_len``: 150 mm), and its signed inscribed angles have a mean within
+    ``mean_tolerance`` of pi and a standard deviation below ``std_max`` (the circles'
+    0.15 rad: "the same procedure of circles"). The paper gives no tolerance for the
+    mean; 5 deg is ours: a circular arc has mean ``180 - phi / 2`` for an arc of ``phi``,
+    so 5 deg keeps arcs spanning more than 10 deg out. Unlike split-and-merge, a segment
+    is accepted or rejected as a whole, never split. Each accepted segment is fitted by
+    :func:`labkit.features.line_segment`.
+
+    Returns
+    -------
+    list of LineSegment in scan order; with ``return_trace``, ``(lines, trace)``.
+
+    Examples
+    --------
+    >>> from labkit import sim
+    >>> world = sim.World("demo", walls=(sim.Wall((2.0, -1.0), (2.0, 1.0)),))
+    >>> scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
+    >>> (line,) = detect_lines_iav(scan)
+    >>> round(line.r, 6), round(line.alpha, 6)
+    (2.0, 0.0)
+    """
+    _check_scan(scan)
+    min_points = _check_int("min_points", min_points, 3)
+    min_length_m = _check_nonneg("min_length_m", min_length_m)
+    mean_tolerance = _check_positive("mean_tolerance", mean_tolerance)
+    std_max = _check_positive("std_max", std_max)
+    lines: list[LineSegment] = []
+    trace: list[SegmentCheck] = []
+    for seg in _segments(scan, segments, seg_threshold_m):
+        p, n = seg.points, seg.n_points
+        if n < min_points:
+            trace.append(SegmentCheck(seg.first, seg.last, n, verdict="too few points"))
+            continue
+        chord = math.hypot(*(p[-1] - p[0]))
+        if chord < min_length_m:
+            trace.append(SegmentCheck(seg.first, seg.last, n, chord, verdict="chord too short"))
+            continue
+        angles, ok = _signed_angles(p)
+        if not ok:
+            trace.append(SegmentCheck(seg.first, seg.last, n, chord, verdict="degenerate"))
+            continue
+        mean, std = float(angles.mean()), float(angles.std())
+        check = SegmentCheck(seg.first, seg.last, n, chord, math.nan, mean, std)
+        if abs(mean - math.pi) > mean_tolerance:
+            trace.append(_with(check, "iav mean"))
+        elif std >= std_max:
+            trace.append(_with(check, "iav std"))
+        else:
+            trace.append(check)
+            lines.append(line_segment(p, seg.indices))
+    return (lines, trace) if return_trace else lines
+
+
+def detect_arcs(
+    scan: Scan,
+    lines: list[LineSegment] | None = None,
+    *,
+    seg_threshold_m: float = 0.08,
+    min_points: int = 4,
+    min_chord_m: float = 0.15,
+    max_chord_m: float = math.inf,
+    middle_range: tuple[float, float] = (0.1, 0.7),
+    mean_range: tuple[float, float] = (math.radians(90.0), math.radians(155.0)),
+    std_max: float = CIRCLE_STD_MAX,
+    center_method: str = "iav",
+    line_params: dict | None = None,
+    segments: list[RangeSegment] | None = None,
+    return_trace: bool = False,
+) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
+    """Arcs embedded in lines, such as rounded wall corners (Xavier et al. Sec. II-B.2, Fig. 3).
+
+    Lines are found first; their points are excluded, and each remaining run of
+    consecutive points of one range segment that borders an excluded point (an arc
+    *between* or *after* lines, not a free-standing object -- that is
+    :func:`detect_circles`' job) gets the circle test of :func:`detect_circles`, with
+    two differences:
+
+    * the arc may bulge towards the sensor (an outside corner) or be hollow towards it
+      (a room's rounded corner seen from inside): the prerequisite uses the middle
+      point's distance from the chord on either side, and a hollow arc's angles are
+      mirrored (``2 pi - a``) before the mean test;
+    * ``mean_range`` reaches 155 deg, not 135: the paper gives no separate bound, and a
+      quarter-round corner has a mean of exactly 135 deg when all of it is seen and more
+      when the line fits take its ends. 155 deg keeps arcs spanning 50 deg or more and
+      stays well below a line's 180 deg; the prerequisite's 0.1 ratio already stops
+      arcs under 45 deg.
+
+    Returned records have ``kind="arc"``.
+
+    Parameters
+    ----------
+    scan : Scan
+    lines : list of LineSegment, optional
+        Lines whose ``indices`` are excluded. ``None``: run
+        ``labkit.split_merge.split_and_merge(scan, **line_params)``. The paper's advice
+        holds: the line extractor must not cut arcs into small polygons (low peak error,
+        long minimum line length).
+    line_params : dict, optional
+        Keyword arguments for ``split_and_merge`` when ``lines`` is None.
+    Other parameters
+        As :func:`detect_circles`.
+
+    Returns
+    -------
+    list of Circle in scan order; with ``return_trace``, ``(arcs, trace)``.
+
+    Examples
+    --------
+    A room corner rounded with a radius of 0.8 m, seen from 2 m inside the room; the two
+    walls are given as lines:
+
+    >>> from labkit import sim
+    >>> from labkit.features import line_segment
+    >>> corner = sim.Arc((2.2, 2.2), 0.8, 0.0, np.pi / 2)
+    >>> walls = (sim.Wall((3.0, -2.0), (3.0, 2.2)), sim.Wall((2.2, 3.0), (-2.0, 3.0)))
+    >>> world = sim.World("demo", walls=walls, arcs=(corner,))
+    >>> scan, truth = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
+    >>> lines = [line_segment(scan.points[w.first:w.last + 1], np.arange(w.first, w.last + 1)) for w in truth.walls]
+    >>> (arc,) = detect_arcs(scan, lines)
+    >>> np.round(arc.center, 2).tolist(), round(arc.radius, 2), arc.kind
+    ([2.2, 2.2], 0.8, 'arc')
+    """
+    _check_scan(scan)
+    test = _circle_test(min_points=min_points, min_chord_m=min_chord_m, max_chord_m=max_chord_m,
+                        middle_range=middle_range, mean_range=mean_range, std_max=std_max, arc_like=False,
+                        arc_like_std_max=None, v_corner_neighbours=4, hollow=True, center_method=center_method,
+                        kind="arc")
+    if lines is None:
+        from .split_merge import split_and_merge  # lazily: the line extractor is optional here
+
+        lines = split_and_merge(scan, **(line_params or {}))
+    elif line_params is not None:
+        raise ValueError("line_params is only used when lines is None")
+    excluded = np.zeros(scan.n_beams, dtype=bool)
+    for line in lines:
+        idx = getattr(line, "indices", None)
+        if idx is None:
+            raise ValueError(f"lines must be LineSegment records with beam indices, got {type(line).__name__}")
+        idx = np.asarray(idx, dtype=np.int64)
+        if idx.size and (idx.min() < 0 or idx.max() >= scan.n_beams):
+            raise ValueError(f"lines has beam indices outside the scan's 0..{scan.n_beams - 1}")
+        excluded[idx] = True
+    arcs: list[Circle] = []
+    trace: list[SegmentCheck] = []
+    for seg in _segments(scan, segments, seg_threshold_m):
+        out = excluded[seg.indices]
+        if not out.any():
+            continue  # no line in this segment: nothing is embedded
+        keep = ~out
+        edges = np.diff(np.concatenate([[0], keep.astype(np.int8), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+            pts = seg.points[a:b]
+            arc, check = _test_run(pts, int(seg.indices[a]), int(seg.indices[b - 1]), test)
+            trace.append(check)
+            if arc is not None:
+                arcs.append(arc)
+    return (arcs, trace) if return_trace else arcs
