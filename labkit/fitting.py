@@ -220,8 +220,9 @@ def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
         model, e.g. noise growing with range). An array: your own non-negative weights.
     range_sigma : float or array_like (N,), metres, optional
         Standard deviation of each range reading, used for the covariance (and for the
-        ``"inverse_variance"`` weights). Default: estimated from the residuals,
-        ``sqrt(sum d^2 / (n - 2))``, so the covariance is NaN for two points.
+        ``"inverse_variance"`` weights). Default: estimated from the orthogonal residuals
+        ``d``, ``sqrt(n / (n - 2) * sum d^2 / sum cos^2(theta - alpha))`` (a range error moves
+        a point across the line by its cosine), so the covariance is NaN for two points.
 
     Returns
     -------
@@ -271,7 +272,13 @@ def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
     x, y = rho * np.cos(theta), rho * np.sin(theta)
     r, alpha, *_ = _line_core(x, y, w)
     d = x * math.cos(alpha) + y * math.sin(alpha) - r
-    s = _residual_sigma(d) if sigma is None else sigma[ok]
+    if sigma is None:
+        # a range error e moves a point by e cos(theta - alpha) across the line, so the
+        # orthogonal residuals understate the range noise by that factor
+        n, c2 = d.size, float(np.sum(np.cos(theta - alpha) ** 2))
+        s = math.sqrt(float(d @ d) * n / ((n - 2) * c2)) if n > 2 and c2 > 0 else math.nan
+    else:
+        s = sigma[ok]
     cov = line_covariance(x, y, w, r, alpha, s, ray_noise=True)
     return LineFit(r, alpha, cov, float(np.sqrt(np.mean(d * d))), int(rho.size))
 

@@ -7,7 +7,9 @@ The algorithm of the course slides (after Nguyen et al. 2005):
 3. Find the worst point, the one farthest from the line; it may not be one of the first or
    last ``min_points // 2`` points (``minPointsPerLine`` in the slides).
 4. If its distance is under ``split_threshold_m`` accept the line, otherwise split the list
-   at that point and go back to 2 with both halves.
+   at that point and go back to 2 with both halves. Points stranded in pieces too short
+   for a line (often the beams around a corner) join the neighbouring line when they are
+   within three range sigmas of it.
 5. When every list is done, merge similar neighbouring lines: ``|r1 - r2|`` and
    ``|alpha1 - alpha2|`` under thresholds (the angle difference taken across the wrap, so
    170 deg and -170 deg are 20 deg apart), or a chi-square test on the covariances, and
@@ -56,6 +58,7 @@ class Step:
         ``"segment"`` (a range segment enters the list), ``"fit"`` (a line fitted to the
         beams ``first..last``), ``"split"`` (split at beam ``at``), ``"gap"`` (split at the
         gap after beam ``at``), ``"accept"``, ``"reject"`` (too few points or too short),
+        ``"absorb"`` (points of a rejected run joined the neighbouring lines they fit),
         ``"merge"`` (two lines merged into one), ``"keep"`` (two neighbours not merged).
     first, last : int
         Beam indices of the run concerned (for a merge: of the merged run).
@@ -195,6 +198,47 @@ def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds", 
                     merge_chi2)
 
 
+def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tuple[int, int]]:
+    """Give the points of runs too short for a line to the neighbouring lines they fit.
+
+    A split can strand a few points between two lines, e.g. the beams just around a corner
+    when the worst point is not the corner beam itself; left out, they make the corner look
+    hidden. Each stranded point joins the line next to it (within the same range segment)
+    when it is within ``threshold`` of that line (the nearer one if both), working outwards
+    from the line.
+    """
+    if not leftovers or not accepted:
+        return sorted(accepted)
+    by_end = {b: k for k, (a, b) in enumerate(accepted)}
+    by_start = {a: k for k, (a, b) in enumerate(accepted)}
+    spans = [list(ab) for ab in accepted]
+    x, y = run.x, run.y
+    inf = math.inf
+
+    def distance(k, i):
+        if k is None:
+            return inf
+        r, alpha = fits[k]
+        return abs(x[i] * math.cos(alpha) + y[i] * math.sin(alpha) - r)
+
+    fits = [_fit_sums(run.sums(a, b)) for a, b in spans]
+    for a, b in leftovers:
+        left, right = by_end.get(a), by_start.get(b)
+        lo, hi = a, b
+        while lo < hi and distance(left, lo) <= threshold and distance(left, lo) <= distance(right, lo):
+            lo += 1
+        while hi > lo and distance(right, hi - 1) <= threshold:
+            hi -= 1
+        if left is not None:
+            spans[left][1] = lo
+        if right is not None:
+            spans[right][0] = hi
+        if steps is not None and (lo > a or hi < b):
+            steps.append(Step("absorb", int(run.idx[a]), int(run.idx[b - 1]),
+                              reason=f"{(lo - a) + (b - hi)} stranded points joined the neighbouring lines"))
+    return sorted((a, b) for a, b in spans)
+
+
 def _segment_order(labels: np.ndarray, wrap: bool) -> tuple[np.ndarray, list[tuple[int, int]]]:
     """Beam indices of all segments laid end to end in scan order, and each segment's
     [start, stop) in that array. A segment crossing the seam of a full-circle scan comes
@@ -233,8 +277,8 @@ def split_and_merge(
     min_length_m: float = 0.15,
     max_gap_m: float = 0.3,
     merge: str | None = "thresholds",
-    merge_dr_m: float = 0.05,
-    merge_dalpha: float = math.radians(5.0),
+    merge_dr_m: float = 0.2,
+    merge_dalpha: float = math.radians(10.0),
     merge_chi2: float = 9.21,
     segment_threshold_m: float = 0.08,
     adaptive_segmentation: bool = True,
@@ -271,7 +315,11 @@ def split_and_merge(
     merge : {"thresholds", "chi2", None}
         The merge test (see :func:`lines_similar`); ``None`` skips the merge step.
     merge_dr_m, merge_dalpha, merge_chi2 : float
-        Thresholds of the merge test: 0.05 m, 5 deg, and 9.21 (chi-square, 2 dof, 99%).
+        Thresholds of the merge test: 0.2 m, 10 deg, and 9.21 (chi-square, 2 dof, 99%).
+        They can be generous because every merge must also pass the split test: the
+        refitted line may miss none of its points by more than ``split_threshold_m``. Tight
+        thresholds leave short noisy pieces of long walls unmerged: a few degrees of
+        angle error on a piece 3 m away shifts its ``r`` by decimetres.
     segment_threshold_m, adaptive_segmentation : float, bool
         Range segmentation (:func:`labkit.segmentation.segment_labels`): 0.08 m floor with
         the adaptive breakpoint detector on.
@@ -335,6 +383,8 @@ def split_and_merge(
             steps.append(Step("segment", int(order[seg_a]), int(order[seg_b - 1]),
                               reason=f"range segment of {seg_b - seg_a} points"))
         stack = [(seg_a, seg_b)]
+        accepted: list[tuple[int, int]] = []
+        leftovers: list[tuple[int, int]] = []
         while stack:
             a, b = stack.pop()
             n = b - a
@@ -342,6 +392,7 @@ def split_and_merge(
             if n < min_points:
                 if steps is not None:
                     steps.append(Step("reject", first, last, reason=f"{n} points < min_points={min_points}"))
+                leftovers.append((a, b))
                 continue
             if n > 1:
                 g = a + int(gaps[a:b - 1].argmax())
@@ -371,6 +422,8 @@ def split_and_merge(
             if steps is not None:
                 steps.append(Step("accept", first, last, r, alpha, at=int(order[p]), distance=worst,
                                   reason=f"{worst:.3f} m <= split_threshold_m"))
+            accepted.append((a, b))
+        for a, b in _absorb(accepted, leftovers, run, min(split_threshold_m, 3 * range_sigma_m), steps):
             lines.append(_Line(order[a:b], run.sums(a, b), points))
 
     if merge is not None and len(lines) > 1:
