@@ -7,6 +7,8 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.segmentation` range segmentation
 - :mod:`labkit.fitting` line and circle fits
 - :mod:`labkit.split_merge` split-and-merge and IEPF line extraction
+- :mod:`labkit.iav` inscribed angle variance: circles, lines, arcs
+- :mod:`labkit.legs` leg detection and pairing into people
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
 - :mod:`labkit.sim` the simulator with ground truth
 - :mod:`labkit.io` bags, CARMEN logs, JSON
@@ -14,12 +16,24 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.viz` matplotlib, rerun and ipywidgets viewers (import explicitly)
 """
 
-from . import geometry, sim
+from . import geometry, iav, legs, sim
 from .data import bundled_data
 from .features import Circle, Corner, Leg, LineSegment, Person, find_corners, line_segment
 from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
+from .iav import (
+    IAVStats,
+    SegmentCheck,
+    circle_from_iav,
+    detect_arcs,
+    detect_circles,
+    detect_lines_iav,
+    iav_stats,
+    inscribed_angles,
+    middle_point_offset,
+)
 from .io import CorruptFileError, convert, read_carmen, read_json_scan, read_scans, write_bag, write_scans
+from .legs import detect_legs, pair_legs
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
 from .split_merge import Step, lines_similar, split_and_merge
@@ -54,6 +68,19 @@ __all__ = [
     "Person",
     "line_segment",
     "find_corners",
+    "iav",
+    "legs",
+    "inscribed_angles",
+    "iav_stats",
+    "IAVStats",
+    "SegmentCheck",
+    "circle_from_iav",
+    "middle_point_offset",
+    "detect_circles",
+    "detect_lines_iav",
+    "detect_arcs",
+    "detect_legs",
+    "pair_legs",
     "sim",
     "bundled_data",
     "read_scans",
