@@ -63,7 +63,10 @@ class Step:
     first, last : int
         Beam indices of the run concerned (for a merge: of the merged run).
     r, alpha : float
-        The line (NaN when none was fitted).
+        The line the step measured against: for ``"fit"``, ``"split"`` and ``"accept"`` the
+        least-squares line (``method="fit"``) or the chord (``method="endpoints"``; accepted
+        runs are refitted by least squares afterwards); for ``"merge"`` the merged line;
+        for ``"keep"`` the first of the two lines when they differ. NaN when there is none.
     at : int
         The worst point's beam (``"fit"``, ``"split"``) or the beam before the gap; -1 if none.
     distance : float
@@ -172,8 +175,8 @@ def _similar(r1, a1, c1, r2, a2, c2, merge, merge_dr_m, merge_dalpha, merge_chi2
     return stat < merge_chi2, stat
 
 
-def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds", merge_dr_m: float = 0.05,
-                  merge_dalpha: float = math.radians(5.0), merge_chi2: float = 9.21) -> tuple[bool, float]:
+def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds", merge_dr_m: float = 0.2,
+                  merge_dalpha: float = math.radians(10.0), merge_chi2: float = 9.21) -> tuple[bool, float]:
     """Whether two lines are similar enough to merge, and the test statistic.
 
     The angle difference is taken across the wrap (170 deg vs -170 deg is 20 deg). Two
@@ -298,7 +301,8 @@ def split_and_merge(
         line is pulled towards the longer of two walls meeting at a corner, so the worst
         point often sits near the end of the short wall and "fit" peels it off a few points
         at a time, losing short walls; the chord passes through both ends and finds the
-        corner. On the simulated corridor the default finds 0.79 of the walls, "fit" 0.61.
+        corner. Over 30 scans of the simulated corridor the default finds every wall of 10 beams
+        or more, "fit" 0.87 of them (``tests/test_split_merge.py``).
     split_threshold_m : float
         Split when the worst point is farther than this from the line. Default 0.05 m, ten
         times the LMS200's range noise (the largest of 100 Gaussian residuals is about 3
