@@ -123,8 +123,9 @@ class Corner:
         ``"concave"`` (the sensor sees into the corner, as into a room's corner) or
         ``"convex"`` (the corner points at the sensor, as a box's edge does).
     extrapolated : bool
-        True when the lines had to be extended by more than ``max_extension_m`` to meet:
-        the corner itself was not observed (a gap or an occlusion hides it).
+        True when the corner itself was not observed: the lines had to be extended by more
+        than ``max_extension_m`` to meet, and (for lines ending on neighbouring beams) by
+        more than the distance between their facing ends, the local beam spacing.
     lines : tuple[int, int]
         Indices of the two segments in the list given to :func:`find_corners`.
     first, last : int
@@ -161,7 +162,10 @@ def find_corners(
 
     Two consecutive segments make a corner when their lines differ in direction by more
     than ``min_angle`` and the end of the first is within ``max_gap_m`` of the start of the
-    second. The corner is the intersection of the two lines. It is ``"concave"`` when it
+    second. The corner is the intersection of the two lines. It is ``"extrapolated"`` when
+    the lines must be extended further than ``max_extension_m`` to meet it -- or, when the
+    lines end on neighbouring beams, further than the gap between those two beams, which
+    grows with range. It is ``"concave"`` when it
     lies beyond the chord joining the two segments' far ends (seen from the sensor at the
     origin) and ``"convex"`` when it lies on the sensor's side. ``wrap=True`` also pairs the
     last segment with the first (a full-circle scan).
@@ -197,11 +201,14 @@ def find_corners(
             continue
         p = np.asarray(p, dtype=float)
         extension = max(math.hypot(*(p - a.end)), math.hypot(*(p - b.start)))
+        allowed = max_extension_m
+        if b.first - a.last == 1:  # neighbouring beams: the corner lies between two readings
+            allowed = max(allowed, math.hypot(*(b.start - a.end)))
         origin = np.zeros(2)
         side_origin = _side(a.start, b.end, origin)
         side_corner = _side(a.start, b.end, p)
         kind = "concave" if side_origin * side_corner < 0 else "convex"
-        out.append(Corner(_frozen(p), angle, kind, extension > max_extension_m, (i, j), a.last, b.first))
+        out.append(Corner(_frozen(p), angle, kind, extension > allowed, (i, j), a.last, b.first))
     return out
 
 

@@ -10,8 +10,13 @@ labkit's reference implementation. Two things make that work:
   the function called into labkit itself, so that a submission that only delegates to the
   reference earns no points for the cell that uses it (see its Notes for the limits).
 
-:func:`assert_beams_result` compares a ``(points, indices)`` answer with the reference and
-says what is wrong in words a student can act on.
+:func:`random_wall_beams` draws a partial sweep across a random scene of walls (runs of
+neighbouring points, jumps between walls, clutter and invalid readings), the input of
+segmentation and line-fitting exercises.
+
+:func:`assert_beams_result` compares a ``(points, indices)`` answer with the reference,
+:func:`assert_labels_result` a per-item label array and :func:`assert_line_result` a line
+``(r, alpha)`` in normal form; they say what is wrong in words a student can act on.
 
 This module imports the standard library and numpy only, so it can be imported (and its
 profiler can run) without pulling in any other part of labkit.
@@ -20,6 +25,8 @@ profiler can run) without pulling in any other part of labkit.
 from __future__ import annotations
 
 import importlib.util
+import math
+import numbers
 import os
 import sys
 import threading
@@ -35,7 +42,10 @@ __all__ = [
     "calls_into",
     "forbid_package_calls",
     "random_beams",
+    "random_wall_beams",
     "assert_beams_result",
+    "assert_labels_result",
+    "assert_line_result",
 ]
 
 _THIS_FILE = os.path.realpath(__file__)
@@ -368,6 +378,104 @@ def random_beams(
     return {"ranges": ranges, "angles": angles, "range_min": range_min, "range_max": range_max}
 
 
+_WALL_INVALID_KINDS = ("nan", "inf", "-inf", "zero", "negative")
+
+
+def random_wall_beams(
+    rng: np.random.Generator,
+    n_beams: int | None = None,
+    *,
+    invalid_fraction: float | None = None,
+    max_beams: int = 720,
+) -> dict[str, np.ndarray]:
+    """Random beams of a partial sweep across a scene of walls, with clutter and invalid readings.
+
+    The sweep is cut into a few angular sectors; each sector sees one straight wall at a
+    random distance (0.3 to 8 m) and orientation, so neighbouring beams form runs of
+    points a few centimetres apart and the range jumps between walls. Beams that would
+    meet their wall at more than 80 degrees from its normal see nothing (``+inf``). Range
+    noise (standard deviation up to 2 cm, the same for the whole scan), isolated clutter
+    returns (up to 10 % of the beams) and invalid readings are added on top.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness: the same generator state gives the same bytes.
+    n_beams : int or None
+        Number of beams N (0 and 1 allowed). None draws it from ``[2, max_beams]``.
+    invalid_fraction : float in [0, 1] or None
+        Probability that a beam's reading is replaced by NaN, +inf, -inf, 0 or a negative
+        number. None draws it from ``[0, 0.2]``.
+    max_beams : int
+        Upper bound for a drawn ``n_beams``.
+
+    Returns
+    -------
+    dict
+        ``ranges`` (ndarray (N,), metres) and ``angles`` (ndarray (N,), radians, strictly
+        increasing, unevenly spaced). The sweep never covers the full circle
+        (:attr:`labkit.Scan.is_full_circle` is False), so its first and last beams are not
+        neighbours. Pass it as ``**kwargs`` to :class:`labkit.Scan` (default range limits:
+        a reading is valid when it is finite and > 0) and to the student's function.
+
+    Examples
+    --------
+    >>> beams = random_wall_beams(np.random.default_rng(0), 50)
+    >>> sorted(beams), beams["ranges"].shape
+    (['angles', 'ranges'], (50,))
+    >>> bool(np.all(np.diff(beams["angles"]) > 0))
+    True
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    if n_beams is None:
+        if max_beams < 2:
+            raise ValueError(f"max_beams must be >= 2, got {max_beams!r}")
+        n_beams = int(rng.integers(2, max_beams + 1))
+    elif int(n_beams) != n_beams or n_beams < 0:
+        raise ValueError(f"n_beams must be a non-negative integer, got {n_beams!r}")
+    n = int(n_beams)
+    if invalid_fraction is None:
+        invalid_fraction = float(rng.uniform(0.0, 0.2))
+    elif not 0.0 <= invalid_fraction <= 1.0:
+        raise ValueError(f"invalid_fraction must be in [0, 1], got {invalid_fraction!r}")
+
+    # Scan.is_full_circle: span + 1.5 * step >= 2 pi, with step = span / (n - 1)
+    widest = 1.5 * np.pi if n < 3 else min(1.5 * np.pi, 0.9 * 2 * np.pi * (n - 1) / (n + 0.5))
+    span = float(rng.uniform(min(0.05, widest), widest))
+    angle_min = float(rng.uniform(-np.pi, np.pi - span))
+    steps = rng.uniform(0.5, 1.5, size=max(n - 1, 0))
+    offsets = np.concatenate([[0.0], np.cumsum(steps)])[:n]
+    if n > 1:
+        offsets *= span / offsets[-1]
+    angles = angle_min + offsets
+
+    n_walls = int(rng.integers(1, 9)) + int(np.ceil(span / (np.pi / 2)))
+    cuts = np.sort(rng.uniform(angle_min, angle_min + span, size=n_walls - 1))
+    bounds = np.concatenate([[angle_min], cuts, [angle_min + span]])
+    wall = np.searchsorted(cuts, angles, side="right")
+    middle = (bounds[:-1] + bounds[1:]) / 2
+    normal = middle + rng.uniform(-0.6, 0.6, size=n_walls)
+    distance = rng.uniform(0.3, 8.0, size=n_walls)
+    cosine = np.cos(angles - normal[wall])
+    ranges = np.full(n, np.inf)
+    seen = cosine > np.cos(np.radians(80.0))
+    ranges[seen] = distance[wall[seen]] / cosine[seen]
+    ranges[seen] += rng.normal(0.0, float(rng.uniform(0.0, 0.02)), size=int(seen.sum()))
+    clutter = np.flatnonzero(rng.random(n) < float(rng.uniform(0.0, 0.1)))
+    ranges[clutter] = rng.uniform(0.2, 10.0, size=clutter.size)
+
+    invalid = np.flatnonzero(rng.random(n) < invalid_fraction)
+    kinds = rng.integers(0, len(_WALL_INVALID_KINDS), size=invalid.size)
+    for i, kind in zip(invalid, kinds, strict=True):
+        name = _WALL_INVALID_KINDS[kind]
+        if name == "negative":
+            ranges[i] = -float(rng.uniform(1e-3, 5.0))
+        else:
+            ranges[i] = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf, "zero": 0.0}[name]
+    return {"ranges": ranges, "angles": angles}
+
+
 def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float = 1e-9) -> None:
     """Check a ``(points, indices)`` answer against the expected points and beam indices.
 
@@ -423,4 +531,99 @@ def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float =
         raise AssertionError(
             f"points are wrong: row {row} (beam {expected_indices[row]}) should be"
             f" {expected_points[row].tolist()}, got {got_points[row].tolist()}"
+        )
+
+
+
+def assert_labels_result(result: Any, expected: Any, *, name: str = "labels", item: str = "beam") -> None:
+    """Check an array of integer labels (one per item, -1 for "none") against the expected one.
+
+    Parameters
+    ----------
+    result : object
+        What the student's function returned; expected a numpy integer array.
+    expected : array_like of shape (N,), int
+        The reference labels, e.g. from :func:`labkit.segment_labels`.
+    name, item : str
+        How the message calls the array and its items ("labels", "beam").
+
+    Raises
+    ------
+    AssertionError
+        With a message that says which part (type, shape, dtype, first wrong item) is wrong.
+
+    Examples
+    --------
+    >>> assert_labels_result(np.array([0, 0, -1]), [0, 0, -1])
+    >>> assert_labels_result(np.array([0, 1, -1]), [0, 0, -1])
+    Traceback (most recent call last):
+    ...
+    AssertionError: labels are wrong: beam 1 should be 0, got 1 (expected [0, 0, -1], got [0, 1, -1])
+    """
+    want = np.asarray(expected, dtype=np.int64).reshape(-1)
+    if not isinstance(result, np.ndarray):
+        raise AssertionError(f"{name} must be a numpy array, got {type(result).__name__}")
+    if result.shape != want.shape:
+        raise AssertionError(f"{name} must have shape {want.shape} (one per {item}), got {result.shape}")
+    if not np.issubdtype(result.dtype, np.integer):
+        raise AssertionError(f"{name} must be integers, got dtype {result.dtype}")
+    wrong = np.flatnonzero(result != want)
+    if wrong.size:
+        i = int(wrong[0])
+        lo, hi = max(i - 3, 0), min(i + 4, want.size)
+        where = "" if (lo, hi) == (0, want.size) else f" around {item}s {lo}..{hi - 1}"
+        raise AssertionError(
+            f"{name} are wrong: {item} {i} should be {want[i]}, got {result[i]} (expected{where}"
+            f" {want[lo:hi].tolist()}, got {result[lo:hi].tolist()})"
+        )
+
+
+def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-7) -> None:
+    """Check a line ``(r, alpha)`` in normal form ``x cos(alpha) + y sin(alpha) = r``.
+
+    Parameters
+    ----------
+    result : object
+        What the student's function returned; expected a tuple of two real numbers
+        ``(r, alpha)`` with ``r >= 0`` (metres) and ``alpha`` in (-pi, pi] (radians).
+    r, alpha : float
+        The expected line, e.g. :attr:`labkit.LineFit.r` and :attr:`labkit.LineFit.alpha`.
+    atol : float
+        Absolute tolerance on ``r`` (metres) and on ``alpha`` (radians; the difference is
+        taken across the wrap, so -pi + 1e-12 is close to pi).
+
+    Raises
+    ------
+    AssertionError
+        With a message that says which part (type, sign of r, range of alpha, value) is wrong.
+
+    Examples
+    --------
+    >>> assert_line_result((2.0, 0.0), 2.0, 1e-12)
+    >>> assert_line_result((-2.0, math.pi), 2.0, 0.0)
+    Traceback (most recent call last):
+    ...
+    AssertionError: r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got -2.0
+    """
+    if not isinstance(result, tuple) or len(result) != 2:
+        raise AssertionError(f"expected a tuple (r, alpha), got {type(result).__name__}")
+    for name, value in zip(("r", "alpha"), result, strict=True):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise AssertionError(f"{name} must be a number (float), got {type(value).__name__}")
+        if not math.isfinite(value):
+            raise AssertionError(f"{name} must be finite, got {value}")
+    got_r, got_alpha = float(result[0]), float(result[1])
+    if got_r < 0:
+        raise AssertionError(
+            f"r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got {got_r}"
+        )
+    if not -math.pi < got_alpha <= math.pi:
+        raise AssertionError(f"alpha must be in (-pi, pi], got {got_alpha} (wrap it)")
+    if abs(got_r - r) > atol:
+        raise AssertionError(f"r is wrong: should be {r:.9f} m, got {got_r:.9f} m")
+    gap = abs(math.remainder(got_alpha - alpha, 2 * math.pi))
+    if gap > atol:
+        raise AssertionError(
+            f"alpha is wrong: should be {alpha:.9f} rad ({math.degrees(alpha):.4f} deg),"
+            f" got {got_alpha:.9f} rad ({math.degrees(got_alpha):.4f} deg)"
         )

@@ -1,4 +1,11 @@
-"""The nbgrader course in ``exercises/``: release generation, autograding, and ``labkit.grading``.
+"""The nbgrader course in ``exercises/``: every exercise, its release, its grading, and ``labkit.grading``.
+
+Each exercise is described by a spec module in ``tests/exercise_specs/`` (found automatically):
+adding an exercise takes a source folder, a spec and ``make release``, not an edit here. Per
+exercise, the fast tests run the source notebook's code cells in this process -- hidden tests
+included, as the autograder runs them -- with the instructor's solution, a cheater that
+delegates to labkit, the release's blank stubs and plausible mistakes, and check which graded
+cells pass. The slow tests generate the release with nbgrader and autograde real submissions.
 
 The slow tests copy ``exercises/`` into a temporary folder and run nbgrader there in a
 subprocess (``python -m nbgrader``), so they never write into the repository. nbgrader 0.9
@@ -9,9 +16,11 @@ empty ``JUPYTER_CONFIG_DIR``.
 
 from __future__ import annotations
 
+import ast
 import csv
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -26,48 +35,39 @@ import pytest
 import labkit
 from labkit.grading import (
     assert_beams_result,
+    assert_labels_result,
+    assert_line_result,
     calls_into,
     forbid_package_calls,
     random_beams,
+    random_wall_beams,
     record_package_calls,
 )
+from tests.exercise_specs import ExerciseSpec, load_specs
 
 REPO = Path(__file__).resolve().parents[1]
 EXERCISES = REPO / "exercises"
-ASSIGNMENT = "ex00_polar_to_cartesian"
-NOTEBOOK = f"{ASSIGNMENT}.ipynb"
-SOURCE_NOTEBOOK = EXERCISES / "source" / ASSIGNMENT / NOTEBOOK
-
-SOLUTION_CELL = "beams_to_points"
-GUARD_CELL = "test_own_work"
-POINTS = {"test_visible": 2, "test_hidden_random": 4, "test_hidden_edges": 2, GUARD_CELL: 2}
-TOTAL = sum(POINTS.values())
 CELL_TIMEOUT_S = 10  # c.Execute.timeout in exercises/nbgrader_config.py
+
+SPECS = load_specs()
+BY_SPEC = [pytest.param(spec, id=spec.name) for spec in SPECS]
+BY_MISTAKE = [
+    pytest.param(spec, mistake, id=f"{spec.name}: {mistake}") for spec in SPECS for mistake in spec.mistakes
+]
 
 MARKERS = {
     "solution": ("### BEGIN SOLUTION", "### END SOLUTION"),
     "hidden": ("### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS"),
 }
 
-CHEATER_SOLUTION = '''
-import labkit
-
-
-def beams_to_points(ranges, angles, range_min, range_max):
-    scan = labkit.Scan(ranges=ranges, angles=angles, range_min=range_min, range_max=range_max)
-    return scan.xy, scan.valid_indices
-'''
-
-LOOPER_SOLUTION = '''
-def beams_to_points(ranges, angles, range_min, range_max):
-    while True:
-        pass
-'''
-
 
 # ---------------------------------------------------------------------------- helpers
 def read_notebook(path: Path) -> dict:
     return json.loads(path.read_text(encoding="utf-8"))
+
+
+def source_notebook(spec: ExerciseSpec) -> dict:
+    return read_notebook(EXERCISES / "source" / spec.name / spec.notebook)
 
 
 def cell_source(cell: dict) -> str:
@@ -101,11 +101,58 @@ def split_marked(source: str, kind: str) -> tuple[list[str], list[str]]:
     return inside, outside
 
 
-def source_solution(grade: str = SOLUTION_CELL) -> str:
-    """The instructor's answer: the solution cell of the source without its marker lines."""
-    cell = cells_by_grade_id(read_notebook(SOURCE_NOTEBOOK))[grade]
+def source_solutions(spec: ExerciseSpec) -> dict[str, str]:
+    """The instructor's answer: each solution cell of the source without its marker lines."""
+    cells = cells_by_grade_id(source_notebook(spec))
     markers = set(MARKERS["solution"])
-    return "\n".join(line for line in cell_source(cell).splitlines() if line.strip() not in markers)
+    return {
+        name: "\n".join(line for line in cell_source(cells[name]).splitlines() if line.strip() not in markers)
+        for name in spec.solutions
+    }
+
+
+def committed_stubs(spec: ExerciseSpec) -> dict[str, str]:
+    """What a student starts from: the solution cells of the committed release."""
+    cells = cells_by_grade_id(read_notebook(EXERCISES / "release" / spec.name / spec.notebook))
+    return {name: cell_source(cells[name]) for name in spec.solutions}
+
+
+def with_mistake(spec: ExerciseSpec, mistake: str) -> dict[str, str]:
+    old, new = spec.mistakes[mistake]
+    solutions = source_solutions(spec)
+    found = sum(code.count(old) for code in solutions.values())
+    assert found == 1, f"{spec.name}, mistake {mistake!r}: {old!r} occurs {found} times in the solution, not once"
+    return {name: code.replace(old, new) for name, code in solutions.items()}
+
+
+def run_in_process(spec: ExerciseSpec, answers: dict[str, str]) -> dict[str, str | None]:
+    """Run the source notebook's code cells in this process, as the autograder runs them.
+
+    The solution cells are replaced by ``answers``; the graded cells keep their hidden tests
+    (the markers are comments). Returns, per graded cell, None when it passed or the error
+    (``"Type: message"``) when it raised. Another cell that raises fails the test.
+    """
+    namespace: dict = {"__name__": f"exercise_{spec.name}"}
+    outcome: dict[str, str | None] = {}
+    for cell in source_notebook(spec)["cells"]:
+        if cell["cell_type"] != "code":
+            continue
+        name = grade_id(cell)
+        code = textwrap.dedent(answers[name]) if name in answers else cell_source(cell)
+        try:
+            exec(compile(code, f"<{spec.name}:{name}>", "exec"), namespace)
+        except Exception as error:  # noqa: BLE001 -- a failing graded cell is a result, not a test error
+            if name not in spec.points:
+                raise
+            outcome[name] = f"{type(error).__name__}: {error}"
+        else:
+            if name in spec.points:
+                outcome[name] = None
+    return outcome
+
+
+def score(spec: ExerciseSpec, outcome: dict[str, str | None]) -> int:
+    return sum(points for name, points in spec.points.items() if outcome[name] is None)
 
 
 def copy_course(destination: Path) -> Path:
@@ -121,14 +168,18 @@ def copy_course(destination: Path) -> Path:
     return destination
 
 
-def run_nbgrader(course: Path, *args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+def nbgrader_env(course: Path) -> dict[str, str]:
     env = dict(os.environ)
     env["PATH"] = os.path.dirname(sys.executable) + os.pathsep + env.get("PATH", "")
     env["JUPYTER_CONFIG_DIR"] = str(course / ".jupyter-config")  # no user-level nbgrader config
+    return env
+
+
+def run_nbgrader(course: Path, *args: str, timeout: float = 900) -> subprocess.CompletedProcess:
     proc = subprocess.run(
         [sys.executable, "-m", "nbgrader", *args],
         cwd=course,
-        env=env,
+        env=nbgrader_env(course),
         capture_output=True,
         text=True,
         timeout=timeout,
@@ -141,85 +192,123 @@ def files_under(folder: Path) -> list[str]:
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
 
 
-def notebooks_under(folder: Path) -> dict[str, Path]:
-    return {str(p.relative_to(folder)): p for p in sorted(folder.rglob("*.ipynb"))}
-
-
-def write_submission(course: Path, student: str, notebook: dict) -> None:
-    folder = course / "submitted" / student / ASSIGNMENT
+def write_submission(course: Path, student: str, spec: ExerciseSpec, notebook: dict) -> None:
+    folder = course / "submitted" / student / spec.name
     folder.mkdir(parents=True)
-    (folder / NOTEBOOK).write_text(json.dumps(notebook, indent=1), encoding="utf-8")
+    (folder / spec.notebook).write_text(json.dumps(notebook, indent=1), encoding="utf-8")
 
 
-def with_solution(release: dict, code: str) -> dict:
+def with_answers(release: dict, answers: dict[str, str]) -> dict:
     notebook = json.loads(json.dumps(release))
-    cell = cells_by_grade_id(notebook)[SOLUTION_CELL]
-    cell["source"] = textwrap.dedent(code).strip("\n")
+    cells = cells_by_grade_id(notebook)
+    for name, code in answers.items():
+        cells[name]["source"] = textwrap.dedent(code).strip("\n")
     return notebook
 
 
 @pytest.fixture(scope="module")
 def generated_course(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A copy of the course with release/ generated for every assignment.
+
+    ``--no-db`` writes the same release (byte for byte) without creating gradebook.db, which
+    takes most of the time; the autograding test generates its own course with the gradebook.
+    """
     course = copy_course(tmp_path_factory.mktemp("ex") / "course")
-    run_nbgrader(course, "generate_assignment", ASSIGNMENT, "--force")
+    run_nbgrader(course, "generate_assignment", "*", "--force", "--no-db")
     return course
 
 
-# ---------------------------------------------------------------------------- the source notebook
-def test_source_notebook_points_and_cells():
-    cells = cells_by_grade_id(read_notebook(SOURCE_NOTEBOOK))
+# ---------------------------------------------------------------------------- the course
+def test_every_exercise_has_a_spec_and_a_release():
+    sources = sorted(p.name for p in (EXERCISES / "source").iterdir() if p.is_dir() and not p.name.startswith("."))
+    releases = sorted(p.name for p in (EXERCISES / "release").iterdir() if p.is_dir() and not p.name.startswith("."))
+    specs = [spec.name for spec in SPECS]
+    assert sources == specs, "every exercises/source/<name>/ needs a tests/exercise_specs/<name>.py, and back"
+    assert releases == sources, "exercises/release/ does not match source/: run `make release`"
+    for name in sources:
+        assert (EXERCISES / "source" / name / f"{name}.ipynb").is_file(), f"source/{name}/ must hold {name}.ipynb"
+
+
+# ---------------------------------------------------------------------------- the source notebooks
+@pytest.mark.parametrize("spec", BY_SPEC)
+def test_source_points_and_cells(spec: ExerciseSpec):
+    notebook = source_notebook(spec)
+    cells = cells_by_grade_id(notebook)
+    assert len(cells) == len(notebook["cells"]), "every cell needs nbgrader metadata with a grade_id"
     graded = {
-        name: cell["metadata"]["nbgrader"]["points"]
-        for name, cell in cells.items()
-        if cell["metadata"]["nbgrader"]["grade"]
+        name: c["metadata"]["nbgrader"]["points"] for name, c in cells.items() if c["metadata"]["nbgrader"]["grade"]
     }
-    assert graded == POINTS
-    assert cells[SOLUTION_CELL]["metadata"]["nbgrader"]["solution"] is True
-    for name in POINTS:
-        assert cells[name]["metadata"]["nbgrader"]["locked"] is True, name
+    assert graded == dict(spec.points)
+    solutions = [name for name, c in cells.items() if c["metadata"]["nbgrader"]["solution"]]
+    assert solutions == list(spec.solutions), "solution cells (in notebook order) differ from the spec"
+    for name, cell in cells.items():
+        meta = cell["metadata"]["nbgrader"]
+        assert meta["locked"] is (name not in spec.solutions), f"{name}: only solution cells are unlocked"
+        assert cell.get("id") == name, f"cell {name}: give the cell the id of its grade_id"
+        assert cell.get("outputs", []) == [] and cell.get("execution_count") is None, f"{name} stored with outputs"
+        if name in spec.solutions:
+            for line in spec.solutions[name].splitlines():
+                assert line in cell_source(cell), f"{name} must contain {line!r}"
     # the guard is its own graded cell, and the only one that forbids calls into labkit
     users = [name for name, cell in cells.items() if "forbid_package_calls" in cell_source(cell)]
-    assert users == [GUARD_CELL]
-    for cell in read_notebook(SOURCE_NOTEBOOK)["cells"]:
-        assert cell.get("outputs", []) == [] and cell.get("execution_count") is None, "stored with outputs"
+    assert users == [spec.guard]
+    # solutions and hidden tests sit where the spec says; graded cells end in no bare expression
+    for name, cell in cells.items():
+        source = cell_source(cell)
+        assert bool(split_marked(source, "solution")[0]) is (name in spec.solutions), f"{name}: solution markers"
+        assert bool(split_marked(source, "hidden")[0]) is (name in spec.hidden), f"{name}: hidden test markers"
+        if name in spec.points:
+            last = ast.parse(source).body[-1]
+            shows_nothing = not isinstance(last, ast.Expr) or (
+                isinstance(last.value, ast.Call) and getattr(last.value.func, "id", None) == "print"
+            )
+            assert shows_nothing, f"{name} ends in a bare expression: nbgrader would read a number it shows as credit"
 
 
-def test_source_solution_matches_reference_and_does_its_own_work():
-    namespace = {"np": np}
-    exec(source_solution(), namespace)
-    beams_to_points = namespace["beams_to_points"]
-    rng = np.random.default_rng(7)
-    for n_beams in [0, 1, 2, None, None, None]:
-        beams = random_beams(rng, n_beams)
-        scan = labkit.Scan(**beams)
-        result = forbid_package_calls("labkit", beams_to_points, **beams)
-        assert_beams_result(result, scan.xy, scan.valid_indices)
-    with pytest.raises(ValueError, match="ranges and angles"):
-        beams_to_points([1.0], [0.0, 1.0], 0.0, 1.0)
+@pytest.mark.parametrize("spec", BY_SPEC)
+def test_source_solution_earns_every_point_and_does_its_own_work(spec: ExerciseSpec):
+    outcome = run_in_process(spec, source_solutions(spec))
+    assert outcome == dict.fromkeys(spec.points), outcome  # the guard cell passing is the own-work proof
+    assert score(spec, outcome) == spec.total
 
 
-def test_cheater_solution_is_correct_but_caught():
-    namespace: dict = {}
-    exec(CHEATER_SOLUTION, namespace)
-    beams = random_beams(np.random.default_rng(8))
-    scan = labkit.Scan(**beams)
-    assert_beams_result(namespace["beams_to_points"](**beams), scan.xy, scan.valid_indices)
-    with pytest.raises(AssertionError, match=r"labkit\.scan\.Scan"):
-        forbid_package_calls("labkit", namespace["beams_to_points"], **beams)
+@pytest.mark.parametrize("spec", BY_SPEC)
+def test_cheater_is_correct_but_caught(spec: ExerciseSpec):
+    outcome = run_in_process(spec, dict(spec.cheater))
+    errors = {name: error for name, error in outcome.items() if error is not None}
+    assert list(errors) == [spec.guard], f"the cheater should fail the guard only: {errors}"
+    assert errors[spec.guard].startswith("AssertionError: ")
+    assert re.search(spec.caught, errors[spec.guard]), errors[spec.guard]
+    assert score(spec, outcome) == spec.total - spec.points[spec.guard]
+
+
+@pytest.mark.parametrize("spec", BY_SPEC)
+def test_blank_stubs_earn_nothing(spec: ExerciseSpec):
+    outcome = run_in_process(spec, committed_stubs(spec))
+    assert all(error is not None and error.startswith("NotImplementedError") for error in outcome.values()), outcome
+
+
+@pytest.mark.parametrize(("spec", "mistake"), BY_MISTAKE)
+def test_hidden_tests_catch_a_plausible_mistake(spec: ExerciseSpec, mistake: str):
+    outcome = run_in_process(spec, with_mistake(spec, mistake))
+    failed = {name for name, error in outcome.items() if error is not None}
+    assert failed & spec.hidden, f"no hidden test caught the mistake {mistake!r}: {outcome}"
+    # ... as a wrong answer: the mistake still does its own work
+    assert not any("own implementation" in error for error in outcome.values() if error is not None), outcome
 
 
 # ---------------------------------------------------------------------------- release generation
 @pytest.mark.slow
-def test_release_has_stubs_and_no_solutions_or_hidden_tests(generated_course: Path):
-    release = read_notebook(generated_course / "release" / ASSIGNMENT / NOTEBOOK)
-    source = read_notebook(SOURCE_NOTEBOOK)
+@pytest.mark.parametrize("spec", BY_SPEC)
+def test_release_has_stubs_and_no_solutions_or_hidden_tests(spec: ExerciseSpec, generated_course: Path):
+    release = read_notebook(generated_course / "release" / spec.name / spec.notebook)
+    source = source_notebook(spec)
     release_cells = cells_by_grade_id(release)
     assert [grade_id(c) for c in release["cells"]] == [grade_id(c) for c in source["cells"]]
     text = json.dumps(release)
     for begin, end in MARKERS.values():
         assert begin not in text and end not in text
 
-    n_marked = 0
     for name, cell in cells_by_grade_id(source).items():
         released = cell_source(release_cells[name])
         released_lines = {line.strip() for line in released.splitlines()}
@@ -231,55 +320,54 @@ def test_release_has_stubs_and_no_solutions_or_hidden_tests(generated_course: Pa
                 and line.strip() in released_lines
             ]
             assert not leaked, f"{kind} text of cell {name} leaked into the release: {leaked}"
-            n_marked += bool(inside)
-        if cell["metadata"]["nbgrader"].get("solution"):
-            assert "# YOUR CODE HERE" in released and "raise NotImplementedError()" in released
-            assert "def beams_to_points(ranges, angles, range_min, range_max):" in released
-    assert n_marked == 4  # one solution cell, three cells with hidden tests
+        if name in spec.solutions:
+            assert "# YOUR CODE HERE" in released and "raise NotImplementedError()" in released, name
+            for line in spec.solutions[name].splitlines():
+                assert line in released, f"the release of {name} lost {line!r}"
+        if name in spec.points:
+            assert release_cells[name]["metadata"]["nbgrader"]["points"] == spec.points[name]
     for cell in release["cells"]:
         assert cell.get("outputs", []) == []
 
 
 @pytest.mark.slow
-def test_committed_release_is_what_the_generator_writes(generated_course: Path):
-    committed_root = EXERCISES / "release"
-    generated_root = generated_course / "release"
-    committed_files = files_under(committed_root)
-    generated_files = files_under(generated_root)
+@pytest.mark.parametrize("spec", BY_SPEC)
+def test_committed_release_is_what_the_generator_writes(spec: ExerciseSpec, generated_course: Path):
+    committed_root = EXERCISES / "release" / spec.name
+    generated_root = generated_course / "release" / spec.name
     stale = "exercises/release/ is stale: regenerate it with `make release` (never edit it by hand)"
-    assert committed_files == generated_files, stale
-    for name, generated in notebooks_under(generated_root).items():
-        committed = read_notebook(committed_root / name)
-        fresh = read_notebook(generated)
-        assert [(c["cell_type"], cell_source(c)) for c in committed["cells"]] == [
-            (c["cell_type"], cell_source(c)) for c in fresh["cells"]
-        ], f"{name}: {stale}"
-    for name in generated_files:
-        if not name.endswith(".ipynb"):
-            assert (committed_root / name).read_bytes() == (generated_root / name).read_bytes(), stale
+    assert files_under(committed_root) == files_under(generated_root), stale
+    for name in files_under(generated_root):
+        committed, generated = committed_root / name, generated_root / name
+        if name.endswith(".ipynb"):
+            assert [(c["cell_type"], cell_source(c)) for c in read_notebook(committed)["cells"]] == [
+                (c["cell_type"], cell_source(c)) for c in read_notebook(generated)["cells"]
+            ], f"{name}: {stale}"
+        else:
+            assert committed.read_bytes() == generated.read_bytes(), stale
 
 
 # ---------------------------------------------------------------------------- autograding
-def per_cell_scores(course: Path, students: list[str]) -> dict[str, dict[str, float]]:
+def per_cell_scores(course: Path, pairs: list[tuple[str, str]]) -> dict[tuple[str, str], dict[str, float]]:
+    """Score of every graded cell, per (assignment, student), from the gradebook."""
     script = textwrap.dedent(
-        f"""
-        import json
+        """
+        import json, sys
         from nbgrader.api import Gradebook
-        scores = {{}}
+        scores = []
         with Gradebook("sqlite:///gradebook.db", "labkit") as gradebook:
-            for student in {students!r}:
-                notebook = gradebook.find_submission_notebook({ASSIGNMENT!r}, {ASSIGNMENT!r}, student)
-                scores[student] = {{grade.name: grade.score for grade in notebook.grades}}
+            for assignment, student in json.loads(sys.argv[1]):
+                notebook = gradebook.find_submission_notebook(assignment, assignment, student)
+                scores.append({grade.name: grade.score for grade in notebook.grades})
         print(json.dumps(scores))
         """
     )
-    env = dict(os.environ)
-    env["PATH"] = os.path.dirname(sys.executable) + os.pathsep + env.get("PATH", "")
     proc = subprocess.run(
-        [sys.executable, "-c", script], cwd=course, env=env, capture_output=True, text=True, timeout=120
+        [sys.executable, "-c", script, json.dumps(pairs)], cwd=course, env=nbgrader_env(course),
+        capture_output=True, text=True, timeout=120,
     )
     assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout)
+    return dict(zip(pairs, json.loads(proc.stdout), strict=True))
 
 
 def error_names(notebook: dict) -> dict[str, list[str]]:
@@ -292,53 +380,69 @@ def error_names(notebook: dict) -> dict[str, list[str]]:
 
 @pytest.mark.slow
 def test_autograde_and_export(tmp_path: Path):
+    """Every exercise autograded: solution full marks, blank 0, cheater all but the guard, looper 0."""
     course = copy_course(tmp_path / "course")
-    run_nbgrader(course, "generate_assignment", ASSIGNMENT, "--force")
-    release = read_notebook(course / "release" / ASSIGNMENT / NOTEBOOK)
-    submissions = {
-        "solution": with_solution(release, source_solution()),
-        "blank": release,
-        "cheater": with_solution(release, CHEATER_SOLUTION),
-        "looper": with_solution(release, LOOPER_SOLUTION),
-    }
-    for student, notebook in submissions.items():
-        write_submission(course, student, notebook)
+    run_nbgrader(course, "generate_assignment", "*", "--force")  # the release, and the assignments in gradebook.db
+    submitted: dict[tuple[str, str], dict] = {}
+    for spec in SPECS:
+        release = read_notebook(course / "release" / spec.name / spec.notebook)
+        students = {
+            "solution": with_answers(release, source_solutions(spec)),
+            "blank": release,
+            "cheater": with_answers(release, dict(spec.cheater)),
+        }
+        if spec.looper is not None:
+            students["looper"] = with_answers(release, dict(spec.looper))
+        for student, notebook in students.items():
+            write_submission(course, student, spec, notebook)
+            submitted[spec.name, student] = notebook
 
     start = time.perf_counter()
-    run_nbgrader(course, "autograde", ASSIGNMENT, "--force")
+    run_nbgrader(course, "autograde", "*", "--force")
     seconds = time.perf_counter() - start
-    print(f"autograde of {len(submissions)} submissions: {seconds:.1f} s")
+    loopers = [spec for spec in SPECS if spec.looper is not None]
+    print(f"autograde of {len(submitted)} submissions ({len(loopers)} endless loops): {seconds:.1f} s")
     run_nbgrader(course, "export")
 
     with open(course / "grades.csv", newline="", encoding="utf-8") as f:
-        rows = {row["student_id"]: row for row in csv.DictReader(f) if row["assignment"] == ASSIGNMENT}
-    assert sorted(rows) == sorted(submissions)  # every student was added and graded
-    scores = {student: float(row["score"]) for student, row in rows.items()}
-    assert {student: float(row["max_score"]) for student, row in rows.items()} == dict.fromkeys(rows, TOTAL)
-    assert scores == {"solution": TOTAL, "blank": 0.0, "cheater": TOTAL - POINTS[GUARD_CELL], "looper": 0.0}
+        rows = {(row["assignment"], row["student_id"]): row for row in csv.DictReader(f)}
+    assert set(submitted) <= set(rows), "a submission is missing from grades.csv"
+    cells = per_cell_scores(course, sorted(submitted))
+    for spec in SPECS:
+        full = {name: float(p) for name, p in spec.points.items()}
+        expected = {"solution": spec.total, "blank": 0, "cheater": spec.total - spec.points[spec.guard]}
+        expected_cells = {"solution": full, "blank": dict.fromkeys(full, 0.0), "cheater": full | {spec.guard: 0.0}}
+        if spec.looper is not None:
+            expected["looper"] = 0
+            expected_cells["looper"] = dict.fromkeys(full, 0.0)
+        scores = {student: float(rows[spec.name, student]["score"]) for student in expected}
+        assert scores == expected, f"{spec.name}: {scores}"
+        for student in expected:
+            assert float(rows[spec.name, student]["max_score"]) == spec.total, (spec.name, student)
+            assert cells[spec.name, student] == expected_cells[student], (spec.name, student)
 
-    cells = per_cell_scores(course, sorted(submissions))
-    assert cells["solution"] == {name: float(p) for name, p in POINTS.items()}
-    assert cells["cheater"] == {name: float(p) for name, p in POINTS.items()} | {GUARD_CELL: 0.0}
-    assert cells["blank"] == cells["looper"] == dict.fromkeys(POINTS, 0.0)
-
-    autograded = course / "autograded"
-    graded = {student: read_notebook(autograded / student / ASSIGNMENT / NOTEBOOK) for student in submissions}
-    # the looper hit the per-cell timeout in every graded cell (each calls its function), and the
-    # students after it were still graded (asserted above: autograde goes in alphabetical order)
-    # (nbgrader records the KeyboardInterrupt of the interrupted kernel and its CellTimeoutError)
-    timed_out = {name for name, names in error_names(graded["looper"]).items() if "CellTimeoutError" in names}
-    assert timed_out == set(POINTS)
-    assert seconds < len(POINTS) * CELL_TIMEOUT_S + 120, "the per-cell timeout did not bound the loop"
-    assert all(names == [] for names in error_names(graded["solution"]).values())
-    # a value shown by a graded cell would be read as partial credit: the cells show none
-    for cell in graded["solution"]["cells"]:
-        assert all(out["output_type"] != "execute_result" for out in cell.get("outputs", [])), grade_id(cell)
-    guard_errors = error_names(graded["cheater"])
-    assert guard_errors[GUARD_CELL] == ["AssertionError"]
-    assert all(names == [] for name, names in guard_errors.items() if name != GUARD_CELL)
-    assert set(error_names(graded["blank"])[SOLUTION_CELL]) == set()
-    assert all(error_names(graded["blank"])[name] == ["NotImplementedError"] for name in POINTS)
+        graded = {
+            student: read_notebook(course / "autograded" / student / spec.name / spec.notebook) for student in expected
+        }
+        assert all(names == [] for names in error_names(graded["solution"]).values()), spec.name
+        # a value shown by a graded cell would be read as partial credit: the cells show none
+        for cell in graded["solution"]["cells"]:
+            assert all(out["output_type"] != "execute_result" for out in cell.get("outputs", [])), grade_id(cell)
+        guard_errors = error_names(graded["cheater"])
+        assert guard_errors[spec.guard] == ["AssertionError"], spec.name
+        assert all(names == [] for name, names in guard_errors.items() if name != spec.guard), guard_errors
+        blank_errors = error_names(graded["blank"])
+        assert all(blank_errors[name] == [] for name in spec.solutions), blank_errors
+        assert all(blank_errors[name] == ["NotImplementedError"] for name in spec.points), blank_errors
+        if spec.looper is not None:
+            # the looper hit the per-cell timeout in every graded cell (each calls its function), and the
+            # students after it were still graded (nbgrader records the kernel's KeyboardInterrupt and
+            # its CellTimeoutError)
+            timed_out = {name for name, names in error_names(graded["looper"]).items() if "CellTimeoutError" in names}
+            assert timed_out == set(spec.points), spec.name
+    looper_cells = sum(len(spec.points) for spec in loopers)
+    budget = looper_cells * CELL_TIMEOUT_S + 10 * len(submitted) + 60
+    assert seconds < budget, f"autograde took {seconds:.0f} s (> {budget} s): did the per-cell timeout bound the loop?"
 
 
 # ---------------------------------------------------------------------------- labkit.grading
@@ -527,3 +631,98 @@ def test_assert_beams_result_says_what_is_wrong(result, match):
     assert_beams_result((np.array([[1.0, 0.0]]), np.array([0])), [[1.0, 0.0]], [0])
     with pytest.raises(AssertionError, match=match):
         assert_beams_result(result, [[1.0, 0.0]], [0])
+
+
+def test_random_wall_beams_is_reproducible_partial_and_accepted_by_scan():
+    first = random_wall_beams(np.random.default_rng(42))
+    second = random_wall_beams(np.random.default_rng(42))
+    assert first["ranges"].tobytes() == second["ranges"].tobytes()
+    assert first["angles"].tobytes() == second["angles"].tobytes()
+    rng = np.random.default_rng(1)
+    for n_beams in [0, 1, 2, 3, 4, 5, *[None] * 200]:
+        beams = random_wall_beams(rng, n_beams)
+        scan = labkit.Scan(**beams)  # angles strictly increasing, span <= 2 pi
+        assert not scan.is_full_circle  # first and last beams are never neighbours
+        if n_beams is None:
+            assert 2 <= scan.n_beams <= 720
+        else:
+            assert scan.n_beams == n_beams
+
+
+def test_random_wall_beams_has_walls_clutter_and_every_invalid_reading():
+    rng = np.random.default_rng(3)
+    seen = dict.fromkeys(["nan", "inf", "-inf", "zero", "negative"], 0)
+    longest, n_segments = [], []
+    for _ in range(100):
+        beams = random_wall_beams(rng, 500)
+        r = beams["ranges"]
+        seen["nan"] += int(np.isnan(r).sum())
+        seen["inf"] += int(np.isposinf(r).sum())
+        seen["-inf"] += int(np.isneginf(r).sum())
+        seen["zero"] += int((r == 0).sum())
+        seen["negative"] += int((np.isfinite(r) & (r < 0)).sum())
+        labels = labkit.segment_labels(labkit.Scan(**beams), 0.1, min_points=1)
+        sizes = np.bincount(labels[labels >= 0])
+        longest.append(sizes.max(initial=0))
+        n_segments.append(sizes.size)
+    assert all(count > 0 for count in seen.values()), seen
+    assert np.median(longest) >= 20, "walls should give long runs of neighbouring points"
+    assert np.median(n_segments) >= 5, "jumps, clutter and invalid readings should cut the scan"
+    for _ in range(10):
+        assert not labkit.Scan(**random_wall_beams(rng, 50, invalid_fraction=1.0)).valid.any()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [({"n_beams": -1}, "n_beams"), ({"invalid_fraction": -0.1}, "invalid_fraction"), ({"max_beams": 1}, "max_beams")],
+)
+def test_random_wall_beams_rejects_bad_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        random_wall_beams(np.random.default_rng(0), **kwargs)
+    with pytest.raises(ValueError, match="rng"):
+        random_wall_beams(np.random.default_rng)
+
+
+@pytest.mark.parametrize(
+    ("result", "match"),
+    [
+        ([0, 0, -1], "numpy array"),
+        (np.array([0, 0]), r"shape \(3,\)"),
+        (np.array([0.0, 0.0, -1.0]), "integers"),
+        (np.array([0, 1, -1]), r"beam 1 should be 0, got 1"),
+    ],
+)
+def test_assert_labels_result_says_what_is_wrong(result, match):
+    assert_labels_result(np.array([0, 0, -1], dtype=np.int32), [0, 0, -1])
+    with pytest.raises(AssertionError, match=match):
+        assert_labels_result(result, [0, 0, -1])
+
+
+def test_assert_labels_result_shows_the_neighbourhood_of_a_long_scan():
+    expected = np.zeros(100, dtype=int)
+    wrong = expected.copy()
+    wrong[50] = 3
+    with pytest.raises(AssertionError, match=r"beam 50 should be 0, got 3 \(expected around beams 47..53"):
+        assert_labels_result(wrong, expected)
+
+
+@pytest.mark.parametrize(
+    ("result", "match"),
+    [
+        ([2.0, 0.0], "tuple"),
+        ((2.0,), "tuple"),
+        ((np.array([2.0]), 0.0), "r must be a number"),
+        ((2.0, True), "alpha must be a number"),
+        ((np.nan, 0.0), "finite"),
+        ((-2.0, np.pi), "r must be >= 0"),
+        ((2.0, -np.pi), r"alpha must be in \(-pi, pi\]"),
+        ((2.0, 3 * np.pi / 2), r"alpha must be in \(-pi, pi\]"),
+        ((2.1, 0.0), "r is wrong"),
+        ((2.0, 0.01), "alpha is wrong"),
+    ],
+)
+def test_assert_line_result_says_what_is_wrong(result, match):
+    assert_line_result((2.0, np.float64(1e-9)), 2.0, 0.0)
+    assert_line_result((1.0, np.pi), 1.0, -np.pi + 1e-9)  # close across the wrap
+    with pytest.raises(AssertionError, match=match):
+        assert_line_result(result, 2.0, 0.0)

@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 
 from labkit import Scan, find_corners, line_segment, lines_similar, read_scans, segment_labels, split_and_merge
 from labkit.geometry import angle_difference
-from labkit.sim import Lidar, Trajectory, Wall, World, scan_at, scenario, simulate
+from labkit.sim import Lidar, Wall, World, scan_at, scenario, simulate
 
 
-def wall_scan(r=2.0, alpha=0.0, fov=(-0.7, 0.7), step=math.radians(0.5), **kw) -> Scan:
+def wall_scan(r=2.0, alpha=0.0, fov=(-0.7, 0.7), step=0.5 * math.pi / 180, **kw) -> Scan:
     angles = np.arange(fov[0], fov[1] + step / 2, step)
     return Scan(ranges=r / np.cos(angles - alpha), angles=angles, **kw)
 

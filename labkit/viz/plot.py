@@ -15,7 +15,8 @@ from ..geometry import arc_points
 from ..scan import Scan
 from .style import label_colors, mpl
 
-__all__ = ["plot_scan", "plot_ranges", "plot_truth", "scan_figure"]
+__all__ = ["plot_scan", "plot_ranges", "plot_truth", "plot_lines", "plot_corners", "plot_circles", "plot_legs",
+           "plot_features", "scan_figure"]
 
 
 def _axes(ax):
@@ -103,6 +104,75 @@ def plot_truth(truth, ax=None):
     for k, g in enumerate(truth.legs):
         ax.add_patch(CirclePatch(g.center, g.diameter / 2, fill=False, color=mpl("legs"), lw=1.2,
                                  label="true legs" if k == 0 else None))
+    return ax
+
+
+def plot_lines(lines, ax=None, *, label: str = "lines", color=None, lw: float = 2.2, annotate: bool = False):
+    """Draw :class:`labkit.LineSegment` records from ``start`` to ``end``; with ``annotate``
+    each is numbered by its position in the list."""
+    ax = _axes(ax)
+    segs = [[tuple(ln.start), tuple(ln.end)] for ln in lines]
+    if segs:
+        ax.add_collection(LineCollection(segs, colors=[color or mpl("lines")], linewidths=lw, zorder=5,
+                                         label=f"{label} ({len(segs)})"))
+        ax.autoscale_view()
+    if annotate:
+        for k, ln in enumerate(lines):
+            mid = (np.asarray(ln.start) + np.asarray(ln.end)) / 2
+            ax.annotate(str(k), mid, fontsize=7, color=color or mpl("lines"), zorder=6)
+    return ax
+
+
+def plot_corners(corners, ax=None):
+    """Draw :class:`labkit.Corner` records: filled diamonds for concave corners, open ones
+    for convex, and a cross for corners extrapolated across a gap."""
+    ax = _axes(ax)
+    for kind, marker_face in (("concave", mpl("corners")), ("convex", "none")):
+        pts = [c.point for c in corners if c.kind == kind and not c.extrapolated]
+        if pts:
+            ax.scatter(*np.array(pts).T, s=70, marker="D", facecolors=marker_face, edgecolors=[mpl("corners")],
+                       linewidths=1.5, zorder=7, label=f"{kind} corners ({len(pts)})")
+    pts = [c.point for c in corners if c.extrapolated]
+    if pts:
+        ax.scatter(*np.array(pts).T, s=70, marker="X", color=mpl("corners"), zorder=7,
+                   label=f"extrapolated corners ({len(pts)})")
+    return ax
+
+
+def plot_circles(circles, ax=None, *, label: str = "circles"):
+    """Draw :class:`labkit.Circle` records (circles and arcs) with their centres."""
+    ax = _axes(ax)
+    for k, c in enumerate(circles):
+        ax.add_patch(CirclePatch(tuple(c.center), c.radius, fill=False, color=mpl("circles"), lw=2.0,
+                                 zorder=6, label=f"{label} ({len(circles)})" if k == 0 else None))
+        ax.plot(*c.center, "+", color=mpl("circles"), zorder=6)
+    return ax
+
+
+def plot_legs(legs, ax=None, *, people=()):
+    """Draw :class:`labkit.Leg` records as circles of their diameter, and people (pairs of
+    legs) as a star between them."""
+    ax = _axes(ax)
+    for k, g in enumerate(legs):
+        ax.add_patch(CirclePatch(tuple(g.center), g.diameter / 2, fill=False, color=mpl("legs"), lw=2.0,
+                                 zorder=6, label=f"legs ({len(legs)})" if k == 0 else None))
+    if len(people):
+        ax.scatter(*np.array([p.center for p in people]).T, marker="*", s=120, color=mpl("legs"), zorder=7,
+                   label=f"people ({len(people)})")
+    return ax
+
+
+def plot_features(scan: Scan, *, lines=(), corners=(), circles=(), legs=(), people=(), truth=None, labels=None,
+                  ax=None, title: str | None = None):
+    """One scan with every feature drawn over it (and the ground truth when given)."""
+    ax = plot_scan(scan, ax, labels=labels, title=title)
+    if truth is not None:
+        plot_truth(truth, ax)
+    plot_lines(lines, ax)
+    plot_corners(corners, ax)
+    plot_circles(circles, ax)
+    plot_legs(legs, ax, people=people)
+    ax.legend(loc="upper right", fontsize=8)
     return ax
 
 
