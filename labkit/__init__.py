@@ -7,6 +7,8 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.segmentation` range segmentation
 - :mod:`labkit.fitting` line and circle fits
 - :mod:`labkit.split_merge` split-and-merge and IEPF line extraction
+- :mod:`labkit.dbscan1d` DBSCAN on 1-D data in linear time
+- :mod:`labkit.angular` angular segmentation (Meglicki 2021)
 - :mod:`labkit.iav` inscribed angle variance: circles, lines, arcs
 - :mod:`labkit.legs` leg detection and pairing into people
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
@@ -17,7 +19,9 @@ The library's public names are re-exported here; modules:
 """
 
 from . import geometry, iav, legs, sim
+from .angular import AngularSteps, angular_segmentation, local_directions
 from .data import bundled_data
+from .dbscan1d import DBSCAN1D, dbscan1d, dbscan1d_reference
 from .features import Circle, Corner, Leg, LineSegment, Person, find_corners, line_segment
 from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
@@ -68,6 +72,12 @@ __all__ = [
     "Person",
     "line_segment",
     "find_corners",
+    "dbscan1d",
+    "dbscan1d_reference",
+    "DBSCAN1D",
+    "angular_segmentation",
+    "AngularSteps",
+    "local_directions",
     "iav",
     "legs",
     "inscribed_angles",
