@@ -290,6 +290,24 @@ def forbid_package_calls(package: str, func: Callable[..., Any], /, *args: Any, 
 _INVALID_KINDS = ("nan", "inf", "-inf", "zero", "negative", "at_max", "beyond_max", "below_min")
 
 
+def _draw_sizes(rng, n_beams, max_beams: int, invalid_fraction, most_invalid: float) -> tuple[int, float]:
+    """Check the random-scan arguments; draw the beam count and the invalid fraction (up to
+    ``most_invalid``) where they are not given."""
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    if n_beams is None:
+        if max_beams < 2:
+            raise ValueError(f"max_beams must be >= 2, got {max_beams!r}")
+        n_beams = int(rng.integers(2, max_beams + 1))
+    elif int(n_beams) != n_beams or n_beams < 0:
+        raise ValueError(f"n_beams must be a non-negative integer, got {n_beams!r}")
+    if invalid_fraction is None:
+        invalid_fraction = float(rng.uniform(0.0, most_invalid))
+    elif not 0.0 <= invalid_fraction <= 1.0:
+        raise ValueError(f"invalid_fraction must be in [0, 1], got {invalid_fraction!r}")
+    return int(n_beams), invalid_fraction
+
+
 def random_beams(
     rng: np.random.Generator,
     n_beams: int | None = None,
@@ -330,19 +348,7 @@ def random_beams(
     >>> bool(np.all(np.diff(beams["angles"]) > 0))
     True
     """
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-    if n_beams is None:
-        if max_beams < 2:
-            raise ValueError(f"max_beams must be >= 2, got {max_beams!r}")
-        n_beams = int(rng.integers(2, max_beams + 1))
-    elif int(n_beams) != n_beams or n_beams < 0:
-        raise ValueError(f"n_beams must be a non-negative integer, got {n_beams!r}")
-    n = int(n_beams)
-    if invalid_fraction is None:
-        invalid_fraction = float(rng.uniform(0.0, 0.5))
-    elif not 0.0 <= invalid_fraction <= 1.0:
-        raise ValueError(f"invalid_fraction must be in [0, 1], got {invalid_fraction!r}")
+    n, invalid_fraction = _draw_sizes(rng, n_beams, max_beams, invalid_fraction, 0.5)
 
     range_min = 0.0 if rng.random() < 1 / 3 else float(rng.uniform(0.02, 0.5))
     range_max = float(rng.uniform(4.0, 60.0))
@@ -426,19 +432,7 @@ def random_wall_beams(
     >>> bool(np.all(np.diff(beams["angles"]) > 0))
     True
     """
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-    if n_beams is None:
-        if max_beams < 2:
-            raise ValueError(f"max_beams must be >= 2, got {max_beams!r}")
-        n_beams = int(rng.integers(2, max_beams + 1))
-    elif int(n_beams) != n_beams or n_beams < 0:
-        raise ValueError(f"n_beams must be a non-negative integer, got {n_beams!r}")
-    n = int(n_beams)
-    if invalid_fraction is None:
-        invalid_fraction = float(rng.uniform(0.0, 0.2))
-    elif not 0.0 <= invalid_fraction <= 1.0:
-        raise ValueError(f"invalid_fraction must be in [0, 1], got {invalid_fraction!r}")
+    n, invalid_fraction = _draw_sizes(rng, n_beams, max_beams, invalid_fraction, 0.2)
 
     # Scan.is_full_circle: span + 1.5 * step >= 2 pi, with step = span / (n - 1)
     widest = 1.5 * np.pi if n < 3 else min(1.5 * np.pi, 0.9 * 2 * np.pi * (n - 1) / (n + 0.5))
