@@ -154,26 +154,36 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
     ``var_x``/``var_y`` are per-point variances. Returns (K, 2, 2); NaN for a line whose
     direction is undetermined (all points identical, or an isotropic cloud)."""
     starts = np.asarray(starts)
-    counts = np.diff(np.append(starts, len(x)))
-    line = np.repeat(np.arange(len(starts)), counts)
+    if len(starts) == 1:  # one line: plain sums and scalars broadcast (reduceat costs more)
+        def per_line(v):
+            return v.sum(keepdims=True)
 
-    def per_line(v):
-        return np.add.reduceat(v, starts)
+        def each(v):
+            return v[0]
+    else:
+        counts = np.diff(np.append(starts, len(x)))
+        line = np.repeat(np.arange(len(starts)), counts)
+
+        def per_line(v):
+            return np.add.reduceat(v, starts)
+
+        def each(v):
+            return v[line]
 
     sw = per_line(w)
     xm, ym = per_line(w * x) / sw, per_line(w * y) / sw
-    dx, dy = x - xm[line], y - ym[line]
+    dx, dy = x - each(xm), y - each(ym)
     num = 2.0 * per_line(w * dx * dy)
     den = per_line(w * (dx * dx - dy * dy))
     q = num * num + den * den
     with np.errstate(divide="ignore", invalid="ignore"):
         # d alpha / d x_i and d alpha / d y_i, from alpha = atan2(num, den) / 2 + pi / 2
-        ax = w * (den[line] * dy - num[line] * dx) / q[line]
-        ay = w * (den[line] * dx + num[line] * dy) / q[line]
+        ax = w * (each(den) * dy - each(num) * dx) / each(q)
+        ay = w * (each(den) * dx + each(num) * dy) / each(q)
     ca, sa = np.cos(alpha), np.sin(alpha)
-    lever = (-xm * sa + ym * ca)[line]  # d r / d alpha at the centroid
-    rx = w / sw[line] * ca[line] + lever * ax
-    ry = w / sw[line] * sa[line] + lever * ay
+    lever = each(-xm * sa + ym * ca)  # d r / d alpha at the centroid
+    rx = w / each(sw) * each(ca) + lever * ax
+    ry = w / each(sw) * each(sa) + lever * ay
     cov = np.empty((len(starts), 2, 2))
     if ray_noise:
         rho = np.hypot(x, y)
