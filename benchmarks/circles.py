@@ -25,16 +25,14 @@ Run: ``python benchmarks/circles.py [--scans 60] [--repeat 5]``
 from __future__ import annotations
 
 import argparse
-import math
 import platform
-import time
 
 import numpy as np
+from common import per_scan, world_scans
 
 from labkit.iav import detect_circles
 from labkit.legs import detect_legs, pair_legs
 from labkit.segmentation import segment_labels
-from labkit.sim import Lidar, make_world, scan_at, scenario
 
 try:
     from labkit.split_merge import split_and_merge
@@ -43,29 +41,6 @@ except ImportError:  # the line extractor is optional here
 
 BEAMS = (361, 722, 1441)
 PAPER_WORST_CIRCLES_S = 1.082e-3  # Xavier et al. 2005, Sec. IV-D, 360 beams, Celeron 500 MHz
-
-
-def hall_scans(n_beams: int, n_scans: int, seed: int = 0):
-    sc = scenario("hall")
-    lidar = Lidar(f"bench{n_beams}", -math.pi / 2, math.pi / (n_beams - 1), n_beams, range_max=32.0,
-                  noise_std_m=0.005)
-    world = make_world("hall")
-    rng = np.random.default_rng(seed)
-    times = np.linspace(0.0, sc.duration_s * 0.95, n_scans)
-    return [scan_at(world, lidar, sc.trajectory.pose_at(t), t, rng=rng)[0] for t in times]
-
-
-def per_scan(fn, scans, repeat: int) -> tuple[float, float]:
-    """Median and largest seconds per scan, each scan timed at its best of ``repeat`` passes
-    (so that a pause of the machine does not pass for a slow scan)."""
-    times = np.empty((repeat, len(scans)))
-    for k in range(repeat):
-        for i, s in enumerate(scans):
-            t0 = time.perf_counter()
-            fn(s)
-            times[k, i] = time.perf_counter() - t0
-    best = times.min(axis=0)
-    return float(np.median(best)), float(best.max())
 
 
 def main() -> None:
@@ -85,7 +60,7 @@ def main() -> None:
         stages["s&m"] = split_and_merge
     rows = {}
     for n in BEAMS:
-        scans = hall_scans(n, args.scans)
+        scans = world_scans("hall", n, args.scans)
         for s in scans:  # warm the cached properties, as a reader would have
             _ = s.points, s.valid
         rows[n] = {name: per_scan(fn, scans, args.repeat) for name, fn in stages.items()}

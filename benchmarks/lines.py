@@ -11,7 +11,7 @@ scans of the simulated ``office`` world along its trajectory (LMS200-like 5 mm n
 * ``rdp``: the PyPI ``rdp`` package's Ramer-Douglas-Peucker on each range segment with the
   same 5 cm tolerance -- the split step alone, with no fitting, merging or covariance
 
-Times are the median per scan over the scans, best of ``--repeat`` passes. The last columns
+Times are the median per scan, each scan at its best of ``--repeat`` passes. The last columns
 are ratios in the same run: how the cost grows with beams (vs 361), and s&m against rdp.
 
 Run: ``python benchmarks/lines.py [--scans 30] [--repeat 3]``
@@ -20,38 +20,15 @@ Run: ``python benchmarks/lines.py [--scans 30] [--repeat 3]``
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
+from common import per_scan, world_scans
 from rdp import rdp
 
 from labkit import find_corners, fit_line_polar, segment_labels, split_and_merge
 from labkit.segmentation import segments_from_labels
-from labkit.sim import Lidar, make_world, scan_at, scenario
 
-STEPS_DEG = {361: 0.5, 721: 0.25, 1441: 0.125, 2881: 0.0625}
-
-
-def office_scans(n_beams: int, n_scans: int, seed: int = 0):
-    sc = scenario("office")
-    lidar = Lidar.from_fov(f"bench{n_beams}", 180.0, STEPS_DEG[n_beams], range_max=20.0, noise_std_m=0.005)
-    world = make_world("office")
-    rng = np.random.default_rng(seed)
-    times = np.linspace(0.0, sc.duration_s * 0.95, n_scans)
-    return [scan_at(world, lidar, sc.trajectory.pose_at(t), t, rng=rng)[0] for t in times]
-
-
-def per_scan(fn, scans, repeat: int) -> float:
-    """Best-of-``repeat`` median seconds per scan."""
-    best = np.inf
-    for _ in range(repeat):
-        times = []
-        for s in scans:
-            t0 = time.perf_counter()
-            fn(s)
-            times.append(time.perf_counter() - t0)
-        best = min(best, float(np.median(times)))
-    return best
+BEAMS = (361, 721, 1441, 2881)
 
 
 def fit_segments(scan):
@@ -84,14 +61,12 @@ def main() -> None:
         "rdp": rdp_segments,
     }
     rows = {}
-    for n in STEPS_DEG:
-        scans = office_scans(n, args.scans)
-        for s in scans:  # warm the cached properties, as a reader would have
-            _ = s.points, s.valid
-        rows[n] = {name: per_scan(fn, scans, args.repeat) for name, fn in stages.items()}
+    for n in BEAMS:
+        scans = world_scans("office", n, args.scans)
+        rows[n] = {name: per_scan(fn, scans, args.repeat)[0] for name, fn in stages.items()}
         rows[n]["lines"] = float(np.mean([len(split_and_merge(s)) for s in scans]))
 
-    print(f"office world, 180 deg, median per scan over {args.scans} scans (best of {args.repeat})\n")
+    print(f"office world, 180 deg, median per scan over {args.scans} scans (each the best of {args.repeat})\n")
     head = "| beams | " + " | ".join(f"{k} (us)" for k in stages) + " | lines/scan | s&m vs 361 | s&m / rdp |"
     print(head)
     print("|" + "---|" * (len(stages) + 4))
