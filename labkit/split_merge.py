@@ -33,6 +33,7 @@ records, so a notebook, a widget or the rerun viewer can replay them.
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
@@ -381,6 +382,8 @@ def split_and_merge(
     w = np.ones_like(x) if weights == "uniform" else 1.0 / ranges[order]
     run = _Run(x, y, w, order)
     gaps = np.hypot(np.diff(x), np.diff(y)) if len(x) > 1 else np.zeros(0)
+    wide = np.flatnonzero(gaps > max_gap_m).tolist()  # where a run may have to be cut, ascending
+    xy = np.column_stack([x, y])
     lines: list[_Line] = []  # accepted runs, scan order
     for seg_a, seg_b in bounds:
         if steps is not None:
@@ -398,20 +401,25 @@ def split_and_merge(
                     steps.append(Step("reject", first, last, reason=f"{n} points < min_points={min_points}"))
                 leftovers.append((a, b))
                 continue
-            if n > 1:
-                g = a + int(gaps[a:b - 1].argmax())
-                if gaps[g] > max_gap_m:
-                    if steps is not None:
-                        steps.append(Step("gap", first, last, at=int(order[g]), distance=float(gaps[g]),
-                                          reason=f"gap {gaps[g]:.3f} m > max_gap_m"))
-                    stack.append((g + 1, b))
-                    stack.append((a, g + 1))
-                    continue
+            k = bisect_left(wide, a)
+            if k < len(wide) and wide[k] < b - 1:  # a gap wider than max_gap_m: cut at the widest
+                g = max(wide[k:bisect_left(wide, b - 1)], key=gaps.item)
+                if steps is not None:
+                    steps.append(Step("gap", first, last, at=int(order[g]), distance=float(gaps[g]),
+                                      reason=f"gap {gaps[g]:.3f} m > max_gap_m"))
+                stack.append((g + 1, b))
+                stack.append((a, g + 1))
+                continue
             r, alpha = _fit_sums(run.sums(a, b)) if method == "fit" else run.chord(a, b)
             lo, hi = (a + keep, b - keep) if n > 2 * keep else (a, b)
-            d = np.abs(x[lo:hi] * math.cos(alpha) + y[lo:hi] * math.sin(alpha) - r)
-            k = int(np.argmax(d))
-            worst, p = float(d[k]), lo + k
+            # signed distances v - r; the worst point is the farther of the two extremes
+            v = xy[lo:hi] @ (math.cos(alpha), math.sin(alpha))
+            k_hi, k_lo = int(v.argmax()), int(v.argmin())
+            d_hi, d_lo = float(v[k_hi]) - r, r - float(v[k_lo])
+            if d_hi > d_lo or (d_hi == d_lo and k_hi < k_lo):
+                worst, p = d_hi, lo + k_hi
+            else:
+                worst, p = d_lo, lo + k_lo
             if steps is not None:
                 ref = "fitted line" if method == "fit" else "chord"
                 steps.append(Step("fit", first, last, r, alpha, at=int(order[p]), distance=worst,
