@@ -8,7 +8,9 @@ labkit's reference implementation. Two things make that work:
   keyword arguments that both the student's function and :class:`labkit.Scan` accept;
 - :func:`forbid_package_calls` runs the student's function under a profiler and fails when
   the function called into labkit itself, so that a submission that only delegates to the
-  reference earns no points for the cell that uses it (see its Notes for the limits).
+  reference earns no points for the cell that uses it (see its Notes for the limits);
+  :func:`own_work` wraps the student's function in the same check, so that every graded cell
+  that calls it through the wrapper fails for such a submission.
 
 :func:`random_wall_beams` draws a partial sweep across a random scene of walls (runs of
 neighbouring points, jumps between walls, clutter and invalid readings), the input of
@@ -24,6 +26,7 @@ profiler can run) without pulling in any other part of labkit.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 import numbers
@@ -41,6 +44,7 @@ __all__ = [
     "record_package_calls",
     "calls_into",
     "forbid_package_calls",
+    "own_work",
     "random_beams",
     "random_wall_beams",
     "assert_beams_result",
@@ -91,6 +95,97 @@ def _package_locations(package: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     dirs = tuple(os.path.realpath(p) + os.sep for p in (spec.submodule_search_locations or ()))
     files = () if dirs or not spec.origin else (os.path.realpath(spec.origin),)
     return dirs, files
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One call watched by :class:`_Watcher`: its result or the exception it raised."""
+
+    result: Any
+    error: Exception | None
+    calls: tuple[str, ...]
+    tampered: bool
+
+
+class _Watcher:
+    """Runs functions under a profiler that records their calls into one or more packages.
+
+    The packages' locations are looked up once, and the verdict per code object is cached,
+    so a wrapper built by :func:`own_work` costs little per call.
+    """
+
+    def __init__(self, packages: tuple[str, ...]) -> None:
+        dirs: list[str] = []
+        files: list[str] = []
+        for package in packages:
+            package_dirs, package_files = _package_locations(package)
+            dirs += package_dirs
+            files += package_files
+        self.packages = packages
+        self.dirs = tuple(dirs)
+        self.files = frozenset(files)
+        self.prefixes = tuple(package + "." for package in packages)
+        self.by_code: dict[Any, bool] = {}
+
+    def in_package(self, module_name: object) -> bool:
+        return isinstance(module_name, str) and module_name != _THIS_MODULE and (
+            module_name in self.packages or module_name.startswith(self.prefixes)
+        )
+
+    def code_in_package(self, code: Any, module_name: object) -> bool:
+        hit = self.by_code.get(code)
+        if hit is None:
+            path = code.co_filename
+            real = os.path.realpath(path) if os.path.isabs(path) else path
+            hit = real != _THIS_FILE and (
+                real in self.files or real.startswith(self.dirs) or self.in_package(module_name)
+            )
+            self.by_code[code] = hit
+        return hit
+
+    def run(self, func: Callable[..., Any], args: tuple, kwargs: dict) -> _Run:
+        """Call ``func(*args, **kwargs)`` under the profiler. An ``Exception`` it raises is
+        returned, not raised; anything else (``KeyboardInterrupt``) propagates."""
+        seen: dict[str, None] = {}  # an insertion-ordered set
+        state = {"active": True, "tampered": False}
+        code_in_package, in_package, setprofile = self.code_in_package, self.in_package, sys.setprofile
+
+        def profiler(frame: Any, event: str, arg: Any) -> None:
+            if event == "c_call":  # the most frequent event that matters: first, and cheap for builtins
+                if not state["active"]:
+                    return
+                if arg is setprofile:
+                    state["tampered"] = True
+                module_name = getattr(arg, "__module__", None)
+                if module_name != "builtins" and in_package(module_name):
+                    seen.setdefault(f"{module_name}.{getattr(arg, '__qualname__', repr(arg))}", None)
+            elif event == "call":
+                if not state["active"]:
+                    return
+                code = frame.f_code
+                module_name = frame.f_globals.get("__name__")
+                if code_in_package(code, module_name):
+                    qualname = code.co_qualname
+                    if "<locals>" in qualname and code.co_argcount and code.co_varnames[0] == "self":
+                        # a method made by a factory (dataclasses' __init__): name it after its class
+                        owner = type(frame.f_locals.get("self"))
+                        qualname = f"{getattr(owner, '__qualname__', '?')}.{code.co_name}"
+                    seen.setdefault(f"{module_name}.{qualname}", None)
+
+        result, error = None, None
+        previous = sys.getprofile()
+        previous_threads = threading.getprofile()
+        threading.setprofile(profiler)
+        sys.setprofile(profiler)
+        try:
+            result = func(*args, **kwargs)
+        except Exception as exc:  # noqa: BLE001 -- handed back to the caller, who decides
+            error = exc
+        finally:
+            state["active"] = False
+            sys.setprofile(previous)
+            threading.setprofile(previous_threads)
+        return _Run(result=result, error=error, calls=tuple(seen), tampered=state["tampered"])
 
 
 def record_package_calls(
@@ -148,59 +243,10 @@ def record_package_calls(
     >>> record_package_calls("labkit", np.hypot, 3.0, 4.0).clean
     True
     """
-    dirs, files = _package_locations(package)
-    prefix = package + "."
-    seen: dict[str, None] = {}  # an insertion-ordered set
-    by_code: dict[Any, bool] = {}
-    state = {"active": True, "tampered": False}
-
-    def in_package(module_name: object) -> bool:
-        return isinstance(module_name, str) and module_name != _THIS_MODULE and (
-            module_name == package or module_name.startswith(prefix)
-        )
-
-    def code_in_package(code: Any, module_name: object) -> bool:
-        hit = by_code.get(code)
-        if hit is None:
-            path = code.co_filename
-            real = os.path.realpath(path) if os.path.isabs(path) else path
-            hit = real != _THIS_FILE and (
-                real in files or any(real.startswith(d) for d in dirs) or in_package(module_name)
-            )
-            by_code[code] = hit
-        return hit
-
-    def profiler(frame: Any, event: str, arg: Any) -> None:
-        if not state["active"]:
-            return
-        if event == "call":
-            code = frame.f_code
-            module_name = frame.f_globals.get("__name__")
-            if code_in_package(code, module_name):
-                qualname = code.co_qualname
-                if "<locals>" in qualname and code.co_argcount and code.co_varnames[0] == "self":
-                    # a method made by a factory (dataclasses' __init__): name it after its class
-                    owner = type(frame.f_locals.get("self"))
-                    qualname = f"{getattr(owner, '__qualname__', '?')}.{code.co_name}"
-                seen.setdefault(f"{module_name}.{qualname}", None)
-        elif event == "c_call":
-            if arg is sys.setprofile:
-                state["tampered"] = True
-            module_name = getattr(arg, "__module__", None)
-            if in_package(module_name):
-                seen.setdefault(f"{module_name}.{getattr(arg, '__qualname__', repr(arg))}", None)
-
-    previous = sys.getprofile()
-    previous_threads = threading.getprofile()
-    threading.setprofile(profiler)
-    sys.setprofile(profiler)
-    try:
-        result = func(*args, **kwargs)
-    finally:
-        state["active"] = False
-        sys.setprofile(previous)
-        threading.setprofile(previous_threads)
-    return PackageCalls(result=result, calls=tuple(seen), tampered=state["tampered"])
+    run = _Watcher((package,)).run(func, args, kwargs)
+    if run.error is not None:
+        raise run.error
+    return PackageCalls(result=run.result, calls=run.calls, tampered=run.tampered)
 
 
 def calls_into(package: str, func: Callable[..., Any], /, *args: Any, **kwargs: Any) -> bool:
@@ -271,19 +317,103 @@ def forbid_package_calls(package: str, func: Callable[..., Any], /, *args: Any, 
     AssertionError: polar_to_cartesian calls labkit's own implementation (labkit.scan.polar_to_cartesian); ...
     """
     record = record_package_calls(package, func, *args, **kwargs)
-    name = getattr(func, "__name__", repr(func))
-    if record.tampered:
-        raise AssertionError(
+    problem = _own_work_problem(getattr(func, "__name__", repr(func)), (package,), record.calls, record.tampered)
+    if problem:
+        raise AssertionError(problem)
+    return record.result
+
+
+def _own_work_problem(name: str, packages: tuple[str, ...], calls: tuple[str, ...], tampered: bool) -> str | None:
+    """What :func:`forbid_package_calls` and :func:`own_work` say about a watched call, or None."""
+    if tampered:
+        return (
             f"{name} called sys.setprofile, which switches off the check that it does not"
-            f" call {package}; remove that call"
+            f" call {' or '.join(packages)}; remove that call"
         )
-    if record.calls:
-        shown = ", ".join(record.calls[:5]) + (", ..." if len(record.calls) > 5 else "")
-        raise AssertionError(
-            f"{name} calls {package}'s own implementation ({shown}); this exercise asks you to"
+    if calls:
+        hit = [p for p in packages if any(c == p or c.startswith(p + ".") for c in calls)] or list(packages)
+        shown = ", ".join(calls[:5]) + (", ..." if len(calls) > 5 else "")
+        return (
+            f"{name} calls {' and '.join(hit)}'s own implementation ({shown}); this exercise asks you to"
             f" write the computation yourself (numpy is fine)"
         )
-    return record.result
+    return None
+
+
+def own_work(
+    func: Callable[..., Any], package: str = "labkit", *, also: tuple[str, ...] = ()
+) -> Callable[..., Any]:
+    """``func`` wrapped so that every call fails when it calls into ``package`` (or ``also``).
+
+    Every graded cell of an exercise calls the student's function through this wrapper
+    (``checked = own_work(student_function)``, then ``checked(...)``), so that a submission
+    that delegates to labkit's reference fails every cell, not only the own-work cell, and
+    scores 0. An honest answer runs as before, a little slower (see Notes).
+
+    Parameters
+    ----------
+    func : callable
+        The function under test (a student's answer).
+    package : str
+        Top-level name of the forbidden package, ``"labkit"`` unless told.
+    also : tuple of str
+        Further forbidden packages, watched in the same pass (e.g. ``("sklearn",)``).
+
+    Returns
+    -------
+    callable
+        Takes the arguments of ``func`` and returns what ``func`` returned, or raises what it
+        raised, when it made no call into the packages.
+
+    Raises
+    ------
+    ValueError
+        At once, if a package cannot be found.
+    AssertionError
+        From the wrapper, if ``func`` called into a package (the message names the calls;
+        also when ``func`` then raised, since the error may well come from the package) or
+        called ``sys.setprofile``.
+
+    See Also
+    --------
+    forbid_package_calls : the same check for a single call.
+    record_package_calls : the recorder, and what counts as a call.
+
+    Notes
+    -----
+    The wrapper runs ``func`` under the profiler of :func:`record_package_calls`, with the
+    packages' locations looked up once. Each Python-level call and each call of a builtin
+    inside ``func`` then costs a profiler event (around a microsecond); numpy work inside C
+    is unaffected. Do not store the wrapper under the function's own name: another of the
+    student's functions that calls it would then run a profiler inside the profiler, which
+    the check reports as switching it off.
+
+    Examples
+    --------
+    >>> import labkit
+    >>> double = own_work(lambda r: np.asarray(r) * 2)
+    >>> double([1.0])
+    array([2.])
+    >>> own_work(labkit.polar_to_cartesian)([1.0], [0.0])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    AssertionError: polar_to_cartesian calls labkit's own implementation (labkit.scan.polar_to_cartesian); ...
+    """
+    packages = (package, *also)
+    watcher = _Watcher(packages)
+    name = getattr(func, "__name__", repr(func))
+
+    @functools.wraps(func)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        run = watcher.run(func, args, kwargs)
+        problem = _own_work_problem(name, packages, run.calls, run.tampered)
+        if problem:
+            raise AssertionError(problem) from None
+        if run.error is not None:
+            raise run.error
+        return run.result
+
+    return checked
 
 
 # ---------------------------------------------------------------------------- test inputs

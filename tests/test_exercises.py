@@ -5,7 +5,9 @@ adding an exercise takes a source folder, a spec and ``make release``, not an ed
 exercise, the fast tests run the source notebook's code cells in this process -- hidden tests
 included, as the autograder runs them -- with the instructor's solution, a cheater that
 delegates to labkit, the release's blank stubs and plausible mistakes, and check which graded
-cells pass. The slow tests generate the release with nbgrader and autograde real submissions.
+cells pass. Every graded cell calls the student's functions through ``labkit.grading.own_work``,
+so the cheater fails every one of them and scores 0. The slow tests generate the release with
+nbgrader and autograde real submissions.
 
 The slow tests copy ``exercises/`` into a temporary folder and run nbgrader there in a
 subprocess (``python -m nbgrader``), so they never write into the repository. nbgrader 0.9
@@ -39,6 +41,7 @@ from labkit.grading import (
     assert_line_result,
     calls_into,
     forbid_package_calls,
+    own_work,
     random_beams,
     random_wall_beams,
     record_package_calls,
@@ -151,6 +154,27 @@ def run_in_process(spec: ExerciseSpec, answers: dict[str, str]) -> dict[str, str
     return outcome
 
 
+def student_functions(spec: ExerciseSpec) -> list[str]:
+    """Names of the functions the student writes, from the ``def`` lines of the spec."""
+    return [name for lines in spec.solutions.values() for name in re.findall(r"^def (\w+)\(", lines, re.M)]
+
+
+def unguarded_uses(source: str, functions: list[str]) -> list[str]:
+    """Uses of a student's function in ``source`` that are not the argument of ``own_work(...)``."""
+    tree = ast.parse(source)
+    wrapped = {
+        id(arg)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "own_work"
+        for arg in node.args[:1]
+    }
+    return [
+        f"line {node.lineno}: {node.id}"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Name) and node.id in functions and id(node) not in wrapped
+    ]
+
+
 def score(spec: ExerciseSpec, outcome: dict[str, str | None]) -> int:
     return sum(points for name, points in spec.points.items() if outcome[name] is None)
 
@@ -249,9 +273,20 @@ def test_source_points_and_cells(spec: ExerciseSpec):
         if name in spec.solutions:
             for line in spec.solutions[name].splitlines():
                 assert line in cell_source(cell), f"{name} must contain {line!r}"
-    # the guard is its own graded cell, and the only one that forbids calls into labkit
+    # the guard is its own graded cell, and the only one that forbids calls into labkit with forbid_package_calls
     users = [name for name, cell in cells.items() if "forbid_package_calls" in cell_source(cell)]
     assert users == [spec.guard]
+    # ... every other graded cell calls the student's functions only through own_work, so that a
+    # submission that delegates to labkit fails every graded cell
+    functions = student_functions(spec)
+    assert functions, f"{spec.name}: the spec's solution lines name no function"
+    for name in spec.points:
+        if name == spec.guard:
+            continue
+        source = cell_source(cells[name])
+        assert unguarded_uses(source, functions) == [], f"{name} calls a student's function without own_work"
+        for function in functions:
+            assert f"own_work({function}" in source, f"{name} must wrap {function} in own_work"
     # solutions and hidden tests sit where the spec says; graded cells end in no bare expression
     for name, cell in cells.items():
         source = cell_source(cell)
@@ -273,10 +308,23 @@ def test_source_solution_earns_every_point_and_does_its_own_work(spec: ExerciseS
 
 
 @pytest.mark.parametrize("spec", BY_SPEC)
-def test_cheater_is_correct_but_caught(spec: ExerciseSpec):
+def test_cheater_is_correct_but_caught_in_every_graded_cell(spec: ExerciseSpec, monkeypatch: pytest.MonkeyPatch):
+    outcome = run_in_process(spec, dict(spec.cheater))
+    failed = {name: error for name, error in outcome.items() if error is not None}
+    assert set(failed) == set(spec.points), f"the cheater should fail every graded cell: {outcome}"
+    for name, error in failed.items():
+        assert error.startswith("AssertionError: "), (name, error)
+        assert "calls labkit's own implementation" in error, (name, error)
+        assert re.search(r"\(labkit\.", error), (name, error)
+    assert re.search(spec.caught, failed[spec.guard]), failed[spec.guard]
+    assert score(spec, outcome) == 0
+
+    # ... although its answers are right: with own_work switched off (the functions called
+    # directly) it passes every graded cell but the own-work cell, which uses forbid_package_calls
+    monkeypatch.setattr(labkit.grading, "own_work", lambda func, *args, **kwargs: func)
     outcome = run_in_process(spec, dict(spec.cheater))
     errors = {name: error for name, error in outcome.items() if error is not None}
-    assert list(errors) == [spec.guard], f"the cheater should fail the guard only: {errors}"
+    assert list(errors) == [spec.guard], f"called directly, the cheater should fail the guard only: {errors}"
     assert errors[spec.guard].startswith("AssertionError: ")
     assert re.search(spec.caught, errors[spec.guard]), errors[spec.guard]
     assert score(spec, outcome) == spec.total - spec.points[spec.guard]
@@ -380,7 +428,7 @@ def error_names(notebook: dict) -> dict[str, list[str]]:
 
 @pytest.mark.slow
 def test_autograde_and_export(tmp_path: Path):
-    """Every exercise autograded: solution full marks, blank 0, cheater all but the guard, looper 0."""
+    """Every exercise autograded: solution full marks, blank 0, cheater 0 (caught in every graded cell), looper 0."""
     course = copy_course(tmp_path / "course")
     run_nbgrader(course, "generate_assignment", "*", "--force")  # the release, and the assignments in gradebook.db
     submitted: dict[tuple[str, str], dict] = {}
@@ -410,8 +458,8 @@ def test_autograde_and_export(tmp_path: Path):
     cells = per_cell_scores(course, sorted(submitted))
     for spec in SPECS:
         full = {name: float(p) for name, p in spec.points.items()}
-        expected = {"solution": spec.total, "blank": 0, "cheater": spec.total - spec.points[spec.guard]}
-        expected_cells = {"solution": full, "blank": dict.fromkeys(full, 0.0), "cheater": full | {spec.guard: 0.0}}
+        expected = {"solution": spec.total, "blank": 0, "cheater": 0}
+        expected_cells = {"solution": full, "blank": dict.fromkeys(full, 0.0), "cheater": dict.fromkeys(full, 0.0)}
         if spec.looper is not None:
             expected["looper"] = 0
             expected_cells["looper"] = dict.fromkeys(full, 0.0)
@@ -428,9 +476,13 @@ def test_autograde_and_export(tmp_path: Path):
         # a value shown by a graded cell would be read as partial credit: the cells show none
         for cell in graded["solution"]["cells"]:
             assert all(out["output_type"] != "execute_result" for out in cell.get("outputs", [])), grade_id(cell)
-        guard_errors = error_names(graded["cheater"])
-        assert guard_errors[spec.guard] == ["AssertionError"], spec.name
-        assert all(names == [] for name, names in guard_errors.items() if name != spec.guard), guard_errors
+        cheater_errors = error_names(graded["cheater"])
+        assert all(cheater_errors[name] == [] for name in spec.solutions), cheater_errors
+        assert all(cheater_errors[name] == ["AssertionError"] for name in spec.points), cheater_errors
+        for cell in graded["cheater"]["cells"]:
+            if grade_id(cell) in spec.points:
+                (error,) = [out for out in cell["outputs"] if out["output_type"] == "error"]
+                assert "calls labkit's own implementation" in error["evalue"], (spec.name, grade_id(cell), error)
         blank_errors = error_names(graded["blank"])
         assert all(blank_errors[name] == [] for name in spec.solutions), blank_errors
         assert all(blank_errors[name] == ["NotImplementedError"] for name in spec.points), blank_errors
@@ -542,6 +594,78 @@ def test_profiler_is_restored_after_return_and_after_an_exception():
     finally:
         sys.setprofile(None)
     assert threading.getprofile() is None
+
+
+def test_own_work_passes_an_honest_function_through():
+    checked = own_work(numpy_only)
+    assert checked.__name__ == "numpy_only" and checked.__wrapped__ is numpy_only
+    np.testing.assert_allclose(checked([2.0], [0.0]), [[2.0, 0.0]])
+    np.testing.assert_allclose(checked(ranges=[1.0], angles=[np.pi / 2]), [[0.0, 1.0]], atol=1e-12)
+    assert sys.getprofile() is None and threading.getprofile() is None
+
+
+def test_own_work_fails_a_delegating_function_on_every_call():
+    checked = own_work(via_polar_to_cartesian)
+    for _ in range(2):
+        with pytest.raises(AssertionError, match=r"via_polar_to_cartesian calls labkit's own implementation "
+                                                 r"\(labkit\.scan\.polar_to_cartesian\)"):
+            checked([1.0], [0.0])
+    assert sys.getprofile() is None
+
+
+def test_own_work_reports_the_call_even_when_the_package_raises():
+    checked = own_work(via_polar_to_cartesian)
+    with pytest.raises(AssertionError, match="own implementation") as caught:
+        checked([1.0, 2.0], [0.0])  # labkit raises ValueError for the different lengths
+    assert caught.value.__cause__ is None and caught.value.__suppress_context__
+
+
+def test_own_work_lets_the_students_own_errors_through():
+    def stub(ranges, angles):
+        raise NotImplementedError()
+
+    def checks_lengths(ranges, angles):
+        raise ValueError("ranges and angles must have the same length")
+
+    with pytest.raises(NotImplementedError):
+        own_work(stub)([1.0], [0.0])
+    with pytest.raises(ValueError, match="ranges and angles"):
+        own_work(checks_lengths)([1.0], [0.0, 1.0])
+    assert sys.getprofile() is None
+
+
+def test_own_work_watches_further_packages_in_one_pass():
+    def via_numpy_testing(x):
+        import numpy.testing
+
+        numpy.testing.assert_array_equal(x, x)
+        return x
+
+    assert own_work(via_numpy_testing)([1.0]) == [1.0]
+    with pytest.raises(AssertionError, match=r"numpy's own implementation \(numpy\.testing"):
+        own_work(via_numpy_testing, also=("numpy",))([1.0])
+    with pytest.raises(AssertionError, match=r"own implementation \(labkit\.scan"):
+        own_work(via_polar_to_cartesian, also=("numpy",))([1.0], [0.0])
+    with pytest.raises(ValueError, match="package"):
+        own_work(numpy_only, also=("no_such_package_xyz",))
+
+
+def test_own_work_catches_switching_the_profiler_off():
+    def sneaky(ranges, angles):
+        sys.setprofile(None)
+        return labkit.polar_to_cartesian(ranges, angles)
+
+    with pytest.raises(AssertionError, match="sys.setprofile"):
+        own_work(sneaky)([1.0], [0.0])
+    assert sys.getprofile() is None
+
+
+def test_own_work_costs_little_per_call():
+    checked = own_work(numpy_only)
+    start = time.perf_counter()
+    for _ in range(2000):
+        checked([1.0], [0.0])
+    assert time.perf_counter() - start < 2.0
 
 
 def test_arguments_named_like_the_helpers_parameters_pass_through():

@@ -38,12 +38,15 @@ class ExerciseSpec:
         ``grade_id`` of every graded test cell -> its points, exactly as in the source.
     cheater : mapping of str to str
         ``grade_id`` of every solution cell -> code that gets the right answers by calling labkit.
-        It must pass every graded cell except :attr:`guard`.
+        Every graded cell calls the student's functions through ``labkit.grading.own_work``, so
+        it must fail every graded cell (score 0); called directly (``own_work`` switched off) it
+        must pass every graded cell except :attr:`guard`.
     caught : str
         Regular expression that the guard's ``AssertionError`` must match when it catches the
         cheater (the labkit function it called, e.g. ``r"labkit\\.scan\\.Scan"``).
     guard : str
-        ``grade_id`` of the own-work cell, the only one that may use ``forbid_package_calls``.
+        ``grade_id`` of the own-work cell, the only one that may use ``forbid_package_calls`` (the
+        others wrap the student's functions in ``own_work``).
     visible : str
         ``grade_id`` of the visible test cell, the only graded cell without hidden tests.
     mistakes : mapping of str to (str, str)
