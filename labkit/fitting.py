@@ -38,6 +38,7 @@ __all__ = [
     "fit_line_ols",
     "fit_circle",
     "line_covariance",
+    "line_from_sums",
     "line_covariances",
 ]
 
@@ -111,35 +112,46 @@ def _check_count(n: int, need: int, name: str, what: str) -> None:
 
 
 # ---------------------------------------------------------------------------- line core
-def _line_core(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float, float, float, float, float]:
-    """Weighted orthogonal fit. Returns r, alpha, weighted centroid (xm, ym), N, D where
-    ``alpha = atan2(N, D) / 2 + pi / 2`` before the sign of ``r`` is fixed."""
-    sw = float(w.sum())
-    sx, sy = float(w @ x), float(w @ y)
-    xm, ym = sx / sw, sy / sw
-    # the slides' double sums factor into products of single sums:
-    #   sum_i sum_j w_i w_j rho_i rho_j cos(t_i) sin(t_j) = (sum w x)(sum w y)
-    #   sum_i sum_j w_i w_j rho_i rho_j cos(t_i + t_j)    = (sum w x)^2 - (sum w y)^2
-    num = 2.0 * float(w @ (x * y)) - 2.0 * sx * sy / sw
-    den = float(w @ (x * x - y * y)) - (sx * sx - sy * sy) / sw
-    spread = float(w @ (x * x + y * y)) - (sx * sx + sy * sy) / sw
-    if spread <= 1e-24 * max(1.0, float(w @ (x * x + y * y))):
-        raise ValueError("points are all identical: a line through them is undefined")
+def line_from_sums(sw: float, sx: float, sy: float, sxx: float, syy: float, sxy: float) -> tuple[float, float]:
+    """``(r, alpha)`` of the weighted orthogonal fit from the weighted sums ``sum w``,
+    ``sum w x``, ``sum w y``, ``sum w x^2``, ``sum w y^2`` and ``sum w x y`` of the points.
+
+    This is the closed form of :func:`fit_line_polar`. The slides' double sums factor into
+    products of single sums, ``sum_i sum_j w_i w_j rho_i rho_j cos(t_i) sin(t_j) =
+    (sum w x)(sum w y)`` and ``sum_i sum_j w_i w_j rho_i rho_j cos(t_i + t_j) = (sum w x)^2 -
+    (sum w y)^2``, so six sums are all a fit needs: split-and-merge keeps their prefix sums
+    and fits any run of a scan in O(1).
+
+    >>> line_from_sums(3.0, 6.0, 0.0, 12.0, 2.0, 0.0)   # (2, -1), (2, 0), (2, 1): the line x = 2
+    (2.0, 0.0)
+    """
+    num = 2.0 * (sxy - sx * sy / sw)
+    den = (sxx - syy) - (sx * sx - sy * sy) / sw
     alpha = 0.5 * math.atan2(num, den) + math.pi / 2
-    r = xm * math.cos(alpha) + ym * math.sin(alpha)
+    r = (sx * math.cos(alpha) + sy * math.sin(alpha)) / sw
     if r < 0:
         r, alpha = -r, alpha + math.pi
-    return r, float(wrap_angle(alpha)), xm, ym, num, den
+    return r, math.remainder(alpha, 2 * math.pi)  # alpha was in (0, 2 pi]: now in (-pi, pi]
 
 
-def line_covariance(x, y, w, r: float, alpha: float, sigma_x, sigma_y=None, *, ray_noise: bool = True) -> np.ndarray:
+def _line_core(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """Weighted orthogonal fit ``(r, alpha)`` of points; ``ValueError`` if they coincide."""
+    sw = float(w.sum())
+    sx, sy = float(w @ x), float(w @ y)
+    sxx, syy = float(w @ (x * x)), float(w @ (y * y))
+    if (sxx + syy) - (sx * sx + sy * sy) / sw <= 1e-24 * max(1.0, sxx + syy):
+        raise ValueError("points are all identical: a line through them is undefined")
+    return line_from_sums(sw, sx, sy, sxx, syy, float(w @ (x * y)))
+
+
+def line_covariance(x, y, w, alpha: float, sigma_x, sigma_y=None, *, ray_noise: bool = True) -> np.ndarray:
     """Covariance of ``(r, alpha)`` of the weighted orthogonal fit, by first-order error
     propagation (Arras & Siegwart 1998) with the weights held fixed.
 
     With ``ray_noise`` (the polar fit) each point moves along its own ray with standard
     deviation ``sigma_x`` (range noise); otherwise each coordinate is independently noisy
     with ``sigma_x`` and ``sigma_y`` (isotropic point noise by default). ``r`` is not
-    needed (the centroid fixes it) and is kept for symmetry with the fit's result.
+    needed: the weighted centroid fixes it.
     """
     x = np.asarray(x, dtype=float)
     vx = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
@@ -280,7 +292,7 @@ def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
     _check_count(int(ok.sum()), 2, "rho", "line")
     rho, theta, w = rho[ok], theta[ok], w[ok]
     x, y = rho * np.cos(theta), rho * np.sin(theta)
-    r, alpha, *_ = _line_core(x, y, w)
+    r, alpha = _line_core(x, y, w)
     d = x * math.cos(alpha) + y * math.sin(alpha) - r
     if sigma is None:
         # a range error e moves a point by e cos(theta - alpha) across the line, so the
@@ -289,7 +301,7 @@ def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
         s = math.sqrt(float(d @ d) * n / ((n - 2) * c2)) if n > 2 and c2 > 0 else math.nan
     else:
         s = sigma[ok]
-    cov = line_covariance(x, y, w, r, alpha, s, ray_noise=True)
+    cov = line_covariance(x, y, w, alpha, s, ray_noise=True)
     return LineFit(r, alpha, cov, float(np.sqrt(np.mean(d * d))), int(rho.size))
 
 
@@ -309,10 +321,10 @@ def fit_line_tls(points, *, point_sigma=None) -> LineFit:
     _check_count(len(p), 2, "points", "line")
     x, y = p[:, 0], p[:, 1]
     w = np.ones(len(p))
-    r, alpha, *_ = _line_core(x, y, w)
+    r, alpha = _line_core(x, y, w)
     d = x * math.cos(alpha) + y * math.sin(alpha) - r
     s = _residual_sigma(d) if point_sigma is None else float(point_sigma)
-    cov = line_covariance(x, y, w, r, alpha, s, ray_noise=False)
+    cov = line_covariance(x, y, w, alpha, s, ray_noise=False)
     return LineFit(r, alpha, cov, float(np.sqrt(np.mean(d * d))), len(p))
 
 

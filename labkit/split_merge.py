@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from .fitting import line_covariances
+from .fitting import line_covariances, line_from_sums
 from .scan import Scan
 from .segmentation import segment_labels
 
@@ -88,19 +88,6 @@ class Step:
     reason: str = ""
 
 
-def _fit_sums(s: list[float]) -> tuple[float, float]:
-    """(r, alpha) from the weighted sums ``[w, wx, wy, wxx, wyy, wxy]`` of a run of points:
-    the closed form of :func:`labkit.fitting.fit_line_polar`, in scalar arithmetic."""
-    sw, sx, sy, sxx, syy, sxy = s
-    num = 2.0 * (sxy - sx * sy / sw)
-    den = (sxx - syy) - (sx * sx - sy * sy) / sw
-    alpha = 0.5 * math.atan2(num, den) + math.pi / 2
-    r = (sx * math.cos(alpha) + sy * math.sin(alpha)) / sw
-    if r < 0:
-        r, alpha = -r, alpha + math.pi
-    return r, math.remainder(alpha, 2 * math.pi)
-
-
 class _Run:
     """One range segment with prefix sums of ``w, wx, wy, wxx, wyy, wxy``: the sums of any
     sub-run, hence its weighted line fit, in O(1)."""
@@ -134,7 +121,7 @@ class _Line:
 
     def __init__(self, idx: np.ndarray, s: list[float], points: np.ndarray):
         self.idx, self.s = idx, s
-        self.r, self.alpha = _fit_sums(s)
+        self.r, self.alpha = line_from_sums(*s)
         self.start = self._project(points[idx[0]])
         self.end = self._project(points[idx[-1]])
         self.cov = None
@@ -225,7 +212,7 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
         r, alpha = fits[k]
         return abs(x[i] * math.cos(alpha) + y[i] * math.sin(alpha) - r)
 
-    fits = [_fit_sums(run.sums(a, b)) for a, b in spans]
+    fits = [line_from_sums(*run.sums(a, b)) for a, b in spans]
     for a, b in leftovers:
         left, right = by_end.get(a), by_start.get(b)
         lo, hi = a, b
@@ -410,7 +397,7 @@ def split_and_merge(
                 stack.append((g + 1, b))
                 stack.append((a, g + 1))
                 continue
-            r, alpha = _fit_sums(run.sums(a, b)) if method == "fit" else run.chord(a, b)
+            r, alpha = line_from_sums(*run.sums(a, b)) if method == "fit" else run.chord(a, b)
             lo, hi = (a + keep, b - keep) if n > 2 * keep else (a, b)
             # signed distances v - r; the worst point is the farther of the two extremes
             v = xy[lo:hi] @ (math.cos(alpha), math.sin(alpha))
@@ -450,8 +437,8 @@ def split_and_merge(
                                   reason=f"length {line.length:.3f} m < min_length_m={min_length_m}"))
             continue
         kept.append(line)
-    return (_finish(kept, points, ranges, weights, range_sigma_m), steps) if trace else \
-        _finish(kept, points, ranges, weights, range_sigma_m)
+    out = _finish(kept, points, ranges, weights, range_sigma_m)
+    return (out, steps) if trace else out
 
 
 def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_error_m, merge, merge_dr_m,
