@@ -316,15 +316,11 @@ def forbid_package_calls(package: str, func: Callable[..., Any], /, *args: Any, 
     ...
     AssertionError: polar_to_cartesian calls labkit's own implementation (labkit.scan.polar_to_cartesian); ...
     """
-    record = record_package_calls(package, func, *args, **kwargs)
-    problem = _own_work_problem(getattr(func, "__name__", repr(func)), (package,), record.calls, record.tampered)
-    if problem:
-        raise AssertionError(problem)
-    return record.result
+    return _guarded(func, (package,))(*args, **kwargs)
 
 
 def _own_work_problem(name: str, packages: tuple[str, ...], calls: tuple[str, ...], tampered: bool) -> str | None:
-    """What :func:`forbid_package_calls` and :func:`own_work` say about a watched call, or None."""
+    """What :func:`own_work` says about a watched call, or None."""
     if tampered:
         return (
             f"{name} called sys.setprofile, which switches off the check that it does not"
@@ -399,7 +395,11 @@ def own_work(
     ...
     AssertionError: polar_to_cartesian calls labkit's own implementation (labkit.scan.polar_to_cartesian); ...
     """
-    packages = (package, *also)
+    return _guarded(func, (package, *also))
+
+
+def _guarded(func: Callable[..., Any], packages: tuple[str, ...]) -> Callable[..., Any]:
+    """The wrapper behind :func:`own_work` and :func:`forbid_package_calls`."""
     watcher = _Watcher(packages)
     name = getattr(func, "__name__", repr(func))
 
