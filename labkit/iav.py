@@ -57,7 +57,7 @@ import numpy as np
 from .features import Circle, LineSegment, line_segment
 from .fitting import fit_circle
 from .scan import Scan
-from .segmentation import RangeSegment, segment_labels
+from .segmentation import RangeSegment, segment_labels, segment_order
 
 __all__ = [
     "IAVStats",
@@ -476,21 +476,11 @@ _NO_RUNS = _Runs(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, np.int64),
 
 
 def _runs_from_labels(scan: Scan, labels: np.ndarray) -> _Runs:
-    """The segments of ``labels`` in label order (the seam-crossing one, label 0, first),
-    as :func:`labkit.segmentation.range_segments` lists them."""
-    n = labels.size
-    order = None
-    if n and labels[0] >= 0 and labels[0] == labels[-1]:
-        other = np.flatnonzero(labels != labels[0])
-        if other.size:  # a segment crossing the seam: start the beam order where it starts
-            t = int(other[-1]) + 1
-            order = np.concatenate([np.arange(t, n), np.arange(t)])
-    idx = np.flatnonzero(labels >= 0) if order is None else order[labels[order] >= 0]
+    """The segments of ``labels`` in label order (:func:`labkit.segmentation.segment_order`)."""
+    idx, starts, stops = segment_order(labels)
     if idx.size == 0:
         return _NO_RUNS
-    lab = labels[idx]
-    cut = np.flatnonzero(lab[1:] != lab[:-1]) + 1
-    return _Runs(idx, scan.points[idx], np.concatenate([[0], cut]), np.concatenate([cut, [idx.size]]), False)
+    return _Runs(idx, scan.points[idx], starts, stops, False)
 
 
 def _runs_from_segments(segments) -> _Runs:

@@ -29,7 +29,8 @@ import numpy as np
 
 from .scan import Scan
 
-__all__ = ["RangeSegment", "segment_labels", "range_segments", "breakpoint_thresholds"]
+__all__ = ["RangeSegment", "segment_labels", "range_segments", "breakpoint_thresholds", "segment_order",
+           "segments_from_labels"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,16 +186,46 @@ def range_segments(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2
     return segments_from_labels(scan, labels)
 
 
+def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The beams of every segment laid end to end, in label order.
+
+    ``labels`` are per beam as :func:`segment_labels` gives them (each segment a run of
+    consecutive beams, -1 for none). Returns ``(beams, starts, stops)``: segment ``k`` is
+    ``beams[starts[k]:stops[k]]``. A segment crossing the seam of a full-circle scan (the same
+    label on the first and the last beam) comes first, its beams running N-k..N-1, 0..m.
+
+    Examples
+    --------
+    >>> beams, starts, stops = segment_order(np.array([0, 0, -1, 1, 1, 1, 0]))
+    >>> beams.tolist(), starts.tolist(), stops.tolist()
+    ([6, 0, 1, 3, 4, 5], [0, 3], [3, 6])
+    """
+    labels = np.asarray(labels)
+    n = labels.size
+    if n and labels[0] >= 0 and labels[0] == labels[-1]:
+        other = np.flatnonzero(labels != labels[0])
+        if other.size:  # a segment crossing the seam: start the beam order where it starts
+            t = int(other[-1]) + 1
+            rolled = np.concatenate([np.arange(t, n), np.arange(t)])
+            beams = rolled[labels[rolled] >= 0]
+        else:
+            beams = np.arange(n)
+    else:
+        beams = np.flatnonzero(labels >= 0)
+    lab = labels[beams]
+    cut = np.flatnonzero(lab[1:] != lab[:-1]) + 1
+    if beams.size == 0:
+        return beams, np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return beams, np.concatenate([[0], cut]), np.concatenate([cut, [beams.size]])
+
+
 def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
-    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware."""
+    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware (see
+    :func:`segment_order`)."""
+    beams, starts, stops = segment_order(labels)
     out = []
-    n = scan.n_beams
-    for k in range(int(labels.max()) + 1 if n and labels.max() >= 0 else 0):
-        idx = np.flatnonzero(labels == k)
-        if idx[0] == 0 and idx[-1] == n - 1 and idx.size < n:
-            # crosses the seam: start after the gap
-            gap_at = int(np.argmax(np.diff(idx) > 1)) + 1 if np.any(np.diff(idx) > 1) else 0
-            idx = np.concatenate([idx[gap_at:], idx[:gap_at]])
+    for a, b in zip(starts.tolist(), stops.tolist(), strict=True):
+        idx = beams[a:b].copy()
         idx.setflags(write=False)
         pts = scan.points[idx]
         pts.setflags(write=False)

@@ -41,7 +41,7 @@ import numpy as np
 from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from .fitting import line_covariances, line_from_sums
 from .scan import Scan
-from .segmentation import segment_labels
+from .segmentation import segment_labels, segment_order
 
 __all__ = ["split_and_merge", "Step", "lines_similar"]
 
@@ -230,26 +230,6 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
     return sorted((a, b) for a, b in spans)
 
 
-def _segment_order(labels: np.ndarray, wrap: bool) -> tuple[np.ndarray, list[tuple[int, int]]]:
-    """Beam indices of all segments laid end to end in scan order, and each segment's
-    [start, stop) in that array. A segment crossing the seam of a full-circle scan comes
-    first, its beams running N-k..N-1, 0..m."""
-    idx = np.flatnonzero(labels >= 0)
-    if idx.size == 0:
-        return idx, []
-    lab = labels[idx]
-    cut = np.flatnonzero(np.diff(lab)) + 1
-    starts = [0, *cut.tolist()]
-    stops = [*cut.tolist(), len(idx)]
-    if wrap and len(starts) > 1 and lab[0] == lab[-1]:
-        tail = idx[starts[-1]:]
-        idx = np.concatenate([tail, idx[:starts[-1]]])
-        k = len(tail)
-        starts = [0] + [s + k for s in starts[1:-1]]
-        stops = [stops[0] + k] + [s + k for s in stops[1:-1]]
-    return idx, list(zip(starts, stops, strict=True))
-
-
 def _covariances(lines: list[_Line], points: np.ndarray, ranges: np.ndarray, weights, sigma: float) -> np.ndarray:
     idx = np.concatenate([ln.idx for ln in lines])
     starts = np.cumsum([0] + [len(ln.idx) for ln in lines[:-1]])
@@ -363,7 +343,7 @@ def split_and_merge(
     points = scan.points
     ranges = scan.ranges
     keep = min_points // 2
-    order, bounds = _segment_order(labels, scan.is_full_circle)
+    order, starts, stops = segment_order(labels)
     # one pass over the whole scan, segments laid end to end: points, weights, prefix sums, gaps
     x, y = points[order, 0], points[order, 1]
     w = np.ones_like(x) if weights == "uniform" else 1.0 / ranges[order]
@@ -372,7 +352,7 @@ def split_and_merge(
     wide = np.flatnonzero(gaps > max_gap_m).tolist()  # where a run may have to be cut, ascending
     xy = np.column_stack([x, y])
     lines: list[_Line] = []  # accepted runs, scan order
-    for seg_a, seg_b in bounds:
+    for seg_a, seg_b in zip(starts.tolist(), stops.tolist(), strict=True):
         if steps is not None:
             steps.append(Step("segment", int(order[seg_a]), int(order[seg_b - 1]),
                               reason=f"range segment of {seg_b - seg_a} points"))

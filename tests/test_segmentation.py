@@ -10,8 +10,9 @@ from hypothesis import strategies as st
 from labkit import Scan, range_segments, segment_labels, sim
 
 
-def reference_labels(scan: Scan, threshold: float, min_points: int) -> np.ndarray:
-    """Segmentation written as a loop over beams, straight from the definition."""
+def reference_runs(scan: Scan, threshold: float, min_points: int) -> list[list[int]]:
+    """Segmentation written as a loop over beams, straight from the definition: the kept
+    segments' beams in scan order (a seam-crossing one as N-k..N-1, 0..m), in label order."""
     n = scan.n_beams
     runs, current = [], []
     for i in range(n):
@@ -32,10 +33,14 @@ def reference_labels(scan: Scan, threshold: float, min_points: int) -> np.ndarra
     if scan.is_full_circle and len(runs) > 1 and runs[0][0] == 0 and runs[-1][-1] == n - 1:
         if np.hypot(*(scan.points[0] - scan.points[n - 1])) < threshold:
             runs[0] = runs.pop() + runs[0]
-    labels = np.full(n, -1)
     kept = [r for r in runs if len(r) >= min_points]
     kept.sort(key=lambda r: min(r))
-    for k, r in enumerate(kept):
+    return kept
+
+
+def reference_labels(scan: Scan, threshold: float, min_points: int) -> np.ndarray:
+    labels = np.full(scan.n_beams, -1)
+    for k, r in enumerate(reference_runs(scan, threshold, min_points)):
         labels[r] = k
     return labels
 
@@ -55,6 +60,8 @@ def test_matches_the_loop_reference(ranges, threshold, min_points, full):
     got = segment_labels(scan, threshold, min_points=min_points)
     want = reference_labels(scan, threshold, min_points)
     np.testing.assert_array_equal(got, want)
+    segments = range_segments(scan, threshold, min_points=min_points)
+    assert [s.indices.tolist() for s in segments] == reference_runs(scan, threshold, min_points)
 
 
 def test_invalid_beams_break_segments_and_isolated_points_go():
