@@ -66,7 +66,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dbscan1d import _check_eps, _check_min_pts, dbscan1d
+from ._checks import check_int, check_positive
+from .dbscan1d import dbscan1d
 from .features import LineSegment, line_segment
 from .geometry import circular_mean, signed_distance_to_line
 from .scan import Scan
@@ -168,13 +169,13 @@ def local_directions(scan: Scan) -> np.ndarray:
 def _check_params(scan, eps_theta, eps_dist, min_pts, split_gap_m):
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    eps_theta = _check_eps(eps_theta, "eps_theta")
+    eps_theta = check_positive("eps_theta", eps_theta)
     if eps_theta >= math.pi / 2:
         raise ValueError(f"eps_theta must be < pi/2 radians, got {eps_theta!r}")
-    eps_dist = _check_eps(eps_dist, "eps_dist")
-    min_pts = _check_min_pts(min_pts, "min_pts", minimum=2)
+    eps_dist = check_positive("eps_dist", eps_dist)
+    min_pts = check_int("min_pts", min_pts, 2)
     if split_gap_m is not None:
-        split_gap_m = _check_eps(split_gap_m, "split_gap_m")
+        split_gap_m = check_positive("split_gap_m", split_gap_m)
     return eps_theta, eps_dist, min_pts, split_gap_m
 
 

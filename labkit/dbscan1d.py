@@ -80,10 +80,11 @@ discovering clusters in large spatial databases with noise", KDD 1996.
 from __future__ import annotations
 
 import math
-import numbers
 from typing import NamedTuple
 
 import numpy as np
+
+from ._checks import check_int, check_positive
 
 __all__ = ["Cluster", "dbscan1d_reference", "dbscan1d", "DBSCAN1D"]
 
@@ -111,25 +112,10 @@ def _check_x(x, name: str = "x") -> np.ndarray:
     return arr
 
 
-def _check_eps(eps, name: str = "eps") -> float:
-    if isinstance(eps, bool) or not isinstance(eps, numbers.Real):
-        raise ValueError(f"{name} must be a finite number > 0, got {eps!r}")
-    value = float(eps)
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a finite number > 0, got {eps!r}")
-    return value
-
-
-def _check_min_pts(min_pts, name: str = "min_pts", minimum: int = 1) -> int:
-    if isinstance(min_pts, bool) or not isinstance(min_pts, numbers.Integral) or min_pts < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {min_pts!r}")
-    return int(min_pts)
-
-
 def _check_period(period) -> float | None:
     if period is None:
         return None
-    return _check_eps(period, "period")
+    return check_positive("period", period)
 
 
 def _check_border(border) -> str:
@@ -245,8 +231,8 @@ def dbscan1d_reference(x, eps: float, min_pts: int) -> tuple[np.ndarray, list[Cl
     [Cluster(lower=0, upper=3, id=0), Cluster(lower=5, upper=7, id=1)]
     """
     arr = _check_x(x)
-    eps = _check_eps(eps)
-    min_pts = _check_min_pts(min_pts)
+    eps = check_positive("eps", eps)
+    min_pts = check_int("min_pts", min_pts, 1)
     if arr.size > 1 and np.any(arr[1:] < arr[:-1]):
         bad = int(np.flatnonzero(arr[1:] < arr[:-1])[0])
         raise ValueError(f"x must be sorted ascending (Algorithm 1 requires it), but x[{bad + 1}] < x[{bad}]")
@@ -621,8 +607,8 @@ def _labels_from_core(s: np.ndarray, core: np.ndarray, eps: float, period: float
 def _dbscan1d(x, eps, min_pts, period, border, *, x_name="x", min_pts_name="min_pts", want_core=False):
     """Validated entry: labels (N,) or (N, 2) in caller order, and the core mask if asked."""
     arr = _check_x(x, x_name)
-    eps = _check_eps(eps)
-    min_pts = _check_min_pts(min_pts, min_pts_name)
+    eps = check_positive("eps", eps)
+    min_pts = check_int(min_pts_name, min_pts, 1)
     period = _check_period(period)
     border = _check_border(border)
     v = arr

@@ -54,6 +54,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ._checks import check_int, check_nonneg, check_positive
 from .features import Circle, LineSegment, line_segment
 from .fitting import fit_circle
 from .scan import Scan
@@ -149,32 +150,6 @@ def _as_points(points) -> np.ndarray:
 def _check_scan(scan) -> None:
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-
-
-def _check_positive(name: str, value, *, allow_inf: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not (v > 0 and (allow_inf or math.isfinite(v))):
-        raise ValueError(f"{name} must be a positive{'' if allow_inf else ' finite'} number, got {value!r}")
-    return v
-
-
-def _check_nonneg(name: str, value, *, allow_inf: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not (v >= 0 and (allow_inf or math.isfinite(v))):
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
-    return v
-
-
-def _check_int(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or int(value) != value or value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
 
 
 def _check_range(name: str, value, lo: float, hi: float) -> tuple[float, float]:
@@ -407,8 +382,8 @@ def is_v_corner(angles, n_neighbours: int = 4, stride: int = 1) -> bool:
     a = np.asarray(angles, dtype=np.float64)
     if a.ndim != 1:
         raise ValueError(f"angles must be one-dimensional, got shape {a.shape}")
-    k = _check_int("n_neighbours", n_neighbours, 2) // 2
-    s = _check_int("stride", stride, 1)
+    k = check_int("n_neighbours", n_neighbours, 2) // 2
+    s = check_int("stride", stride, 1)
     if a.size == 0:
         return False
     m = int(np.argmin(a))
@@ -501,7 +476,7 @@ def _scan_runs(scan: Scan, segments, seg_threshold_m: float) -> _Runs:
         if runs.idx.size and (runs.idx.min() < 0 or runs.idx.max() >= scan.n_beams):
             raise ValueError(f"segments has beam indices outside the scan's 0..{scan.n_beams - 1}")
         return runs
-    _check_positive("seg_threshold_m", seg_threshold_m)
+    check_positive("seg_threshold_m", seg_threshold_m)
     return _runs_from_labels(scan, segment_labels(scan, seg_threshold_m, min_points=2))
 
 
@@ -671,22 +646,22 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
 def _circle_test(*, min_points, min_chord_m, max_chord_m, middle_range, mean_range, std_max, arc_like,
                  arc_like_std_max, v_corner_neighbours, v_corner_stride=None, hollow, center_method,
                  kind) -> _CircleTest:
-    min_points = _check_int("min_points", min_points, 3)
-    lo = _check_nonneg("min_chord_m", min_chord_m)
-    hi = _check_positive("max_chord_m", max_chord_m, allow_inf=True)
+    min_points = check_int("min_points", min_points, 3)
+    lo = check_nonneg("min_chord_m", min_chord_m)
+    hi = check_positive("max_chord_m", max_chord_m, allow_inf=True)
     if not lo < hi:
         raise ValueError(f"min_chord_m must be < max_chord_m, got {lo:g} >= {hi:g}")
     middle_range = _check_range("middle_range", middle_range, 0.0, math.inf)
     mean_range = _check_range("mean_range", mean_range, 0.0, math.pi)
-    std_max = _check_positive("std_max", std_max)
+    std_max = check_positive("std_max", std_max)
     like = None
     if arc_like:
-        like = _check_positive("arc_like_std_max", arc_like_std_max)
+        like = check_positive("arc_like_std_max", arc_like_std_max)
         if like <= std_max:
             raise ValueError(f"arc_like_std_max must exceed std_max, got {like:g} <= {std_max:g}")
-    v_corner_neighbours = _check_int("v_corner_neighbours", v_corner_neighbours, 2)
+    v_corner_neighbours = check_int("v_corner_neighbours", v_corner_neighbours, 2)
     if v_corner_stride is not None:
-        v_corner_stride = _check_int("v_corner_stride", v_corner_stride, 1)
+        v_corner_stride = check_int("v_corner_stride", v_corner_stride, 1)
     _check_center_method(center_method)
     return _CircleTest(min_points, (lo, hi), middle_range, mean_range, std_max, like, v_corner_neighbours,
                        v_corner_stride, hollow, center_method, kind)
@@ -850,10 +825,10 @@ def detect_lines_iav(
     (2.0, True, 107)
     """
     _check_scan(scan)
-    min_points = _check_int("min_points", min_points, 3)
-    min_length_m = _check_nonneg("min_length_m", min_length_m)
-    mean_tolerance = _check_positive("mean_tolerance", mean_tolerance)
-    std_max = _check_positive("std_max", std_max)
+    min_points = check_int("min_points", min_points, 3)
+    min_length_m = check_nonneg("min_length_m", min_length_m)
+    mean_tolerance = check_positive("mean_tolerance", mean_tolerance)
+    std_max = check_positive("std_max", std_max)
     runs = _scan_runs(scan, segments, seg_threshold_m)
     s = runs.starts.size
     if s == 0:

@@ -53,6 +53,7 @@ import math
 
 import numpy as np
 
+from ._checks import check_int, check_nonneg, check_positive
 from .features import Leg, Person
 from .fitting import fit_circle
 from .iav import (
@@ -68,9 +69,6 @@ from .iav import (
     _STD,
     SegmentCheck,
     _batch_angles,
-    _check_int,
-    _check_nonneg,
-    _check_positive,
     _check_range,
     _check_scan,
     _Geometry,
@@ -203,16 +201,16 @@ def detect_legs(
     ([1.99, 0.5], 0.12, 7)
     """
     _check_scan(scan)
-    min_points = _check_int("min_points", min_points, 3)
+    min_points = check_int("min_points", min_points, 3)
     chord_lo, chord_hi = _check_range("chord_range", chord_range, 0.0, math.inf)
     middle_range = _check_range("middle_range", middle_range, 0.0, math.inf)
     if iav_mean_range is not None:
         iav_mean_range = _check_range("iav_mean_range", iav_mean_range, 0.0, math.pi)
     if iav_std_max is not None:
-        iav_std_max = _check_positive("iav_std_max", iav_std_max)
+        iav_std_max = check_positive("iav_std_max", iav_std_max)
     if center_method not in _LEG_CENTER_METHODS:
         raise ValueError(f"center_method must be one of {_LEG_CENTER_METHODS}, got {center_method!r}")
-    chord_padding_beams = _check_nonneg("chord_padding_beams", chord_padding_beams)
+    chord_padding_beams = check_nonneg("chord_padding_beams", chord_padding_beams)
     spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
     runs = _scan_runs(scan, segments, seg_threshold_m)
     if runs.starts.size == 0:
@@ -288,7 +286,7 @@ def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
     >>> len(people), np.round(people[0].center, 3).tolist()
     (1, [2.0, 0.15])
     """
-    max_distance_m = _check_positive("max_distance_m", max_distance_m)
+    max_distance_m = check_positive("max_distance_m", max_distance_m)
     legs = list(legs)
     for leg in legs:
         if not isinstance(leg, Leg):

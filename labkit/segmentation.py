@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._checks import check_int, check_positive
 from .scan import Scan
 
 __all__ = ["RangeSegment", "segment_labels", "range_segments", "breakpoint_thresholds", "segment_order",
@@ -68,10 +69,8 @@ class RangeSegment:
 
 
 def _validate(threshold_m: float, min_points: int) -> None:
-    if not (np.isfinite(threshold_m) and threshold_m > 0):
-        raise ValueError(f"threshold_m must be a positive number of metres, got {threshold_m}")
-    if int(min_points) != min_points or min_points < 1:
-        raise ValueError(f"min_points must be an integer >= 1, got {min_points!r}")
+    check_positive("threshold_m", threshold_m)
+    check_int("min_points", min_points, 1)
 
 
 def breakpoint_thresholds(

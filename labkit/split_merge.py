@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._checks import check_int, check_nonneg, check_positive
 from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from .fitting import line_covariances, line_from_sums
 from .scan import Scan
@@ -134,13 +135,6 @@ class _Line:
     @property
     def length(self) -> float:
         return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
-
-
-def _check(name: str, value, *, positive: bool = True) -> float:
-    v = float(value)
-    if not math.isfinite(v) or (v <= 0 if positive else v < 0):
-        raise ValueError(f"{name} must be a finite number {'> 0' if positive else '>= 0'}, got {value!r}")
-    return v
 
 
 def _similar(r1, a1, c1, r2, a2, c2, merge, merge_dr_m, merge_dalpha, merge_chi2) -> tuple[bool, float]:
@@ -326,16 +320,14 @@ def split_and_merge(
         raise ValueError(f'merge must be "thresholds", "chi2" or None, got {merge!r}')
     if weights not in (None, "uniform"):
         raise ValueError(f'weights must be None (1/rho) or "uniform", got {weights!r}')
-    if int(min_points) != min_points or min_points < 2:
-        raise ValueError(f"min_points must be an integer >= 2, got {min_points!r}")
-    min_points = int(min_points)
-    split_threshold_m = _check("split_threshold_m", split_threshold_m)
-    min_length_m = _check("min_length_m", min_length_m, positive=False)
-    max_gap_m = _check("max_gap_m", max_gap_m)
-    _check("merge_dr_m", merge_dr_m)
-    _check("merge_dalpha", merge_dalpha)
-    _check("merge_chi2", merge_chi2)
-    range_sigma_m = _check("range_sigma_m", range_sigma_m)
+    min_points = check_int("min_points", min_points, 2)
+    split_threshold_m = check_positive("split_threshold_m", split_threshold_m)
+    min_length_m = check_nonneg("min_length_m", min_length_m)
+    max_gap_m = check_positive("max_gap_m", max_gap_m)
+    check_positive("merge_dr_m", merge_dr_m)
+    check_positive("merge_dalpha", merge_dalpha)
+    check_positive("merge_chi2", merge_chi2)
+    range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
 
     steps: list[Step] | None = [] if trace else None
     labels = segment_labels(scan, segment_threshold_m, min_points=min_points, adaptive=adaptive_segmentation,

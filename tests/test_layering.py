@@ -12,8 +12,8 @@ import pytest
 LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 
 #: the model and the algorithms: each may import the others, numpy and the standard library
-ALGORITHMS = ["scan", "geometry", "segmentation", "fitting", "features", "split_merge", "dbscan1d", "angular",
-              "iav", "legs", "sim"]
+ALGORITHMS = ["_checks", "scan", "geometry", "segmentation", "fitting", "features", "split_merge", "dbscan1d",
+              "angular", "iav", "legs", "sim"]
 
 
 def imports_of(path: Path) -> set[str]:
