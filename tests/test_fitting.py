@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize
 
 from labkit.fitting import fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
-from labkit.geometry import angle_difference, rotation_matrix
+from labkit.geometry import angle_difference, normalize_line, rotation_matrix
 
 
 def wall_beams(r: float, alpha: float, half_width: float = 0.5, n: int = 40):
@@ -67,13 +67,16 @@ def test_fits_are_invariant_under_rotation_and_translation(phi, tx, ty, seed):
     rot = rotation_matrix(phi)
     moved = pts @ rot.T + [tx, ty]
 
-    # orthogonal regression: any rigid motion moves the line with the points
+    # orthogonal regression: any rigid motion moves the line with the points. The line
+    # (r, alpha) moved by (phi, t) is (r + t . n', alpha + phi) with n' the turned normal.
     a, b = fit_line_tls(pts), fit_line_tls(moved)
-    foot = a.r * np.array([math.cos(a.alpha), math.sin(a.alpha)]) @ rot.T + [tx, ty]
-    normal = rot @ [math.cos(a.alpha), math.sin(a.alpha)]
-    assert abs(foot @ normal - (b.r if normal @ [math.cos(b.alpha), math.sin(b.alpha)] > 0 else -b.r)) < 1e-7
-    assert abs(abs(float(angle_difference(b.alpha, math.atan2(normal[1], normal[0])))) % math.pi) < 1e-7 or \
-        abs(abs(float(angle_difference(b.alpha, math.atan2(normal[1], normal[0])))) - math.pi) < 1e-7
+    alpha = a.alpha + phi
+    want_r, want_alpha = normalize_line(a.r + tx * math.cos(alpha) + ty * math.sin(alpha), alpha)
+    # the foot points r n agree, and the directions agree modulo pi (through the origin,
+    # r = 0, either normal describes the line)
+    np.testing.assert_allclose(b.r * np.array([math.cos(b.alpha), math.sin(b.alpha)]),
+                               want_r * np.array([math.cos(want_alpha), math.sin(want_alpha)]), atol=1e-7)
+    assert abs(math.sin(b.alpha - want_alpha)) < 1e-7
 
     # the 1/rho-weighted polar fit depends on the origin, so only rotation about it is free
     rho, theta = np.hypot(*pts.T), np.arctan2(pts[:, 1], pts[:, 0])
