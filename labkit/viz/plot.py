@@ -107,14 +107,14 @@ def plot_truth(truth, ax=None):
     return ax
 
 
-def plot_lines(lines, ax=None, *, label: str = "lines", color=None, lw: float = 2.2, annotate: bool = False):
-    """Draw :class:`labkit.LineSegment` records from ``start`` to ``end``; with ``annotate``
-    each is numbered by its position in the list."""
+def plot_lines(lines, ax=None, *, label: str | None = None, color=None, lw: float = 2.2, annotate: bool = False):
+    """Draw :class:`labkit.LineSegment` records from ``start`` to ``end`` (legend: ``label``,
+    by default "lines (count)"); with ``annotate`` each is numbered by its place in the list."""
     ax = _axes(ax)
     segs = [[tuple(ln.start), tuple(ln.end)] for ln in lines]
     if segs:
         ax.add_collection(LineCollection(segs, colors=[color or mpl("lines")], linewidths=lw, zorder=5,
-                                         label=f"{label} ({len(segs)})"))
+                                         label=f"lines ({len(segs)})" if label is None else label))
         ax.autoscale_view()
     if annotate:
         for k, ln in enumerate(lines):
