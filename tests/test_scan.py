@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, polar_to_cartesian
@@ -182,10 +182,14 @@ def _limits_ok(range_min, range_max) -> bool:
 def _angles_ok(angle_min, increment, n) -> bool:
     if n <= 1:
         return bool(np.isfinite(angle_min)) and np.isfinite(increment) and increment != 0
-    end = angle_min + increment * (n - 1)
-    return bool(np.isfinite([angle_min, increment, end]).all() and increment != 0
-                and abs(increment) * (n - 1) <= 2 * np.pi
-                and np.all(np.diff(angle_min + abs(increment) * np.arange(n)) > 0))
+    # The beam angles as float64 holds them: far from zero (|angle_min| ~ 1e16) rounding
+    # alone can stretch a 5 rad span to 8 rad, and such input is rightly rejected.
+    with np.errstate(over="ignore", invalid="ignore"):
+        angles = angle_min + increment * np.arange(n)
+    steps = np.diff(angles) * np.sign(increment)
+    return bool(np.isfinite([angle_min, increment]).all() and np.isfinite(angles).all() and increment != 0
+                and abs(angles[-1] - angles[0]) <= 2 * np.pi
+                and np.all(steps > 0))
 
 
 def build_or_reject(make, well_formed: bool):
@@ -216,6 +220,8 @@ def test_fuzz_constructor(ranges, start, step, range_min, range_max):
 
 @settings(max_examples=300, deadline=None)
 @given(ranges=st.lists(weird_floats, max_size=40), angle_min=weird_floats, increment=weird_floats)
+@example(ranges=[0.0, 0.0], angle_min=3.602879701896397e16, increment=5.0)  # rounding: 5 rad steps become 8
+@example(ranges=[0.0, 0.0], angle_min=3.602879701896397e16, increment=-5.0)
 def test_fuzz_from_angle_increment(ranges, angle_min, increment):
     build_or_reject(lambda: Scan.from_angle_increment(ranges, angle_min, increment, range_max=30.0),
                     _angles_ok(angle_min, increment, len(ranges)))
