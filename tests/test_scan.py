@@ -186,7 +186,7 @@ def _angles_ok(angle_min, increment, n) -> bool:
     # alone can stretch a 5 rad span to 8 rad, and such input is rightly rejected.
     with np.errstate(over="ignore", invalid="ignore"):
         angles = angle_min + increment * np.arange(n)
-    steps = np.diff(angles) * np.sign(increment)
+        steps = np.diff(angles) * np.sign(increment)
     return bool(np.isfinite([angle_min, increment]).all() and np.isfinite(angles).all() and increment != 0
                 and abs(angles[-1] - angles[0]) <= 2 * np.pi
                 and np.all(steps > 0))
