@@ -8,6 +8,7 @@ back onto its scan. Points are in the sensor frame, metres; angles in radians.
 * :class:`Corner` -- where two consecutive line segments meet
 * :class:`Circle` -- IAV circles and arcs
 * :class:`Leg`, :class:`Person` -- leg detection and pairing
+* :class:`Features` -- everything :func:`labkit.extract_features` found in one scan
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 from .fitting import fit_line_polar
 from .geometry import angle_difference, intersect_lines, project_onto_line
 
-__all__ = ["LineSegment", "Corner", "Circle", "Leg", "Person", "line_segment", "find_corners"]
+__all__ = ["LineSegment", "Corner", "Circle", "Leg", "Person", "Features", "line_segment", "find_corners"]
 
 
 def _frozen(a) -> np.ndarray:
@@ -266,3 +267,67 @@ class Person:
 
     def as_dict(self) -> dict:
         return {"type": "person", "center": self.center.tolist(), "legs": [leg.as_dict() for leg in self.legs]}
+
+
+@dataclass(frozen=True, eq=False)
+class Features:
+    """Every feature found in one scan, with the time each stage took.
+
+    Attributes
+    ----------
+    stamp_ns : int
+        The scan's time stamp.
+    n_beams : int
+        Beams in the scan.
+    labels : ndarray (n_beams,), int
+        The range segment of each beam (-1: invalid or in no segment), shared by every
+        detector.
+    lines, corners, circles, arcs, legs, people : tuple
+        :class:`LineSegment`, :class:`Corner`, :class:`Circle` (``kind`` ``"circle"`` or
+        ``"arc-like"``), :class:`Circle` (``kind="arc"``, arcs embedded in walls),
+        :class:`Leg`, :class:`Person`. A stage that is switched off gives an empty tuple.
+    timings : dict of str to float
+        Seconds spent per stage (``segmentation``, ``legs``, ``circles``, ``lines``,
+        ``corners``, ``arcs``) and in all (``total``).
+    """
+
+    stamp_ns: int
+    n_beams: int
+    labels: np.ndarray = field(repr=False)
+    lines: tuple = ()
+    corners: tuple = ()
+    circles: tuple = ()
+    arcs: tuple = ()
+    legs: tuple = ()
+    people: tuple = ()
+    timings: dict = field(default_factory=dict, repr=False)
+
+    LAYERS = ("lines", "corners", "circles", "arcs", "legs", "people")
+
+    @property
+    def n_segments(self) -> int:
+        """Number of range segments."""
+        return int(self.labels.max()) + 1 if self.labels.size else 0
+
+    def counts(self) -> dict[str, int]:
+        """How many of each feature: ``{"segments": .., "lines": .., ...}``."""
+        return {"segments": self.n_segments, **{k: len(getattr(self, k)) for k in self.LAYERS}}
+
+    def as_record(self) -> dict:
+        """One JSON-ready record for the scan: time stamp, beam count, counts, stage times
+        in milliseconds, and every feature as its ``as_dict()`` (the Player "laser feature
+        2D" fields: ``type``, ``first``/``last`` beam, endpoints or centre, radius, IAV mean
+        and std, point count, fit error). People are listed after the legs they pair."""
+        items = [f.as_dict() for k in self.LAYERS for f in getattr(self, k)]
+        return {
+            "stamp_ns": int(self.stamp_ns),
+            "n_beams": int(self.n_beams),
+            "counts": self.counts(),
+            "timings_ms": {k: round(v * 1e3, 4) for k, v in self.timings.items()},
+            "features": items,
+        }
+
+    def __repr__(self) -> str:
+        c = self.counts()
+        return "Features(" + ", ".join(f"{v} {k}" for k, v in c.items()) + f", stamp_ns={self.stamp_ns})"
+

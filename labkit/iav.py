@@ -58,7 +58,7 @@ from ._checks import check_int, check_nonneg, check_positive
 from .features import Circle, LineSegment, line_segment
 from .fitting import fit_circle
 from .scan import Scan
-from .segmentation import RangeSegment, segment_labels, segment_order
+from .segmentation import RangeSegment, labels_from, segment_labels, segment_order
 
 __all__ = [
     "IAVStats",
@@ -471,6 +471,8 @@ def _runs_from_segments(segments) -> _Runs:
 
 
 def _scan_runs(scan: Scan, segments, seg_threshold_m: float) -> _Runs:
+    if isinstance(segments, np.ndarray):
+        return _runs_from_labels(scan, labels_from(scan, segments))
     if segments is not None:
         runs = _runs_from_segments(segments)
         if runs.idx.size and (runs.idx.min() < 0 or runs.idx.max() >= scan.n_beams):
@@ -683,7 +685,7 @@ def detect_circles(
     arc_like_std_max: float = ARC_LIKE_STD_MAX,
     v_corner_neighbours: int = 4,
     v_corner_stride: int | None = None,
-    segments: list[RangeSegment] | None = None,
+    segments: list[RangeSegment] | np.ndarray | None = None,
     return_trace: bool = False,
 ) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
     """Circles in a scan by the Inscribed Angle Variance (Xavier et al. 2005, Sec. II-B to II-D).
@@ -738,9 +740,9 @@ def detect_circles(
         (900 scans): 16 passed as "arc-like" with stride 1, 1 with the default; of 200
         irregular trunks (16-gons, corners 10-15 % off the circle) 22 and 26 were kept
         as "arc-like".
-    segments : list of RangeSegment, optional
-        Precomputed segments (e.g. from an adaptive threshold) instead of
-        ``range_segments(scan, seg_threshold_m)``.
+    segments : list of RangeSegment or ndarray of per-beam labels, optional
+        Precomputed segments (e.g. from an adaptive threshold, shared with other
+        detectors) instead of ``range_segments(scan, seg_threshold_m)``.
     return_trace : bool
         Also return one :class:`SegmentCheck` per segment, saying why it was rejected.
 
@@ -777,7 +779,7 @@ def detect_lines_iav(
     min_length_m: float = 0.15,
     mean_tolerance: float = math.radians(5.0),
     std_max: float = CIRCLE_STD_MAX,
-    segments: list[RangeSegment] | None = None,
+    segments: list[RangeSegment] | np.ndarray | None = None,
     return_trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[SegmentCheck]]:
     """Lines as range segments whose inscribed angles are all near 180 deg (Sec. II-B.1).
@@ -806,7 +808,7 @@ def detect_lines_iav(
         Largest distance of the mean inscribed angle from pi: 5 deg (ours).
     std_max : float, radians
         0.15 rad (8.6 deg), as for circles.
-    segments : list of RangeSegment, optional
+    segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments.
     return_trace : bool
         Also return one :class:`SegmentCheck` per segment.
@@ -869,7 +871,7 @@ def detect_arcs(
     std_max: float = CIRCLE_STD_MAX,
     center_method: str = "geometric",
     line_params: dict | None = None,
-    segments: list[RangeSegment] | None = None,
+    segments: list[RangeSegment] | np.ndarray | None = None,
     return_trace: bool = False,
 ) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
     """Arcs embedded in lines, such as rounded wall corners (Xavier et al. Sec. II-B.2, Fig. 3).

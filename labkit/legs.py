@@ -144,7 +144,7 @@ def detect_legs(
     iav_std_max: float | None = None,
     reject_occluded: bool = True,
     center_method: str = "ray",
-    segments: list[RangeSegment] | None = None,
+    segments: list[RangeSegment] | np.ndarray | None = None,
     return_trace: bool = False,
 ) -> list[Leg] | tuple[list[Leg], list[SegmentCheck]]:
     """Leg candidates in a scan (Xavier et al. 2005, Sec. II-E; see the module notes).
@@ -180,8 +180,8 @@ def detect_legs(
         median centre error (1.4 cm against 0.9 cm) but no outliers (largest 4 cm against
         8-11 cm; diameters within 4 cm against up to 20 cm off), since 3 to 5 noisy
         points define a circle poorly.
-    segments : list of RangeSegment, optional
-        Precomputed segments.
+    segments : list of RangeSegment or ndarray of per-beam labels, optional
+        Precomputed segments (:func:`labkit.segmentation.labels_from`).
     return_trace : bool
         Also return one :class:`labkit.iav.SegmentCheck` per segment (its ``chord_m`` is
         the padded chord).

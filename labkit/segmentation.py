@@ -31,7 +31,7 @@ from ._checks import check_int, check_positive
 from .scan import Scan
 
 __all__ = ["RangeSegment", "segment_labels", "range_segments", "breakpoint_thresholds", "segment_order",
-           "segments_from_labels"]
+           "segments_from_labels", "labels_from"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -230,3 +230,34 @@ def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
         pts.setflags(write=False)
         out.append(RangeSegment(idx, pts))
     return out
+
+
+def labels_from(scan: Scan, segments, name: str = "segments") -> np.ndarray:
+    """Per-beam segment labels from ``segments`` given either as per-beam labels (an int
+    array of shape ``(scan.n_beams,)``, -1 for none, as :func:`segment_labels` returns) or as
+    :class:`RangeSegment` records. Labels on invalid beams are set to -1.
+
+    This lets one segmentation be shared by every detector of a pipeline.
+
+    >>> s = Scan(ranges=[1.0, 1.0, np.nan, 1.0], angles=np.radians(np.arange(4)))
+    >>> labels_from(s, np.array([0, 0, 0, 1])).tolist()
+    [0, 0, -1, 1]
+    """
+    n = scan.n_beams
+    if isinstance(segments, np.ndarray):
+        if segments.shape != (n,) or not (np.issubdtype(segments.dtype, np.integer) or segments.size == 0):
+            raise ValueError(f"{name} given as labels must be an int array of shape ({n},), one per beam, "
+                             f"got {segments.dtype} of shape {segments.shape}")
+        return np.where(scan.valid, segments, -1).astype(np.int64, copy=False)
+    labels = np.full(n, -1, dtype=np.int64)
+    for k, seg in enumerate(segments):
+        if not isinstance(seg, RangeSegment):
+            raise ValueError(f"{name} must be per-beam labels or RangeSegment records (labkit.range_segments), "
+                             f"got {type(seg).__name__}")
+        idx = np.asarray(seg.indices, dtype=np.int64)
+        if idx.size and (idx.min() < 0 or idx.max() >= n):
+            raise ValueError(f"{name} has beam indices outside the scan's 0..{n - 1}")
+        labels[idx] = k
+    labels[~scan.valid] = -1
+    return labels
+

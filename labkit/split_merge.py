@@ -42,7 +42,7 @@ from ._checks import check_int, check_nonneg, check_positive
 from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from .fitting import line_covariances, line_from_sums
 from .scan import Scan
-from .segmentation import segment_labels, segment_order
+from .segmentation import labels_from, segment_labels, segment_order
 
 __all__ = ["split_and_merge", "Step", "lines_similar"]
 
@@ -249,6 +249,7 @@ def split_and_merge(
     adaptive_segmentation: bool = True,
     range_sigma_m: float = 0.01,
     weights=None,
+    segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Extract line segments from a scan by split-and-merge.
@@ -293,6 +294,10 @@ def split_and_merge(
         Range noise, for the adaptive breakpoints and the lines' covariances. Default 0.01 m.
     weights : None or "uniform"
         Point weights of the fits: ``None`` is ``1 / rho`` (the slides).
+    segments : ndarray of per-beam labels or list of RangeSegment, optional
+        A range segmentation computed elsewhere (shared with other detectors, or with the
+        beams of circles and legs set to -1 so that no line is fitted to them); then
+        ``segment_threshold_m`` and ``adaptive_segmentation`` are not used.
     trace : bool
         Also return the list of :class:`Step` records.
 
@@ -330,8 +335,11 @@ def split_and_merge(
     range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
 
     steps: list[Step] | None = [] if trace else None
-    labels = segment_labels(scan, segment_threshold_m, min_points=min_points, adaptive=adaptive_segmentation,
-                            range_sigma_m=range_sigma_m)
+    if segments is None:
+        labels = segment_labels(scan, segment_threshold_m, min_points=min_points, adaptive=adaptive_segmentation,
+                                range_sigma_m=range_sigma_m)
+    else:
+        labels = labels_from(scan, segments)
     points = scan.points
     ranges = scan.ranges
     keep = min_points // 2
