@@ -12,6 +12,7 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.iav` inscribed angle variance: circles, lines, arcs
 - :mod:`labkit.legs` leg detection and pairing into people
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
+- :mod:`labkit.pipeline` one :class:`Config` and :func:`extract_features` for every feature
 - :mod:`labkit.sim` the simulator with ground truth
 - :mod:`labkit.io` bags, CARMEN logs, JSON
 - :mod:`labkit.data` the bundled recordings
@@ -22,7 +23,7 @@ from . import geometry, iav, legs, sim
 from .angular import AngularSteps, angular_segmentation, local_directions
 from .data import bundled_data
 from .dbscan1d import DBSCAN1D, dbscan1d, dbscan1d_reference
-from .features import Circle, Corner, Leg, LineSegment, Person, find_corners, line_segment
+from .features import Circle, Corner, Features, Leg, LineSegment, Person, find_corners, line_segment
 from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
 from .iav import (
@@ -36,8 +37,19 @@ from .iav import (
     inscribed_angles,
     middle_point_offset,
 )
-from .io import CorruptFileError, convert, read_carmen, read_json_scan, read_scans, write_bag, write_scans
+from .io import (
+    CorruptFileError,
+    convert,
+    read_carmen,
+    read_features,
+    read_json_scan,
+    read_scans,
+    write_bag,
+    write_features,
+    write_scans,
+)
 from .legs import detect_legs, pair_legs
+from .pipeline import Config, extract_all, extract_features
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
 from .split_merge import Step, lines_similar, split_and_merge
@@ -72,6 +84,10 @@ __all__ = [
     "Person",
     "line_segment",
     "find_corners",
+    "Features",
+    "Config",
+    "extract_features",
+    "extract_all",
     "dbscan1d",
     "dbscan1d_reference",
     "DBSCAN1D",
@@ -99,6 +115,8 @@ __all__ = [
     "write_bag",
     "write_scans",
     "convert",
+    "write_features",
+    "read_features",
     "CorruptFileError",
     "__version__",
 ]

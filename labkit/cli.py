@@ -1,4 +1,4 @@
-"""The ``labkit`` command line: simulate, convert, view, inspect and demo recordings.
+"""The ``labkit`` command line: simulate, extract features, view, convert, benchmark and inspect recordings.
 
 Run ``labkit --help`` or ``labkit COMMAND --help``. Errors print one line that says what
 to do and exit with status 1; a damaged input file still produces its output with every
@@ -70,18 +70,121 @@ def cmd_convert(args: argparse.Namespace) -> int:
     return 0
 
 
+def _config(args: argparse.Namespace):
+    from .pipeline import Config
+
+    config = Config.load(args.config) if getattr(args, "config", None) else Config()
+    if getattr(args, "method", None):
+        config = config.updated({"lines.method": args.method})
+    return config
+
+
+def _counts_line(counts: dict, n: int) -> str:
+    return ", ".join(f"{k} {v / max(n, 1):.1f}" for k, v in counts.items())
+
+
 def cmd_view(args: argparse.Namespace) -> int:
     from .viz import rr as lkrr
 
-    summary = lkrr.record(args.input, args.output, topic=args.topic, progress=not args.quiet)
+    config = None if args.no_features else _config(args)
+    summary = lkrr.record(args.input, args.output, topic=args.topic, config=config,
+                          features=not args.no_features, progress=not args.quiet)
     extra = f" and ground truth for {summary.n_truth}" if summary.n_truth else ""
     print(f"wrote {summary.n_scans} scans{extra} to {summary.path}")
+    if summary.counts:
+        print(f"  per scan: {_counts_line(summary.counts, summary.n_scans)}")
     if args.spawn:
         subprocess.Popen([sys.executable, "-m", "rerun", str(summary.path)])
     else:
         print(f"open it with: {_rerun_command()} {summary.path}")
     if summary.error is not None:
         raise summary.error
+    return 0
+
+
+def cmd_extract(args: argparse.Namespace) -> int:
+    from .io import write_features
+    from .pipeline import extract_all
+
+    config = _config(args)
+    stream = read_scans(args.input, topic=args.topic)
+    scans = iter(stream)
+    to_stdout = args.output == "-"
+    if not args.quiet:
+        scans = _progress(stream.count, f"extract {Path(args.input).name}")(scans)
+    counts: dict[str, int] = {}
+    t0 = time.perf_counter()
+
+    def tallied():
+        for f in extract_all(scans, config):
+            for k, v in f.counts().items():
+                counts[k] = counts.get(k, 0) + v
+            yield f
+
+    n = write_features(tallied(), args.output, overwrite=args.force)
+    dt = time.perf_counter() - t0
+    report = sys.stderr if to_stdout else sys.stdout
+    where = "standard output" if to_stdout else args.output
+    print(f"wrote features of {n} scans to {where} ({n / max(dt, 1e-9):,.0f} scans/s, lines by "
+          f"{config.lines.method})", file=report)
+    print(f"  per scan: {_counts_line(counts, n)}", file=report)
+    return 0
+
+
+def cmd_config(args: argparse.Namespace) -> int:
+    from .pipeline import Config
+
+    config = Config.load(args.input) if args.input else Config()
+    if args.output:
+        out = Path(args.output)
+        if out.exists() and not args.force:
+            raise ValueError(f"{out} exists; pass --force to replace it")
+        config.save(out)
+        print(f"wrote {out}; edit it and pass it with --config to extract, view or bench")
+    else:
+        print(config.to_toml())
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    import tempfile
+
+    import numpy as np
+
+    from .data import bundled_data
+    from .pipeline import extract_features
+    from .viz import rr as lkrr
+
+    config = _config(args)
+    source = Path(args.input) if args.input else bundled_data("hall.bag")
+    t0 = time.perf_counter()
+    scans = list(read_scans(source, topic=args.topic))[: args.scans]
+    t_read = time.perf_counter() - t0
+    if not scans:
+        raise ValueError(f"{source} holds no scans")
+    for s in scans[:20]:  # warm up caches and lazy imports
+        extract_features(s, config)
+    stages: dict[str, list[float]] = {}
+    t0 = time.perf_counter()
+    feats = [extract_features(s, config) for s in scans]
+    t_extract = time.perf_counter() - t0
+    for f in feats:
+        for k, v in f.timings.items():
+            stages.setdefault(k, []).append(v)
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        lkrr.record_scans(scans, Path(tmp) / "bench.rrd", name=source.name, features=feats)
+        t_rrd = time.perf_counter() - t0
+    n = len(scans)
+    print(f"labkit bench: {n} scans of {scans[0].n_beams} beams from {source}, lines by {config.lines.method}")
+    print(f"{'stage':14s} {'median us':>10s} {'mean us':>10s} {'p99 us':>10s} {'share':>7s}")
+    total = float(np.sum(stages["total"]))
+    for k, v in stages.items():
+        v = np.asarray(v) * 1e6
+        print(f"{k:14s} {np.median(v):10.0f} {v.mean():10.0f} {np.percentile(v, 99):10.0f} "
+              f"{v.sum() / 1e6 / total:7.1%}")
+    print(f"read {n / t_read:,.0f} scans/s | extract {n / t_extract:,.0f} scans/s | log .rrd {n / t_rrd:,.0f} scans/s"
+          f" | bag -> features -> .rrd {n / (t_read + t_extract + t_rrd):,.0f} scans/s")
     return 0
 
 
@@ -108,43 +211,55 @@ def cmd_demo(args: argparse.Namespace) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     import numpy as np
 
     from .data import bundled_data
-    from .segmentation import segment_labels
+    from .pipeline import extract_features
     from .viz import plot
     from .viz import rr as lkrr
 
+    config = _config(args)
     source = Path(args.input) if args.input else bundled_data("hall.bag")
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     scans = list(read_scans(source))
     t_read = time.perf_counter() - t0
+    if not scans:
+        raise ValueError(f"{source} holds no scans")
     t0 = time.perf_counter()
-    labels = [segment_labels(s) for s in scans]
-    t_seg = time.perf_counter() - t0
+    feats = [extract_features(s, config) for s in scans]
+    t_extract = time.perf_counter() - t0
     truth_file = sim.truth_path_for(source)
     truth = sim.read_truth(truth_file) if truth_file.exists() else None
     t0 = time.perf_counter()
-    summary = lkrr.record_scans(scans, out / "demo.rrd", name=source.name, truth=truth, labels=labels,
-                                description=f"# labkit demo: {source.name}\n\nColours in `world/segments` "
-                                "are range segments (0.08 m threshold); `world/truth` is the ground truth.")
+    summary = lkrr.record_scans(
+        scans, out / "demo.rrd", name=source.name, truth=truth, features=feats,
+        description=lkrr.describe(f"labkit demo: {source.name}", config=config, truth=truth is not None,
+                                  source="Every scan through `labkit.extract_features` with the default config."))
     t_rrd = time.perf_counter() - t0
-    k = len(scans) // 2
-    fig = plot.scan_figure(scans[k], labels=labels[k], truth=truth.scans.get(scans[k].stamp_ns) if truth else None,
-                           title=f"{source.name}, scan {k}: range segments (0.08 m threshold)")
+    # the figure: the scan with the most kinds of feature (ties: the middle one)
+    kinds = np.array([sum(bool(getattr(f, k)) for k in f.LAYERS) for f in feats])
+    k = int(np.flatnonzero(kinds == kinds.max())[len(np.flatnonzero(kinds == kinds.max())) // 2])
+    f = feats[k]
+    fig, ax = plt.subplots(figsize=(10, 8))
+    plot.plot_features(scans[k], features=f, truth=truth.scans.get(scans[k].stamp_ns) if truth else None, ax=ax,
+                       title=f"{source.name}, scan {k}: " + ", ".join(f"{v} {n}" for n, v in f.counts().items()))
+    fig.tight_layout()
     fig.savefig(out / "demo.png", dpi=110)
-    n_valid = np.array([s.valid.sum() for s in scans])
-    n_seg = np.array([lab.max() + 1 for lab in labels])
     n = len(scans)
+    per_scan = {name: sum(x.counts()[name] for x in feats) / n for name in feats[0].counts()}
+    stage_us = {name: 1e6 * float(np.median([x.timings[name] for x in feats])) for name in feats[0].timings}
     print(f"labkit demo on {source}")
-    print(f"  {n} scans of {scans[0].n_beams} beams, {n_valid.mean() / scans[0].n_beams:.1%} valid on average")
-    print(f"  range segments per scan: mean {n_seg.mean():.1f}, min {n_seg.min()}, max {n_seg.max()}")
-    print(f"  read {n / t_read:,.0f} scans/s, segmented {n / t_seg:,.0f} scans/s, "
-          f"wrote .rrd at {n / t_rrd:,.0f} scans/s")
+    print(f"  {n} scans of {scans[0].n_beams} beams; lines by {config.lines.method}")
+    print("  features per scan: " + ", ".join(f"{name} {v:.1f}" for name, v in per_scan.items()))
+    print("  median us per scan: " + ", ".join(f"{name} {v:.0f}" for name, v in stage_us.items()))
+    print(f"  read {n / t_read:,.0f} scans/s, extracted {n / t_extract:,.0f} scans/s, "
+          f"wrote .rrd at {n / t_rrd:,.0f} scans/s; bag -> features -> .rrd {n / (t_read + t_extract + t_rrd):,.0f}"
+          " scans/s")
     print(f"  wrote {out / 'demo.rrd'} ({summary.n_scans} scans, ground truth for {summary.n_truth})"
-          f" and {out / 'demo.png'}")
+          f" and {out / 'demo.png'} (scan {k})")
     print(f"next: '{_rerun_command()} {out / 'demo.rrd'}' to scrub through it, 'make lab' for the notebooks")
     return 0
 
@@ -175,18 +290,45 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("-f", "--force", action="store_true", help="overwrite the output")
     c.set_defaults(func=cmd_convert)
 
-    v = sub.add_parser("view", help="write a recording's scans to a rerun .rrd file")
+    pipeline = argparse.ArgumentParser(add_help=False)  # what every command that runs the pipeline takes
+    pipeline.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
+    pipeline.add_argument("--config", help="TOML file of extractor parameters (write one with `labkit config -o`)")
+    pipeline.add_argument("--method", choices=["iepf", "split_and_merge", "angular", "none"],
+                          help="line extractor (overrides the config's lines.method)")
+
+    e = sub.add_parser("extract", parents=[common, pipeline],
+                       help="extract every feature of every scan into JSON lines (one record per scan)")
+    e.add_argument("input", help="a recording: .bag, .mcap, ROS2 folder, CARMEN .log/.gz, .json, .jsonl")
+    e.add_argument("-o", "--output", default="-", help="features file (.jsonl; default: standard output)")
+    e.add_argument("-f", "--force", action="store_true", help="overwrite the output")
+    e.set_defaults(func=cmd_extract)
+
+    v = sub.add_parser("view", parents=[common, pipeline],
+                       help="write a recording's scans and features to a rerun .rrd file")
     v.add_argument("input")
     v.add_argument("-o", "--output", required=True, help="the .rrd file to write")
-    v.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
+    v.add_argument("--no-features", action="store_true", help="scans and range segments only")
     v.add_argument("--spawn", action="store_true", help="open the rerun viewer on the result")
     v.set_defaults(func=cmd_view)
+
+    b = sub.add_parser("bench", parents=[common, pipeline],
+                       help="time every pipeline stage on a recording (default: the bundled hall.bag)")
+    b.add_argument("input", nargs="?", help="recording (default: the bundled hall.bag)")
+    b.add_argument("--scans", type=int, default=None, help="use the first N scans (default: all)")
+    b.set_defaults(func=cmd_bench)
+
+    g = sub.add_parser("config", help="print the default extractor config as TOML, or write it with -o")
+    g.add_argument("input", nargs="?", help="a config to check and print (default: the defaults)")
+    g.add_argument("-o", "--output", help="write the TOML file here")
+    g.add_argument("-f", "--force", action="store_true", help="overwrite the output")
+    g.set_defaults(func=cmd_config)
 
     i = sub.add_parser("info", help="format, topics and scan counts of a file")
     i.add_argument("input")
     i.set_defaults(func=cmd_info)
 
-    d = sub.add_parser("demo", help="the README's demo: segment the bundled hall bag, write .rrd and .png")
+    d = sub.add_parser("demo", parents=[common, pipeline],
+                       help="the README's demo: every feature of the bundled hall bag into .rrd and .png")
     d.add_argument("input", nargs="?", help="recording (default: the bundled hall.bag)")
     d.add_argument("-o", "--output", default="out", help="output folder (default out/)")
     d.set_defaults(func=cmd_demo)

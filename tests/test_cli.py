@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from labkit import read_scans
@@ -74,3 +76,64 @@ def test_demo_writes_its_outputs(tmp_path):
 @pytest.mark.parametrize("args", [["--help"], ["view", "--help"], ["simulate", "--help"]])
 def test_help(args):
     assert "usage" in run(*args).stdout
+
+
+def test_extract_writes_one_record_per_scan_with_the_pipelines_features(tmp_path):
+    """The JSON lines hold, per scan, exactly what extract_features finds in that scan."""
+    from labkit import extract_features, read_features
+
+    run("simulate", "hall", "-o", tmp_path / "h.bag", "--scans", "15")
+    out = run("extract", tmp_path / "h.bag", "-o", tmp_path / "h.features.jsonl").stdout
+    assert "wrote features of 15 scans" in out and "lines" in out
+    records = list(read_features(tmp_path / "h.features.jsonl"))
+    assert [r["scan"] for r in records] == list(range(15))
+    for record, scan in zip(records, read_scans(tmp_path / "h.bag"), strict=True):
+        want = extract_features(scan).as_record()
+        assert record["stamp_ns"] == scan.stamp_ns and record["counts"] == want["counts"]
+        assert [f["type"] for f in record["features"]] == [f["type"] for f in want["features"]]
+        for got, exp in zip(record["features"], want["features"], strict=True):
+            assert (got["first"] if "first" in got else None) == exp.get("first")
+            for key in ("start", "end", "center", "r", "alpha", "radius"):
+                if key in exp:
+                    np.testing.assert_allclose(got[key], exp[key], rtol=1e-12, atol=1e-12)
+
+
+def test_extract_to_stdout_and_with_a_config_file(tmp_path):
+    run("simulate", "office", "-o", tmp_path / "o.bag", "--scans", "5")
+    run("config", "-o", tmp_path / "c.toml")
+    text = (tmp_path / "c.toml").read_text()
+    assert "[lines]" in text and 'method = "iepf"' in text
+    (tmp_path / "c.toml").write_text(text.replace('method = "iepf"', 'method = "angular"'))
+    p = run("extract", tmp_path / "o.bag", "--config", tmp_path / "c.toml")
+    lines = p.stdout.splitlines()
+    assert len(lines) == 5 and all(json.loads(ln)["features"] is not None for ln in lines)
+    assert "lines by angular" in p.stderr
+    # a typo in the config is named, with the keys that exist
+    (tmp_path / "bad.toml").write_text("[lines]\nsplit_threshold = 0.1\n")
+    bad = run("extract", tmp_path / "o.bag", "--config", tmp_path / "bad.toml", ok=False)
+    assert bad.returncode == 1 and "lines.split_threshold" in bad.stderr and "split_threshold_m" in bad.stderr
+    missing = run("extract", tmp_path / "o.bag", "--config", tmp_path / "none.toml", ok=False)
+    assert missing.returncode == 1 and "labkit config -o" in missing.stderr
+
+
+def test_extract_from_a_truncated_bag_keeps_every_scan_before_the_fault(tmp_path):
+    run("simulate", "hall", "-o", tmp_path / "h.bag", "--scans", "40")
+    bag = tmp_path / "h.bag"
+    bag.write_bytes(bag.read_bytes()[: bag.stat().st_size // 2])
+    readable = 0
+    try:
+        for _ in read_scans(bag):
+            readable += 1
+    except ValueError:
+        pass
+    p = run("extract", bag, "-o", tmp_path / "h.jsonl", ok=False)
+    assert p.returncode == 1 and "h.bag is damaged" in p.stderr
+    assert 10 < readable < 40
+    assert len((tmp_path / "h.jsonl").read_text().splitlines()) == readable
+
+
+def test_bench_prints_a_stage_table(tmp_path):
+    out = run("bench", "--scans", "30").stdout
+    for stage in ("segmentation", "legs", "circles", "lines", "corners", "total"):
+        assert stage in out
+    assert "30 scans of 361 beams" in out and "bag -> features -> .rrd" in out

@@ -19,12 +19,12 @@ def rrd_rows(path):
 
     rows, timelines = defaultdict(int), {}
     for chunk in RrdReader(path).store().stream():
+        timelines.setdefault(chunk.entity_path, set())
         if chunk.is_static:
             rows[chunk.entity_path] += 0
-            timelines[chunk.entity_path] = set()
             continue
         rows[chunk.entity_path] += chunk.num_rows
-        timelines[chunk.entity_path] = set(chunk.timeline_names)
+        timelines[chunk.entity_path] |= set(chunk.timeline_names)
     return rows, timelines
 
 
@@ -37,10 +37,14 @@ def test_record_a_simulated_bag_with_truth(tmp_path):
     summary = lkrr.record(bag, tmp_path / "hall.rrd")
     assert (summary.n_scans, summary.n_truth, summary.error) == (30, 30, None)
     rows, timelines = rrd_rows(tmp_path / "hall.rrd")
-    for entity in ["/world/scan/points", "/world/scan/invalid", "/world/segments", "/metrics/valid_beams",
-                   "/metrics/segments", "/world/truth/walls", "/world/truth/circles", "/world/truth/legs"]:
+    for entity in ["/world/scan/points", "/world/scan/invalid", "/world/segments", "/metrics/count/valid_beams",
+                   "/metrics/count/segments", "/world/truth/walls", "/world/truth/circles", "/world/truth/legs",
+                   "/world/lines", "/world/corners", "/world/circles", "/world/arcs", "/world/legs", "/world/people",
+                   "/metrics/count/lines", "/metrics/count/legs", "/metrics/time_ms/lines", "/metrics/time_ms/total"]:
         assert rows[entity] == 30, entity
         assert {"ros_time", "scan"} <= timelines[entity]
+    assert summary.counts["lines"] > 30 and summary.counts["legs"] > 0
+    assert summary.stage_seconds["total"] >= summary.stage_seconds["lines"] > 0
     assert "log_time" not in timelines["/world/scan/points"]
     for static in ["/world", "/world/sensor", "/description"]:
         assert static in rows and timelines[static] == set()
@@ -51,7 +55,7 @@ def test_points_in_the_rrd_are_the_valid_beams(tmp_path):
 
     scans = [s for s, _ in sim.simulate("office", seed=0, n_scans=12)]  # NaN dropouts
     write_bag(scans, tmp_path / "o.bag")
-    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd", segment_threshold_m=None)
+    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False, segment_threshold_m=None)
     got = {}
     for chunk in RrdReader(tmp_path / "o.rrd").store().stream():
         if chunk.entity_path == "/world/scan/points":
@@ -77,22 +81,85 @@ def test_a_damaged_bag_still_gives_an_rrd_with_every_readable_scan(tmp_path):
     assert 10 < summary.n_scans < 40
 
 
-def test_the_rrd_carries_the_default_layout(tmp_path):
-    """The saved file opens with a 2D scan view, metric time series, a log and the notes."""
+def _views(path):
+    """(kind, origin) of every view in the file's blueprint."""
     from rerun.chunk import RrdReader
 
-    bag, _, _ = write_simulation("office", tmp_path / "o.bag", n_scans=3)
-    lkrr.record(bag, tmp_path / "o.rrd")
-    reader = RrdReader(tmp_path / "o.rrd")
+    reader = RrdReader(path)
     (store,) = reader.blueprints()
-    views = {}
+    views = set()
     for chunk in reader.store(store=store).stream():
         batch = chunk.to_record_batch()
         if "ViewBlueprint:class_identifier" in batch.schema.names:
             kind = batch.column("ViewBlueprint:class_identifier").to_pylist()[0][0]
             origin = batch.column("ViewBlueprint:space_origin").to_pylist()[0][0]
-            views[kind] = origin.strip("/")
-    assert views == {"2D": "", "TimeSeries": "metrics", "TextLog": "log", "TextDocument": "description"}
+            views.add((kind, origin.strip("/")))
+    return views
+
+
+def test_the_rrd_carries_the_default_layout(tmp_path):
+    """The saved file opens with a 2D scan view, counts and stage times, a log and the notes."""
+    bag, _, _ = write_simulation("office", tmp_path / "o.bag", n_scans=3)
+    lkrr.record(bag, tmp_path / "o.rrd")
+    assert _views(tmp_path / "o.rrd") == {("2D", ""), ("TimeSeries", "metrics/count"),
+                                          ("TimeSeries", "metrics/time_ms"), ("TextLog", "log"),
+                                          ("TextDocument", "description")}
+
+
+def _batches(path, entity):
+    """{scan index: record batch row as dict} for one entity of an .rrd."""
+    from rerun.chunk import RrdReader
+
+    out = {}
+    for chunk in RrdReader(path).store().stream():
+        if chunk.entity_path == entity and not chunk.is_static:
+            batch = chunk.to_record_batch()
+            cols = {name: batch.column(name).to_pylist() for name in batch.schema.names}
+            for i, k in enumerate(cols["scan"]):
+                out[k] = {name: v[i] for name, v in cols.items()}
+    return out
+
+
+def test_the_features_in_the_rrd_are_those_of_the_pipeline(tmp_path):
+    """Read the layers back and compare with extract_features run here on the same scans."""
+    from labkit import Config, extract_features, read_scans
+
+    bag, _, _ = write_simulation("hall", tmp_path / "h.bag", n_scans=12)
+    config = Config().updated({"lines.method": "angular"})
+    lkrr.record(bag, tmp_path / "h.rrd", config=config)
+    lines = _batches(tmp_path / "h.rrd", "/world/lines")
+    legs = _batches(tmp_path / "h.rrd", "/world/legs")
+    counts = _batches(tmp_path / "h.rrd", "/metrics/count/corners")
+    assert sorted(lines) == list(range(12))
+    for k, scan in enumerate(read_scans(bag)):
+        f = extract_features(scan, config)
+        got = np.array(lines[k]["LineStrips2D:strips"] or [], dtype=float).reshape(-1, 2, 2)
+        want = np.array([[ln.start, ln.end] for ln in f.lines]).reshape(-1, 2, 2)
+        np.testing.assert_allclose(got, want, atol=1e-5)
+        got_legs = np.array(legs[k]["Ellipses2D:centers"] or [], dtype=float).reshape(-1, 2)
+        np.testing.assert_allclose(got_legs, np.array([g.center for g in f.legs]).reshape(-1, 2), atol=1e-5)
+        assert counts[k]["Scalars:scalars"] == [len(f.corners)]
+
+
+def test_two_configurations_side_by_side(tmp_path):
+    """log_features with a name puts a second configuration beside the first, and the
+    compare blueprint gives each its own scan view."""
+    from labkit import Config, extract_all
+
+    scans = [s for s, _ in sim.simulate("hall", seed=0, n_scans=5)]
+    rec = lkrr.new_recording("cmp")
+    rec.save(tmp_path / "c.rrd", default_blueprint=lkrr.blueprint(compare=["iepf", "angular"]))
+    lkrr.log_scans(rec, scans)
+    for method in ("iepf", "angular"):
+        assert lkrr.log_features(rec, extract_all(scans, Config().updated({"lines.method": method})),
+                                 name=method) == 5
+    rec.flush()
+    rec.disconnect()
+    rows, _ = rrd_rows(tmp_path / "c.rrd")
+    for method in ("iepf", "angular"):
+        assert rows[f"/world/{method}/lines"] == 5 and rows[f"/metrics/{method}/time_ms/total"] == 5
+    views = _views(tmp_path / "c.rrd")
+    assert {v for v in views if v[0] == "2D"} == {("2D", "")} and len(views) >= 5
 
 
 @pytest.mark.parametrize("n", [1, 300])

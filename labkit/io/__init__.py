@@ -20,6 +20,7 @@ from . import bags
 from .bags import write_bag
 from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_carmen
 from .errors import CorruptFileError
+from .features import read_features, write_features
 from .jsonscan import read_json_lines, read_json_scan, write_json_lines, write_json_scan
 
 __all__ = [
@@ -36,6 +37,8 @@ __all__ = [
     "write_json_scan",
     "write_json_lines",
     "convert",
+    "write_features",
+    "read_features",
 ]
 
 #: What each format name means.

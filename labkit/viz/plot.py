@@ -162,15 +162,25 @@ def plot_legs(legs, ax=None, *, people=()):
     return ax
 
 
-def plot_features(scan: Scan, *, lines=(), corners=(), circles=(), legs=(), people=(), truth=None, labels=None,
-                  ax=None, title: str | None = None):
-    """One scan with every feature drawn over it (and the ground truth when given)."""
+def plot_features(scan: Scan, features=None, *, lines=(), corners=(), circles=(), arcs=(), legs=(), people=(),
+                  truth=None, labels=None, ax=None, title: str | None = None):
+    """One scan with every feature drawn over it (and the ground truth when given).
+
+    Pass a :class:`labkit.Features` (from :func:`labkit.extract_features`) as ``features``
+    to draw all of it, points coloured by its range segments, or the layers one by one.
+    """
+    if features is not None:
+        lines, corners, circles, arcs = features.lines, features.corners, features.circles, features.arcs
+        legs, people = features.legs, features.people
+        labels = features.labels if labels is None else labels
     ax = plot_scan(scan, ax, labels=labels, title=title)
     if truth is not None:
         plot_truth(truth, ax)
     plot_lines(lines, ax)
     plot_corners(corners, ax)
     plot_circles(circles, ax)
+    if len(arcs):
+        plot_circles(arcs, ax, label="arcs")
     plot_legs(legs, ax, people=people)
     ax.legend(loc="upper right", fontsize=8)
     return ax

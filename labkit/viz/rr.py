@@ -7,11 +7,15 @@ Timelines
 Entities
     ``world/scan/points`` valid beams, ``world/scan/invalid`` short grey rays where a beam
     returned nothing usable, ``world/sensor`` the sensor, ``world/segments`` the points
-    coloured by range segment, ``world/truth/{walls,circles,arcs,legs}`` simulator ground
-    truth, ``metrics/*`` per-scan counts as time series, ``log`` a text log, and
-    ``description`` a Markdown note. ``world`` is the sensor frame, drawn with x to the
-    right and y up, as in labkit's matplotlib figures (rerun's 2D views point y down, so
-    ``world`` carries a static mirror transform).
+    coloured by range segment, ``world/{lines,corners,circles,arcs,legs,people}`` the
+    features :func:`labkit.extract_features` found (hover one for its parameters),
+    ``world/truth/{walls,circles,arcs,legs}`` simulator ground truth,
+    ``metrics/count/*`` per-scan counts and ``metrics/time_ms/*`` per-stage times as time
+    series, ``log`` a text log, and ``description`` a Markdown note. Features of a second
+    configuration logged with ``name="B"`` go to ``world/B/...`` and ``metrics/B/...``.
+    ``world`` is the sensor frame, drawn with x to the right and y up, as in labkit's
+    matplotlib figures (rerun's 2D views point y down, so ``world`` carries a static
+    mirror transform).
 
 Importing this module sets ``RERUN_NOTEBOOK_ASSET=serve-local`` (unless already set) before
 it imports rerun, so the viewer embedded in a notebook loads its assets from the installed
@@ -35,14 +39,16 @@ if "rerun_notebook" in sys.modules and "RERUN_NOTEBOOK_ASSET" not in os.environ:
 os.environ.setdefault("RERUN_NOTEBOOK_ASSET", "serve-local")
 
 from collections.abc import Iterable  # noqa: E402
-from dataclasses import dataclass  # noqa: E402
+from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import rerun as rr  # noqa: E402
 import rerun.blueprint as rrb  # noqa: E402
 
+from ..features import Features  # noqa: E402
 from ..geometry import arc_points  # noqa: E402
+from ..pipeline import Config, extract_features  # noqa: E402
 from ..scan import Scan  # noqa: E402
 from ..segmentation import segment_labels  # noqa: E402
 from .style import COLORS, label_colors  # noqa: E402
@@ -55,11 +61,13 @@ __all__ = [
     "new_recording",
     "log_static",
     "log_scans",
+    "log_features",
     "log_truth",
     "log_text",
     "record",
     "record_scans",
     "RecordSummary",
+    "describe",
     "show_inline",
 ]
 
@@ -76,16 +84,29 @@ _BATCH = 256  # scans per send_columns call
 _Y_UP = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
 
 
-def blueprint() -> rrb.Blueprint:
-    """The default layout: the scan view on the left; metrics, log and notes on the right."""
+def blueprint(compare: tuple[str, ...] | list[str] = ()) -> rrb.Blueprint:
+    """The default layout: the scan view on the left; counts, stage times, log and notes on
+    the right. With ``compare=("A", "B")`` there is one scan view per named configuration
+    (features logged with ``log_features(..., name="A")``), side by side, each showing the
+    scan, the ground truth and that configuration's features."""
+    if compare:
+        others = {n: [f"- /world/{m}/**" for m in compare if m != n] for n in compare}
+        views = [rrb.Spatial2DView(origin="/", contents=["+ /world/**", *others[n]], name=f"{n}")
+                 for n in compare]
+        scene = rrb.Horizontal(*views)
+        counts = [rrb.TimeSeriesView(origin=f"metrics/{n}/count", name=f"{n}: counts") for n in compare]
+        times = [rrb.TimeSeriesView(origin=f"metrics/{n}/time_ms", name=f"{n}: ms per stage") for n in compare]
+        right = rrb.Vertical(*counts, *times, rrb.TextDocumentView(origin="description", name="About"))
+        return rrb.Blueprint(rrb.Vertical(scene, rrb.Horizontal(right), row_shares=[3, 2]), collapse_panels=False)
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)"),
             rrb.Vertical(
-                rrb.TimeSeriesView(origin="metrics", name="Per-scan metrics"),
+                rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts"),
+                rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage"),
                 rrb.TextLogView(origin="log", name="Log"),
                 rrb.TextDocumentView(origin="description", name="About"),
-                row_shares=[3, 1, 2],
+                row_shares=[2, 2, 1, 2],
             ),
             column_shares=[3, 2],
         ),
@@ -127,10 +148,18 @@ def _time_columns(indices: np.ndarray, stamps: np.ndarray) -> list:
     ]
 
 
-def _invalid_rays(scan: Scan) -> list[np.ndarray]:
+def _segments(starts, ends) -> np.ndarray:
+    """Two-point line strips as one (N, 2, 2) array (rerun converts that in one go; a list of
+    small arrays costs it about 20 us per strip)."""
+    out = np.zeros((len(starts), 2, 2))
+    if len(starts):
+        out[:, 0], out[:, 1] = starts, ends
+    return out
+
+
+def _invalid_rays(scan: Scan) -> np.ndarray:
     a = scan.angles[~scan.valid]
-    ends = INVALID_RAY_M * np.stack([np.cos(a), np.sin(a)], axis=1)
-    return [np.array([[0.0, 0.0], e]) for e in ends]
+    return _segments(np.zeros((a.size, 2)), INVALID_RAY_M * np.stack([np.cos(a), np.sin(a)], axis=1))
 
 
 def log_scans(
@@ -140,19 +169,41 @@ def log_scans(
     start_index: int = 0,
     segment_threshold_m: float | None = 0.08,
     labels: Iterable[np.ndarray] | None = None,
+    features: Iterable[Features] | None = None,
     show_invalid: bool = True,
 ) -> int:
     """Log scans in bulk (``send_columns``) on both timelines; return how many.
 
     Each scan is logged at ``scan = start_index + k`` and ``ros_time = scan.stamp_ns``.
-    The points are also logged coloured by range segment (``world/segments``, with the
-    segment count in ``metrics/segments``): from ``labels`` (one per-beam label array per
-    scan, e.g. already computed by the caller) or else segmented here with
-    ``segment_threshold_m`` (``None``: no segment layer). If iterating ``scans`` raises (a
-    damaged file), every scan before the fault is sent, then the error propagates.
+    With ``features`` (one :class:`labkit.Features` per scan, e.g. from
+    :func:`labkit.extract_all`) every feature layer, the per-scan counts and stage times are
+    logged too (see :func:`log_features`), and the segments are the features' own. The
+    points are also logged coloured by range segment (``world/segments``, with the segment
+    count in ``metrics/count/segments``): from ``features``, from ``labels`` (one per-beam
+    label array per scan) or else segmented here with ``segment_threshold_m`` (``None``: no
+    segment layer). If iterating ``scans`` (or ``features``) raises (a damaged file), every
+    scan before the fault is sent, then the error propagates.
     """
+    def frames():
+        if features is not None:
+            for scan, f in zip(scans, features, strict=False):
+                yield scan, f.labels, f
+        elif labels is not None:
+            for scan, lab in zip(scans, labels, strict=False):
+                yield scan, lab, None
+        else:
+            for scan in scans:
+                yield scan, (None if segment_threshold_m is None else segment_labels(scan, segment_threshold_m)), None
+
+    return _log_frames(rec, frames(), start_index, show_invalid)
+
+
+def _log_frames(rec, frames: Iterable[tuple[Scan, np.ndarray | None, Features | None]], start_index: int,
+                show_invalid: bool) -> int:
+    """Send ``(scan, labels, features)`` frames in batches of ``_BATCH``; on an error while
+    iterating, send what came before it, then re-raise."""
     count = 0
-    batch: list[tuple[Scan, np.ndarray | None]] = []
+    batch: list[tuple[Scan, np.ndarray | None, Features | None]] = []
 
     def flush() -> None:
         nonlocal batch
@@ -160,18 +211,8 @@ def log_scans(
             _send_batch(rec, batch, start_index + count - len(batch), show_invalid)
             batch = []
 
-    def with_labels():
-        if labels is not None:
-            yield from zip(scans, labels, strict=False)
-        elif segment_threshold_m is not None:
-            for scan in scans:
-                yield scan, segment_labels(scan, segment_threshold_m)
-        else:
-            for scan in scans:
-                yield scan, None
-
     try:
-        for item in with_labels():
+        for item in frames:
             batch.append(item)
             count += 1
             if len(batch) >= _BATCH:
@@ -181,8 +222,13 @@ def log_scans(
     return count
 
 
-def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None]], first_index: int, show_invalid) -> None:
-    batch = [scan for scan, _ in items]
+def _scalars(rec, path: str, times, values) -> None:
+    rec.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)))
+
+
+def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]], first_index: int,
+                show_invalid) -> None:
+    batch = [scan for scan, _, _ in items]
     idx = np.arange(first_index, first_index + len(batch))
     stamps = np.array([s.stamp_ns for s in batch], dtype=np.int64)
     times = _time_columns(idx, stamps)
@@ -194,21 +240,20 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None]], first_index: i
         columns=rr.Points2D.columns(positions=pts, colors=np.tile(COLORS["points"], (len(pts), 1)),
                                     radii=np.full(len(pts), POINT_RADIUS_UI, dtype=np.float32)).partition(lengths),
     )
-    n_valid = np.array(lengths, dtype=np.float64)
-    rec.send_columns("metrics/valid_beams", indexes=times, columns=rr.Scalars.columns(scalars=n_valid))
+    _scalars(rec, "metrics/count/valid_beams", times, lengths)
     if show_invalid:
         rays = [_invalid_rays(s) for s in batch]
         rec.send_columns(
             "world/scan/invalid",
             indexes=times,
             columns=rr.LineStrips2D.columns(
-                strips=[r for rs in rays for r in rs],
+                strips=np.concatenate(rays),
                 colors=np.tile(COLORS["invalid"], (sum(map(len, rays)), 1)),
             ).partition([len(r) for r in rays]),
         )
     if items[0][1] is not None:
         colors, n_segments = [], []
-        for s, beam_labels in items:
+        for s, beam_labels, _ in items:
             labels = np.asarray(beam_labels)[s.valid_indices]
             colors.append(label_colors(labels))
             n_segments.append(float(labels.max() + 1) if labels.size else 0.0)
@@ -220,46 +265,206 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None]], first_index: i
                                         radii=np.full(len(pts), SEGMENT_RADIUS_UI, dtype=np.float32)
                                         ).partition(lengths),
         )
-        rec.send_columns("metrics/segments", indexes=times,
-                         columns=rr.Scalars.columns(scalars=np.array(n_segments)))
+        _scalars(rec, "metrics/count/segments", times, n_segments)
+    if items[0][2] is not None:
+        _send_features(rec, times, [f for _, _, f in items], "world", "metrics", segment_count=False)
+
+
+def _forever(value):
+    while True:
+        yield value
+
+
+def _colors(name: str, n: int) -> np.ndarray:
+    return np.tile(np.array(COLORS[name], dtype=np.uint8), (n, 1))
+
+
+def _send_features(rec, times, feats: list[Features], world: str, metrics: str, segment_count: bool) -> None:
+    """Every feature layer of a batch of scans, as one ``send_columns`` call per layer."""
+
+    def send(layer: str, archetype, columns: dict, counts: list[int]) -> None:
+        rec.send_columns(f"{world}/{layer}", indexes=times, columns=archetype.columns(**columns).partition(counts))
+
+    def of(layer: str) -> tuple[list, list[int]]:
+        per_scan = [getattr(f, layer) for f in feats]
+        return [x for xs in per_scan for x in xs], [len(xs) for xs in per_scan]
+
+    lines, n = of("lines")
+    send("lines", rr.LineStrips2D, {
+        "strips": _segments([ln.start for ln in lines], [ln.end for ln in lines]),
+        "colors": _colors("lines", len(lines)),
+        "radii": np.full(len(lines), -2.5, dtype=np.float32),
+        "labels": [f"line r={ln.r:.3f} m alpha={np.degrees(ln.alpha):.1f} deg, beams {ln.first}-{ln.last}, "
+                   f"{ln.n_points} pts, rms {ln.error * 1e3:.1f} mm" for ln in lines],
+    }, n)
+    corners, n = of("corners")
+    send("corners", rr.Points2D, {
+        "positions": np.array([c.point for c in corners]).reshape(-1, 2),
+        "colors": _colors("corners", len(corners)),
+        "radii": np.full(len(corners), -5.0, dtype=np.float32),
+        "labels": [f"{c.kind} corner {np.degrees(c.angle):.0f} deg" + (" (extrapolated)" if c.extrapolated else "")
+                   for c in corners],
+    }, n)
+    for layer, colour in (("circles", "circles"), ("arcs", "arcs")):
+        items, n = of(layer)
+        send(layer, rr.Ellipses2D, {
+            "centers": np.array([c.center for c in items]).reshape(-1, 2),
+            "half_sizes": np.repeat(np.array([c.radius for c in items]).reshape(-1, 1), 2, axis=1),
+            "colors": _colors(colour, len(items)),
+            "line_radii": np.full(len(items), -2.0, dtype=np.float32),
+            "labels": [f"{c.kind} r={c.radius:.3f} m, IAV {np.degrees(c.iav_mean):.0f}+-{np.degrees(c.iav_std):.1f} "
+                       f"deg, confidence {c.confidence:.2f}" for c in items],
+        }, n)
+    legs, n = of("legs")
+    send("legs", rr.Ellipses2D, {
+        "centers": np.array([g.center for g in legs]).reshape(-1, 2),
+        "half_sizes": np.repeat(np.array([g.diameter / 2 for g in legs]).reshape(-1, 1), 2, axis=1),
+        "colors": _colors("legs", len(legs)),
+        "line_radii": np.full(len(legs), -2.0, dtype=np.float32),
+        "labels": [f"leg d={g.diameter * 100:.0f} cm" for g in legs],
+    }, n)
+    people, n = of("people")
+    send("people", rr.Points2D, {
+        "positions": np.array([p.center for p in people]).reshape(-1, 2),
+        "colors": _colors("people", len(people)),
+        "radii": np.full(len(people), -7.0, dtype=np.float32),
+        "labels": ["person"] * len(people),
+    }, n)
+    for layer in ("segments",) * segment_count + Features.LAYERS:
+        _scalars(rec, f"{metrics}/count/{layer}", times,
+                 [f.n_segments if layer == "segments" else len(getattr(f, layer)) for f in feats])
+    for stage in feats[0].timings:
+        _scalars(rec, f"{metrics}/time_ms/{stage}", times, [1e3 * f.timings.get(stage, np.nan) for f in feats])
+
+
+def log_features(
+    rec: rr.RecordingStream,
+    features: Iterable[Features],
+    *,
+    start_index: int = 0,
+    name: str | None = None,
+) -> int:
+    """Log features alone (the scans logged already, e.g. by :func:`log_scans`), at
+    ``scan = start_index + k`` and ``ros_time = features.stamp_ns``; return how many.
+
+    ``name`` puts them under ``world/<name>/...`` and ``metrics/<name>/...``, so that two
+    configurations can be compared side by side (``blueprint(compare=[...])``).
+    """
+    world, metrics = ("world", "metrics") if not name else (f"world/{name}", f"metrics/{name}")
+    count = 0
+    batch: list[Features] = []
+
+    def flush() -> None:
+        nonlocal batch
+        if batch:
+            k0 = start_index + count - len(batch)
+            times = _time_columns(np.arange(k0, k0 + len(batch)), np.array([f.stamp_ns for f in batch], np.int64))
+            _send_features(rec, times, batch, world, metrics, segment_count=True)
+            batch = []
+
+    try:
+        for f in features:
+            batch.append(f)
+            count += 1
+            if len(batch) >= _BATCH:
+                flush()
+    finally:
+        flush()
+    return count
 
 
 def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int]) -> int:
-    """Log simulator ground truth (:class:`labkit.sim.ScanTruth`) under ``world/truth``.
+    """Log simulator ground truth (:class:`labkit.sim.ScanTruth`) under ``world/truth``, in
+    grey so that the detected features (in colour) stand out against it.
 
     ``index_of`` maps ``stamp_ns`` to the scan's sequence number; truths of stamps not in
     it are skipped. Returns how many were logged.
     """
     n = 0
+    batch: list[tuple[int, object]] = []
+
+    def flush() -> None:
+        if not batch:
+            return
+        times = _time_columns(np.array([k for k, _ in batch]), np.array([tr.stamp_ns for _, tr in batch], np.int64))
+        truths = [tr for _, tr in batch]
+        walls = [w for tr in truths for w in tr.walls]
+        rec.send_columns("world/truth/walls", indexes=times, columns=rr.LineStrips2D.columns(
+            strips=_segments([w.start for w in walls], [w.end for w in walls]), colors=_colors("truth", len(walls)),
+            labels=[w.name for w in walls], radii=np.full(len(walls), -1.0, dtype=np.float32),
+        ).partition([len(tr.walls) for tr in truths]))
+        arcs = [a for tr in truths for a in tr.arcs]
+        rec.send_columns("world/truth/arcs", indexes=times, columns=rr.LineStrips2D.columns(
+            strips=[arc_points(a.center, a.radius, a.start, a.end) for a in arcs], colors=_colors("truth", len(arcs)),
+            labels=[a.name for a in arcs], radii=np.full(len(arcs), -1.0, dtype=np.float32),
+        ).partition([len(tr.arcs) for tr in truths]))
+        for key in ("circles", "legs"):
+            items = [c for tr in truths for c in getattr(tr, key)]
+            half = np.array([getattr(c, "radius", None) or c.diameter / 2 for c in items]).reshape(-1, 1)
+            rec.send_columns(f"world/truth/{key}", indexes=times, columns=rr.Ellipses2D.columns(
+                centers=np.array([c.center for c in items]).reshape(-1, 2), half_sizes=np.repeat(half, 2, axis=1),
+                colors=_colors("truth", len(items)), line_radii=np.full(len(items), -1.0, dtype=np.float32),
+            ).partition([len(getattr(tr, key)) for tr in truths]))
+        batch.clear()
+
     for tr in truths:
         k = index_of.get(tr.stamp_ns)
         if k is None:
             continue
-        rec.set_time(SEQUENCE, sequence=k)
-        rec.set_time(TIME, timestamp=np.datetime64(int(tr.stamp_ns), "ns"))
-        rec.log("world/truth/walls", rr.LineStrips2D(
-            [np.array([w.start, w.end]) for w in tr.walls], colors=[COLORS["truth"]] * len(tr.walls),
-            labels=[w.name for w in tr.walls], show_labels=False, radii=[-1.0] * len(tr.walls)))
-        rec.log("world/truth/arcs", rr.LineStrips2D(
-            [arc_points(a.center, a.radius, a.start, a.end) for a in tr.arcs],
-            colors=[COLORS["circles"]] * len(tr.arcs), labels=[a.name for a in tr.arcs], show_labels=False))
-        for key, items, colour in [("circles", tr.circles, "circles"), ("legs", tr.legs, "legs")]:
-            centers = [c.center for c in items]
-            half = [(getattr(c, "radius", None) or c.diameter / 2,) * 2 for c in items]
-            rec.log(f"world/truth/{key}", rr.Ellipses2D(centers=centers, half_sizes=half,
-                                                         colors=[COLORS[colour]] * len(items)))
+        batch.append((k, tr))
         n += 1
+        if len(batch) >= _BATCH:
+            flush()
+    flush()
+    for layer in ("walls", "arcs"):
+        rec.log(f"world/truth/{layer}", rr.LineStrips2D.from_fields(show_labels=False), static=True)
     return n
 
 
 @dataclass(frozen=True)
 class RecordSummary:
-    """What :func:`record` wrote."""
+    """What :func:`record` wrote: the file, how many scans and truths, the error that
+    stopped reading (or ``None``), and over all scans the feature counts and the seconds
+    spent per pipeline stage (empty without features)."""
 
     path: Path
     n_scans: int
     n_truth: int
     error: Exception | None
+    counts: dict = field(default_factory=dict)
+    stage_seconds: dict = field(default_factory=dict)
+
+
+_LAYER_NOTES = {
+    "world/scan/points": "valid beams",
+    "world/scan/invalid": "grey rays: beams without a valid return",
+    "world/segments": "points coloured by range segment",
+    "world/lines": "line segments (hover for r, alpha, beams, points, RMS error)",
+    "world/corners": "corners where two lines meet",
+    "world/circles": "IAV circles",
+    "world/arcs": "arcs embedded in walls",
+    "world/legs": "legs",
+    "world/people": "pairs of legs",
+    "world/truth/*": "simulator ground truth, grey",
+    "metrics/count/*": "per-scan counts",
+    "metrics/time_ms/*": "milliseconds per pipeline stage",
+}
+
+
+def describe(title: str, *, source: str = "", config: Config | None = None, truth: bool = False) -> str:
+    """The Markdown note logged with a recording: what each entity shows, and the config."""
+    lines = [f"# {title}", ""]
+    if source:
+        lines += [source, ""]
+    lines += ["| entity | shows |", "|---|---|"]
+    for entity, note in _LAYER_NOTES.items():
+        if (entity.startswith("world/truth") and not truth) or (config is None and entity not in (
+                "world/scan/points", "world/scan/invalid", "world/segments", "world/truth/*", "metrics/count/*")):
+            continue
+        lines.append(f"| `{entity}` | {note} |")
+    if config is not None:
+        lines += ["", "## Config", "", "```toml", config.to_toml(), "```"]
+    return "\n".join(lines)
 
 
 def record_scans(
@@ -269,16 +474,19 @@ def record_scans(
     name: str,
     truth=None,
     labels: Iterable[np.ndarray] | None = None,
+    features: Iterable[Features] | None = None,
+    config: Config | None = None,
     segment_threshold_m: float | None = 0.08,
     description: str | None = None,
 ) -> RecordSummary:
     """Write scans to an ``.rrd`` file with the default blueprint.
 
-    ``truth`` is a :class:`labkit.sim.GroundTruth` to log beside the scans; ``labels``
-    per-scan segment labels already computed (else segmented with ``segment_threshold_m``).
-    If iterating ``scans`` raises ``ValueError``/``OSError`` (a damaged file), the ``.rrd``
-    still holds every scan before the fault, the error is logged to ``log`` and returned in
-    the summary (not raised).
+    Features are logged when given (``features``, one per scan) or computed here with
+    ``config`` (a :class:`labkit.Config`); otherwise only the scans and their range
+    segments (``labels`` per scan, or segmented with ``segment_threshold_m``). ``truth`` is
+    a :class:`labkit.sim.GroundTruth` to log beside them. If iterating ``scans`` raises
+    ``ValueError``/``OSError`` (a damaged file), the ``.rrd`` still holds every scan before
+    the fault, the error is logged to ``log`` and returned in the summary (not raised).
     """
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -286,15 +494,33 @@ def record_scans(
     rec.save(out, default_blueprint=blueprint())
     log_static(rec, description)
     stamps: list[int] = []
+    counts: dict[str, int] = {}
+    seconds: dict[str, float] = {}
 
     def stamped():
         for s in scans:
             stamps.append(s.stamp_ns)
             yield s
 
+    side = features if features is not None else labels if labels is not None else _forever(None)
+
+    def frames():
+        for scan, x in zip(stamped(), side, strict=False):
+            f = x if features is not None else extract_features(scan, config) if config is not None else None
+            if f is not None:
+                for k, v in f.counts().items():
+                    counts[k] = counts.get(k, 0) + v
+                for k, v in f.timings.items():
+                    seconds[k] = seconds.get(k, 0.0) + v
+                yield scan, f.labels, f
+            elif labels is not None:
+                yield scan, x, None
+            else:
+                yield scan, None if segment_threshold_m is None else segment_labels(scan, segment_threshold_m), None
+
     error: Exception | None = None
     try:
-        n = log_scans(rec, stamped(), labels=labels, segment_threshold_m=segment_threshold_m)
+        n = _log_frames(rec, frames(), 0, True)
     except (ValueError, OSError) as exc:  # CorruptFileError is a ValueError
         error, n = exc, len(stamps)
         rec.set_time(SEQUENCE, sequence=max(n - 1, 0))
@@ -304,7 +530,7 @@ def record_scans(
     log_text(rec, f"{n} scans from {name}" + (f", ground truth for {n_truth}" if n_truth else ""))
     rec.flush()
     rec.disconnect()
-    return RecordSummary(out, n, n_truth, error)
+    return RecordSummary(out, n, n_truth, error, counts, seconds)
 
 
 def record(
@@ -312,36 +538,42 @@ def record(
     out: str | Path,
     *,
     topic: str | None = None,
+    config: Config | None = None,
+    features: bool = True,
     progress: bool = False,
     segment_threshold_m: float | None = 0.08,
     description: str | None = None,
 ) -> RecordSummary:
     """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
-    ``.rrd`` file with the default blueprint, plus its ground truth when a
-    ``<name>.truth.jsonl`` lies beside it. See :func:`record_scans` for damaged inputs.
+    ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
+    (``config``, default :class:`labkit.Config` (); ``features=False``: scans and range
+    segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it. See
+    :func:`record_scans` for damaged inputs.
     """
     from ..io import read_scans
     from ..sim import read_truth, truth_path_for
 
     stream = read_scans(source, topic=topic)
     name = Path(source).name
+    if features and config is None:
+        config = Config()
+    truth_file = truth_path_for(source)
+    truth = read_truth(truth_file) if truth_file.exists() else None
     if description is None:
-        description = (
-            f"# {name}\n\nFormat: `{stream.format}`, topic: `{stream.topic}`.\n\n"
-            "Grey rays mark beams without a valid return; colours in `world/segments` are range "
-            f"segments ({segment_threshold_m} m threshold)."
-        )
+        origin = f"Format: `{stream.format}`, topic: `{stream.topic}`."
+        if not features:
+            origin += f" Range segments with a {segment_threshold_m} m threshold."
+        description = describe(name, source=origin, config=config if features else None, truth=truth is not None)
     scans = iter(stream)
     if progress:
         from tqdm.auto import tqdm
 
         scans = tqdm(scans, total=stream.count, unit="scan", desc=f"view {name}")
-    truth_file = truth_path_for(source)
-    truth = read_truth(truth_file) if truth_file.exists() else None
-    return record_scans(scans, out, name=name, truth=truth, segment_threshold_m=segment_threshold_m,
-                        description=description)
+    return record_scans(scans, out, name=name, truth=truth, config=config if features else None,
+                        segment_threshold_m=segment_threshold_m, description=description)
 
 
-def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600) -> None:
-    """Show a recording in the notebook with the default blueprint (works offline)."""
-    rec.notebook_show(width=width, height=height, blueprint=blueprint())
+def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=()) -> None:
+    """Show a recording in the notebook with the default blueprint (or the side-by-side
+    one for ``compare``); works offline."""
+    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare))
