@@ -1,0 +1,119 @@
+"""The whole pipeline per scan, stage by stage, and a recording from bag to rerun file.
+
+Part 1 -- :func:`labkit.extract_features` with the default :class:`labkit.Config` on scans of
+the simulated ``hall`` world (columns, benches, a walking student, walls; LMS200-like 5 mm
+noise) by a lidar of 361 / 722 / 1441 / 2881 beams over 180 degrees. For each size: the median
+time per stage (from ``Features.timings``), the total, scans per second, the growth against
+361 beams, and a peer in the same run: the same detectors called one by one as a user would
+without the pipeline (each segments the scan itself, and lines are also fitted to columns
+and legs).
+
+Part 2 -- end to end: a bag of 722-beam scans written with labkit, then
+``labkit.viz.rr.record`` (read -> extract_features -> .rrd with every feature layer, counts
+and stage times) timed as a whole and by phase.
+
+Goals (issue 6): >= 1000 scans/s through the pipeline at 722 beams on one core; 8x the beams
+for <= 10x the time; >= 500 scans/s from bag to .rrd.
+
+Run: ``python benchmarks/pipeline.py [--scans 40] [--repeat 3] [--bag-scans 1000]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from common import per_scan, world_scans
+
+from labkit import (
+    Config,
+    detect_circles,
+    detect_legs,
+    extract_features,
+    find_corners,
+    read_scans,
+    split_and_merge,
+    write_bag,
+)
+from labkit.viz import rr as lkrr
+
+BEAMS = (361, 722, 1441, 2881)
+STAGES = ("segmentation", "legs", "circles", "lines", "corners", "total")
+
+
+def one_by_one(scan) -> None:
+    """The detectors without the pipeline: each segments the scan on its own."""
+    detect_legs(scan)
+    detect_circles(scan)
+    find_corners(split_and_merge(scan), wrap=scan.is_full_circle)
+
+
+def stage_table(n_scans: int, repeat: int) -> None:
+    config = Config()
+    print(f"Part 1: per-scan time by stage, hall world, {n_scans} scans per size, best of {repeat} per scan "
+          "(median over scans, microseconds)")
+    head = " ".join(f"{s:>12s}" for s in STAGES)
+    print(f"{'beams':>6s} {head} {'scans/s':>8s} {'vs 361':>7s} {'one by one':>11s} {'pipeline/1by1':>14s}")
+    base = None
+    for n in BEAMS:
+        scans = world_scans("hall", n, n_scans)
+        for s in scans[:5]:
+            extract_features(s, config)
+        total, _ = per_scan(lambda s: extract_features(s, config), scans, repeat)
+        peer, _ = per_scan(one_by_one, scans, repeat)
+        timings = {k: [] for k in STAGES}
+        for s in scans:
+            f = extract_features(s, config)
+            for k in STAGES:
+                timings[k].append(f.timings[k])
+        base = base or total
+        cells = " ".join(f"{np.median(timings[k]) * 1e6:12.0f}" for k in STAGES[:-1])
+        print(f"{n:6d} {cells} {total * 1e6:12.0f} {1 / total:8.0f} {total / base:6.2f}x {peer * 1e6:9.0f}us "
+              f"{total / peer:13.2f}x")
+    print("('total' is the best-of-repeat wall time of extract_features; the stage columns are single passes.)")
+
+
+def end_to_end(n_scans: int) -> None:
+    print(f"\nPart 2: bag -> features -> .rrd, {n_scans} scans of 722 beams (hall world)")
+    scans = world_scans("hall", 722, n_scans)
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = Path(tmp) / "hall722.bag"
+        write_bag(scans, bag)
+        rows = []
+        for label, kwargs in (("scans only (no features)", {"features": False}), ("every feature", {})):
+            t0 = time.perf_counter()
+            summary = lkrr.record(bag, Path(tmp) / "out.rrd", **kwargs)
+            rows.append((label, summary.n_scans / (time.perf_counter() - t0)))
+        t0 = time.perf_counter()
+        read = list(read_scans(bag))
+        t_read = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        feats = [extract_features(s) for s in read]
+        t_extract = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        lkrr.record_scans(read, Path(tmp) / "out2.rrd", name="bench", features=feats)
+        t_log = time.perf_counter() - t0
+    print(f"{'recording':28s} {'scans/s':>8s}")
+    for label, rate in rows:
+        print(f"{label:28s} {rate:8.0f}")
+    n = len(read)
+    total = t_read + t_extract + t_log
+    print(f"phases: read {n / t_read:,.0f} scans/s ({t_read / total:.0%}), extract {n / t_extract:,.0f} scans/s "
+          f"({t_extract / total:.0%}), log .rrd {n / t_log:,.0f} scans/s ({t_log / total:.0%})")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scans", type=int, default=40)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--bag-scans", type=int, default=1000)
+    args = ap.parse_args()
+    stage_table(args.scans, args.repeat)
+    end_to_end(args.bag_scans)
+
+
+if __name__ == "__main__":
+    main()
