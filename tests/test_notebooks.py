@@ -3,7 +3,8 @@
 Every ``notebooks/*.ipynb`` is executed headless by nbclient, in a fresh kernel that runs
 *this* interpreter (so it sees the labkit installed here), with a temporary working
 directory (so whatever a notebook writes, e.g. ``out/``, lands there and not in the
-repository). Those tests are marked ``slow``.
+repository), and with ``LABKIT_SHARED_DATASETS`` pointing at ``../shared/datasets`` when that
+folder exists (so the real-data sections run). Those tests are marked ``slow``.
 
 The fast tests check what is committed: notebooks and exercise sources are valid nbformat 4
 with no outputs (STYLE.md item 11) and no ``sys.path`` manipulation (STYLE.md item 1).
@@ -21,6 +22,8 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
+
+from tests.conftest import SHARED_DATASETS
 
 REPO = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((REPO / "notebooks").glob("*.ipynb"))
@@ -95,7 +98,9 @@ def test_kernel_runs_this_interpreter(this_python_kernel, tmp_path):
 # ---------------------------------------------------------------------------- notebooks run
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path):
+def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path, monkeypatch):
+    if SHARED_DATASETS.is_dir():  # the notebooks' real-data sections run too (they skip without it)
+        monkeypatch.setenv("LABKIT_SHARED_DATASETS", str(SHARED_DATASETS.resolve()))
     nb = nbformat.read(path, as_version=4)
     workdir = tmp_path / "cwd"
     workdir.mkdir()

@@ -163,17 +163,18 @@ def plot_legs(legs, ax=None, *, people=()):
 
 
 def plot_features(scan: Scan, features=None, *, lines=(), corners=(), circles=(), arcs=(), legs=(), people=(),
-                  truth=None, labels=None, ax=None, title: str | None = None):
+                  truth=None, labels=None, ax=None, title: str | None = None, adjustable: str = "datalim"):
     """One scan with every feature drawn over it (and the ground truth when given).
 
     Pass a :class:`labkit.Features` (from :func:`labkit.extract_features`) as ``features``
     to draw all of it, points coloured by its range segments, or the layers one by one.
+    ``adjustable="box"`` for axes shared with others (see :func:`plot_scan`).
     """
     if features is not None:
         lines, corners, circles, arcs = features.lines, features.corners, features.circles, features.arcs
         legs, people = features.legs, features.people
         labels = features.labels if labels is None else labels
-    ax = plot_scan(scan, ax, labels=labels, title=title)
+    ax = plot_scan(scan, ax, labels=labels, title=title, adjustable=adjustable)
     if truth is not None:
         plot_truth(truth, ax)
     plot_lines(lines, ax)

@@ -180,10 +180,12 @@ def log_scans(
     logged too (see :func:`log_features`), and the segments are the features' own. The
     points are also logged coloured by range segment (``world/segments``, with the segment
     count in ``metrics/count/segments``): from ``features``, from ``labels`` (one per-beam
-    label array per scan) or else segmented here with ``segment_threshold_m`` (``None``: no
-    segment layer). If iterating ``scans`` (or ``features``) raises (a damaged file), every
-    scan before the fault is sent, then the error propagates.
+    label array per scan) or else segmented here as the pipeline does (adaptive breakpoints
+    with ``segment_threshold_m`` as the floor; ``None``: no segment layer). If iterating
+    ``scans`` (or ``features``) raises (a damaged file), every scan before the fault is sent,
+    then the error propagates.
     """
+
     def frames():
         if features is not None:
             for scan, f in zip(scans, features, strict=False):
@@ -193,7 +195,7 @@ def log_scans(
                 yield scan, lab, None
         else:
             for scan in scans:
-                yield scan, (None if segment_threshold_m is None else segment_labels(scan, segment_threshold_m)), None
+                yield scan, _segment(scan, segment_threshold_m), None
 
     return _log_frames(rec, frames(), start_index, show_invalid)
 
@@ -220,6 +222,11 @@ def _log_frames(rec, frames: Iterable[tuple[Scan, np.ndarray | None, Features | 
     finally:
         flush()
     return count
+
+
+def _segment(scan: Scan, threshold_m: float | None) -> np.ndarray | None:
+    """Range segments as the pipeline's default makes them (adaptive, ``threshold_m`` floor)."""
+    return None if threshold_m is None else segment_labels(scan, threshold_m, adaptive=True)
 
 
 def _scalars(rec, path: str, times, values) -> None:
@@ -451,8 +458,11 @@ _LAYER_NOTES = {
 }
 
 
-def describe(title: str, *, source: str = "", config: Config | None = None, truth: bool = False) -> str:
-    """The Markdown note logged with a recording: what each entity shows, and the config."""
+def describe(title: str, *, source: str = "", config: Config | None = None, truth: bool = False,
+             compare: dict[str, Config] | None = None) -> str:
+    """The Markdown note logged with a recording: what each entity shows, and the config;
+    with ``compare`` (``{name: config}`` of features logged with ``log_features(...,
+    name=name)``) the named layers and every config."""
     lines = [f"# {title}", ""]
     if source:
         lines += [source, ""]
@@ -462,8 +472,13 @@ def describe(title: str, *, source: str = "", config: Config | None = None, trut
                 "world/scan/points", "world/scan/invalid", "world/segments", "world/truth/*", "metrics/count/*")):
             continue
         lines.append(f"| `{entity}` | {note} |")
+    for name in compare or {}:
+        lines.append(f"| `world/{name}/*`, `metrics/{name}/*` | the features, counts and stage times of config "
+                     f"`{name}` |")
     if config is not None:
         lines += ["", "## Config", "", "```toml", config.to_toml(), "```"]
+    for name, cfg in (compare or {}).items():
+        lines += ["", f"## Config `{name}`", "", "```toml", cfg.to_toml(), "```"]
     return "\n".join(lines)
 
 
@@ -483,7 +498,7 @@ def record_scans(
 
     Features are logged when given (``features``, one per scan) or computed here with
     ``config`` (a :class:`labkit.Config`); otherwise only the scans and their range
-    segments (``labels`` per scan, or segmented with ``segment_threshold_m``). ``truth`` is
+    segments (``labels`` per scan, or adaptive with ``segment_threshold_m`` as floor). ``truth`` is
     a :class:`labkit.sim.GroundTruth` to log beside them. If iterating ``scans`` raises
     ``ValueError``/``OSError`` (a damaged file), the ``.rrd`` still holds every scan before
     the fault, the error is logged to ``log`` and returned in the summary (not raised).
@@ -516,7 +531,7 @@ def record_scans(
             elif labels is not None:
                 yield scan, x, None
             else:
-                yield scan, None if segment_threshold_m is None else segment_labels(scan, segment_threshold_m), None
+                yield scan, _segment(scan, segment_threshold_m), None
 
     error: Exception | None = None
     try:
@@ -562,7 +577,7 @@ def record(
     if description is None:
         origin = f"Format: `{stream.format}`, topic: `{stream.topic}`."
         if not features:
-            origin += f" Range segments with a {segment_threshold_m} m threshold."
+            origin += f" Range segments: adaptive breakpoints, {segment_threshold_m} m floor."
         description = describe(name, source=origin, config=config if features else None, truth=truth is not None)
     scans = iter(stream)
     if progress:
