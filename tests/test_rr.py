@@ -37,7 +37,7 @@ def test_record_a_simulated_bag_with_truth(tmp_path):
     summary = lkrr.record(bag, tmp_path / "hall.rrd")
     assert (summary.n_scans, summary.n_truth, summary.error) == (30, 30, None)
     rows, timelines = rrd_rows(tmp_path / "hall.rrd")
-    for entity in ["/world/scan/points", "/world/scan/invalid", "/world/segments", "/metrics/count/valid_beams",
+    for entity in ["/world/scan/points", "/world/scan/invalid", "/world/segments", "/metrics/valid_beams",
                    "/metrics/count/segments", "/world/truth/walls", "/world/truth/circles", "/world/truth/legs",
                    "/world/lines", "/world/corners", "/world/circles", "/world/arcs", "/world/legs", "/world/people",
                    "/metrics/count/lines", "/metrics/count/legs", "/metrics/time_ms/lines", "/metrics/time_ms/total"]:

@@ -132,8 +132,19 @@ def log_static(rec: rr.RecordingStream, description: str | None = None) -> None:
     rec.log("world", rr.Transform3D(mat3x3=_Y_UP), static=True)
     rec.log("world/sensor", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[COLORS["sensor"]],
                                         labels=["sensor"]), static=True)
+    _hide_labels(rec, "world")
     if description:
         rec.log("description", rr.TextDocument(description, media_type=rr.MediaType.MARKDOWN), static=True)
+
+
+def _hide_labels(rec: rr.RecordingStream, world: str) -> None:
+    """Features are drawn over the scan's points (rerun draws points over lines by default),
+    and their labels show when hovered, not all at once (dozens would hide the scan)."""
+    for layer, archetype, order in (("lines", rr.LineStrips2D, 40.0), ("corners", rr.Points2D, 45.0),
+                                    ("circles", rr.Ellipses2D, 42.0), ("arcs", rr.Ellipses2D, 42.0),
+                                    ("legs", rr.Ellipses2D, 42.0), ("people", rr.Points2D, 44.0)):
+        rec.log(f"{world}/{layer}", archetype.from_fields(show_labels=layer == "people", draw_order=order),
+                static=True)
 
 
 def log_text(rec: rr.RecordingStream, text: str, level: str = "INFO") -> None:
@@ -247,7 +258,7 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
         columns=rr.Points2D.columns(positions=pts, colors=np.tile(COLORS["points"], (len(pts), 1)),
                                     radii=np.full(len(pts), POINT_RADIUS_UI, dtype=np.float32)).partition(lengths),
     )
-    _scalars(rec, "metrics/count/valid_beams", times, lengths)
+    _scalars(rec, "metrics/valid_beams", times, lengths)
     if show_invalid:
         rays = [_invalid_rays(s) for s in batch]
         rec.send_columns(
@@ -334,7 +345,7 @@ def _send_features(rec, times, feats: list[Features], world: str, metrics: str, 
     send("people", rr.Points2D, {
         "positions": np.array([p.center for p in people]).reshape(-1, 2),
         "colors": _colors("people", len(people)),
-        "radii": np.full(len(people), -7.0, dtype=np.float32),
+        "radii": np.full(len(people), -3.5, dtype=np.float32),
         "labels": ["person"] * len(people),
     }, n)
     for layer in ("segments",) * segment_count + Features.LAYERS:
@@ -358,6 +369,7 @@ def log_features(
     configurations can be compared side by side (``blueprint(compare=[...])``).
     """
     world, metrics = ("world", "metrics") if not name else (f"world/{name}", f"metrics/{name}")
+    _hide_labels(rec, world)
     count = 0
     batch: list[Features] = []
 
@@ -454,6 +466,7 @@ _LAYER_NOTES = {
     "world/people": "pairs of legs",
     "world/truth/*": "simulator ground truth, grey",
     "metrics/count/*": "per-scan counts",
+    "metrics/valid_beams": "valid beams per scan",
     "metrics/time_ms/*": "milliseconds per pipeline stage",
 }
 
@@ -469,7 +482,8 @@ def describe(title: str, *, source: str = "", config: Config | None = None, trut
     lines += ["| entity | shows |", "|---|---|"]
     for entity, note in _LAYER_NOTES.items():
         if (entity.startswith("world/truth") and not truth) or (config is None and entity not in (
-                "world/scan/points", "world/scan/invalid", "world/segments", "world/truth/*", "metrics/count/*")):
+                "world/scan/points", "world/scan/invalid", "world/segments", "world/truth/*", "metrics/count/*",
+                "metrics/valid_beams")):
             continue
         lines.append(f"| `{entity}` | {note} |")
     for name in compare or {}:
