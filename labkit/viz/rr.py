@@ -93,11 +93,11 @@ def blueprint(compare: tuple[str, ...] | list[str] = ()) -> rrb.Blueprint:
         others = {n: [f"- /world/{m}/**" for m in compare if m != n] for n in compare}
         views = [rrb.Spatial2DView(origin="/", contents=["+ /world/**", *others[n]], name=f"{n}")
                  for n in compare]
-        scene = rrb.Horizontal(*views)
-        counts = [rrb.TimeSeriesView(origin=f"metrics/{n}/count", name=f"{n}: counts") for n in compare]
-        times = [rrb.TimeSeriesView(origin=f"metrics/{n}/time_ms", name=f"{n}: ms per stage") for n in compare]
-        right = rrb.Vertical(*counts, *times, rrb.TextDocumentView(origin="description", name="About"))
-        return rrb.Blueprint(rrb.Vertical(scene, rrb.Horizontal(right), row_shares=[3, 2]), collapse_panels=False)
+        plots = [rrb.Tabs(rrb.TimeSeriesView(origin=f"metrics/{n}/count", name=f"{n}: counts"),
+                          rrb.TimeSeriesView(origin=f"metrics/{n}/time_ms", name=f"{n}: ms per stage"))
+                 for n in compare]
+        below = rrb.Horizontal(*plots, rrb.TextDocumentView(origin="description", name="About"))
+        return rrb.Blueprint(rrb.Vertical(rrb.Horizontal(*views), below, row_shares=[3, 2]), collapse_panels=False)
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)"),
