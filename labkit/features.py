@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .fitting import fit_line_polar
-from .geometry import angle_difference, intersect_lines, project_onto_line
+from .geometry import project_onto_line
 
 __all__ = ["LineSegment", "Corner", "Circle", "Leg", "Person", "Features", "line_segment", "find_corners"]
 
@@ -30,7 +30,14 @@ def _frozen(a) -> np.ndarray:
     return a
 
 
-@dataclass(frozen=True, eq=False)
+# The records below are frozen dataclasses with their own ``__init__``: the generated one sets
+# each field through ``object.__setattr__`` (the frozen class's own ``__setattr__`` refuses),
+# one call per field; writing the fields straight into the instance's ``__dict__`` in one
+# update does the same in a third of the time, and extractors build thousands of records a
+# second. The class stays frozen: assigning to a field afterwards still raises.
+
+
+@dataclass(frozen=True, eq=False, init=False)
 class LineSegment:
     """A line fitted to a run of beams.
 
@@ -63,6 +70,11 @@ class LineSegment:
     n_points: int
     error: float
     indices: np.ndarray = field(repr=False)
+
+    def __init__(self, r: float, alpha: float, covariance: np.ndarray, start: np.ndarray, end: np.ndarray,
+                 first: int, last: int, n_points: int, error: float, indices: np.ndarray):
+        self.__dict__.update(r=r, alpha=alpha, covariance=covariance, start=start, end=end, first=first, last=last,
+                             n_points=n_points, error=error, indices=indices)
 
     @property
     def length(self) -> float:
@@ -110,7 +122,7 @@ def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None)
                        int(idx[0]), int(idx[-1]), len(p), fit.rms, idx)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Corner:
     """Where two consecutive line segments meet.
 
@@ -142,13 +154,39 @@ class Corner:
     first: int
     last: int
 
+    def __init__(self, point: np.ndarray, angle: float, kind: str, extrapolated: bool, lines: tuple[int, int],
+                 first: int, last: int):
+        self.__dict__.update(point=point, angle=angle, kind=kind, extrapolated=extrapolated, lines=lines, first=first,
+                             last=last)
+
     def as_dict(self) -> dict:
         return {"type": "corner", "first": self.first, "last": self.last, "point": self.point.tolist(),
                 "angle": self.angle, "kind": self.kind, "extrapolated": self.extrapolated}
 
 
-def _side(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> float:
-    return float((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]))
+def _side(a, b, p) -> float:
+    """Twice the signed area of the triangle ``a, b, p``: > 0 when ``p`` lies left of ``a -> b``."""
+    return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+
+
+def _wrap(angle: float) -> float:
+    """:func:`labkit.geometry.wrap_angle` of one float, in plain Python (the same arithmetic)."""
+    return math.pi - (math.pi - angle) % (2 * math.pi)
+
+
+def _intersect(r1: float, alpha1: float, r2: float, alpha2: float) -> tuple[float, float] | None:
+    """:func:`labkit.geometry.intersect_lines` in plain floats: the 2x2 system
+    ``[cos a1, sin a1; cos a2, sin a2] p = [r1, r2]`` solved by Gaussian elimination with
+    partial pivoting, as ``np.linalg.solve`` does; ``None`` for (nearly) parallel lines."""
+    c1, s1, c2, s2 = math.cos(alpha1), math.sin(alpha1), math.cos(alpha2), math.sin(alpha2)
+    if abs(c2) > abs(c1):  # pivot: the row with the larger first coefficient goes first
+        c1, s1, r1, c2, s2, r2 = c2, s2, r2, c1, s1, r1
+    f = c2 * (1.0 / c1)  # eliminate the first unknown from the second row
+    u = s2 - f * s1
+    if abs(c1 * u) < 1e-12:  # the determinant
+        return None
+    y = (r2 - f * r1) / u
+    return (r1 - s1 * y) / c1, y
 
 
 def find_corners(
@@ -188,32 +226,34 @@ def find_corners(
     pairs = [(i, i + 1) for i in range(n - 1)]
     if wrap and n > 2:
         pairs.append((n - 1, 0))
+    # Plain floats throughout: for 2-vectors, math is several times faster than numpy.
     for i, j in pairs:
         a, b = lines[i], lines[j]
         # angle between undirected lines, in [0, pi/2]
-        d = abs(float(angle_difference(a.alpha, b.alpha)))
+        d = abs(_wrap(float(a.alpha) - float(b.alpha)))
         angle = min(d, math.pi - d)
         if angle < min_angle:
             continue
-        if math.hypot(*(b.start - a.end)) > max_gap_m:
+        a_start, a_end = a.start.tolist(), a.end.tolist()
+        b_start, b_end = b.start.tolist(), b.end.tolist()
+        gap = math.hypot(b_start[0] - a_end[0], b_start[1] - a_end[1])
+        if gap > max_gap_m:
             continue
-        p = intersect_lines(a.r, a.alpha, b.r, b.alpha)
+        p = _intersect(float(a.r), float(a.alpha), float(b.r), float(b.alpha))
         if p is None:
             continue
-        p = np.asarray(p, dtype=float)
-        extension = max(math.hypot(*(p - a.end)), math.hypot(*(p - b.start)))
+        extension = max(math.hypot(p[0] - a_end[0], p[1] - a_end[1]), math.hypot(p[0] - b_start[0], p[1] - b_start[1]))
         allowed = max_extension_m
         if b.first - a.last == 1:  # neighbouring beams: the corner lies between two readings
-            allowed = max(allowed, math.hypot(*(b.start - a.end)))
-        origin = np.zeros(2)
-        side_origin = _side(a.start, b.end, origin)
-        side_corner = _side(a.start, b.end, p)
+            allowed = max(allowed, gap)
+        side_origin = _side(a_start, b_end, (0.0, 0.0))
+        side_corner = _side(a_start, b_end, p)
         kind = "concave" if side_origin * side_corner < 0 else "convex"
         out.append(Corner(_frozen(p), angle, kind, extension > allowed, (i, j), a.last, b.first))
     return out
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Circle:
     """A circle (or arc) found in a scan.
 
@@ -232,13 +272,18 @@ class Circle:
     n_points: int
     kind: str = "circle"
 
+    def __init__(self, center: np.ndarray, radius: float, iav_mean: float, iav_std: float, confidence: float,
+                 first: int, last: int, n_points: int, kind: str = "circle"):
+        self.__dict__.update(center=center, radius=radius, iav_mean=iav_mean, iav_std=iav_std, confidence=confidence,
+                             first=first, last=last, n_points=n_points, kind=kind)
+
     def as_dict(self) -> dict:
         return {"type": self.kind, "first": self.first, "last": self.last, "center": self.center.tolist(),
                 "radius": self.radius, "iav_mean": self.iav_mean, "iav_std": self.iav_std,
                 "confidence": self.confidence, "n_points": self.n_points}
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Leg:
     """A leg candidate: ``center`` (2,) and ``diameter`` in metres, ``middle`` the segment's
     middle point (Xavier et al. Table I), beam indices, IAV statistics."""
@@ -251,6 +296,11 @@ class Leg:
     n_points: int
     iav_mean: float
     iav_std: float
+
+    def __init__(self, center: np.ndarray, diameter: float, middle: np.ndarray, first: int, last: int, n_points: int,
+                 iav_mean: float, iav_std: float):
+        self.__dict__.update(center=center, diameter=diameter, middle=middle, first=first, last=last,
+                             n_points=n_points, iav_mean=iav_mean, iav_std=iav_std)
 
     def as_dict(self) -> dict:
         return {"type": "leg", "first": self.first, "last": self.last, "center": self.center.tolist(),

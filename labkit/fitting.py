@@ -173,14 +173,13 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
         def each(v):
             return v[0]
     else:
-        counts = np.diff(np.append(starts, len(x)))
-        line = np.repeat(np.arange(len(starts)), counts)
+        counts = np.concatenate((starts[1:], [len(x)])) - starts
 
         def per_line(v):
             return np.add.reduceat(v, starts)
 
         def each(v):
-            return v[line]
+            return v.repeat(counts)  # = v[line of each point]
 
     sw = per_line(w)
     xm, ym = per_line(w * x) / sw, per_line(w * y) / sw
@@ -188,21 +187,24 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
     num = 2.0 * per_line(w * dx * dy)
     den = per_line(w * (dx * dx - dy * dy))
     q = num * num + den * den
+    num_i, den_i, q_i = each(num), each(den), each(q)
     with np.errstate(divide="ignore", invalid="ignore"):
         # d alpha / d x_i and d alpha / d y_i, from alpha = atan2(num, den) / 2 + pi / 2
-        ax = w * (each(den) * dy - each(num) * dx) / each(q)
-        ay = w * (each(den) * dx + each(num) * dy) / each(q)
+        ax = w * (den_i * dy - num_i * dx) / q_i
+        ay = w * (den_i * dx + num_i * dy) / q_i
     ca, sa = np.cos(alpha), np.sin(alpha)
     lever = each(-xm * sa + ym * ca)  # d r / d alpha at the centroid
-    rx = w / each(sw) * each(ca) + lever * ax
-    ry = w / each(sw) * each(sa) + lever * ay
+    share = w / each(sw)
+    rx = share * each(ca) + lever * ax
+    ry = share * each(sa) + lever * ay
     cov = np.empty((len(starts), 2, 2))
     if ray_noise:
         rho = np.hypot(x, y)
         c, s = x / rho, y / rho
         jr, ja = rx * c + ry * s, ax * c + ay * s
-        cov[:, 0, 0] = per_line(var_x * jr * jr)
-        cov[:, 0, 1] = cov[:, 1, 0] = per_line(var_x * jr * ja)
+        var_jr = var_x * jr
+        cov[:, 0, 0] = per_line(var_jr * jr)
+        cov[:, 0, 1] = cov[:, 1, 0] = per_line(var_jr * ja)
         cov[:, 1, 1] = per_line(var_x * ja * ja)
     else:
         var_y = var_x if var_y is None else var_y

@@ -455,7 +455,7 @@ def _runs_from_labels(scan: Scan, labels: np.ndarray) -> _Runs:
     idx, starts, stops = segment_order(labels)
     if idx.size == 0:
         return _NO_RUNS
-    return _Runs(idx, scan.points[idx], starts, stops, False)
+    return _Runs(idx, scan.points.take(idx, axis=0), starts, stops, False)  # take: points[idx], faster
 
 
 def _runs_from_segments(segments) -> _Runs:
@@ -496,23 +496,37 @@ class _Geometry:
 
 
 def _geometry(runs: _Runs, check_finite: bool = True) -> _Geometry:
-    n = runs.sizes
-    p0, p1 = runs.pts[runs.starts], runs.pts[runs.ends - 1]
-    mid = runs.pts[runs.starts + n // 2]
-    d = p1 - p0
-    chord = np.hypot(d[:, 0], d[:, 1])
-    m = mid - p0
-    cross_mid = d[:, 0] * m[:, 1] - d[:, 1] * m[:, 0]
-    cross_origin = d[:, 1] * p0[:, 0] - d[:, 0] * p0[:, 1]  # cross(d, origin - p0)
+    n = runs.ends - runs.starts
+    p0 = runs.pts.take(runs.starts, axis=0)  # take(i, axis=0): pts[i], several times faster
+    p1 = runs.pts.take(runs.ends - 1, axis=0)
+    mid = runs.pts.take(runs.starts + n // 2, axis=0)
+    (x0, y0), (dx, dy), (mx, my) = p0.T, (p1 - p0).T, (mid - p0).T
+    chord = np.hypot(dx, dy)
+    cross_mid = dx * my - dy * mx
+    cross_origin = dy * x0 - dx * y0  # cross(d, origin - p0)
     side = np.where(cross_origin < 0, -cross_mid, np.where(cross_origin == 0, np.abs(cross_mid), cross_mid))
     if check_finite:
         finite = ~(np.add.reduceat(~np.isfinite(runs.pts).all(axis=1), runs.starts) > 0)
     else:  # points of valid beams
         finite = np.ones(n.size, dtype=bool)
-    ratio = np.full(n.size, np.nan)
-    ok = chord > 0
-    ratio[ok] = side[ok] / (chord[ok] * chord[ok])
+    ratio = np.divide(side, chord * chord, out=np.full(n.size, np.nan), where=chord > 0)  # NaN: no chord
     return _Geometry(n, chord, ratio, finite, p0, p1, mid)
+
+
+def _cheap_verdicts(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio: np.ndarray, min_points: int,
+                    chord_range: tuple[float, float], middle_range: tuple[float, float]) -> np.ndarray:
+    """Per run: the first cheap test failed, in the detectors' order (too few points, chord
+    too short, chord too long, degenerate, prerequisite), or ``_ACCEPTED``."""
+    verdict = np.full(chord.size, _PREREQ, dtype=np.int64)
+    verdict[(ratio > middle_range[0]) & (ratio < middle_range[1])] = _ACCEPTED
+    degenerate = np.isnan(geo.ratio)
+    if runs.check_finite:
+        degenerate |= ~geo.finite
+    verdict[degenerate] = _DEGENERATE
+    verdict[chord > chord_range[1]] = _LONG
+    verdict[chord < chord_range[0]] = _SHORT
+    verdict[geo.n < min_points] = _FEW
+    return verdict
 
 
 @dataclass(frozen=True)
@@ -525,7 +539,7 @@ class _Angles:
     mean: np.ndarray
     std: np.ndarray
     side: np.ndarray  # (R,) sum of cross(chord, P_i - P_1): > 0 when the points lie left of P_1 -> P_n
-    degenerate: np.ndarray  # (R,) bool: an interior point on an extreme, or too few points
+    degenerate: np.ndarray  # (R,) bool: an interior point on an extreme
 
 
 def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None) -> _Angles:
@@ -535,29 +549,35 @@ def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None) 
     Points are complex numbers here: with ``a = P_1 - P_i`` and ``b = P_n - P_i`` the
     counter-clockwise angle from ``a`` to ``b`` is ``arg(b conj(a))``.
     """
-    counts = runs.sizes[sel] - 2
-    offsets = np.cumsum(counts) - counts
+    first, last = runs.starts[sel], runs.ends[sel] - 1
+    counts = last - first - 1
+    offsets = counts.cumsum() - counts
     r = sel.size
-    run_of = np.repeat(np.arange(r), counts)
-    pos = np.arange(int(counts.sum())) + np.repeat(runs.starts[sel] + 1 - offsets, counts)
-    z = runs.pts[:, 0] + 1j * runs.pts[:, 1]
-    z0 = z[runs.starts[sel]]
-    d = (z[runs.ends[sel] - 1] - z0)[run_of]
+    run_of = np.arange(r).repeat(counts)
+    pos = np.arange(run_of.size) + (first + 1 - offsets).repeat(counts)  # the interior points
+    z = np.ascontiguousarray(runs.pts).view(np.complex128)[:, 0]  # each row (x, y) read as x + iy
+    z0 = z[first]
+    d = (z[last] - z0)[run_of]
     a = z0[run_of] - z[pos]  # rays P_i -> P_1
     b = a + d  # rays P_i -> P_n
-    ang = np.angle(b * a.conj()) % (2 * np.pi)
+    ab = b * a.conj()
+    ang = np.arctan2(ab.imag, ab.real) % (2 * np.pi)
     if flip is not None:
         ang = np.where(flip[run_of], 2 * np.pi - ang, ang)
-    degenerate = (np.bincount(run_of, (a == 0) | (b == 0), minlength=r) > 0) | (counts < 1)
-    safe = np.maximum(counts, 1)
-    mean = np.bincount(run_of, ang, minlength=r) / safe
-    var = np.bincount(run_of, (ang - mean[run_of]) ** 2, minlength=r) / safe
+    degenerate = np.bincount(run_of, (a == 0) | (b == 0), minlength=r) > 0
+    mean = np.bincount(run_of, ang, minlength=r) / counts
+    var = np.bincount(run_of, (ang - mean[run_of]) ** 2, minlength=r) / counts
     side = np.bincount(run_of, (d * a.conj()).imag, minlength=r)  # sum of cross(d, P_i - P_1)
     return _Angles(ang, offsets, counts, mean, np.sqrt(var), side, degenerate)
 
 
-def _trace(runs: _Runs, geo: _Geometry, verdict: np.ndarray, mean: np.ndarray, std: np.ndarray) -> list[SegmentCheck]:
-    """One :class:`SegmentCheck` per run, with the values known when it was decided."""
+def _trace(runs: _Runs, geo: _Geometry, verdict: np.ndarray, sel: np.ndarray,
+           ang: _Angles | None) -> list[SegmentCheck]:
+    """One :class:`SegmentCheck` per run, with the values known when it was decided
+    (``ang``: the inscribed angles of the runs ``sel``, or None)."""
+    mean, std = np.full(verdict.size, np.nan), np.full(verdict.size, np.nan)
+    if ang is not None:
+        mean[sel], std[sel] = ang.mean, ang.std
     out = []
     first, last = runs.idx[runs.starts], runs.idx[runs.ends - 1]
     for k in range(verdict.size):
@@ -593,32 +613,26 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool) -> tuple[list[Circ
     if s == 0:
         return [], []
     geo = _geometry(runs, runs.check_finite)
-    verdict = np.full(s, _PREREQ, dtype=np.int64)
-    ratio = np.abs(geo.ratio) if t.hollow else geo.ratio
-    verdict[(ratio > t.middle_range[0]) & (ratio < t.middle_range[1])] = _ACCEPTED
-    verdict[~geo.finite | np.isnan(geo.ratio)] = _DEGENERATE
-    verdict[geo.chord > t.chord_range[1]] = _LONG
-    verdict[geo.chord < t.chord_range[0]] = _SHORT
-    verdict[geo.n < max(t.min_points, 3)] = _FEW
-    sel = np.flatnonzero(verdict == _ACCEPTED)
-    mean, std = np.full(s, np.nan), np.full(s, np.nan)
+    verdict = _cheap_verdicts(runs, geo, geo.chord, np.abs(geo.ratio) if t.hollow else geo.ratio,
+                              max(t.min_points, 3), t.chord_range, t.middle_range)
+    sel = (verdict == _ACCEPTED).nonzero()[0]
     circles: list[Circle] = []
+    ang = None
     if sel.size:
         ang = _batch_angles(runs, sel, (geo.ratio[sel] < 0) if t.hollow else None)
-        mean[sel], std[sel] = ang.mean, ang.std
-        for j, k in enumerate(sel):
-            circle, v = _finish_circle(runs, geo, ang, j, int(k), t)
+        for j, k in enumerate(sel.tolist()):
+            circle, v = _finish_circle(runs, geo, ang, j, k, t)
             verdict[k] = v
             if circle is not None:
                 circles.append(circle)
-    return circles, (_trace(runs, geo, verdict, mean, std) if want_trace else [])
+    return circles, (_trace(runs, geo, verdict, sel, ang) if want_trace else [])
 
 
 def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
                    t: _CircleTest) -> tuple[Circle | None, int]:
-    if ang.degenerate[j]:
+    if ang.degenerate.item(j):
         return None, _DEGENERATE
-    mean, std = float(ang.mean[j]), float(ang.std[j])
+    mean, std = ang.mean.item(j), ang.std.item(j)
     if not (t.mean_range[0] <= mean <= t.mean_range[1]):
         return None, _MEAN
     kind, std_max = t.kind, t.std_max
@@ -632,17 +646,18 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
         kind, std_max = "arc-like", t.arc_like_std_max
     try:
         if t.center_method == "iav":
-            side = float(ang.side[j])
+            side = ang.side.item(j)
             center, radius = circle_from_iav(geo.p_first[k], geo.p_last[k], mean, side if side != 0 else 1.0)
         else:
-            fit = fit_circle(runs.pts[runs.starts[k]:runs.ends[k]], t.center_method)
+            fit = fit_circle(runs.pts[runs.starts.item(k):runs.ends.item(k)], t.center_method)
             center, radius = np.array(fit.center, dtype=np.float64), fit.radius
     except ValueError:
         return None, _FIT
     center.setflags(write=False)
-    confidence = circle_confidence(int(ang.counts[j]), mean, std, std_max=std_max, mean_range=t.mean_range)
-    first, last = int(runs.idx[runs.starts[k]]), int(runs.idx[runs.ends[k] - 1])
-    return Circle(center, float(radius), mean, std, confidence, first, last, int(geo.n[k]), kind), _ACCEPTED
+    n = geo.n.item(k)
+    confidence = circle_confidence(n - 2, mean, std, std_max=std_max, mean_range=t.mean_range)
+    first, last = runs.idx.item(runs.starts.item(k)), runs.idx.item(runs.ends.item(k) - 1)
+    return Circle(center, float(radius), mean, std, confidence, first, last, n, kind), _ACCEPTED
 
 
 def _circle_test(*, min_points, min_chord_m, max_chord_m, middle_range, mean_range, std_max, arc_like,
@@ -841,11 +856,10 @@ def detect_lines_iav(
     verdict[geo.chord < min_length_m] = _SHORT
     verdict[geo.n < min_points] = _FEW
     sel = np.flatnonzero(verdict == _ACCEPTED)
-    mean, std = np.full(s, np.nan), np.full(s, np.nan)
     lines: list[LineSegment] = []
+    ang = None
     if sel.size:
         ang = _batch_angles(runs, sel)
-        mean[sel], std[sel] = ang.mean, ang.std
         verdict[sel[np.abs(ang.mean - math.pi) > mean_tolerance]] = _MEAN
         verdict[sel[(verdict[sel] == _ACCEPTED) & (ang.std >= std_max)]] = _STD
         verdict[sel[ang.degenerate]] = _DEGENERATE
@@ -855,7 +869,7 @@ def detect_lines_iav(
     if not return_trace:
         return lines
     geo = _Geometry(geo.n, geo.chord, np.full(s, np.nan), geo.finite, geo.p_first, geo.p_last, geo.middle)
-    return lines, _trace(runs, geo, verdict, mean, std)
+    return lines, _trace(runs, geo, verdict, sel, ang)
 
 
 def detect_arcs(
@@ -970,6 +984,7 @@ def detect_arcs(
     if kept.size == 0:
         return ([], []) if return_trace else []
     starts = np.flatnonzero(~continues[kept])
-    sub = _Runs(runs.idx[kept], runs.pts[kept], starts, np.concatenate([starts[1:], [kept.size]]), runs.check_finite)
+    sub = _Runs(runs.idx[kept], runs.pts.take(kept, axis=0), starts, np.concatenate([starts[1:], [kept.size]]),
+                runs.check_finite)
     arcs, trace = _test_runs(sub, test, return_trace)
     return (arcs, trace) if return_trace else arcs

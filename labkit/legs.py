@@ -49,6 +49,7 @@ Player driver", IEEE ICRA 2005, Sec. II-D and II-E.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -59,16 +60,13 @@ from .fitting import fit_circle
 from .iav import (
     _ACCEPTED,
     _DEGENERATE,
-    _FEW,
     _FIT,
-    _LONG,
     _MEAN,
     _OCCLUDED,
-    _PREREQ,
-    _SHORT,
     _STD,
     SegmentCheck,
     _batch_angles,
+    _cheap_verdicts,
     _check_range,
     _check_scan,
     _Geometry,
@@ -102,12 +100,12 @@ def is_occluded(scan: Scan, first: int, last: int) -> bool:
     for name, beam in (("first", first), ("last", last)):
         if isinstance(beam, bool) or int(beam) != beam or not 0 <= beam < n:
             raise ValueError(f"{name} must be a beam index in 0..{n - 1}, got {beam!r}")
-    return _occluded(scan, int(first), int(last))
+    return _occluded(scan, int(first), int(last), scan.is_full_circle)
 
 
-def _occluded(scan: Scan, first: int, last: int) -> bool:
+def _occluded(scan: Scan, first: int, last: int, wrap: bool) -> bool:
+    """:func:`is_occluded` without the checks; ``wrap``: ``scan.is_full_circle``."""
     n = scan.n_beams
-    wrap = scan.is_full_circle
     r, valid = scan.ranges, scan.valid
     for end, nb in ((first, first - 1), (last, last + 1)):
         if not 0 <= nb < n:
@@ -123,8 +121,9 @@ def _leg_center(points: np.ndarray, chord: float, mean: float, side: float,
                 method: str) -> tuple[np.ndarray, float]:
     """Centre and diameter of a leg segment."""
     if method == "ray":
-        middle = points[points.shape[0] // 2]
-        return middle + 0.5 * chord * middle / math.hypot(middle[0], middle[1]), chord
+        mx, my = points[points.shape[0] // 2].tolist()
+        h, k = math.hypot(mx, my), 0.5 * chord
+        return np.array([mx + k * mx / h, my + k * my / h]), chord
     if method == "iav":
         center, radius = circle_from_iav(points[0], points[-1], mean, side if side != 0 else 1.0)
         return np.asarray(center, dtype=np.float64), 2.0 * radius
@@ -211,7 +210,6 @@ def detect_legs(
     if center_method not in _LEG_CENTER_METHODS:
         raise ValueError(f"center_method must be one of {_LEG_CENTER_METHODS}, got {center_method!r}")
     chord_padding_beams = check_nonneg("chord_padding_beams", chord_padding_beams)
-    spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
     runs = _scan_runs(scan, segments, seg_threshold_m)
     if runs.starts.size == 0:
         return ([], []) if return_trace else []
@@ -219,34 +217,28 @@ def detect_legs(
     spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
     chord = geo.chord + chord_padding_beams * spacing * np.hypot(geo.middle[:, 0], geo.middle[:, 1])
     geo = _Geometry(geo.n, chord, geo.ratio, geo.finite, geo.p_first, geo.p_last, geo.middle)
-    verdict = np.full(runs.starts.size, _PREREQ, dtype=np.int64)
-    verdict[(geo.ratio > middle_range[0]) & (geo.ratio < middle_range[1])] = _ACCEPTED
-    verdict[~geo.finite | np.isnan(geo.ratio)] = _DEGENERATE
-    verdict[chord > chord_hi] = _LONG
-    verdict[chord < chord_lo] = _SHORT
-    verdict[geo.n < min_points] = _FEW
-    sel = np.flatnonzero(verdict == _ACCEPTED)
-    mean, std = np.full(runs.starts.size, np.nan), np.full(runs.starts.size, np.nan)
+    verdict = _cheap_verdicts(runs, geo, chord, geo.ratio, min_points, (chord_lo, chord_hi), middle_range)
+    sel = (verdict == _ACCEPTED).nonzero()[0]
     legs: list[Leg] = []
+    ang = None
     if sel.size:
         ang = _batch_angles(runs, sel)
-        mean[sel], std[sel] = ang.mean, ang.std
-        for j, k in enumerate(sel):
-            a, b = int(runs.starts[k]), int(runs.ends[k])
-            first, last = int(runs.idx[a]), int(runs.idx[b - 1])
-            m, sd = float(ang.mean[j]), float(ang.std[j])
-            if ang.degenerate[j]:
+        wrap = scan.is_full_circle
+        for j, k in enumerate(sel.tolist()):
+            a, b = runs.starts.item(k), runs.ends.item(k)
+            first, last = runs.idx.item(a), runs.idx.item(b - 1)
+            m, sd = ang.mean.item(j), ang.std.item(j)
+            if ang.degenerate.item(j):
                 verdict[k] = _DEGENERATE
             elif iav_mean_range is not None and not iav_mean_range[0] <= m <= iav_mean_range[1]:
                 verdict[k] = _MEAN
             elif iav_std_max is not None and sd >= iav_std_max:
                 verdict[k] = _STD
-            elif reject_occluded and _occluded(scan, first, last):
+            elif reject_occluded and _occluded(scan, first, last, wrap):
                 verdict[k] = _OCCLUDED
             else:
                 try:
-                    center, diameter = _leg_center(runs.pts[a:b], float(chord[k]), m, float(ang.side[j]),
-                                                   center_method)
+                    center, diameter = _leg_center(runs.pts[a:b], chord.item(k), m, ang.side.item(j), center_method)
                 except ValueError:
                     verdict[k] = _FIT
                     continue
@@ -254,7 +246,7 @@ def detect_legs(
                 center.setflags(write=False)
                 middle.setflags(write=False)
                 legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
-    return (legs, _trace(runs, geo, verdict, mean, std)) if return_trace else legs
+    return (legs, _trace(runs, geo, verdict, sel, ang)) if return_trace else legs
 
 
 def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
@@ -294,15 +286,18 @@ def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
     if len(legs) < 2:
         return []
     c = np.array([leg.center for leg in legs], dtype=np.float64)
-    i, j = np.triu_indices(len(legs), k=1)
-    dist = np.hypot(*(c[i] - c[j]).T)
-    order = np.argsort(dist, kind="stable")
-    used = np.zeros(len(legs), dtype=bool)
+    pairs = list(itertools.combinations(range(len(legs)), 2))  # (0, 1), (0, 2), ..., (1, 2), ...
+    i, j = np.array(pairs).T
+    diff = c.take(i, axis=0) - c.take(j, axis=0)
+    dist = np.hypot(diff[:, 0], diff[:, 1])
+    order = np.argsort(dist, kind="stable").tolist()
+    dist = dist.tolist()
+    used = [False] * len(legs)
     people: list[Person] = []
     for k in order:
         if dist[k] > max_distance_m:
             break
-        a, b = int(i[k]), int(j[k])
+        a, b = pairs[k]
         if used[a] or used[b]:
             continue
         used[a] = used[b] = True

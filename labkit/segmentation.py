@@ -23,6 +23,7 @@ Labels follow the scikit-learn convention: an int per beam, -1 for "no segment".
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,12 +92,21 @@ def breakpoint_thresholds(
     >>> np.round(t, 3).tolist()
     [0.083, 0.559]
     """
+    _check_adaptive(incidence_deg, range_sigma_m)
+    return _thresholds(r_a, r_b, np.abs(np.asarray(dphi, dtype=float)), threshold_m, incidence_deg, range_sigma_m)
+
+
+def _check_adaptive(incidence_deg: float, range_sigma_m: float) -> None:
     if not (0 < incidence_deg < 90):
         raise ValueError(f"incidence_deg must be in (0, 90) degrees, got {incidence_deg}")
     if not (np.isfinite(range_sigma_m) and range_sigma_m >= 0):
         raise ValueError(f"range_sigma_m must be a finite number >= 0, got {range_sigma_m}")
-    dphi = np.abs(np.asarray(dphi, dtype=float))
-    lam = np.radians(incidence_deg)
+
+
+def _thresholds(r_a, r_b, dphi: np.ndarray, threshold_m: float, incidence_deg: float,
+                range_sigma_m: float) -> np.ndarray:
+    """:func:`breakpoint_thresholds` without the checks, for ``dphi >= 0``."""
+    lam = math.radians(incidence_deg)
     with np.errstate(invalid="ignore", divide="ignore"):
         d = np.fmin(r_a, r_b) * np.sin(dphi) / np.sin(np.maximum(lam - dphi, 1e-9)) + 3.0 * range_sigma_m
     return np.fmax(d, threshold_m)
@@ -142,39 +152,40 @@ def segment_labels(
     """
     _validate(threshold_m, min_points)
     n = scan.n_beams
-    labels = np.full(n, -1, dtype=np.int64)
     if n == 0:
-        return labels
+        return np.full(n, -1, dtype=np.int64)
+    if adaptive:
+        _check_adaptive(incidence_deg, range_sigma_m)
+    valid = scan.valid
+    if not valid.any():
+        return np.full(n, -1, dtype=np.int64)
     pts = scan.points
     ranges, angles = scan.ranges, scan.angles
     if adaptive:
-        limit = breakpoint_thresholds(ranges[:-1], ranges[1:], np.diff(angles), threshold_m,
-                                      incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)
-        seam_limit = float(breakpoint_thresholds(ranges[-1:], ranges[:1], [scan.angle_increment], threshold_m,
-                                                 incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)[0])
+        limit = _thresholds(ranges[:-1], ranges[1:], np.abs(angles[1:] - angles[:-1]), threshold_m, incidence_deg,
+                            range_sigma_m)
     else:
-        limit, seam_limit = threshold_m, threshold_m
+        limit = threshold_m
+    x, y = pts[:, 0], pts[:, 1]
     with np.errstate(invalid="ignore"):
-        gap = np.hypot(*np.diff(pts, axis=0).T)  # NaN where either beam is invalid
+        gap = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # NaN where either beam is invalid
         linked = gap < limit  # (N - 1,)
-    valid = scan.valid
     # a new segment starts at every valid beam not linked to its predecessor
-    starts = valid & np.concatenate([[True], ~linked])
-    raw = np.cumsum(starts) - 1
-    raw[~valid] = -1
-    wrap = False
-    if scan.is_full_circle and n > 2 and valid[0] and valid[-1] and raw[-1] != raw[0]:
+    starts = valid.copy()
+    starts[1:] &= ~linked
+    raw = starts.cumsum() - 1  # the segment of every valid beam (invalid beams: meaningless)
+    if n > 2 and valid[0] and valid[-1] and raw[-1] != raw[0] and scan.is_full_circle:
+        seam_limit = threshold_m
+        if adaptive:
+            seam_limit = float(_thresholds(ranges[-1:], ranges[:1], np.abs([scan.angle_increment]), threshold_m,
+                                           incidence_deg, range_sigma_m)[0])
         with np.errstate(invalid="ignore"):
-            wrap = bool(np.hypot(*(pts[0] - pts[-1])) < seam_limit)
-    if wrap:
-        raw[raw == raw[-1]] = raw[0]  # the run before the seam continues the first run
-    sizes = np.bincount(raw[raw >= 0], minlength=0) if np.any(raw >= 0) else np.zeros(0, dtype=int)
+            if np.hypot(*(pts[0] - pts[-1])) < seam_limit:
+                raw[raw == raw[-1]] = raw[0]  # the run before the seam continues the first run
+    sizes = np.bincount(raw[valid])
     keep = sizes >= min_points
-    new_id = np.cumsum(keep) - 1
-    ok = raw >= 0
-    ok[ok] = keep[raw[ok]]
-    labels[ok] = new_id[raw[ok]]
-    return labels
+    new_id = np.where(keep, keep.cumsum() - 1, -1)  # per segment: its label, -1 if rejected
+    return np.where(valid, new_id[raw], -1)
 
 
 def range_segments(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2, **adaptive) -> list[RangeSegment]:
@@ -210,12 +221,13 @@ def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         else:
             beams = np.arange(n)
     else:
-        beams = np.flatnonzero(labels >= 0)
-    lab = labels[beams]
-    cut = np.flatnonzero(lab[1:] != lab[:-1]) + 1
+        beams = (labels >= 0).nonzero()[0]
     if beams.size == 0:
         return beams, np.zeros(0, np.int64), np.zeros(0, np.int64)
-    return beams, np.concatenate([[0], cut]), np.concatenate([cut, [beams.size]])
+    lab = labels[beams]
+    # the segments' bounds in beams: where the label changes, and both ends
+    bounds = np.concatenate(([True], lab[1:] != lab[:-1], [True])).nonzero()[0]
+    return beams, bounds[:-1], bounds[1:]
 
 
 def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
@@ -245,7 +257,7 @@ def labels_from(scan: Scan, segments, name: str = "segments") -> np.ndarray:
     """
     n = scan.n_beams
     if isinstance(segments, np.ndarray):
-        if segments.shape != (n,) or not (np.issubdtype(segments.dtype, np.integer) or segments.size == 0):
+        if segments.shape != (n,) or not (issubclass(segments.dtype.type, np.integer) or segments.size == 0):
             raise ValueError(f"{name} given as labels must be an int array of shape ({n},), one per beam, "
                              f"got {segments.dtype} of shape {segments.shape}")
         return np.where(scan.valid, segments, -1).astype(np.int64, copy=False)

@@ -90,45 +90,73 @@ class Step:
 
 
 class _Run:
-    """One range segment with prefix sums of ``w, wx, wy, wxx, wyy, wxy``: the sums of any
-    sub-run, hence its weighted line fit, in O(1)."""
+    """Range segments laid end to end (points ``xy``, beams ``idx``) with prefix sums of
+    ``w, wx, wy, wxx, wyy, wxy``: the sums of any sub-run, hence its weighted line fit, in O(1)."""
 
-    __slots__ = ("x", "y", "idx", "c")
+    __slots__ = ("xy", "x", "y", "idx", "c")
 
-    def __init__(self, x: np.ndarray, y: np.ndarray, w: np.ndarray, idx: np.ndarray):
-        self.x, self.y, self.idx = x, y, idx
-        c = np.zeros((len(x) + 1, 6))
-        np.cumsum(np.stack([w, w * x, w * y, w * x * x, w * y * y, w * x * y], axis=1), axis=0, out=c[1:])
-        self.c = c.tolist()  # python floats: scalar arithmetic on them is fastest
+    def __init__(self, xy: np.ndarray, w: np.ndarray, idx: np.ndarray):
+        self.xy, self.idx = xy, idx
+        self.x, self.y = x, y = xy[:, 0], xy[:, 1]
+        c = np.empty((6, len(x) + 1))  # c[:, i]: the sums over points 0..i-1
+        c[:, 0] = 0.0
+        w_, wx, wy, wxx, wyy, wxy = c[:, 1:]  # the terms of every point, summed up in place below
+        w_[:] = w
+        np.multiply(w, x, out=wx)
+        np.multiply(w, y, out=wy)
+        np.multiply(wx, x, out=wxx)
+        np.multiply(wy, y, out=wyy)
+        np.multiply(wx, y, out=wxy)
+        np.cumsum(c[:, 1:], axis=1, out=c[:, 1:])
+        self.c = c
 
     def sums(self, a: int, b: int) -> list[float]:
-        hi, lo = self.c[b], self.c[a]
-        return [h - v for h, v in zip(hi, lo, strict=True)]
+        # python floats: scalar arithmetic on them is fastest (converting only the sums
+        # used is much cheaper than converting the whole table)
+        return (self.c[:, b] - self.c[:, a]).tolist()
+
+    def point(self, i: int) -> tuple[float, float]:
+        return self.x.item(i), self.y.item(i)
 
     def chord(self, a: int, b: int) -> tuple[float, float]:
         """(r, alpha) of the line through points a and b-1."""
-        x0, y0, x1, y1 = self.x[a], self.y[a], self.x[b - 1], self.y[b - 1]
+        (x0, y0), (x1, y1) = self.point(a), self.point(b - 1)
         alpha = math.atan2(x1 - x0, -(y1 - y0))
         r = x0 * math.cos(alpha) + y0 * math.sin(alpha)
         if r < 0:
             r, alpha = -r, alpha + math.pi
         return r, math.remainder(alpha, 2 * math.pi)
 
+    def lines(self, spans: list[tuple[int, int]]) -> list[_Line]:
+        """A :class:`_Line` for each run ``a..b-1`` of ``spans``; their sums, end points and
+        beams are gathered in one go."""
+        if not spans:
+            return []
+        a, b = np.array(spans).T
+        sums = (self.c[:, b] - self.c[:, a]).T.tolist()
+        p_first, p_last = self.xy.take(a, axis=0).tolist(), self.xy.take(b - 1, axis=0).tolist()
+        first, last = self.idx[a].tolist(), self.idx[b - 1].tolist()
+        return [_Line(self.idx[i:j], s, f, g, p, q)
+                for (i, j), s, f, g, p, q in zip(spans, sums, first, last, p_first, p_last, strict=True)]
+
 
 class _Line:
-    """A line during split-and-merge: its beams, weighted sums, fit and projected ends."""
+    """A line during split-and-merge: its beams (all, ``first`` and ``last``), weighted sums,
+    fit, first and last points, and their projections onto the line (``start``, ``end``)."""
 
-    __slots__ = ("idx", "s", "r", "alpha", "start", "end", "cov")
+    __slots__ = ("idx", "first", "last", "s", "r", "alpha", "p_first", "p_last", "start", "end", "cov")
 
-    def __init__(self, idx: np.ndarray, s: list[float], points: np.ndarray):
-        self.idx, self.s = idx, s
+    def __init__(self, idx: np.ndarray, s: list[float], first: int, last: int, p_first, p_last):
+        self.idx, self.s, self.first, self.last = idx, s, first, last
         self.r, self.alpha = line_from_sums(*s)
-        self.start = self._project(points[idx[0]])
-        self.end = self._project(points[idx[-1]])
+        self.p_first, self.p_last = p_first, p_last
+        c, s = math.cos(self.alpha), math.sin(self.alpha)
+        self.start = self._project(p_first, c, s)
+        self.end = self._project(p_last, c, s)
         self.cov = None
 
-    def _project(self, p) -> tuple[float, float]:
-        c, s = math.cos(self.alpha), math.sin(self.alpha)
+    def _project(self, p, c: float, s: float) -> tuple[float, float]:
+        """The point ``p`` projected onto the line; ``c, s``: cos and sin of alpha."""
         d = p[0] * c + p[1] * s - self.r
         return (p[0] - d * c, p[1] - d * s)
 
@@ -224,13 +252,12 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
     return sorted((a, b) for a, b in spans)
 
 
-def _covariances(lines: list[_Line], points: np.ndarray, ranges: np.ndarray, weights, sigma: float) -> np.ndarray:
-    idx = np.concatenate([ln.idx for ln in lines])
-    starts = np.cumsum([0] + [len(ln.idx) for ln in lines[:-1]])
-    p = points[idx]
+def _covariances(idx: np.ndarray, starts: np.ndarray, alpha: np.ndarray, p: np.ndarray, ranges: np.ndarray, weights,
+                 sigma: float) -> np.ndarray:
+    """Covariances of lines whose beams ``idx[starts[k]:starts[k + 1]]`` have the points ``p``."""
     w = np.ones(len(idx)) if weights == "uniform" else 1.0 / ranges[idx]
     var = np.full(len(idx), sigma * sigma)
-    return line_covariances(p[:, 0], p[:, 1], w, starts, np.array([ln.alpha for ln in lines]), var)
+    return line_covariances(p[:, 0], p[:, 1], w, starts, alpha, var)
 
 
 def split_and_merge(
@@ -345,13 +372,13 @@ def split_and_merge(
     keep = min_points // 2
     order, starts, stops = segment_order(labels)
     # one pass over the whole scan, segments laid end to end: points, weights, prefix sums, gaps
-    x, y = points[order, 0], points[order, 1]
-    w = np.ones_like(x) if weights == "uniform" else 1.0 / ranges[order]
-    run = _Run(x, y, w, order)
-    gaps = np.hypot(np.diff(x), np.diff(y)) if len(x) > 1 else np.zeros(0)
-    wide = np.flatnonzero(gaps > max_gap_m).tolist()  # where a run may have to be cut, ascending
-    xy = np.column_stack([x, y])
-    lines: list[_Line] = []  # accepted runs, scan order
+    xy = points.take(order, axis=0)  # = points[order], several times faster
+    w = np.ones(len(order)) if weights == "uniform" else 1.0 / ranges[order]
+    run = _Run(xy, w, order)
+    x, y = run.x, run.y
+    gaps = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # between neighbours
+    wide = (gaps > max_gap_m).nonzero()[0].tolist()  # where a run may have to be cut, ascending
+    spans: list[tuple[int, int]] = []  # the accepted runs a..b-1, scan order
     for seg_a, seg_b in zip(starts.tolist(), stops.tolist(), strict=True):
         if steps is not None:
             steps.append(Step("segment", int(order[seg_a]), int(order[seg_b - 1]),
@@ -362,7 +389,8 @@ def split_and_merge(
         while stack:
             a, b = stack.pop()
             n = b - a
-            first, last = int(order[a]), int(order[b - 1])
+            if steps is not None:
+                first, last = int(order[a]), int(order[b - 1])
             if n < min_points:
                 if steps is not None:
                     steps.append(Step("reject", first, last, reason=f"{n} points < min_points={min_points}"))
@@ -380,9 +408,9 @@ def split_and_merge(
             r, alpha = line_from_sums(*run.sums(a, b)) if method == "fit" else run.chord(a, b)
             lo, hi = (a + keep, b - keep) if n > 2 * keep else (a, b)
             # signed distances v - r; the worst point is the farther of the two extremes
-            v = xy[lo:hi] @ (math.cos(alpha), math.sin(alpha))
+            v = xy[lo:hi].dot((math.cos(alpha), math.sin(alpha)))  # xy[lo:hi] @ (cos, sin), with less overhead
             k_hi, k_lo = int(v.argmax()), int(v.argmin())
-            d_hi, d_lo = float(v[k_hi]) - r, r - float(v[k_lo])
+            d_hi, d_lo = v.item(k_hi) - r, r - v.item(k_lo)
             if d_hi > d_lo or (d_hi == d_lo and k_hi < k_lo):
                 worst, p = d_hi, lo + k_hi
             else:
@@ -402,8 +430,8 @@ def split_and_merge(
                 steps.append(Step("accept", first, last, r, alpha, at=int(order[p]), distance=worst,
                                   reason=f"{worst:.3f} m <= split_threshold_m"))
             accepted.append((a, b))
-        for a, b in _absorb(accepted, leftovers, run, min(split_threshold_m, 3 * range_sigma_m), steps):
-            lines.append(_Line(order[a:b], run.sums(a, b), points))
+        spans += _absorb(accepted, leftovers, run, min(split_threshold_m, 3 * range_sigma_m), steps)
+    lines = run.lines(spans)
 
     if merge is not None and len(lines) > 1:
         lines = _merge(lines, points, scan.is_full_circle, steps, max_gap_m=max_gap_m, max_error_m=split_threshold_m,
@@ -413,7 +441,7 @@ def split_and_merge(
     for line in lines:
         if line.length < min_length_m:
             if steps is not None:
-                steps.append(Step("reject", int(line.idx[0]), int(line.idx[-1]), line.r, line.alpha,
+                steps.append(Step("reject", line.first, line.last, line.r, line.alpha,
                                   reason=f"length {line.length:.3f} m < min_length_m={min_length_m}"))
             continue
         kept.append(line)
@@ -431,37 +459,40 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
     """
 
     def attempt(a: _Line, b: _Line) -> _Line | None:
-        first, last = int(a.idx[0]), int(b.idx[-1])
+        first, last = a.first, b.last
         gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
         if gap > max_gap_m:
             if steps is not None:
-                steps.append(Step("keep", first, last, at=int(a.idx[-1]), distance=gap,
+                steps.append(Step("keep", first, last, at=a.last, distance=gap,
                                   reason=f"facing ends {gap:.3f} m apart > max_gap_m"))
             return None
         if merge == "chi2":
             for ln in (a, b):
                 if ln.cov is None:
-                    ln.cov = _covariances([ln], points, ranges, weights, sigma)[0]
+                    ln.cov = _covariances(ln.idx, np.zeros(1, np.int64), np.array([ln.alpha]),
+                                          points.take(ln.idx, axis=0), ranges, weights, sigma)[0]
         ok, stat = _similar(a.r, a.alpha, a.cov, b.r, b.alpha, b.cov, merge, merge_dr_m, merge_dalpha,
                             merge_chi2)
-        merged = None
+        merged = worst = None
         if ok:
             idx = np.concatenate([a.idx, b.idx])
-            merged = _Line(idx, [u + v for u, v in zip(a.s, b.s, strict=True)], points)
-            p = points[idx]
+            merged = _Line(idx, [u + v for u, v in zip(a.s, b.s, strict=True)], a.first, b.last, a.p_first,
+                           b.p_last)
+            p = points.take(idx, axis=0)
             worst = float(np.max(np.abs(p[:, 0] * math.cos(merged.alpha) + p[:, 1] * math.sin(merged.alpha)
                                         - merged.r)))
             if worst > max_error_m:
                 merged = None
+        if steps is not None:
+            if not ok:
+                reason = f"different: statistic {stat:.2f}"
+            elif merged is None:
                 reason = f"similar ({stat:.2f}) but the merged line misses a point by {worst:.3f} m"
             else:
                 reason = f"similar: statistic {stat:.2f}"
-        else:
-            reason = f"different: statistic {stat:.2f}"
-        if steps is not None:
             ln = merged if merged is not None else a
             steps.append(Step("merge" if merged is not None else "keep", first, last, ln.r, ln.alpha,
-                              at=int(a.idx[-1]), distance=stat, reason=reason))
+                              at=a.last, distance=stat, reason=reason))
         return merged
 
     out = list(lines)
@@ -483,22 +514,23 @@ def _finish(lines: list[_Line], points, ranges, weights, sigma: float) -> list[L
     """LineSegment records, with every line's covariance and RMS error in one vectorised pass."""
     if not lines:
         return []
-    cov = _covariances(lines, points, ranges, weights, sigma)
+    counts = [len(ln.idx) for ln in lines]
     idx = np.concatenate([ln.idx for ln in lines])
-    starts = np.cumsum([0] + [len(ln.idx) for ln in lines[:-1]])
-    alpha = np.repeat([ln.alpha for ln in lines], [len(ln.idx) for ln in lines])
-    r = np.repeat([ln.r for ln in lines], [len(ln.idx) for ln in lines])
-    p = points[idx]
-    d = p[:, 0] * np.cos(alpha) + p[:, 1] * np.sin(alpha) - r
-    rms = np.sqrt(np.add.reduceat(d * d, starts) / np.diff(np.append(starts, len(idx))))
+    starts = np.array([0] + counts[:-1]).cumsum()
+    p = points.take(idx, axis=0)  # = points[idx]
+    alpha = np.array([ln.alpha for ln in lines])
+    cov = _covariances(idx, starts, alpha, p, ranges, weights, sigma)
+    # RMS distance of the points to their line; cos and sin once per line, spread to its points
+    r = np.array([ln.r for ln in lines])
+    d = p[:, 0] * np.cos(alpha).repeat(counts) + p[:, 1] * np.sin(alpha).repeat(counts) - r.repeat(counts)
+    rms = np.sqrt(np.add.reduceat(d * d, starts) / counts).tolist()
+    # read-only records: covariance k, start k and end k are views of these arrays
+    cov.setflags(write=False)
+    ends = np.array([ln.start + ln.end for ln in lines]).reshape(-1, 2, 2)
+    ends.setflags(write=False)
     out = []
     for k, ln in enumerate(lines):
-        c = cov[k]
-        c.setflags(write=False)
         ln.idx.setflags(write=False)
-        start, end = np.array(ln.start), np.array(ln.end)
-        start.setflags(write=False)
-        end.setflags(write=False)
-        out.append(LineSegment(ln.r, ln.alpha, c, start, end, int(ln.idx[0]), int(ln.idx[-1]), len(ln.idx),
-                               float(rms[k]), ln.idx))
+        out.append(LineSegment(ln.r, ln.alpha, cov[k], ends[k, 0], ends[k, 1], ln.first, ln.last, counts[k], rms[k],
+                               ln.idx))
     return out
