@@ -433,10 +433,11 @@ def split_and_merge(
         spans += _absorb(accepted, leftovers, run, min(split_threshold_m, 3 * range_sigma_m), steps)
     lines = run.lines(spans)
 
+    merge_args = dict(max_gap_m=max_gap_m, max_error_m=split_threshold_m, merge=merge, merge_dr_m=merge_dr_m,
+                      merge_dalpha=merge_dalpha, merge_chi2=merge_chi2, ranges=ranges, weights=weights,
+                      sigma=range_sigma_m)
     if merge is not None and len(lines) > 1:
-        lines = _merge(lines, points, scan.is_full_circle, steps, max_gap_m=max_gap_m, max_error_m=split_threshold_m,
-                       merge=merge, merge_dr_m=merge_dr_m, merge_dalpha=merge_dalpha, merge_chi2=merge_chi2,
-                       ranges=ranges, weights=weights, sigma=range_sigma_m)
+        lines = _merge(lines, points, scan.is_full_circle, steps, **merge_args)
     kept = []
     for line in lines:
         if line.length < min_length_m:
@@ -445,6 +446,10 @@ def split_and_merge(
                                   reason=f"length {line.length:.3f} m < min_length_m={min_length_m}"))
             continue
         kept.append(line)
+    if merge is not None and 1 < len(kept) < len(lines):
+        # a short piece dropped from between two parts of one wall (a few noisy points around
+        # a dropout) no longer keeps them apart: try merging the new neighbours
+        kept = _merge(kept, points, scan.is_full_circle, steps, **merge_args)
     out = _finish(kept, points, ranges, weights, range_sigma_m)
     return (out, steps) if trace else out
 
