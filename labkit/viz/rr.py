@@ -213,25 +213,26 @@ def log_scans(
 
 def _log_frames(rec, frames: Iterable[tuple[Scan, np.ndarray | None, Features | None]], start_index: int,
                 show_invalid: bool) -> int:
-    """Send ``(scan, labels, features)`` frames in batches of ``_BATCH``; on an error while
-    iterating, send what came before it, then re-raise."""
+    """Send ``(scan, labels, features)`` frames in batches (see :func:`_batched`)."""
+    return _batched(frames, lambda batch, k: _send_batch(rec, batch, start_index + k, show_invalid))
+
+
+def _batched(items: Iterable, send) -> int:
+    """Call ``send(batch, index of its first item)`` for every ``_BATCH`` items and for the
+    rest; if iterating ``items`` raises, what came before is sent, then the error propagates.
+    Returns how many items there were."""
     count = 0
-    batch: list[tuple[Scan, np.ndarray | None, Features | None]] = []
-
-    def flush() -> None:
-        nonlocal batch
-        if batch:
-            _send_batch(rec, batch, start_index + count - len(batch), show_invalid)
-            batch = []
-
+    batch: list = []
     try:
-        for item in frames:
+        for item in items:
             batch.append(item)
             count += 1
             if len(batch) >= _BATCH:
-                flush()
+                send(batch, count - len(batch))
+                batch = []
     finally:
-        flush()
+        if batch:
+            send(batch, count - len(batch))
     return count
 
 
@@ -300,54 +301,35 @@ def _colors(name: str, n: int) -> np.ndarray:
 def _send_features(rec, times, feats: list[Features], world: str, metrics: str, segment_count: bool) -> None:
     """Every feature layer of a batch of scans, as one ``send_columns`` call per layer."""
 
-    def send(layer: str, archetype, columns: dict, counts: list[int]) -> None:
+    def send(layer: str, archetype, colour: str, size_ui: float, **columns) -> None:
+        per_scan = [getattr(f, layer) for f in feats]
+        counts = [len(xs) for xs in per_scan]
+        items = [x for xs in per_scan for x in xs]
+        size = "line_radii" if archetype is rr.Ellipses2D else "radii"  # outline width or dot/line size
+        columns = {name: make(items) for name, make in columns.items()}
+        columns.update({"colors": _colors(colour, len(items)), size: np.full(len(items), size_ui, dtype=np.float32)})
         rec.send_columns(f"{world}/{layer}", indexes=times, columns=archetype.columns(**columns).partition(counts))
 
-    def of(layer: str) -> tuple[list, list[int]]:
-        per_scan = [getattr(f, layer) for f in feats]
-        return [x for xs in per_scan for x in xs], [len(xs) for xs in per_scan]
+    def xy(attr: str):
+        return lambda items: np.array([getattr(x, attr) for x in items]).reshape(-1, 2)
 
-    lines, n = of("lines")
-    send("lines", rr.LineStrips2D, {
-        "strips": _segments([ln.start for ln in lines], [ln.end for ln in lines]),
-        "colors": _colors("lines", len(lines)),
-        "radii": np.full(len(lines), -2.5, dtype=np.float32),
-        "labels": [f"line r={ln.r:.3f} m alpha={np.degrees(ln.alpha):.1f} deg, beams {ln.first}-{ln.last}, "
-                   f"{ln.n_points} pts, rms {ln.error * 1e3:.1f} mm" for ln in lines],
-    }, n)
-    corners, n = of("corners")
-    send("corners", rr.Points2D, {
-        "positions": np.array([c.point for c in corners]).reshape(-1, 2),
-        "colors": _colors("corners", len(corners)),
-        "radii": np.full(len(corners), -5.0, dtype=np.float32),
-        "labels": [f"{c.kind} corner {np.degrees(c.angle):.0f} deg" + (" (extrapolated)" if c.extrapolated else "")
-                   for c in corners],
-    }, n)
-    for layer, colour in (("circles", "circles"), ("arcs", "arcs")):
-        items, n = of(layer)
-        send(layer, rr.Ellipses2D, {
-            "centers": np.array([c.center for c in items]).reshape(-1, 2),
-            "half_sizes": np.repeat(np.array([c.radius for c in items]).reshape(-1, 1), 2, axis=1),
-            "colors": _colors(colour, len(items)),
-            "line_radii": np.full(len(items), -2.0, dtype=np.float32),
-            "labels": [f"{c.kind} r={c.radius:.3f} m, IAV {np.degrees(c.iav_mean):.0f}+-{np.degrees(c.iav_std):.1f} "
-                       f"deg, confidence {c.confidence:.2f}" for c in items],
-        }, n)
-    legs, n = of("legs")
-    send("legs", rr.Ellipses2D, {
-        "centers": np.array([g.center for g in legs]).reshape(-1, 2),
-        "half_sizes": np.repeat(np.array([g.diameter / 2 for g in legs]).reshape(-1, 1), 2, axis=1),
-        "colors": _colors("legs", len(legs)),
-        "line_radii": np.full(len(legs), -2.0, dtype=np.float32),
-        "labels": [f"leg d={g.diameter * 100:.0f} cm" for g in legs],
-    }, n)
-    people, n = of("people")
-    send("people", rr.Points2D, {
-        "positions": np.array([p.center for p in people]).reshape(-1, 2),
-        "colors": _colors("people", len(people)),
-        "radii": np.full(len(people), -3.5, dtype=np.float32),
-        "labels": ["person"] * len(people),
-    }, n)
+    def half_sizes(radius):
+        return lambda items: np.repeat(np.array([radius(x) for x in items]).reshape(-1, 1), 2, axis=1)
+
+    send("lines", rr.LineStrips2D, "lines", -2.5,
+         strips=lambda lines: _segments([ln.start for ln in lines], [ln.end for ln in lines]),
+         labels=lambda lines: [f"line r={ln.r:.3f} m alpha={np.degrees(ln.alpha):.1f} deg, beams {ln.first}-"
+                               f"{ln.last}, {ln.n_points} pts, rms {ln.error * 1e3:.1f} mm" for ln in lines])
+    send("corners", rr.Points2D, "corners", -5.0, positions=xy("point"),
+         labels=lambda corners: [f"{c.kind} corner {np.degrees(c.angle):.0f} deg"
+                                 + (" (extrapolated)" if c.extrapolated else "") for c in corners])
+    for layer in ("circles", "arcs"):
+        send(layer, rr.Ellipses2D, layer, -2.0, centers=xy("center"), half_sizes=half_sizes(lambda c: c.radius),
+             labels=lambda items: [f"{c.kind} r={c.radius:.3f} m, IAV {np.degrees(c.iav_mean):.0f}+-"
+                                   f"{np.degrees(c.iav_std):.1f} deg, confidence {c.confidence:.2f}" for c in items])
+    send("legs", rr.Ellipses2D, "legs", -2.0, centers=xy("center"), half_sizes=half_sizes(lambda g: g.diameter / 2),
+         labels=lambda legs: [f"leg d={g.diameter * 100:.0f} cm" for g in legs])
+    send("people", rr.Points2D, "people", -3.5, positions=xy("center"), labels=lambda people: ["person"] * len(people))
     for layer in ("segments",) * segment_count + Features.LAYERS:
         _scalars(rec, f"{metrics}/count/{layer}", times,
                  [f.n_segments if layer == "segments" else len(getattr(f, layer)) for f in feats])
@@ -370,26 +352,13 @@ def log_features(
     """
     world, metrics = ("world", "metrics") if not name else (f"world/{name}", f"metrics/{name}")
     _hide_labels(rec, world)
-    count = 0
-    batch: list[Features] = []
 
-    def flush() -> None:
-        nonlocal batch
-        if batch:
-            k0 = start_index + count - len(batch)
-            times = _time_columns(np.arange(k0, k0 + len(batch)), np.array([f.stamp_ns for f in batch], np.int64))
-            _send_features(rec, times, batch, world, metrics, segment_count=True)
-            batch = []
+    def send(batch: list[Features], k: int) -> None:
+        k0 = start_index + k
+        times = _time_columns(np.arange(k0, k0 + len(batch)), np.array([f.stamp_ns for f in batch], np.int64))
+        _send_features(rec, times, batch, world, metrics, segment_count=True)
 
-    try:
-        for f in features:
-            batch.append(f)
-            count += 1
-            if len(batch) >= _BATCH:
-                flush()
-    finally:
-        flush()
-    return count
+    return _batched(features, send)
 
 
 def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int]) -> int:
@@ -399,12 +368,7 @@ def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int
     ``index_of`` maps ``stamp_ns`` to the scan's sequence number; truths of stamps not in
     it are skipped. Returns how many were logged.
     """
-    n = 0
-    batch: list[tuple[int, object]] = []
-
-    def flush() -> None:
-        if not batch:
-            return
+    def send(batch: list[tuple[int, object]], _first: int) -> None:
         times = _time_columns(np.array([k for k, _ in batch]), np.array([tr.stamp_ns for _, tr in batch], np.int64))
         truths = [tr for _, tr in batch]
         walls = [w for tr in truths for w in tr.walls]
@@ -424,17 +388,9 @@ def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int
                 centers=np.array([c.center for c in items]).reshape(-1, 2), half_sizes=np.repeat(half, 2, axis=1),
                 colors=_colors("truth", len(items)), line_radii=np.full(len(items), -1.0, dtype=np.float32),
             ).partition([len(getattr(tr, key)) for tr in truths]))
-        batch.clear()
 
-    for tr in truths:
-        k = index_of.get(tr.stamp_ns)
-        if k is None:
-            continue
-        batch.append((k, tr))
-        n += 1
-        if len(batch) >= _BATCH:
-            flush()
-    flush()
+    known = ((index_of[tr.stamp_ns], tr) for tr in truths if tr.stamp_ns in index_of)
+    n = _batched(known, send)
     for layer in ("walls", "arcs"):
         rec.log(f"world/truth/{layer}", rr.LineStrips2D.from_fields(show_labels=False), static=True)
     return n
