@@ -79,7 +79,8 @@ class LineSegment:
     @property
     def length(self) -> float:
         """Distance between ``start`` and ``end``, metres."""
-        return float(math.hypot(*(self.end - self.start)))
+        d = self.end - self.start
+        return float(math.hypot(d[0], d[1]))
 
     @property
     def direction(self) -> float:
@@ -226,20 +227,23 @@ def find_corners(
     pairs = [(i, i + 1) for i in range(n - 1)]
     if wrap and n > 2:
         pairs.append((n - 1, 0))
+    if not pairs:
+        return out
     # Plain floats throughout: for 2-vectors, math is several times faster than numpy.
+    alphas = [float(ln.alpha) for ln in lines]
     for i, j in pairs:
-        a, b = lines[i], lines[j]
         # angle between undirected lines, in [0, pi/2]
-        d = abs(_wrap(float(a.alpha) - float(b.alpha)))
+        d = abs(_wrap(alphas[i] - alphas[j]))
         angle = min(d, math.pi - d)
         if angle < min_angle:
             continue
+        a, b = lines[i], lines[j]
         a_start, a_end = a.start.tolist(), a.end.tolist()
         b_start, b_end = b.start.tolist(), b.end.tolist()
         gap = math.hypot(b_start[0] - a_end[0], b_start[1] - a_end[1])
         if gap > max_gap_m:
             continue
-        p = _intersect(float(a.r), float(a.alpha), float(b.r), float(b.alpha))
+        p = _intersect(float(a.r), alphas[i], float(b.r), alphas[j])
         if p is None:
             continue
         extension = max(math.hypot(p[0] - a_end[0], p[1] - a_end[1]), math.hypot(p[0] - b_start[0], p[1] - b_start[1]))

@@ -165,8 +165,18 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
     ``x[starts[k]:starts[k + 1]]`` (the last runs to the end), its normal ``alpha[k]``;
     ``var_x``/``var_y`` are per-point variances. Returns (K, 2, 2); NaN for a line whose
     direction is undetermined (all points identical, or an isotropic cloud)."""
+    return _line_covariances(x, y, w, starts, alpha, var_x, var_y, ray_noise)[0]
+
+
+def _line_covariances(x, y, w, starts, alpha, var_x, var_y=None, ray_noise: bool = True,
+                      r=None) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`line_covariances`; with ``r`` (K,), also the RMS distance of each line's
+    points to the line ``(r[k], alpha[k])`` (it needs the cos and sin of alpha at every
+    point, which the covariances compute anyway)."""
     starts = np.asarray(starts)
     if len(starts) == 1:  # one line: plain sums and scalars broadcast (reduceat costs more)
+        counts = len(x)
+
         def per_line(v):
             return v.sum(keepdims=True)
 
@@ -195,8 +205,9 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
     ca, sa = np.cos(alpha), np.sin(alpha)
     lever = each(-xm * sa + ym * ca)  # d r / d alpha at the centroid
     share = w / each(sw)
-    rx = share * each(ca) + lever * ax
-    ry = share * each(sa) + lever * ay
+    ca_i, sa_i = each(ca), each(sa)
+    rx = share * ca_i + lever * ax
+    ry = share * sa_i + lever * ay
     cov = np.empty((len(starts), 2, 2))
     if ray_noise:
         rho = np.hypot(x, y)
@@ -212,7 +223,10 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
         cov[:, 0, 1] = cov[:, 1, 0] = per_line(var_x * rx * ax + var_y * ry * ay)
         cov[:, 1, 1] = per_line(var_x * ax * ax + var_y * ay * ay)
     cov[q == 0] = np.nan
-    return cov
+    if r is None:
+        return cov, None
+    d = x * ca_i + y * sa_i - each(r)
+    return cov, np.sqrt(np.add.reduceat(d * d, starts) / counts)
 
 
 def _residual_sigma(d: np.ndarray) -> float:

@@ -58,7 +58,7 @@ from ._checks import check_int, check_nonneg, check_positive
 from .features import Circle, LineSegment, line_segment
 from .fitting import fit_circle
 from .scan import Scan
-from .segmentation import RangeSegment, labels_from, segment_labels, segment_order
+from .segmentation import RangeSegment, _remembered, labels_from, segment_labels, segment_order
 
 __all__ = [
     "IAVStats",
@@ -154,7 +154,7 @@ def _check_scan(scan) -> None:
 
 def _check_range(name: str, value, lo: float, hi: float) -> tuple[float, float]:
     try:
-        a, b = (float(v) for v in value)
+        a, b = map(float, value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a pair (low, high), got {value!r}") from None
     if not (lo <= a < b <= hi):
@@ -341,11 +341,17 @@ def circle_from_iav(p_first, p_last, iav_mean: float, side: float) -> tuple[np.n
     pn = np.asarray(p_last, dtype=np.float64)
     if p1.shape != (2,) or pn.shape != (2,):
         raise ValueError(f"p_first and p_last must be points (x, y), got shapes {p1.shape} and {pn.shape}")
+    return _circle_from_iav(float(p1[0]), float(p1[1]), float(pn[0]), float(pn[1]), iav_mean, side)
+
+
+def _circle_from_iav(x1: float, y1: float, x2: float, y2: float, iav_mean: float,
+                     side: float) -> tuple[np.ndarray, float]:
+    """:func:`circle_from_iav` for the chord ``(x1, y1) -> (x2, y2)`` given as floats."""
     if not (0 < iav_mean < math.pi):
         raise ValueError(f"iav_mean must be in (0, pi) radians, got {iav_mean!r}")
     if side == 0 or not math.isfinite(side):
         raise ValueError(f"side must be a non-zero number, got {side!r}")
-    x1, y1, dx, dy = float(p1[0]), float(p1[1]), float(pn[0] - p1[0]), float(pn[1] - p1[1])
+    dx, dy = x2 - x1, y2 - y1
     chord = math.hypot(dx, dy)
     if chord == 0:
         raise ValueError("p_first and p_last coincide: the chord is undefined")
@@ -421,19 +427,21 @@ def circle_confidence(n_angles: int, iav_mean: float, iav_std: float, *, std_max
 
 # ============================================================================ batch analysis
 # The detectors test every run of points of a scan at once: a scan's runs are stored back
-# to back in one array (``_Runs``), the cheap tests (counts, chords, the middle point) are
-# array operations over all runs, and the inscribed angles of the runs that pass them are
-# computed in one go and reduced per run with ``np.bincount``. Only the few runs left (the
-# circles themselves) meet Python code. This is what makes a scan cost tens of
-# microseconds rather than a millisecond; ``tests/test_iav.py`` checks it against a plain
-# loop over :func:`inscribed_angles` and :func:`middle_point_offset`.
+# to back in one array (``_Runs``), their extreme and middle points and chords are array
+# operations over all runs, the cheap tests on them (counts, chords, the middle point) a
+# loop on plain floats over the runs (a scan has tens of them), and the inscribed angles of
+# the runs that pass them are computed in one go and reduced per run with ``np.bincount``.
+# Only the few runs left (the circles themselves) meet more Python code. This is what makes
+# a scan cost tens of microseconds rather than a millisecond; ``tests/test_iav.py`` checks it
+# against a plain loop over :func:`inscribed_angles` and :func:`middle_point_offset`.
 _VERDICTS = ("accepted", "too few points", "chord too short", "chord too long", "prerequisite", "degenerate",
              "iav mean", "iav std", "v-corner", "fit failed", "occluded")
 _ACCEPTED, _FEW, _SHORT, _LONG, _PREREQ, _DEGENERATE, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED = range(11)
 
 
-@dataclass(frozen=True)
-class _Runs:
+# The internal records below are NamedTuples rather than frozen dataclasses: they are built
+# several times per scan, and a NamedTuple is several times cheaper to build.
+class _Runs(NamedTuple):
     """Runs of points stored back to back: run ``k`` is rows ``starts[k]:ends[k]``."""
 
     idx: np.ndarray  # (K,) beam index of each point
@@ -482,55 +490,75 @@ def _scan_runs(scan: Scan, segments, seg_threshold_m: float) -> _Runs:
     return _runs_from_labels(scan, segment_labels(scan, seg_threshold_m, min_points=2))
 
 
-@dataclass(frozen=True)
-class _Geometry:
-    """Per run: size, chord, signed middle-point ratio (towards the origin), finiteness."""
+class _Geometry(NamedTuple):
+    """Per run: size, chord, first, last and middle point (row ``n // 2``), and whether all
+    its points are finite (None when not checked: the points of a scan's valid beams)."""
 
     n: np.ndarray
     chord: np.ndarray
-    ratio: np.ndarray
-    finite: np.ndarray
     p_first: np.ndarray
     p_last: np.ndarray
     middle: np.ndarray
+    finite: np.ndarray | None
 
 
-def _geometry(runs: _Runs, check_finite: bool = True) -> _Geometry:
+def _geometry(runs: _Runs) -> _Geometry:
     n = runs.ends - runs.starts
     p0 = runs.pts.take(runs.starts, axis=0)  # take(i, axis=0): pts[i], several times faster
     p1 = runs.pts.take(runs.ends - 1, axis=0)
     mid = runs.pts.take(runs.starts + n // 2, axis=0)
-    (x0, y0), (dx, dy), (mx, my) = p0.T, (p1 - p0).T, (mid - p0).T
-    chord = np.hypot(dx, dy)
-    cross_mid = dx * my - dy * mx
-    cross_origin = dy * x0 - dx * y0  # cross(d, origin - p0)
-    side = np.where(cross_origin < 0, -cross_mid, np.where(cross_origin == 0, np.abs(cross_mid), cross_mid))
-    if check_finite:
-        finite = ~(np.add.reduceat(~np.isfinite(runs.pts).all(axis=1), runs.starts) > 0)
-    else:  # points of valid beams
-        finite = np.ones(n.size, dtype=bool)
-    ratio = np.divide(side, chord * chord, out=np.full(n.size, np.nan), where=chord > 0)  # NaN: no chord
-    return _Geometry(n, chord, ratio, finite, p0, p1, mid)
-
-
-def _cheap_verdicts(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio: np.ndarray, min_points: int,
-                    chord_range: tuple[float, float], middle_range: tuple[float, float]) -> np.ndarray:
-    """Per run: the first cheap test failed, in the detectors' order (too few points, chord
-    too short, chord too long, degenerate, prerequisite), or ``_ACCEPTED``."""
-    verdict = np.full(chord.size, _PREREQ, dtype=np.int64)
-    verdict[(ratio > middle_range[0]) & (ratio < middle_range[1])] = _ACCEPTED
-    degenerate = np.isnan(geo.ratio)
+    d = p1 - p0
+    finite = None
     if runs.check_finite:
-        degenerate |= ~geo.finite
-    verdict[degenerate] = _DEGENERATE
-    verdict[chord > chord_range[1]] = _LONG
-    verdict[chord < chord_range[0]] = _SHORT
-    verdict[geo.n < min_points] = _FEW
-    return verdict
+        finite = ~(np.add.reduceat(~np.isfinite(runs.pts).all(axis=1), runs.starts) > 0)
+    return _Geometry(n, np.hypot(d[:, 0], d[:, 1]), p0, p1, mid, finite)
 
 
-@dataclass(frozen=True)
-class _Angles:
+def _cheap_tests(geo: _Geometry, chord: np.ndarray, min_points: int, chord_range: tuple[float, float],
+                 middle_range: tuple[float, float], hollow: bool = False) -> tuple[list[int], list[float]]:
+    """The cheap tests of every run in the detectors' order, the first failed deciding: too
+    few points, chord too short, chord too long, degenerate (a non-finite point, no chord),
+    and the prerequisite on the middle point (``hollow``: on either side of the chord).
+
+    A scan holds tens of runs, not thousands, so a loop on plain floats beats array
+    operations here. Returns each run's verdict (``_ACCEPTED`` when it passed them all) and
+    its signed middle-point ratio (NaN for the runs that did not get that far). ``chord`` is
+    the chord tested; the ratio is taken over ``geo.chord``.
+    """
+    n, chords = geo.n.tolist(), geo.chord.tolist()
+    tested = chords if chord is geo.chord else chord.tolist()
+    p0, p1, mid = geo.p_first.tolist(), geo.p_last.tolist(), geo.middle.tolist()
+    finite = [True] * len(n) if geo.finite is None else geo.finite.tolist()
+    (c_lo, c_hi), (lo, hi) = chord_range, middle_range
+    verdicts, ratios = [], []
+    for k in range(len(n)):
+        r = math.nan
+        if n[k] < min_points:
+            v = _FEW
+        elif tested[k] < c_lo:
+            v = _SHORT
+        elif tested[k] > c_hi:
+            v = _LONG
+        else:
+            # the middle point's signed distance from the chord over the chord length,
+            # cross(d, m) / chord^2, positive towards the sensor (as _middle_ratio)
+            (x0, y0), (x1, y1), (xm, ym), c = p0[k], p1[k], mid[k], chords[k]
+            dx, dy = x1 - x0, y1 - y0
+            cross_mid = dx * (ym - y0) - dy * (xm - x0)
+            cross_origin = dy * x0 - dx * y0  # cross(d, origin - p0)
+            side = -cross_mid if cross_origin < 0 else abs(cross_mid) if cross_origin == 0 else cross_mid
+            c2 = c * c  # (0 for chords under 1e-162 m: then side / 0 as numpy would give it)
+            r = side / c2 if c2 > 0 else side * math.inf if c > 0 else math.nan
+            if math.isnan(r) or not finite[k]:
+                v = _DEGENERATE
+            else:
+                v = _ACCEPTED if lo < (abs(r) if hollow else r) < hi else _PREREQ
+        verdicts.append(v)
+        ratios.append(r)
+    return verdicts, ratios
+
+
+class _Angles(NamedTuple):
     """Signed inscribed angles of selected runs, back to back, and their statistics."""
 
     angles: np.ndarray  # (T,)
@@ -538,13 +566,13 @@ class _Angles:
     counts: np.ndarray  # (R,)
     mean: np.ndarray
     std: np.ndarray
-    side: np.ndarray  # (R,) sum of cross(chord, P_i - P_1): > 0 when the points lie left of P_1 -> P_n
+    side: np.ndarray | None  # (R,) sum of cross(chord, P_i - P_1): > 0 when the points lie left of P_1 -> P_n
     degenerate: np.ndarray  # (R,) bool: an interior point on an extreme
 
 
-def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None) -> _Angles:
+def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None, with_side: bool = True) -> _Angles:
     """Inscribed angles of runs ``sel`` (each of 3 points or more); ``flip`` (R,) mirrors a
-    run's angles to ``2 pi - a`` (hollow arcs).
+    run's angles to ``2 pi - a`` (hollow arcs); ``with_side=False`` leaves ``side`` out (None).
 
     Points are complex numbers here: with ``a = P_1 - P_i`` and ``b = P_n - P_i`` the
     counter-clockwise angle from ``a`` to ``b`` is ``arg(b conj(a))``.
@@ -560,38 +588,42 @@ def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None) 
     d = (z[last] - z0)[run_of]
     a = z0[run_of] - z[pos]  # rays P_i -> P_1
     b = a + d  # rays P_i -> P_n
-    ab = b * a.conj()
+    ac = a.conj()
+    ab = b * ac
     ang = np.arctan2(ab.imag, ab.real) % (2 * np.pi)
     if flip is not None:
         ang = np.where(flip[run_of], 2 * np.pi - ang, ang)
-    degenerate = np.bincount(run_of, (a == 0) | (b == 0), minlength=r) > 0
+    if a.all() and b.all():  # no interior point on an extreme (the usual case)
+        degenerate = np.zeros(r, dtype=bool)
+    else:
+        degenerate = np.bincount(run_of, (a == 0) | (b == 0), minlength=r) > 0
     mean = np.bincount(run_of, ang, minlength=r) / counts
     var = np.bincount(run_of, (ang - mean[run_of]) ** 2, minlength=r) / counts
-    side = np.bincount(run_of, (d * a.conj()).imag, minlength=r)  # sum of cross(d, P_i - P_1)
+    side = np.bincount(run_of, (d * ac).imag, minlength=r) if with_side else None  # sum of cross(d, P_i - P_1)
     return _Angles(ang, offsets, counts, mean, np.sqrt(var), side, degenerate)
 
 
-def _trace(runs: _Runs, geo: _Geometry, verdict: np.ndarray, sel: np.ndarray,
+def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel,
            ang: _Angles | None) -> list[SegmentCheck]:
     """One :class:`SegmentCheck` per run, with the values known when it was decided
-    (``ang``: the inscribed angles of the runs ``sel``, or None)."""
-    mean, std = np.full(verdict.size, np.nan), np.full(verdict.size, np.nan)
+    (``chord``, ``ratio``: as tested; ``verdict`` per run; ``ang``: the inscribed angles of
+    the runs ``sel``, or None)."""
+    mean, std = np.full(len(verdict), np.nan), np.full(len(verdict), np.nan)
     if ang is not None:
         mean[sel], std[sel] = ang.mean, ang.std
     out = []
     first, last = runs.idx[runs.starts], runs.idx[runs.ends - 1]
-    for k in range(verdict.size):
+    for k in range(len(verdict)):
         v = int(verdict[k])
-        chord = float(geo.chord[k]) if v != _FEW else math.nan
-        ratio = float(geo.ratio[k]) if v not in (_FEW, _SHORT, _LONG) else math.nan
+        c = float(chord[k]) if v != _FEW else math.nan
+        r = float(ratio[k]) if v not in (_FEW, _SHORT, _LONG) else math.nan
         iav = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED) else (
             math.nan, math.nan)
-        out.append(SegmentCheck(int(first[k]), int(last[k]), int(geo.n[k]), chord, ratio, *iav, _VERDICTS[v]))
+        out.append(SegmentCheck(int(first[k]), int(last[k]), int(geo.n[k]), c, r, *iav, _VERDICTS[v]))
     return out
 
 
-@dataclass(frozen=True)
-class _CircleTest:
+class _CircleTest(NamedTuple):
     """Thresholds of one circle/arc test, validated once at the public boundary."""
 
     min_points: int
@@ -612,20 +644,19 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool) -> tuple[list[Circ
     s = runs.starts.size
     if s == 0:
         return [], []
-    geo = _geometry(runs, runs.check_finite)
-    verdict = _cheap_verdicts(runs, geo, geo.chord, np.abs(geo.ratio) if t.hollow else geo.ratio,
-                              max(t.min_points, 3), t.chord_range, t.middle_range)
-    sel = (verdict == _ACCEPTED).nonzero()[0]
+    geo = _geometry(runs)
+    verdict, ratio = _cheap_tests(geo, geo.chord, max(t.min_points, 3), t.chord_range, t.middle_range, t.hollow)
+    sel = [k for k, v in enumerate(verdict) if v == _ACCEPTED]
     circles: list[Circle] = []
     ang = None
-    if sel.size:
-        ang = _batch_angles(runs, sel, (geo.ratio[sel] < 0) if t.hollow else None)
-        for j, k in enumerate(sel.tolist()):
+    if sel:
+        ang = _batch_angles(runs, np.array(sel), np.array([ratio[k] < 0 for k in sel]) if t.hollow else None)
+        for j, k in enumerate(sel):
             circle, v = _finish_circle(runs, geo, ang, j, k, t)
             verdict[k] = v
             if circle is not None:
                 circles.append(circle)
-    return circles, (_trace(runs, geo, verdict, sel, ang) if want_trace else [])
+    return circles, (_trace(runs, geo, geo.chord, ratio, verdict, sel, ang) if want_trace else [])
 
 
 def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
@@ -647,7 +678,8 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
     try:
         if t.center_method == "iav":
             side = ang.side.item(j)
-            center, radius = circle_from_iav(geo.p_first[k], geo.p_last[k], mean, side if side != 0 else 1.0)
+            (x1, y1), (x2, y2) = geo.p_first[k].tolist(), geo.p_last[k].tolist()
+            center, radius = _circle_from_iav(x1, y1, x2, y2, mean, side if side != 0 else 1.0)
         else:
             fit = fit_circle(runs.pts[runs.starts.item(k):runs.ends.item(k)], t.center_method)
             center, radius = np.array(fit.center, dtype=np.float64), fit.radius
@@ -660,6 +692,7 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
     return Circle(center, float(radius), mean, std, confidence, first, last, n, kind), _ACCEPTED
 
 
+@_remembered
 def _circle_test(*, min_points, min_chord_m, max_chord_m, middle_range, mean_range, std_max, arc_like,
                  arc_like_std_max, v_corner_neighbours, v_corner_stride=None, hollow, center_method,
                  kind) -> _CircleTest:
@@ -850,9 +883,10 @@ def detect_lines_iav(
     s = runs.starts.size
     if s == 0:
         return ([], []) if return_trace else []
-    geo = _geometry(runs, runs.check_finite)
+    geo = _geometry(runs)
     verdict = np.full(s, _ACCEPTED, dtype=np.int64)
-    verdict[~geo.finite] = _DEGENERATE
+    if geo.finite is not None:
+        verdict[~geo.finite] = _DEGENERATE
     verdict[geo.chord < min_length_m] = _SHORT
     verdict[geo.n < min_points] = _FEW
     sel = np.flatnonzero(verdict == _ACCEPTED)
@@ -868,8 +902,7 @@ def detect_lines_iav(
             lines.append(line_segment(runs.pts[a:b], runs.idx[a:b]))
     if not return_trace:
         return lines
-    geo = _Geometry(geo.n, geo.chord, np.full(s, np.nan), geo.finite, geo.p_first, geo.p_last, geo.middle)
-    return lines, _trace(runs, geo, verdict, sel, ang)
+    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang)
 
 
 def detect_arcs(

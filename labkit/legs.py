@@ -66,17 +66,16 @@ from .iav import (
     _STD,
     SegmentCheck,
     _batch_angles,
-    _cheap_verdicts,
+    _cheap_tests,
     _check_range,
     _check_scan,
-    _Geometry,
     _geometry,
     _scan_runs,
     _trace,
     circle_from_iav,
 )
 from .scan import Scan
-from .segmentation import RangeSegment
+from .segmentation import RangeSegment, _remembered
 
 __all__ = ["detect_legs", "pair_legs", "is_occluded"]
 
@@ -100,19 +99,19 @@ def is_occluded(scan: Scan, first: int, last: int) -> bool:
     for name, beam in (("first", first), ("last", last)):
         if isinstance(beam, bool) or int(beam) != beam or not 0 <= beam < n:
             raise ValueError(f"{name} must be a beam index in 0..{n - 1}, got {beam!r}")
-    return _occluded(scan, int(first), int(last), scan.is_full_circle)
+    return _occluded(scan, int(first), int(last))
 
 
-def _occluded(scan: Scan, first: int, last: int, wrap: bool) -> bool:
-    """:func:`is_occluded` without the checks; ``wrap``: ``scan.is_full_circle``."""
+def _occluded(scan: Scan, first: int, last: int) -> bool:
+    """:func:`is_occluded` without the checks."""
     n = scan.n_beams
     r, valid = scan.ranges, scan.valid
     for end, nb in ((first, first - 1), (last, last + 1)):
         if not 0 <= nb < n:
-            if not wrap:
+            if not scan.is_full_circle:
                 return True  # cut by the edge of the field of view
             nb %= n
-        if valid[nb] and r[nb] < r[end]:
+        if valid.item(nb) and r.item(nb) < r.item(end):
             return True
     return False
 
@@ -200,31 +199,21 @@ def detect_legs(
     ([1.99, 0.5], 0.12, 7)
     """
     _check_scan(scan)
-    min_points = check_int("min_points", min_points, 3)
-    chord_lo, chord_hi = _check_range("chord_range", chord_range, 0.0, math.inf)
-    middle_range = _check_range("middle_range", middle_range, 0.0, math.inf)
-    if iav_mean_range is not None:
-        iav_mean_range = _check_range("iav_mean_range", iav_mean_range, 0.0, math.pi)
-    if iav_std_max is not None:
-        iav_std_max = check_positive("iav_std_max", iav_std_max)
-    if center_method not in _LEG_CENTER_METHODS:
-        raise ValueError(f"center_method must be one of {_LEG_CENTER_METHODS}, got {center_method!r}")
-    chord_padding_beams = check_nonneg("chord_padding_beams", chord_padding_beams)
+    min_points, (chord_lo, chord_hi), middle_range, iav_mean_range, iav_std_max, chord_padding_beams = _leg_params(
+        min_points, chord_range, middle_range, iav_mean_range, iav_std_max, center_method, chord_padding_beams)
     runs = _scan_runs(scan, segments, seg_threshold_m)
     if runs.starts.size == 0:
         return ([], []) if return_trace else []
-    geo = _geometry(runs, runs.check_finite)
+    geo = _geometry(runs)
     spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
     chord = geo.chord + chord_padding_beams * spacing * np.hypot(geo.middle[:, 0], geo.middle[:, 1])
-    geo = _Geometry(geo.n, chord, geo.ratio, geo.finite, geo.p_first, geo.p_last, geo.middle)
-    verdict = _cheap_verdicts(runs, geo, chord, geo.ratio, min_points, (chord_lo, chord_hi), middle_range)
-    sel = (verdict == _ACCEPTED).nonzero()[0]
+    verdict, ratio = _cheap_tests(geo, chord, min_points, (chord_lo, chord_hi), middle_range)
+    sel = [k for k, v in enumerate(verdict) if v == _ACCEPTED]
     legs: list[Leg] = []
     ang = None
-    if sel.size:
-        ang = _batch_angles(runs, sel)
-        wrap = scan.is_full_circle
-        for j, k in enumerate(sel.tolist()):
+    if sel:
+        ang = _batch_angles(runs, np.array(sel), with_side=center_method == "iav")
+        for j, k in enumerate(sel):
             a, b = runs.starts.item(k), runs.ends.item(k)
             first, last = runs.idx.item(a), runs.idx.item(b - 1)
             m, sd = ang.mean.item(j), ang.std.item(j)
@@ -234,11 +223,12 @@ def detect_legs(
                 verdict[k] = _MEAN
             elif iav_std_max is not None and sd >= iav_std_max:
                 verdict[k] = _STD
-            elif reject_occluded and _occluded(scan, first, last, wrap):
+            elif reject_occluded and _occluded(scan, first, last):
                 verdict[k] = _OCCLUDED
             else:
+                side = ang.side.item(j) if center_method == "iav" else 0.0  # (only the iav centre needs it)
                 try:
-                    center, diameter = _leg_center(runs.pts[a:b], chord.item(k), m, ang.side.item(j), center_method)
+                    center, diameter = _leg_center(runs.pts[a:b], chord.item(k), m, side, center_method)
                 except ValueError:
                     verdict[k] = _FIT
                     continue
@@ -246,7 +236,24 @@ def detect_legs(
                 center.setflags(write=False)
                 middle.setflags(write=False)
                 legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
-    return (legs, _trace(runs, geo, verdict, sel, ang)) if return_trace else legs
+    return (legs, _trace(runs, geo, chord, ratio, verdict, sel, ang)) if return_trace else legs
+
+
+@_remembered
+def _leg_params(min_points, chord_range, middle_range, iav_mean_range, iav_std_max, center_method,
+                chord_padding_beams) -> tuple:
+    """The parameters of :func:`detect_legs` checked, in its order, and converted."""
+    min_points = check_int("min_points", min_points, 3)
+    chord_range = _check_range("chord_range", chord_range, 0.0, math.inf)
+    middle_range = _check_range("middle_range", middle_range, 0.0, math.inf)
+    if iav_mean_range is not None:
+        iav_mean_range = _check_range("iav_mean_range", iav_mean_range, 0.0, math.pi)
+    if iav_std_max is not None:
+        iav_std_max = check_positive("iav_std_max", iav_std_max)
+    if center_method not in _LEG_CENTER_METHODS:
+        raise ValueError(f"center_method must be one of {_LEG_CENTER_METHODS}, got {center_method!r}")
+    chord_padding_beams = check_nonneg("chord_padding_beams", chord_padding_beams)
+    return min_points, chord_range, middle_range, iav_mean_range, iav_std_max, chord_padding_beams
 
 
 def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
@@ -285,12 +292,11 @@ def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
             raise ValueError(f"legs must be Leg records, got {type(leg).__name__}")
     if len(legs) < 2:
         return []
-    c = np.array([leg.center for leg in legs], dtype=np.float64)
+    centers = np.array([leg.center for leg in legs], dtype=np.float64).tolist()
     pairs = list(itertools.combinations(range(len(legs)), 2))  # (0, 1), (0, 2), ..., (1, 2), ...
-    i, j = np.array(pairs).T
-    diff = c.take(i, axis=0) - c.take(j, axis=0)
-    dist = np.hypot(diff[:, 0], diff[:, 1])
-    order = np.argsort(dist, kind="stable").tolist()
+    dist = np.hypot([centers[i][0] - centers[j][0] for i, j in pairs],
+                    [centers[i][1] - centers[j][1] for i, j in pairs])
+    order = dist.argsort(kind="stable").tolist()
     dist = dist.tolist()
     used = [False] * len(legs)
     people: list[Person] = []
@@ -302,7 +308,8 @@ def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
             continue
         used[a] = used[b] = True
         pair = tuple(sorted((legs[a], legs[b]), key=lambda g: g.first))
-        center = 0.5 * (c[a] + c[b])
+        (xa, ya), (xb, yb) = centers[a], centers[b]
+        center = np.array([0.5 * (xa + xb), 0.5 * (ya + yb)])
         center.setflags(write=False)
         people.append(Person(center, pair))
     return people

@@ -23,6 +23,7 @@ Labels follow the scikit-learn convention: an int per beam, -1 for "no segment".
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -69,6 +70,25 @@ class RangeSegment:
         return f"RangeSegment(beams {self.first}..{self.last}, {self.n_points} points)"
 
 
+def _remembered(check):
+    """``check``, a pure function that validates parameters (and returns them converted),
+    remembered for each distinct set of arguments: the detectors run by a pipeline get the
+    same parameters with every scan, and checking them anew costs tens of microseconds a
+    scan. Unhashable arguments (lists, arrays) are checked every time; ``typed`` keeps
+    ``1``, ``1.0`` and ``True`` apart, as the checks do. A failed check is never remembered."""
+    remembered = functools.lru_cache(maxsize=32, typed=True)(check)
+
+    @functools.wraps(check)
+    def checked(*args, **kwargs):
+        try:
+            return remembered(*args, **kwargs)
+        except TypeError:  # an unhashable argument
+            return check(*args, **kwargs)
+
+    return checked
+
+
+@_remembered
 def _validate(threshold_m: float, min_points: int) -> None:
     check_positive("threshold_m", threshold_m)
     check_int("min_points", min_points, 1)
@@ -96,6 +116,7 @@ def breakpoint_thresholds(
     return _thresholds(r_a, r_b, np.abs(np.asarray(dphi, dtype=float)), threshold_m, incidence_deg, range_sigma_m)
 
 
+@_remembered
 def _check_adaptive(incidence_deg: float, range_sigma_m: float) -> None:
     if not (0 < incidence_deg < 90):
         raise ValueError(f"incidence_deg must be in (0, 90) degrees, got {incidence_deg}")
@@ -161,15 +182,15 @@ def segment_labels(
         return np.full(n, -1, dtype=np.int64)
     pts = scan.points
     ranges, angles = scan.ranges, scan.angles
-    if adaptive:
-        limit = _thresholds(ranges[:-1], ranges[1:], np.abs(angles[1:] - angles[:-1]), threshold_m, incidence_deg,
-                            range_sigma_m)
-    else:
-        limit = threshold_m
     x, y = pts[:, 0], pts[:, 1]
     with np.errstate(invalid="ignore"):
         gap = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # NaN where either beam is invalid
-        linked = gap < limit  # (N - 1,)
+        linked = gap < threshold_m  # (N - 1,)
+        if adaptive:  # the adaptive threshold is never below threshold_m: only wider gaps need it
+            k = (gap >= threshold_m).nonzero()[0]
+            if k.size:
+                linked[k] = gap[k] < _thresholds(ranges[k], ranges[k + 1], np.abs(angles[k + 1] - angles[k]),
+                                                 threshold_m, incidence_deg, range_sigma_m)
     # a new segment starts at every valid beam not linked to its predecessor
     starts = valid.copy()
     starts[1:] &= ~linked
@@ -180,7 +201,8 @@ def segment_labels(
             seam_limit = float(_thresholds(ranges[-1:], ranges[:1], np.abs([scan.angle_increment]), threshold_m,
                                            incidence_deg, range_sigma_m)[0])
         with np.errstate(invalid="ignore"):
-            if np.hypot(*(pts[0] - pts[-1])) < seam_limit:
+            d = pts[0] - pts[-1]
+            if np.hypot(d[0], d[1]) < seam_limit:
                 raw[raw == raw[-1]] = raw[0]  # the run before the seam continues the first run
     sizes = np.bincount(raw[valid])
     keep = sizes >= min_points
@@ -224,9 +246,12 @@ def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
         beams = (labels >= 0).nonzero()[0]
     if beams.size == 0:
         return beams, np.zeros(0, np.int64), np.zeros(0, np.int64)
-    lab = labels[beams]
-    # the segments' bounds in beams: where the label changes, and both ends
-    bounds = np.concatenate(([True], lab[1:] != lab[:-1], [True])).nonzero()[0]
+    lab = labels.take(beams)  # = labels[beams]
+    # the segments' bounds in beams: both ends, and wherever the label changes
+    edge = np.empty(beams.size + 1, dtype=bool)
+    edge[0] = edge[-1] = True
+    np.not_equal(lab[1:], lab[:-1], out=edge[1:-1])
+    bounds = edge.nonzero()[0]
     return beams, bounds[:-1], bounds[1:]
 
 
@@ -260,6 +285,10 @@ def labels_from(scan: Scan, segments, name: str = "segments") -> np.ndarray:
         if segments.shape != (n,) or not (issubclass(segments.dtype.type, np.integer) or segments.size == 0):
             raise ValueError(f"{name} given as labels must be an int array of shape ({n},), one per beam, "
                              f"got {segments.dtype} of shape {segments.shape}")
+        if segments.dtype == np.int64:  # the usual case, in short: a copy with -1 on the invalid beams
+            labels = segments.copy()
+            labels[~scan.valid] = -1
+            return labels
         return np.where(scan.valid, segments, -1).astype(np.int64, copy=False)
     labels = np.full(n, -1, dtype=np.int64)
     for k, seg in enumerate(segments):

@@ -40,9 +40,9 @@ import numpy as np
 
 from ._checks import check_int, check_nonneg, check_positive
 from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from .fitting import line_covariances, line_from_sums
+from .fitting import _line_covariances, line_from_sums
 from .scan import Scan
-from .segmentation import labels_from, segment_labels, segment_order
+from .segmentation import _remembered, labels_from, segment_labels, segment_order
 
 __all__ = ["split_and_merge", "Step", "lines_similar"]
 
@@ -98,44 +98,36 @@ class _Run:
     def __init__(self, xy: np.ndarray, w: np.ndarray, idx: np.ndarray):
         self.xy, self.idx = xy, idx
         self.x, self.y = x, y = xy[:, 0], xy[:, 1]
-        c = np.empty((6, len(x) + 1))  # c[:, i]: the sums over points 0..i-1
-        c[:, 0] = 0.0
-        w_, wx, wy, wxx, wyy, wxy = c[:, 1:]  # the terms of every point, summed up in place below
-        w_[:] = w
-        np.multiply(w, x, out=wx)
-        np.multiply(w, y, out=wy)
-        np.multiply(wx, x, out=wxx)
-        np.multiply(wy, y, out=wyy)
-        np.multiply(wx, y, out=wxy)
-        np.cumsum(c[:, 1:], axis=1, out=c[:, 1:])
+        c = np.empty((len(x) + 1, 6))  # row i: the sums over points 0..i-1
+        c[0] = 0.0
+        t = c[1:]  # the terms of every point, summed up in place below
+        t[:, 0] = w
+        np.multiply(w, x, out=t[:, 1])  # w x
+        np.multiply(w, y, out=t[:, 2])  # w y
+        np.multiply(t[:, 1], x, out=t[:, 3])  # w x x
+        np.multiply(t[:, 2], y, out=t[:, 4])  # w y y
+        np.multiply(t[:, 1], y, out=t[:, 5])  # w x y
+        # the running sums down the columns; read as three columns of complex numbers, each
+        # complex add sums two columns at once: the same sums, in half the steps
+        z = t.view(np.complex128)
+        np.add.accumulate(z, axis=0, out=z)  # (= cumsum, with less overhead)
         self.c = c
 
     def sums(self, a: int, b: int) -> list[float]:
         # python floats: scalar arithmetic on them is fastest (converting only the sums
         # used is much cheaper than converting the whole table)
-        return (self.c[:, b] - self.c[:, a]).tolist()
-
-    def point(self, i: int) -> tuple[float, float]:
-        return self.x.item(i), self.y.item(i)
-
-    def chord(self, a: int, b: int) -> tuple[float, float]:
-        """(r, alpha) of the line through points a and b-1."""
-        (x0, y0), (x1, y1) = self.point(a), self.point(b - 1)
-        alpha = math.atan2(x1 - x0, -(y1 - y0))
-        r = x0 * math.cos(alpha) + y0 * math.sin(alpha)
-        if r < 0:
-            r, alpha = -r, alpha + math.pi
-        return r, math.remainder(alpha, 2 * math.pi)
+        return (self.c[b] - self.c[a]).tolist()
 
     def lines(self, spans: list[tuple[int, int]]) -> list[_Line]:
         """A :class:`_Line` for each run ``a..b-1`` of ``spans``; their sums, end points and
         beams are gathered in one go."""
         if not spans:
             return []
-        a, b = np.array(spans).T
-        sums = (self.c[:, b] - self.c[:, a]).T.tolist()
+        ab = np.array(spans)
+        a, b = ab[:, 0], ab[:, 1]  # (indexing: unpacking an array costs an IndexError)
+        sums = (self.c.take(b, axis=0) - self.c.take(a, axis=0)).tolist()
         p_first, p_last = self.xy.take(a, axis=0).tolist(), self.xy.take(b - 1, axis=0).tolist()
-        first, last = self.idx[a].tolist(), self.idx[b - 1].tolist()
+        first, last = self.idx.take(a).tolist(), self.idx.take(b - 1).tolist()
         return [_Line(self.idx[i:j], s, f, g, p, q)
                 for (i, j), s, f, g, p, q in zip(spans, sums, first, last, p_first, p_last, strict=True)]
 
@@ -148,17 +140,14 @@ class _Line:
 
     def __init__(self, idx: np.ndarray, s: list[float], first: int, last: int, p_first, p_last):
         self.idx, self.s, self.first, self.last = idx, s, first, last
-        self.r, self.alpha = line_from_sums(*s)
+        self.r, self.alpha = r, alpha = line_from_sums(*s)
         self.p_first, self.p_last = p_first, p_last
-        c, s = math.cos(self.alpha), math.sin(self.alpha)
-        self.start = self._project(p_first, c, s)
-        self.end = self._project(p_last, c, s)
+        # the first and last points projected onto the line
+        c, sn = math.cos(alpha), math.sin(alpha)
+        (x0, y0), (x1, y1) = p_first, p_last
+        d0, d1 = x0 * c + y0 * sn - r, x1 * c + y1 * sn - r
+        self.start, self.end = (x0 - d0 * c, y0 - d0 * sn), (x1 - d1 * c, y1 - d1 * sn)
         self.cov = None
-
-    def _project(self, p, c: float, s: float) -> tuple[float, float]:
-        """The point ``p`` projected onto the line; ``c, s``: cos and sin of alpha."""
-        d = p[0] * c + p[1] * s - self.r
-        return (p[0] - d * c, p[1] - d * s)
 
     @property
     def length(self) -> float:
@@ -226,19 +215,24 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
     by_start = {a: k for k, (a, b) in enumerate(accepted)}
     spans = [list(ab) for ab in accepted]
     x, y = run.x, run.y
-    inf = math.inf
+    fits: dict[int, tuple[float, float, float]] = {}  # cos(alpha), sin(alpha), r of the lines used
 
     def distance(k, i):
         if k is None:
-            return inf
-        r, alpha = fits[k]
-        return abs(x[i] * math.cos(alpha) + y[i] * math.sin(alpha) - r)
+            return math.inf
+        if k not in fits:
+            r, alpha = line_from_sums(*run.sums(*accepted[k]))
+            fits[k] = math.cos(alpha), math.sin(alpha), r
+        c, s, r = fits[k]
+        return abs(x.item(i) * c + y.item(i) * s - r)
 
-    fits = [line_from_sums(*run.sums(a, b)) for a, b in spans]
     for a, b in leftovers:
         left, right = by_end.get(a), by_start.get(b)
         lo, hi = a, b
-        while lo < hi and distance(left, lo) <= threshold and distance(left, lo) <= distance(right, lo):
+        while lo < hi:
+            d = distance(left, lo)
+            if not (d <= threshold and d <= distance(right, lo)):
+                break
             lo += 1
         while hi > lo and distance(right, hi - 1) <= threshold:
             hi -= 1
@@ -253,11 +247,12 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
 
 
 def _covariances(idx: np.ndarray, starts: np.ndarray, alpha: np.ndarray, p: np.ndarray, ranges: np.ndarray, weights,
-                 sigma: float) -> np.ndarray:
-    """Covariances of lines whose beams ``idx[starts[k]:starts[k + 1]]`` have the points ``p``."""
-    w = np.ones(len(idx)) if weights == "uniform" else 1.0 / ranges[idx]
+                 sigma: float, r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """Covariances of lines whose beams ``idx[starts[k]:starts[k + 1]]`` have the points ``p``
+    (and, given the lines' ``r``, their RMS errors: :func:`labkit.fitting._line_covariances`)."""
+    w = np.ones(len(idx)) if weights == "uniform" else 1.0 / ranges.take(idx)
     var = np.full(len(idx), sigma * sigma)
-    return line_covariances(p[:, 0], p[:, 1], w, starts, alpha, var)
+    return _line_covariances(p[:, 0], p[:, 1], w, starts, alpha, var, r=r)
 
 
 def split_and_merge(
@@ -346,20 +341,9 @@ def split_and_merge(
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    if method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
-    if merge not in _MERGES:
-        raise ValueError(f'merge must be "thresholds", "chi2" or None, got {merge!r}')
-    if weights not in (None, "uniform"):
-        raise ValueError(f'weights must be None (1/rho) or "uniform", got {weights!r}')
-    min_points = check_int("min_points", min_points, 2)
-    split_threshold_m = check_positive("split_threshold_m", split_threshold_m)
-    min_length_m = check_nonneg("min_length_m", min_length_m)
-    max_gap_m = check_positive("max_gap_m", max_gap_m)
-    check_positive("merge_dr_m", merge_dr_m)
-    check_positive("merge_dalpha", merge_dalpha)
-    check_positive("merge_chi2", merge_chi2)
-    range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
+    min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m = _params(
+        method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
+        merge_chi2, range_sigma_m)
 
     steps: list[Step] | None = [] if trace else None
     if segments is None:
@@ -371,14 +355,22 @@ def split_and_merge(
     ranges = scan.ranges
     keep = min_points // 2
     order, starts, stops = segment_order(labels)
+    order.setflags(write=False)  # so are the lines' beams, slices of it
     # one pass over the whole scan, segments laid end to end: points, weights, prefix sums, gaps
     xy = points.take(order, axis=0)  # = points[order], several times faster
-    w = np.ones(len(order)) if weights == "uniform" else 1.0 / ranges[order]
+    w = np.ones(len(order)) if weights == "uniform" else 1.0 / ranges.take(order)
     run = _Run(xy, w, order)
     x, y = run.x, run.y
-    gaps = np.hypot(x[1:] - x[:-1], y[1:] - y[:-1])  # between neighbours
-    wide = (gaps > max_gap_m).nonzero()[0].tolist()  # where a run may have to be cut, ascending
+    # the gaps between neighbours wider than max_gap_m, where a run may have to be cut (ascending);
+    # as hypot(dx, dy) <= |dx| + |dy|, only the few neighbours with |dx| + |dy| near max_gap_m are measured
+    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]
+    near = (np.abs(dx) + np.abs(dy) > 0.99 * max_gap_m).nonzero()[0]
+    gaps = dict(zip(near.tolist(), np.hypot(dx[near], dy[near]).tolist(), strict=True))
+    wide = [i for i, gap in gaps.items() if gap > max_gap_m]
     spans: list[tuple[int, int]] = []  # the accepted runs a..b-1, scan order
+    normal = np.empty(2)  # (cos alpha, sin alpha) of the line being tested
+    fit = method == "fit"
+    absorb_m = min(split_threshold_m, 3 * range_sigma_m)
     for seg_a, seg_b in zip(starts.tolist(), stops.tolist(), strict=True):
         if steps is not None:
             steps.append(Step("segment", int(order[seg_a]), int(order[seg_b - 1]),
@@ -396,19 +388,28 @@ def split_and_merge(
                     steps.append(Step("reject", first, last, reason=f"{n} points < min_points={min_points}"))
                 leftovers.append((a, b))
                 continue
-            k = bisect_left(wide, a)
+            k = bisect_left(wide, a) if wide else 0
             if k < len(wide) and wide[k] < b - 1:  # a gap wider than max_gap_m: cut at the widest
-                g = max(wide[k:bisect_left(wide, b - 1)], key=gaps.item)
+                g = max(wide[k:bisect_left(wide, b - 1)], key=gaps.__getitem__)
                 if steps is not None:
-                    steps.append(Step("gap", first, last, at=int(order[g]), distance=float(gaps[g]),
+                    steps.append(Step("gap", first, last, at=int(order[g]), distance=gaps[g],
                                       reason=f"gap {gaps[g]:.3f} m > max_gap_m"))
                 stack.append((g + 1, b))
                 stack.append((a, g + 1))
                 continue
-            r, alpha = line_from_sums(*run.sums(a, b)) if method == "fit" else run.chord(a, b)
+            if fit:
+                r, alpha = line_from_sums(*run.sums(a, b))
+            else:  # the chord: the line through points a and b - 1
+                x0, y0, x1, y1 = x.item(a), y.item(a), x.item(b - 1), y.item(b - 1)
+                alpha = math.atan2(x1 - x0, -(y1 - y0))
+                r = x0 * math.cos(alpha) + y0 * math.sin(alpha)
+                if r < 0:
+                    r, alpha = -r, alpha + math.pi
+                alpha = math.remainder(alpha, 2 * math.pi)
             lo, hi = (a + keep, b - keep) if n > 2 * keep else (a, b)
             # signed distances v - r; the worst point is the farther of the two extremes
-            v = xy[lo:hi].dot((math.cos(alpha), math.sin(alpha)))  # xy[lo:hi] @ (cos, sin), with less overhead
+            normal[0], normal[1] = math.cos(alpha), math.sin(alpha)
+            v = xy[lo:hi].dot(normal)  # xy[lo:hi] @ normal, with less overhead
             k_hi, k_lo = int(v.argmax()), int(v.argmin())
             d_hi, d_lo = v.item(k_hi) - r, r - v.item(k_lo)
             if d_hi > d_lo or (d_hi == d_lo and k_hi < k_lo):
@@ -416,7 +417,7 @@ def split_and_merge(
             else:
                 worst, p = d_lo, lo + k_lo
             if steps is not None:
-                ref = "fitted line" if method == "fit" else "chord"
+                ref = "fitted line" if fit else "chord"
                 steps.append(Step("fit", first, last, r, alpha, at=int(order[p]), distance=worst,
                                   reason=f"worst point {worst:.3f} m from the {ref}"))
             if worst > split_threshold_m and a < p < b - 1:
@@ -430,14 +431,15 @@ def split_and_merge(
                 steps.append(Step("accept", first, last, r, alpha, at=int(order[p]), distance=worst,
                                   reason=f"{worst:.3f} m <= split_threshold_m"))
             accepted.append((a, b))
-        spans += _absorb(accepted, leftovers, run, min(split_threshold_m, 3 * range_sigma_m), steps)
+        spans += _absorb(accepted, leftovers, run, absorb_m, steps) if leftovers else sorted(accepted)
     lines = run.lines(spans)
 
     merge_args = dict(max_gap_m=max_gap_m, max_error_m=split_threshold_m, merge=merge, merge_dr_m=merge_dr_m,
                       merge_dalpha=merge_dalpha, merge_chi2=merge_chi2, ranges=ranges, weights=weights,
                       sigma=range_sigma_m)
+    wrap = merge is not None and len(lines) > 1 and scan.is_full_circle
     if merge is not None and len(lines) > 1:
-        lines = _merge(lines, points, scan.is_full_circle, steps, **merge_args)
+        lines = _merge(lines, points, wrap, steps, **merge_args)
     kept = []
     for line in lines:
         if line.length < min_length_m:
@@ -449,9 +451,30 @@ def split_and_merge(
     if merge is not None and 1 < len(kept) < len(lines):
         # a short piece dropped from between two parts of one wall (a few noisy points around
         # a dropout) no longer keeps them apart: try merging the new neighbours
-        kept = _merge(kept, points, scan.is_full_circle, steps, **merge_args)
+        kept = _merge(kept, points, wrap, steps, **merge_args)
     out = _finish(kept, points, ranges, weights, range_sigma_m)
     return (out, steps) if trace else out
+
+
+@_remembered
+def _params(method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
+            merge_chi2, range_sigma_m) -> tuple:
+    """The parameters of :func:`split_and_merge` checked, in its order; returns those it uses converted."""
+    if method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    if merge not in _MERGES:
+        raise ValueError(f'merge must be "thresholds", "chi2" or None, got {merge!r}')
+    if weights not in (None, "uniform"):
+        raise ValueError(f'weights must be None (1/rho) or "uniform", got {weights!r}')
+    min_points = check_int("min_points", min_points, 2)
+    split_threshold_m = check_positive("split_threshold_m", split_threshold_m)
+    min_length_m = check_nonneg("min_length_m", min_length_m)
+    max_gap_m = check_positive("max_gap_m", max_gap_m)
+    check_positive("merge_dr_m", merge_dr_m)
+    check_positive("merge_dalpha", merge_dalpha)
+    check_positive("merge_chi2", merge_chi2)
+    range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
+    return min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m
 
 
 def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_error_m, merge, merge_dr_m,
@@ -475,12 +498,13 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
             for ln in (a, b):
                 if ln.cov is None:
                     ln.cov = _covariances(ln.idx, np.zeros(1, np.int64), np.array([ln.alpha]),
-                                          points.take(ln.idx, axis=0), ranges, weights, sigma)[0]
+                                          points.take(ln.idx, axis=0), ranges, weights, sigma)[0][0]
         ok, stat = _similar(a.r, a.alpha, a.cov, b.r, b.alpha, b.cov, merge, merge_dr_m, merge_dalpha,
                             merge_chi2)
         merged = worst = None
         if ok:
             idx = np.concatenate([a.idx, b.idx])
+            idx.setflags(write=False)
             merged = _Line(idx, [u + v for u, v in zip(a.s, b.s, strict=True)], a.first, b.last, a.p_first,
                            b.p_last)
             p = points.take(idx, axis=0)
@@ -519,23 +543,18 @@ def _finish(lines: list[_Line], points, ranges, weights, sigma: float) -> list[L
     """LineSegment records, with every line's covariance and RMS error in one vectorised pass."""
     if not lines:
         return []
-    counts = [len(ln.idx) for ln in lines]
+    counts = np.array([len(ln.idx) for ln in lines])
     idx = np.concatenate([ln.idx for ln in lines])
-    starts = np.array([0] + counts[:-1]).cumsum()
+    starts = counts.cumsum() - counts
     p = points.take(idx, axis=0)  # = points[idx]
-    alpha = np.array([ln.alpha for ln in lines])
-    cov = _covariances(idx, starts, alpha, p, ranges, weights, sigma)
-    # RMS distance of the points to their line; cos and sin once per line, spread to its points
-    r = np.array([ln.r for ln in lines])
-    d = p[:, 0] * np.cos(alpha).repeat(counts) + p[:, 1] * np.sin(alpha).repeat(counts) - r.repeat(counts)
-    rms = np.sqrt(np.add.reduceat(d * d, starts) / counts).tolist()
-    # read-only records: covariance k, start k and end k are views of these arrays
+    alpha, r = np.array([ln.alpha for ln in lines]), np.array([ln.r for ln in lines])
+    cov, rms = _covariances(idx, starts, alpha, p, ranges, weights, sigma, r)  # and the RMS distances to the lines
+    rms = rms.tolist()
+    # read-only records (the beams already are): each covariance, start and end is a view of these
     cov.setflags(write=False)
-    ends = np.array([ln.start + ln.end for ln in lines]).reshape(-1, 2, 2)
+    ends = np.array([ln.start + ln.end for ln in lines])
     ends.setflags(write=False)
-    out = []
-    for k, ln in enumerate(lines):
-        ln.idx.setflags(write=False)
-        out.append(LineSegment(ln.r, ln.alpha, cov[k], ends[k, 0], ends[k, 1], ln.first, ln.last, counts[k], rms[k],
-                               ln.idx))
-    return out
+    ends = list(ends.reshape(-1, 2))  # start 0, end 0, start 1, ...
+    return [LineSegment(ln.r, ln.alpha, c, start, end, ln.first, ln.last, n, error, ln.idx)
+            for ln, c, start, end, n, error in zip(lines, cov, ends[0::2], ends[1::2], counts.tolist(), rms,
+                                                   strict=True)]
