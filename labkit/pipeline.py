@@ -393,10 +393,11 @@ def _mask_segments(labels: np.ndarray, taken: list) -> np.ndarray:
     """``labels`` with the segments holding the first beam of each feature set to -1."""
     if not taken:
         return labels
-    gone = labels[[f.first for f in taken]]
-    out = labels.copy()
-    out[np.isin(labels, gone[gone >= 0])] = -1
-    return out
+    # A look-up table by label (its last entry, for -1, stays False): one gather instead of np.isin's sort.
+    drop = np.zeros(int(labels.max()) + 2, dtype=bool)
+    drop[labels[[f.first for f in taken]]] = True
+    drop[-1] = False
+    return np.where(drop[labels], -1, labels)
 
 
 def extract_features(scan: Scan, config: Config | None = None) -> Features:
