@@ -1,0 +1,236 @@
+"""Incremental line extraction ("line tracking"), as compared by Nguyen et al. (2007).
+
+The algorithm walks along the scan and grows one line at a time:
+
+1. Start a line with the first ``min_points`` points of a run (the *seed*); a seed whose
+   own fit misses one of its points by more than ``max_error_m`` (it lies across a corner
+   or a burst of noise) is moved on by one beam.
+2. Add the next point to the line and refit it.
+3. Test the line condition: the new point lies within ``max_error_m`` of the refitted line.
+4. While the condition holds, go back to 2.
+5. When it fails, put the point back (the line keeps its previous fit), emit the line,
+   and start a new line (step 1) at that point.
+6. (Ours, not part of the published algorithm.) Hand corner points back; see below.
+7. Fit every line to its points and drop those shorter than ``min_length_m``.
+
+Why this line condition: it is O(1) per point (no pass over the line's points, unlike the
+largest residual of the whole line), it is the same distance that split-and-merge compares
+with its ``split_threshold_m`` (a point's orthogonal distance to the fitted line), so the two
+extractors share a default of 0.05 m, and measuring the point against the line *refitted with
+it* is forgiving while the line is short and its direction still uncertain (the new point
+pulls a 5-point line a long way towards itself) and strict once it is long (it barely moves).
+
+A line grown this way keeps the first few points of the next wall: past a corner the points
+stay within ``max_error_m`` of the old line for a few beams. Step 6 repairs that: where one
+line ends on the beam before the next begins, the end points of the first line are handed to
+the second while they are closer to the second line than to their own. Over 20 scans of the
+simulated corridor it raises the share of walls found from 0.81 to 0.93 and lowers the false
+positives from 0.34 to 0.16 (``tests/test_incremental.py`` scores the defaults).
+
+Every fit is the weighted least-squares line of :func:`labkit.fitting.fit_line_polar`
+(weights ``1 / rho``), computed in O(1) from running sums of ``w, w x, w y, w x^2, w y^2,
+w x y`` (:func:`labkit.fitting.line_from_sums`), so the whole scan costs O(N).
+
+Runs: the algorithm never crosses a *break*: a gap wider than ``max_gap_m`` between
+neighbouring valid points, or a boundary between range segments when ``segments`` is given.
+An invalid beam (NaN, inf, 0, out of range) is skipped, not a break: its neighbours stay in
+one run when they are within ``max_gap_m`` of each other, so a single dropout does not cut a
+wall in two (on the simulated office, 2 % dropouts, cutting at every invalid beam leaves short
+noisy pieces: 0.09 false positives instead of 0.02).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._checks import check_int, check_nonneg, check_positive
+from .features import LineSegment, line_segment
+from .fitting import line_from_sums
+from .scan import Scan
+from .segmentation import _remembered, labels_from
+
+__all__ = ["incremental_lines"]
+
+
+def incremental_lines(
+    scan: Scan,
+    *,
+    max_error_m: float = 0.05,
+    min_points: int = 5,
+    min_length_m: float = 0.15,
+    max_gap_m: float = 0.3,
+    segments=None,
+) -> list[LineSegment]:
+    """Extract line segments from a scan with the incremental (line-tracking) algorithm.
+
+    Parameters
+    ----------
+    scan : Scan
+        Invalid beams (NaN, inf, 0, out of range) are masked: skipped, never raised.
+    max_error_m : float, metres
+        The line condition: a new point joins the line while it is within this distance of
+        the line refitted with it. Default 0.05 m, split-and-merge's ``split_threshold_m``
+        (ten times the LMS200's 5 mm range noise), so that the two extractors are compared
+        at the same tolerance. 0.04 m scores about the same on the simulated worlds; 0.06 m
+        loses more short walls of the corridor (0.88 found instead of 0.93).
+    min_points : int
+        Points of a seed, and fewest points of a line. Default 5 (Xavier et al.'s
+        ``line_min_pts``, split-and-merge's ``min_points``): fewer points fix a line's
+        direction too poorly to grow it.
+    min_length_m : float, metres
+        Shorter lines are dropped. Default 0.15 m, as split-and-merge.
+    max_gap_m : float, metres
+        A line never spans two neighbouring points farther apart than this. Default 0.3 m,
+        as split-and-merge.
+    segments : ndarray of per-beam labels or list of RangeSegment, optional
+        A range segmentation computed elsewhere (e.g. shared by a pipeline, with the beams
+        of circles and legs set to -1): lines then never cross a segment boundary nor a
+        valid beam labelled -1. Default None: the whole scan, broken only at gaps.
+
+    Returns
+    -------
+    list of LineSegment
+        Sorted by first beam; each fitted by :func:`labkit.features.line_segment` to the
+        valid beams it covers (indices ascending). The seam of a full-circle scan is a
+        break: a wall across it gives two lines.
+
+    Examples
+    --------
+    A wall at x = 2 m seen from the origin, one beam lost:
+
+    >>> theta = np.radians(np.arange(-40.0, 40.5, 0.5))
+    >>> ranges = 2.0 / np.cos(theta)
+    >>> ranges[50] = np.nan
+    >>> lines = incremental_lines(Scan(ranges=ranges, angles=theta))
+    >>> [(round(s.r, 6), round(float(np.degrees(s.alpha)), 6), s.first, s.last, s.n_points) for s in lines]
+    [(2.0, 0.0, 0, 160, 160)]
+    """
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+    max_error_m, min_points, min_length_m, max_gap_m = _params(max_error_m, min_points, min_length_m, max_gap_m)
+    beams, runs = _runs(scan, segments, max_gap_m, min_points)
+    if not runs:
+        return []
+    xy = scan.points.take(beams, axis=0)
+    w = 1.0 / scan.ranges.take(beams)  # the weights of fit_line_polar: 1 / rho
+    sums = _PrefixSums(xy, w)
+    # plain Python floats: the growing loop handles one point at a time, where numpy is slow
+    xs, ys, ws = xy[:, 0].tolist(), xy[:, 1].tolist(), w.tolist()
+
+    spans: list[list[int]] = []  # every line as [a, b): positions a..b-1 in `beams`
+    for a, b in runs:
+        run_spans: list[list[int]] = []
+        start = a
+        while b - start >= min_points:
+            # step 1: the seed, the first min_points points; moved on while it is no line
+            stop = start + min_points
+            s = sums(start, stop)
+            r, alpha = line_from_sums(*s)
+            c, sn = math.cos(alpha), math.sin(alpha)
+            if max(abs(xs[i] * c + ys[i] * sn - r) for i in range(start, stop)) > max_error_m:
+                start += 1
+                continue
+            # steps 2-4: add the next point, refit, keep it while it lies near the refitted line
+            sw, sx, sy, sxx, syy, sxy = s
+            while stop < b:
+                wi, xi, yi = ws[stop], xs[stop], ys[stop]
+                wx, wy = wi * xi, wi * yi
+                t = (sw + wi, sx + wx, sy + wy, sxx + wx * xi, syy + wy * yi, sxy + wx * yi)
+                r, alpha = line_from_sums(*t)
+                if abs(xi * math.cos(alpha) + yi * math.sin(alpha) - r) > max_error_m:
+                    break  # step 5: put the point back (its sums t are dropped) and end the line
+                sw, sx, sy, sxx, syy, sxy = t
+                stop += 1
+            run_spans.append([start, stop])
+            start = stop  # step 5: the next line starts at the point that failed
+        _hand_back_corners(run_spans, sums, xs, ys, min_points)  # step 6
+        spans += run_spans
+
+    # step 7: every line fitted to its points, the short ones dropped
+    lines = []
+    for a, b in spans:
+        line = line_segment(xy[a:b], beams[a:b])
+        if line.length >= min_length_m:
+            lines.append(line)
+    return lines
+
+
+@_remembered
+def _params(max_error_m, min_points, min_length_m, max_gap_m) -> tuple:
+    """The parameters of :func:`incremental_lines` checked and converted, in its order."""
+    return (check_positive("max_error_m", max_error_m), check_int("min_points", min_points, 2),
+            check_nonneg("min_length_m", min_length_m), check_positive("max_gap_m", max_gap_m))
+
+
+def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int) -> None:
+    """Step 6: where a line ends on the point before the next line starts, move its last
+    points to the next line while they are closer to the next line than to their own (at
+    least ``min_points`` points stay). Both lines are refitted after every move. ``spans``
+    change in place."""
+    for left, right in zip(spans[:-1], spans[1:], strict=True):
+        while left[1] == right[0] and left[1] - left[0] > min_points:
+            i = left[1] - 1
+            r1, a1 = line_from_sums(*sums(left[0], left[1]))
+            r2, a2 = line_from_sums(*sums(right[0], right[1]))
+            d1 = abs(xs[i] * math.cos(a1) + ys[i] * math.sin(a1) - r1)
+            d2 = abs(xs[i] * math.cos(a2) + ys[i] * math.sin(a2) - r2)
+            if d2 >= d1:
+                break
+            left[1] = right[0] = i
+
+
+class _PrefixSums:
+    """Prefix sums of ``w, w x, w y, w x^2, w y^2, w x y`` over points laid end to end:
+    ``sums(a, b)`` gives the weighted sums of the points ``a..b-1`` (for
+    :func:`labkit.fitting.line_from_sums`) in O(1). ``table`` is the (N + 1, 6) array, row
+    ``i`` the sums over points ``0..i-1``."""
+
+    __slots__ = ("table",)
+
+    def __init__(self, xy: np.ndarray, w: np.ndarray):
+        x, y = xy[:, 0], xy[:, 1]
+        wx, wy = w * x, w * y
+        terms = np.stack([w, wx, wy, wx * x, wy * y, wx * y], axis=1)
+        self.table = np.zeros((len(w) + 1, 6))
+        np.cumsum(terms, axis=0, out=self.table[1:])
+
+    def __call__(self, a: int, b: int) -> list[float]:
+        return (self.table[b] - self.table[a]).tolist()
+
+
+def _runs(scan: Scan, segments, max_gap_m: float, min_points: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """The runs a line may not cross, shared by the extractors of this module and
+    :mod:`labkit.line_regression`.
+
+    Returns ``(beams, runs)``: ``beams`` the usable beams in scan order (valid, and with a
+    label >= 0 when ``segments`` is given); ``runs`` the ``(a, b)`` such that
+    ``beams[a:b]`` is a run: neighbouring usable beams whose points are at most ``max_gap_m``
+    apart and (with ``segments``) share a label and have no valid beam labelled -1 between
+    them (invalid beams between them are skipped). Runs of fewer than ``min_points`` beams
+    are left out. The seam of a full-circle scan always ends a run.
+    """
+    if segments is None:
+        usable = scan.valid
+        labels = None
+    else:
+        labels = labels_from(scan, segments)
+        usable = labels >= 0
+    beams = np.flatnonzero(usable)
+    if beams.size == 0:
+        return beams, []
+    p = scan.points.take(beams, axis=0)
+    d = p[1:] - p[:-1]
+    linked = np.hypot(d[:, 0], d[:, 1]) <= max_gap_m
+    if labels is not None:
+        lab = labels.take(beams)
+        linked &= lab[1:] == lab[:-1]
+        # a valid beam labelled -1 (taken by another detector) is a boundary, not a dropout
+        taken = np.concatenate(([0], np.cumsum(scan.valid & ~usable)))
+        linked &= taken.take(beams[1:]) == taken.take(beams[:-1] + 1)
+    cut = np.flatnonzero(~linked) + 1  # a run starts at 0 and after every unlinked pair
+    starts = np.concatenate(([0], cut))
+    stops = np.concatenate((cut, [beams.size]))
+    keep = stops - starts >= min_points
+    return beams, list(zip(starts[keep].tolist(), stops[keep].tolist(), strict=True))
