@@ -1,0 +1,265 @@
+"""RANSAC line extraction: lines as the largest consensus sets of random two-point hypotheses.
+
+The algorithm as Nguyen et al. (2007) compare it, after Fischler & Bolles (1981):
+
+1. Draw two of the remaining points at random; the line through them is a hypothesis.
+2. Count the remaining points within ``threshold_m`` of that line (its consensus set, or
+   inliers). Repeat ``max_trials`` times and keep the hypothesis with the most inliers.
+3. If it has fewer than ``min_inliers`` inliers, stop. Otherwise refit the line by least
+   squares to its inliers, take the points within ``threshold_m`` of the refitted line as
+   the line's inliers, and remove them from the remaining points.
+4. Go back to 1 until fewer than ``min_inliers`` points remain.
+
+A RANSAC line is an infinite line: its inliers may lie on several walls that happen to be
+collinear, or on a wall and a few points of whatever else crosses the line far away. So each
+accepted line's inliers are cut, in scan order, into runs with no gap wider than
+``max_gap_m`` between neighbouring inliers, and every run of ``min_points`` points or more and
+at least ``min_length_m`` long becomes one :class:`~labkit.features.LineSegment`, fitted to
+that run's points alone.
+
+The draw (step 1) is *local* by default: the second point is one of the ``draw_window``
+remaining points on either side of the first, in scan order. Drawn over the whole scan, both
+points lie on the same wall with a probability of about ``sum_k (n_k / N)^2`` (walls of
+``n_k`` of the ``N`` points), 0.1 in a room seen as ten walls of equal size; drawn locally they
+mostly do, so fewer trials suffice. ``draw_window=None`` draws the second point from all
+remaining points, as Nguyen et al. do.
+
+Randomness comes only from the ``rng`` passed in (a :class:`numpy.random.Generator`);
+without one, a generator with a fixed seed is used, so the same call gives the same lines.
+
+References
+----------
+Fischler, M. A. & Bolles, R. C. (1981). Random sample consensus: a paradigm for model fitting
+with applications to image analysis and automated cartography. Comm. ACM 24(6), 381-395.
+
+Nguyen, V., Gächter, S., Martinelli, A., Tomatis, N. & Siegwart, R. (2007). A comparison of
+line extraction algorithms using 2D range data for indoor mobile robotics. Autonomous Robots
+23(2), 97-111.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._checks import check_int, check_nonneg, check_positive
+from .features import LineSegment, line_segment
+from .fitting import line_from_sums
+from .scan import Scan
+from .segmentation import _remembered, labels_from
+
+__all__ = ["ransac_lines"]
+
+#: The seed of the generator used when no ``rng`` is given.
+DEFAULT_SEED = 0
+
+
+def ransac_lines(
+    scan: Scan,
+    *,
+    threshold_m: float = 0.03,
+    min_inliers: int = 8,
+    max_trials: int = 50,
+    draw_window: int | None = 20,
+    min_points: int = 5,
+    min_length_m: float = 0.15,
+    max_gap_m: float = 0.3,
+    segments=None,
+    rng: np.random.Generator | None = None,
+) -> list[LineSegment]:
+    """Extract line segments from a scan by RANSAC (random sample consensus).
+
+    Parameters
+    ----------
+    scan : Scan
+        Invalid beams (NaN, inf, 0, out of range) are masked: they take no part.
+    threshold_m : float, metres
+        A point is an inlier of a line when it is at most this far from it. Default 0.03 m:
+        2 sigma of the 15 mm range noise of cheap sensors (XV-11), 6 sigma of the LMS200's
+        5 mm. A wider band lets a line take the first points of the next wall past a corner,
+        which tilts short walls such as the backs of door recesses: at 0.05 m, 85 % of the
+        simulated corridor's walls are found (98 % at 0.03 m). A narrower band leaves noisy
+        points out of their wall's line: at 0.02 m the lines of the simulated XV-11 office hold
+        87 % of its wall points (96 % at 0.03 m). Measured over 20 scans, seed 0.
+    min_inliers : int
+        The best hypothesis is accepted as a line only with at least this many inliers, and
+        the search stops when fewer points remain. Default 8: the shortest wall worth a line
+        in the simulator's ground truth has 10 beams, and may lose a point at each end to
+        its neighbours; at 10, 4 % of the walls of ``random_polygons_2`` are missed.
+    max_trials : int
+        Hypotheses drawn for each line. Default 50: with the local draw, 25 to 200 trials find
+        the same walls to within one in a hundred (20 scans each of five simulated worlds),
+        while a 722-beam office scan takes 2.9 ms at 25 or 50 trials, 3.9 ms at 100 and
+        4.9 ms at 200.
+    draw_window : int or None
+        The second point of a hypothesis is drawn among the ``draw_window`` remaining points
+        on either side of the first (in scan order): a local draw, so that both points are
+        usually on one wall. Default 20 points, 10 degrees at a 0.5 degree step: far enough
+        apart that range noise barely tilts the hypothesis, close enough to stay on one wall
+        of a room. ``None`` draws it from all remaining points (as Nguyen et al. do), which
+        needs more trials: with 5 trials a line, the local draw finds 91 % of the simulated
+        office's walls, the global one 56 % (``tests/test_ransac.py``).
+    min_points : int
+        Runs of inliers with fewer points make no segment. Default 5, as for
+        :func:`labkit.split_and_merge` (Xavier et al., ``line_min_pts``).
+    min_length_m : float, metres
+        Shorter segments (between the projections of their first and last points) are
+        dropped. Default 0.15 m, as for :func:`labkit.split_and_merge`.
+    max_gap_m : float, metres
+        A segment never spans two neighbouring inliers (in scan order) farther apart than this:
+        the inliers of a line are cut there into separate segments. Default 0.3 m, as for
+        :func:`labkit.split_and_merge`.
+    segments : ndarray of per-beam labels or list of RangeSegment, optional
+        A range segmentation computed elsewhere (for instance with the beams of circles and
+        legs set to -1). Beams labelled -1 then take no part, and a segment never spans two
+        range segments. Default ``None``: every valid beam takes part, and only ``max_gap_m``
+        cuts.
+    rng : numpy.random.Generator, optional
+        The source of every random draw. Default ``None``: ``np.random.default_rng(0)``, so
+        the same call always gives the same lines; pass your own generator to draw anew.
+
+    Returns
+    -------
+    list of LineSegment
+        Sorted by first beam; each fitted by :func:`labkit.features.line_segment` to the points
+        of its run (beam indices ascending). The seam of a full-circle scan is ignored: a wall
+        seen across it gives two segments, one ending at the last beam and one starting at
+        beam 0. A scan without valid beams gives ``[]``.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is out of range (the message names it) or ``rng`` is not a
+        :class:`numpy.random.Generator`.
+
+    Notes
+    -----
+    Each round scores all ``max_trials`` hypotheses at once against the remaining points (an
+    ``(n, max_trials)`` array of distances), so a round costs ``O(n max_trials)`` and the whole
+    extraction ``O(n max_trials L)`` for ``L`` lines. Points removed with a line never come
+    back, even those of runs too short to become a segment (as in Nguyen et al.).
+
+    Examples
+    --------
+    Two walls meeting in the corner (2, 1) m, seen from the origin:
+
+    >>> theta = np.radians(np.arange(-30.0, 60.0, 0.5))
+    >>> ranges = np.minimum(2.0 / np.cos(theta), 1.0 / np.sin(np.maximum(theta, 1e-9)))
+    >>> lines = ransac_lines(Scan(ranges=ranges, angles=theta))
+    >>> [(round(s.r, 6), round(float(np.degrees(s.alpha)), 6), s.first, s.last) for s in lines]
+    [(2.0, 0.0, 0, 113), (1.0, 90.0, 114, 179)]
+    """
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+    threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m = _params(
+        threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m)
+    if rng is None:
+        rng = np.random.default_rng(DEFAULT_SEED)
+    elif not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), "
+                         f"got {type(rng).__name__}")
+
+    # the beams that take part: valid ones (and, given a segmentation, those in a segment)
+    labels = None if segments is None else labels_from(scan, segments)
+    beams = np.flatnonzero(scan.valid if labels is None else labels >= 0)
+    if beams.size < max(min_inliers, 2):
+        return []
+    xy = scan.points[beams]  # (M, 2), row k is beam beams[k]
+    rho = scan.ranges[beams]
+    w = 1.0 / rho  # the least-squares weights of labkit's fits
+    remaining = np.ones(beams.size, dtype=bool)  # not yet taken by a line
+    lines: list[LineSegment] = []
+
+    while True:
+        pool = np.flatnonzero(remaining)  # positions of the remaining points, in scan order
+        n = pool.size
+        if n < min_inliers:  # step 4: too few points left for another line
+            break
+        p = xy[pool]
+
+        # step 1: max_trials hypotheses, each the line through two of the remaining points
+        first = rng.integers(0, n, size=max_trials)
+        if draw_window is None:  # anywhere else among the remaining points
+            second = (first + rng.integers(1, n, size=max_trials)) % n
+        else:  # one of the draw_window neighbours on either side (wrapping at the ends of the pool)
+            reach = min(draw_window, n - 1)
+            step = rng.integers(1, reach + 1, size=max_trials) * rng.choice(np.array([-1, 1]), size=max_trials)
+            second = (first + step) % n
+        a, b = p[first], p[second]
+        normal = np.stack([a[:, 1] - b[:, 1], b[:, 0] - a[:, 0]], axis=1)  # (b - a) turned by -90 deg
+        length = np.hypot(normal[:, 0], normal[:, 1])
+        usable = length > 0  # two identical points define no line
+        normal[usable] /= length[usable, None]
+        offset = np.einsum("ij,ij->i", normal, a)  # x cos(alpha) + y sin(alpha) = offset (any sign)
+
+        # step 2: the consensus of every hypothesis at once, an (n, max_trials) table of distances
+        distance = p @ normal.T
+        distance -= offset
+        votes = np.count_nonzero(np.abs(distance) <= threshold_m, axis=0)
+        votes[~usable] = 0
+        best = int(np.argmax(votes))  # the first of equals: deterministic
+        if votes[best] < min_inliers:  # step 3: no hypothesis good enough, stop
+            break
+        inliers = pool[np.abs(distance[:, best]) <= threshold_m]
+
+        # step 3: refit by weighted least squares, and take the refitted line's consensus set
+        r, alpha = _fit(xy[inliers], w[inliers])
+        refined = pool[np.abs(p @ np.array([math.cos(alpha), math.sin(alpha)]) - r) <= threshold_m]
+        if refined.size >= min_inliers:
+            inliers = refined
+        remaining[inliers] = False
+
+        # cut the inliers into runs and make a segment of every run long enough
+        lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m)
+
+    lines.sort(key=lambda s: s.first)
+    return lines
+
+
+@_remembered
+def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m) -> tuple:
+    """The parameters of :func:`ransac_lines` checked and converted, in its order."""
+    threshold_m = check_positive("threshold_m", threshold_m)
+    min_inliers = check_int("min_inliers", min_inliers, 2)
+    max_trials = check_int("max_trials", max_trials, 1)
+    if draw_window is not None:
+        draw_window = check_int("draw_window", draw_window, 1)
+    min_points = check_int("min_points", min_points, 2)
+    min_length_m = check_nonneg("min_length_m", min_length_m)
+    max_gap_m = check_positive("max_gap_m", max_gap_m)
+    return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m
+
+
+def _fit(p: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """``(r, alpha)`` of the weighted least-squares line through points ``p`` (M, 2), weights ``w``
+    (the closed form of :func:`labkit.fitting.fit_line_polar`)."""
+    x, y = p[:, 0], p[:, 1]
+    wx, wy = w * x, w * y
+    return line_from_sums(float(w.sum()), float(wx.sum()), float(wy.sum()), float(wx @ x), float(wy @ y),
+                          float(wx @ y))
+
+
+def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inliers: np.ndarray, min_points: int,
+              min_length_m: float, max_gap_m: float) -> list[LineSegment]:
+    """The segments of one line: its inliers (positions into ``xy``/``beams``, ascending) cut
+    where neighbouring inliers are more than ``max_gap_m`` apart (or, given per-beam
+    ``labels``, in different range segments); runs with ``min_points`` points or more and
+    at least ``min_length_m`` long become segments. Shared by :mod:`labkit.hough`."""
+    if inliers.size < min_points:
+        return []
+    p = xy[inliers]
+    gap = np.hypot(*(p[1:] - p[:-1]).T)
+    cut = gap > max_gap_m
+    if labels is not None:
+        lab = labels[beams[inliers]]
+        cut |= lab[1:] != lab[:-1]
+    bounds = np.concatenate([[0], np.flatnonzero(cut) + 1, [inliers.size]]).tolist()
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        if b - a < min_points:
+            continue
+        seg = line_segment(p[a:b], beams[inliers[a:b]])
+        if seg.length >= min_length_m:
+            out.append(seg)
+    return out
