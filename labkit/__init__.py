@@ -12,6 +12,10 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.iav` inscribed angle variance: circles, lines, arcs
 - :mod:`labkit.legs` leg detection and pairing into people
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
+- :mod:`labkit.incremental`, :mod:`labkit.line_regression`, :mod:`labkit.ransac`, :mod:`labkit.hough`
+  the other line extractors Nguyen et al. compared, written to teach
+- :mod:`labkit.evaluation` scores against ground truth (Nguyen's line metrics, circles, legs) and ray-axis RMSE
+- :mod:`labkit.experiments` the evaluation experiments (simulated sets, comparisons, sweeps)
 - :mod:`labkit.pipeline` one :class:`Config` and :func:`extract_features` for every feature
 - :mod:`labkit.sim` the simulator with ground truth
 - :mod:`labkit.io` bags, CARMEN logs, JSON
@@ -19,13 +23,15 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.viz` matplotlib, rerun and ipywidgets viewers (import explicitly)
 """
 
-from . import geometry, iav, legs, sim
+from . import evaluation, geometry, iav, legs, sim
 from .angular import AngularSteps, angular_segmentation, local_directions
 from .data import bundled_data
 from .dbscan1d import DBSCAN1D, dbscan1d, dbscan1d_reference
+from .evaluation import match_circles, match_legs, match_lines, ray_errors, score_detections, score_lines
 from .features import Circle, Corner, Features, Leg, LineSegment, Person, find_corners, line_segment
 from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
+from .hough import hough_lines
 from .iav import (
     IAVStats,
     SegmentCheck,
@@ -37,6 +43,7 @@ from .iav import (
     inscribed_angles,
     middle_point_offset,
 )
+from .incremental import incremental_lines
 from .io import (
     CorruptFileError,
     convert,
@@ -49,7 +56,9 @@ from .io import (
     write_scans,
 )
 from .legs import detect_legs, pair_legs
+from .line_regression import regression_lines
 from .pipeline import Config, extract_all, extract_features
+from .ransac import ransac_lines
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
 from .split_merge import Step, lines_similar, split_and_merge
@@ -69,6 +78,10 @@ __all__ = [
     "range_segments",
     "breakpoint_thresholds",
     "split_and_merge",
+    "incremental_lines",
+    "regression_lines",
+    "ransac_lines",
+    "hough_lines",
     "lines_similar",
     "Step",
     "LineFit",
@@ -118,5 +131,12 @@ __all__ = [
     "write_features",
     "read_features",
     "CorruptFileError",
+    "evaluation",
+    "match_lines",
+    "score_lines",
+    "match_circles",
+    "match_legs",
+    "score_detections",
+    "ray_errors",
     "__version__",
 ]

@@ -1,4 +1,4 @@
-"""The ``labkit`` command line: simulate, extract features, view, convert, benchmark and inspect recordings.
+"""The ``labkit`` command line: simulate, extract features, view, convert, evaluate, benchmark and inspect recordings.
 
 Run ``labkit --help`` or ``labkit COMMAND --help``. Errors print one line that says what
 to do and exit with status 1; a damaged input file still produces its output with every
@@ -264,6 +264,57 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    import json
+
+    from . import experiments as ex
+
+    extractors = ex.LINE_EXTRACTORS
+    if args.method:
+        unknown = [m for m in args.method if m not in extractors]
+        if unknown:
+            raise ValueError(f"--method {unknown[0]!r} is not a line extractor; choose from {sorted(extractors)}")
+        extractors = {m: extractors[m] for m in args.method}
+    progress = None if args.quiet else _bar
+    report: dict[str, list] = {}
+    if args.inputs:
+        rows = ex.compare_on_logs(args.inputs, extractors, n_scans=args.scans or 100, progress=progress)
+        report["recordings"] = rows
+        print(f"## Ray-axis RMSE on {len(args.inputs)} recording(s), first {args.scans or 100} scans each\n")
+        print(ex.markdown_table(rows, ex.LOG_COLUMNS))
+    else:
+        n = args.scans or 102
+        data = ex.nguyen_set(n, noise_levels=args.noise)
+        rows = ex.compare_lines(data, extractors, progress=progress)
+        report["lines"] = rows
+        print(f"## Line extractors on {n} simulated scans of 722 beams per noise level"
+              " (office, corridor, random polygons)\n")
+        print(ex.markdown_table(rows, ex.LINE_COLUMNS))
+        if args.sweep:
+            rows = ex.sweep_split_and_merge(data, progress=progress)
+            report["sweep"] = rows
+            print("\n## Split-and-merge (IEPF): true against false positives by split threshold\n")
+            print(ex.markdown_table(rows, ex.SWEEP_COLUMNS))
+        if not args.method:
+            rows = list(ex.score_round_objects(300, progress=progress).values())
+            report["round_objects"] = rows
+            print("\n## Circles and legs of the pipeline on 300 scans of the hall\n")
+            print(ex.markdown_table(rows, ex.ROUND_COLUMNS))
+    if args.json:
+        out = Path(args.json)
+        if out.exists() and not args.force:
+            raise ValueError(f"{out} exists; pass -f to overwrite it")
+        out.write_text(json.dumps(report, indent=1, default=float, allow_nan=True) + "\n", encoding="utf-8")
+        print(f"\nwrote {out}", file=sys.stderr)
+    return 0
+
+
+def _bar(items, total=None, desc=None):
+    from tqdm.auto import tqdm
+
+    return tqdm(items, total=total, desc=desc, unit="scan", leave=False, file=sys.stderr)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="labkit", description=__doc__.splitlines()[0])
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
@@ -326,6 +377,21 @@ def build_parser() -> argparse.ArgumentParser:
     i = sub.add_parser("info", help="format, topics and scan counts of a file")
     i.add_argument("input")
     i.set_defaults(func=cmd_info)
+
+    ev = sub.add_parser("evaluate", help="score the line extractors against ground truth (simulated) or by ray-axis"
+                        " RMSE on recordings, and circles and legs on the hall")
+    ev.add_argument("inputs", nargs="*", metavar="IN",
+                    help="recordings to score by ray-axis RMSE (default: the simulated sets with ground truth)")
+    ev.add_argument("--scans", type=int, help="scans per noise level (simulated, default 102) or per recording"
+                    " (default 100)")
+    ev.add_argument("--noise", type=float, nargs="+", default=[0.005, 0.02], metavar="M",
+                    help="range noise levels of the simulated sets, metres (default 0.005 0.02)")
+    ev.add_argument("--method", action="append", metavar="NAME",
+                    help="only this line extractor (repeatable), e.g. 'RANSAC'")
+    ev.add_argument("--sweep", action="store_true", help="also sweep split-and-merge's split threshold")
+    ev.add_argument("--json", help="also write every table's rows to this JSON file")
+    ev.add_argument("-f", "--force", action="store_true", help="overwrite the JSON file")
+    ev.set_defaults(func=cmd_evaluate)
 
     d = sub.add_parser("demo", parents=[common, pipeline],
                        help="the README's demo: every feature of the bundled hall bag into .rrd and .png")

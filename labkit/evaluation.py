@@ -445,15 +445,29 @@ class RayErrors:
     """Per-beam ray-axis errors of segments against one or more scans (Schaefer et al.).
 
     ``errors`` holds measured range minus the distance along the ray to the nearest segment,
-    for the valid beams whose ray meets a segment; ``n_valid`` counts every valid beam.
+    for the valid beams whose ray meets a segment, and ``beams`` those beams' indices (pooled
+    over scans with ``+``: concatenated); ``n_valid`` counts every valid beam. The RMSE is
+    dominated by a few beams whose ray meets a segment far in front of or behind what it
+    hit (a line across a doorway, a piece of clutter): ``median_abs`` and ``share_over``
+    tell those apart from a general misfit.
     """
 
     errors: np.ndarray = field(repr=False)
     n_valid: int
+    beams: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64), repr=False)
 
     @property
     def rmse(self) -> float:
         return float(np.sqrt(np.mean(self.errors ** 2))) if len(self.errors) else math.nan
+
+    @property
+    def median_abs(self) -> float:
+        """Median of ``|errors|``, metres."""
+        return float(np.median(np.abs(self.errors))) if len(self.errors) else math.nan
+
+    def share_over(self, limit_m: float = 0.1) -> float:
+        """Share of the covered beams whose ``|error|`` exceeds ``limit_m``."""
+        return float(np.mean(np.abs(self.errors) > limit_m)) if len(self.errors) else math.nan
 
     @property
     def coverage(self) -> float:
@@ -461,7 +475,8 @@ class RayErrors:
         return len(self.errors) / self.n_valid if self.n_valid else math.nan
 
     def __add__(self, other: RayErrors) -> RayErrors:
-        return RayErrors(np.concatenate([self.errors, other.errors]), self.n_valid + other.n_valid)
+        return RayErrors(np.concatenate([self.errors, other.errors]), self.n_valid + other.n_valid,
+                         np.concatenate([self.beams, other.beams]))
 
 
 def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
@@ -478,8 +493,8 @@ def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
     >>> angles = np.array([-0.1, 0.0, 0.1])
     >>> scan = Scan(2.0 / np.cos(angles) + [0.0, 0.05, 0.0], angles)
     >>> e = ray_errors(scan, [Seg(start=(2.0, -1.0), end=(2.0, 1.0))])
-    >>> np.round(e.errors, 6).tolist(), e.coverage
-    ([0.0, 0.05, 0.0], 1.0)
+    >>> np.round(e.errors, 6).tolist(), e.beams.tolist(), e.coverage
+    ([0.0, 0.05, 0.0], [0, 1, 2], 1.0)
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
@@ -487,6 +502,7 @@ def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
     n_valid = int(valid.sum())
     if n_valid == 0 or len(segments) == 0:
         return RayErrors(np.empty(0), n_valid)
+    beams = np.flatnonzero(valid)
     theta = scan.angles[valid]
     rho = scan.ranges[valid]
     u = np.stack([np.cos(theta), np.sin(theta)], axis=1)  # (B, 2) ray directions
@@ -503,4 +519,4 @@ def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
     s = np.where(ok, s, np.inf)
     nearest = s.min(axis=1)
     hit = np.isfinite(nearest)
-    return RayErrors(rho[hit] - nearest[hit], n_valid)
+    return RayErrors(rho[hit] - nearest[hit], n_valid, beams[hit])

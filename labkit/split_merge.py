@@ -291,7 +291,10 @@ def split_and_merge(
     split_threshold_m : float
         Split when the worst point is farther than this from the line. Default 0.05 m, ten
         times the LMS200's range noise (the largest of 100 Gaussian residuals is about 3
-        sigma; the margin covers the 15 mm noise of cheap sensors).
+        sigma; the margin covers the 15 mm noise of cheap sensors). For the fewest false
+        positives on a known sensor, use about four times its range noise sigma: in the sweep
+        of ``benchmarks/evaluation.py`` (204 simulated scans of 722 beams) the false-positive
+        rate was lowest at 0.02 m for 5 mm noise and at 0.08-0.12 m for 2 cm noise.
     min_points : int
         ``minPointsPerLine``: runs with fewer points make no line, and the worst point is
         never among the first or last ``min_points // 2`` of a run. Default 5 (Xavier et

@@ -280,3 +280,13 @@ def test_no_segments_cover_nothing():
     scan = Scan(np.ones(5), np.linspace(0, 1, 5))
     e = ray_errors(scan, [])
     assert e.coverage == 0 and math.isnan(e.rmse)
+
+
+def test_ray_error_summaries():
+    angles = np.array([-0.2, -0.1, 0.0, 0.1, 0.2])
+    scan = Scan(2.0 / np.cos(angles) + [0.0, 0.01, -0.02, 0.5, np.nan], angles)
+    e = ray_errors(scan, [NS(start=(2.0, -1.0), end=(2.0, 0.15))])  # misses the last two rays
+    assert e.beams.tolist() == [0, 1, 2] and e.n_valid == 4 and e.coverage == 0.75
+    assert e.median_abs == pytest.approx(0.01) and e.share_over(0.015) == pytest.approx(1 / 3)
+    both = e + e
+    assert both.beams.tolist() == [0, 1, 2, 0, 1, 2] and both.rmse == pytest.approx(e.rmse)

@@ -13,7 +13,8 @@ LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 
 #: the model and the algorithms: each may import the others, numpy and the standard library
 ALGORITHMS = ["_checks", "scan", "geometry", "segmentation", "fitting", "features", "split_merge", "dbscan1d",
-              "angular", "iav", "legs", "sim"]
+              "angular", "iav", "legs", "sim", "pipeline", "evaluation",
+              "incremental", "line_regression", "ransac", "hough"]
 
 
 def imports_of(path: Path) -> set[str]:

@@ -1,0 +1,99 @@
+"""Nguyen-style comparison of the line extractors, circles and legs, and ray-axis RMSE on real logs.
+
+Four parts, every number computed here by :mod:`labkit.experiments` (the same code as
+``labkit evaluate`` and notebook 08):
+
+(a) every line extractor on ``--scans`` simulated scans of 722 beams per noise level (5 mm and
+    2 cm), a third each from the office, corridor and random-polygon worlds: TruePos, FalsePos,
+    sigma dr, sigma dalpha, lines per scan and scans per second -- then the same by world;
+(b) circles and legs of the pipeline on 300 scans of the ``hall`` world;
+(c) ray-axis RMSE (Schaefer et al. 2018) and lines per scan of every extractor on the first 100
+    scans of each Radish log in ``../shared/datasets/carmen`` (skipped when absent);
+(d) split-and-merge's true- against false-positive rate as its split threshold varies.
+
+The goals of issue 7 are checked at the end against the measured numbers.
+
+Run: ``python benchmarks/evaluation.py [--scans 102] [--logs DIR]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from labkit import experiments as ex
+
+DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scans", type=int, default=102, help="simulated scans per noise level (default 102)")
+    ap.add_argument("--log-scans", type=int, default=100, help="scans per Radish log (default 100)")
+    ap.add_argument("--logs", type=Path, default=DATASETS / "carmen", help="folder of CARMEN logs")
+    ap.add_argument("--repeat", type=int, default=3, help="time each scan at its best of this many runs (default 3)")
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    print(f"# Evaluation (numpy {np.__version__}, Python {platform.python_version()})\n")
+
+    data = ex.nguyen_set(args.scans)
+    print(f"## (a) Line extractors on {args.scans} simulated scans of 722 beams per noise level\n")
+    print("Match: |dr| <= 5 cm, |dalpha| <= 3 deg, at least half the line on the wall, one-to-one;"
+          " walls of >= 10 beams and >= 0.3 m are the truth. Defaults of every extractor.\n")
+    rows = ex.compare_lines(data, repeat=args.repeat)
+    print(ex.markdown_table(rows, ex.LINE_COLUMNS))
+    by_world = ex.compare_lines(data, by=("noise_std_m", "world"))
+    print("\nBy world:\n")
+    print(ex.markdown_table(by_world, {"world": "world", **ex.LINE_COLUMNS}))
+
+    print("\n## (b) Circles and legs of the pipeline on 300 scans of the hall\n")
+    round_rows = ex.score_round_objects(300)
+    print(ex.markdown_table(list(round_rows.values()), ex.ROUND_COLUMNS))
+
+    print(f"\n## (c) Ray-axis RMSE on the first {args.log_scans} scans of each Radish log\n")
+    logs = sorted(args.logs.glob("*.log*")) if args.logs.is_dir() else []
+    if logs:
+        print(ex.markdown_table(ex.compare_on_logs(logs, n_scans=args.log_scans, repeat=args.repeat), ex.LOG_COLUMNS))
+    else:
+        print(f"(skipped: no CARMEN logs in {args.logs})")
+
+    print("\n## (d) Split-and-merge (IEPF): true against false positives by split threshold\n")
+    sweep = ex.sweep_split_and_merge(data)
+    print(ex.markdown_table(sweep, ex.SWEEP_COLUMNS))
+
+    print("\nWhat the false positives at 2 cm are (split threshold 0.12 m): each unmatched line against the wall most"
+          " of its beams hit.\n")
+    print(ex.markdown_table(ex.false_positive_reasons(data, 0.02, split_threshold_m=0.12),
+                            {"reason": "fails", "lines": "lines", "median_length_m": "median length (m):.2f",
+                             "median_points": "median points:.0f"}))
+
+    print("\n## Goals\n")
+    goals = []
+    for noise in sorted({r["noise_std_m"] for r in sweep}):
+        ok = [r for r in sweep if r["noise_std_m"] == noise and r["tp_rate"] >= 0.9]
+        best = min(ok, key=lambda r: r["fp_rate"]) if ok else None
+        if best is None:
+            goals.append((f"split-and-merge FalsePos <= 5 % with TruePos >= 0.9, noise {noise} m",
+                          "no threshold keeps TruePos >= 0.9", "not met"))
+        else:
+            goals.append((f"split-and-merge FalsePos <= 5 % with TruePos >= 0.9, noise {noise} m",
+                          f"best {best['fp_rate']:.1%} (TruePos {best['tp_rate']:.3f}) at split threshold "
+                          f"{best['split_threshold_m']:g} m", "met" if best["fp_rate"] <= 0.05 else "not met"))
+    c, g = round_rows["circles"], round_rows["legs"]
+    goals.append(("circles precision >= 0.95, recall >= 0.9 (hall)", f"{c['precision']:.3f}, {c['recall']:.3f}",
+                  "met" if c["precision"] >= 0.95 and c["recall"] >= 0.9 else "not met"))
+    goals.append(("legs precision >= 0.9, recall >= 0.85 (hall)", f"{g['precision']:.3f}, {g['recall']:.3f}",
+                  "met" if g["precision"] >= 0.9 and g["recall"] >= 0.85 else "not met"))
+    print("| goal | measured | |\n|---|---|---|")
+    for goal in goals:
+        print("| " + " | ".join(goal) + " |")
+    print(f"\n(total {time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

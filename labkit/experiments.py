@@ -1,0 +1,319 @@
+"""The evaluation experiments of ``labkit evaluate``, ``benchmarks/evaluation.py`` and notebook 08.
+
+Each experiment is a function that builds its data, runs the extractors and scores them with
+:mod:`labkit.evaluation`; the CLI, the benchmark script and the notebook all call these, so
+their tables come from the same code.
+
+* :func:`nguyen_set` -- simulated scans like Nguyen et al.'s (2007): 722 beams over 180 deg,
+  office, corridor and random-polygon worlds, at two range noise levels;
+* :func:`compare_lines` -- every line extractor in :data:`LINE_EXTRACTORS` on a set of
+  simulated scans: TruePos, FalsePos, sigma dr, sigma dalpha, lines and scans per second;
+* :func:`score_round_objects` -- circles and legs of the pipeline on the ``hall`` world;
+* :func:`compare_on_logs` -- ray-axis RMSE (Schaefer et al. 2018) and lines per scan of
+  every extractor on real scans (the Radish CARMEN logs);
+* :func:`sweep_split_and_merge` -- the true-positive against false-positive curve of
+  split-and-merge as its split threshold varies.
+
+This module sits beside the CLI, above the algorithms: it imports the simulator, the readers
+and every extractor.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from .angular import angular_segmentation
+from .evaluation import (
+    LineScores,
+    RayErrors,
+    match_circles,
+    match_legs,
+    match_lines,
+    ray_errors,
+    score_detections,
+    score_lines,
+)
+from .geometry import angle_difference
+from .hough import hough_lines
+from .iav import detect_lines_iav
+from .incremental import incremental_lines
+from .line_regression import regression_lines
+from .pipeline import Config, extract_features
+from .ransac import ransac_lines
+from .scan import Scan
+from .sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenario, simulate
+from .split_merge import split_and_merge
+
+__all__ = [
+    "LINE_EXTRACTORS",
+    "SimScan",
+    "nguyen_set",
+    "compare_lines",
+    "score_round_objects",
+    "compare_on_logs",
+    "sweep_split_and_merge",
+    "false_positive_reasons",
+    "markdown_table",
+]
+
+#: The line extractors compared, each called with a scan and its own documented defaults, and
+#: no line across a gap wider than 0.3 m (``max_gap_m``; angular segmentation's
+#: ``split_gap_m``, off by default, is set to match: without it its lines span collinear walls
+#: across doorways). Most share ``min_points`` 5 and ``min_length_m`` 0.15 (angular
+#: segmentation: ``min_pts`` 8, Meglicki's setting); the distance thresholds are 5 cm for
+#: split-and-merge and incremental, 3 cm for RANSAC and Hough, whose bands take in the next
+#: wall's first points at 5 cm. Nguyen et al.'s six minus EM, plus labkit's angular
+#: segmentation and IAV lines.
+LINE_EXTRACTORS: dict[str, Callable[[Scan], list]] = {
+    "split-and-merge (IEPF)": split_and_merge,
+    "split-and-merge (fit)": partial(split_and_merge, method="fit"),
+    "incremental": incremental_lines,
+    "line regression": regression_lines,
+    "RANSAC": ransac_lines,
+    "Hough": hough_lines,
+    "angular segmentation": partial(angular_segmentation, split_gap_m=0.3),
+    "IAV lines": detect_lines_iav,
+}
+
+#: Range noise of the two simulated sets: an LMS200's 5 mm and a cheap sensor's 2 cm.
+NOISE_LEVELS_M = (0.005, 0.02)
+
+
+@dataclass(frozen=True)
+class SimScan:
+    """One simulated scan with its world's name, its noise level and its ground truth."""
+
+    world: str
+    noise_std_m: float
+    scan: Scan = field(repr=False)
+    truth: ScanTruth = field(repr=False)
+
+
+def nguyen_lidar(n_beams: int = 722, noise_std_m: float = 0.005) -> Lidar:
+    """A 180 deg scanner with ``n_beams`` beams (722, as in Nguyen et al.) and 32 m range."""
+    return Lidar(f"lidar{n_beams}", -math.pi / 2, math.pi / (n_beams - 1), n_beams, range_max=32.0,
+                 noise_std_m=noise_std_m)
+
+
+def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVELS_M, n_beams: int = 722,
+               seed: int = 0) -> list[SimScan]:
+    """``n_scans`` simulated scans per noise level, a third from each kind of world.
+
+    * ``office``: poses spread along the office scenario's tour (two rooms, a door, a column
+      and a walking person);
+    * ``corridor``: poses spread along the corridor scenario's drive (long walls, side
+      branches, door recesses, a person);
+    * ``random_polygons``: a new random room for every scan (``random_polygons(seed=k)``:
+      six convex obstacles in a 12 x 9 m room), seen from its centre at a random heading.
+
+    The same poses and worlds are used at every noise level; the noise itself is drawn from
+    ``seed``.
+    """
+    if n_scans < 3:
+        raise ValueError(f"n_scans must be >= 3 (one per kind of world), got {n_scans}")
+    per = [n_scans // 3 + (k < n_scans % 3) for k in range(3)]
+    out: list[SimScan] = []
+    for noise in noise_levels:
+        if not noise >= 0:
+            raise ValueError(f"noise_levels must be >= 0, got {noise}")
+        rng = np.random.default_rng(seed)
+        lidar = nguyen_lidar(n_beams, noise)
+        for name, count in zip(("office", "corridor"), per, strict=False):
+            sc = scenario(name)
+            world = make_world(name)
+            for t in np.linspace(0.0, sc.duration_s * 0.98, count):
+                scan, truth = scan_at(world, lidar, sc.trajectory.pose_at(float(t)), float(t), rng=rng)
+                out.append(SimScan(name, noise, scan, truth))
+        headings = np.random.default_rng(seed + 1).uniform(-math.pi, math.pi, per[2])
+        for k in range(per[2]):
+            world = random_polygons(seed + k)
+            scan, truth = scan_at(world, lidar, (6.0, 4.5, float(headings[k])), 0.0, rng=rng)
+            out.append(SimScan("random_polygons", noise, scan, truth))
+    return out
+
+
+def _timed(extract: Callable, scans: Sequence[Scan], progress=None, repeat: int = 1) -> tuple[list, float]:
+    """Run ``extract`` on every scan; the results and the seconds spent in it, summed over
+    the scans, each scan's time the best of ``repeat`` runs (other work on the machine only
+    ever adds time)."""
+    results, spent = [], 0.0
+    items = scans if progress is None else progress(scans)
+    for scan in items:
+        best = math.inf
+        for _ in range(max(1, repeat)):
+            t = time.perf_counter()
+            out = extract(scan)
+            best = min(best, time.perf_counter() - t)
+        results.append(out)
+        spent += best
+    return results, spent
+
+
+def compare_lines(data: Sequence[SimScan], extractors: dict[str, Callable] | None = None, *,
+                  by: Sequence[str] = ("noise_std_m",), progress: Callable | None = None, repeat: int = 1,
+                  **rule) -> list[dict]:
+    """Every extractor on ``data``, scored per group of scans (``by``: SimScan fields).
+
+    Returns one row per (group, extractor): the group's keys, ``method``, the
+    :meth:`LineScores.as_dict` fields, ``lines_per_scan`` and ``scans_per_s`` (each scan
+    timed at its best of ``repeat`` runs). ``rule``: keyword arguments of
+    :func:`labkit.evaluation.match_lines`.
+    """
+    extractors = LINE_EXTRACTORS if extractors is None else extractors
+    groups: dict[tuple, list[SimScan]] = {}
+    for item in data:
+        groups.setdefault(tuple(getattr(item, k) for k in by), []).append(item)
+    rows = []
+    for key, items in groups.items():
+        scans = [it.scan for it in items]
+        for name, extract in extractors.items():
+            bar = None if progress is None else partial(progress, desc=f"{name} {key}")
+            lines, spent = _timed(extract, scans, bar, repeat)
+            s: LineScores = score_lines(zip(lines, (it.truth for it in items), strict=False), **rule)
+            rows.append({**dict(zip(by, key, strict=False)), "method": name, **s.as_dict(),
+                         "lines_per_scan": s.n_lines / max(s.n_scans, 1), "scans_per_s": len(scans) / spent})
+    return rows
+
+
+def score_round_objects(n_scans: int = 300, *, seed: int = 0, config: Config | None = None,
+                        progress: Callable | None = None) -> dict[str, dict]:
+    """Circles and legs of :func:`labkit.extract_features` on ``n_scans`` of the ``hall``
+    scenario (columns, bench feet, a rolling cylinder, a walking student; LMS200), scored with
+    :func:`labkit.evaluation.match_circles` and :func:`~labkit.evaluation.match_legs`."""
+    circles, legs = [], []
+    items = simulate("hall", seed, n_scans=n_scans)
+    if progress is not None:
+        items = progress(items, total=n_scans, desc="hall")
+    spent = 0.0
+    for scan, truth in items:
+        t = time.perf_counter()
+        f = extract_features(scan, config)
+        spent += time.perf_counter() - t
+        circles.append(match_circles(f.circles, scan, truth))
+        legs.append(match_legs(f.legs, scan, truth))
+    rate = n_scans / spent if spent else math.nan
+    return {"circles": {"kind": "circles", **score_detections(circles).as_dict(), "scans_per_s": rate},
+            "legs": {"kind": "legs", **score_detections(legs).as_dict(), "scans_per_s": rate}}
+
+
+def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable] | None = None, *,
+                    n_scans: int = 100, progress: Callable | None = None, repeat: int = 1) -> list[dict]:
+    """Ray-axis RMSE, median error, share of errors over 10 cm, coverage and lines per scan
+    of every extractor on the first ``n_scans`` scans of each recording (any format
+    :func:`labkit.read_scans` reads)."""
+    from .io import read_scans  # I/O stays out of the algorithm imports above
+
+    extractors = LINE_EXTRACTORS if extractors is None else extractors
+    rows = []
+    for path in paths:
+        scans = []
+        for scan in read_scans(path):
+            scans.append(scan)
+            if len(scans) >= n_scans:
+                break
+        for name, extract in extractors.items():
+            bar = None if progress is None else partial(progress, desc=f"{Path(path).name} {name}")
+            lines, spent = _timed(extract, scans, bar, repeat)
+            total = RayErrors(np.empty(0), 0)
+            for scan, found in zip(scans, lines, strict=False):
+                total = total + ray_errors(scan, found)
+            rows.append({"log": Path(path).name, "method": name, "scans": len(scans),
+                         "beams": int(np.median([s.n_beams for s in scans])) if scans else 0,
+                         "rmse_m": total.rmse, "median_abs_m": total.median_abs,
+                         "over_10cm": total.share_over(0.1), "coverage": total.coverage,
+                         "lines_per_scan": sum(map(len, lines)) / max(len(scans), 1),
+                         "scans_per_s": len(scans) / spent if spent else math.nan})
+    return rows
+
+
+#: Split thresholds of the sweep, metres.
+SWEEP_THRESHOLDS_M = (0.01, 0.015, 0.02, 0.03, 0.05, 0.08, 0.12, 0.2, 0.3)
+
+
+def sweep_split_and_merge(data: Sequence[SimScan], thresholds: Sequence[float] = SWEEP_THRESHOLDS_M, *,
+                          by: Sequence[str] = ("noise_std_m",), progress: Callable | None = None, repeat: int = 1,
+                          **fixed) -> list[dict]:
+    """True- and false-positive rates of :func:`labkit.split_and_merge` for each
+    ``split_threshold_m`` in ``thresholds`` (other arguments: ``fixed``), per group."""
+    extractors = {f"{t:g}": partial(split_and_merge, split_threshold_m=t, **fixed) for t in thresholds}
+    rows = compare_lines(data, extractors, by=by, progress=progress, repeat=repeat)
+    for row in rows:
+        row["split_threshold_m"] = float(row.pop("method"))
+    return rows
+
+
+def false_positive_reasons(data: Sequence[SimScan], noise_std_m: float, extract: Callable = split_and_merge,
+                           max_dr_m: float = 0.05, max_dalpha: float = math.radians(3.0), **kwargs) -> list[dict]:
+    """Why the false positives of ``extract(scan, **kwargs)`` on the scans of ``data`` at
+    ``noise_std_m`` failed to match: each is compared with the wall most of its beams hit
+    ("dr", "dalpha", both, "overlap or a second line on the wall", or "not on a wall").
+    One row per reason: count, median length and median number of points."""
+    found: dict[str, list[tuple[float, int]]] = {}
+    for item in data:
+        if item.noise_std_m != noise_std_m:
+            continue
+        lines = extract(item.scan, **kwargs)
+        m = match_lines(lines, item.truth, max_dr_m=max_dr_m, max_dalpha=max_dalpha)
+        walls = {w.wall_id: w for w in item.truth.walls}
+        for i in m.false_positives:
+            line = lines[i]
+            owners, counts = np.unique(item.truth.hits[line.indices], return_counts=True)
+            wall = walls.get(int(owners[np.argmax(counts)]))
+            if wall is None:
+                reason = "not on a wall"
+            else:
+                fails = [name for name, bad in (
+                    ("dr", abs(line.r - wall.r) > max_dr_m),
+                    ("dalpha", abs(float(angle_difference(line.alpha, wall.alpha))) > max_dalpha)) if bad]
+                reason = " and ".join(fails) or "overlap or a second line on the wall"
+            found.setdefault(reason, []).append((line.length, line.n_points))
+    return [{"reason": k, "lines": len(v), "median_length_m": float(np.median([a for a, _ in v])),
+             "median_points": float(np.median([b for _, b in v]))}
+            for k, v in sorted(found.items(), key=lambda kv: -len(kv[1]))]
+
+
+#: Columns of the tables (row key -> ``header:format``), shared by the CLI, the benchmark and notebook 08.
+LINE_COLUMNS = {"noise_std_m": "noise (m)", "method": "method", "tp_rate": "TruePos:.3f", "fp_rate": "FalsePos:.3f",
+                "sigma_dr_m": "sigma dr (mm):", "sigma_dalpha_deg": "sigma dalpha (deg):.2f",
+                "lines_per_scan": "lines/scan:.1f", "scans_per_s": "scans/s:,.0f"}
+ROUND_COLUMNS = {"kind": "objects", "truth": "in truth", "detected": "detected", "scored": "scored",
+                 "precision": "precision:.3f", "recall": "recall:.3f",
+                 "center_err_median_m": "centre err median (m):.3f",
+                 "center_err_p95_m": "centre err p95 (m):.3f", "radius_err_median": "radius err median:.1%",
+                 "scans_per_s": "scans/s:,.0f"}
+LOG_COLUMNS = {"log": "recording", "method": "method", "scans": "scans", "beams": "beams", "rmse_m": "RMSE (m):.4f",
+               "median_abs_m": "median abs (m):.4f", "over_10cm": "beyond 10 cm:.1%", "coverage": "coverage:.1%",
+               "lines_per_scan": "lines/scan:.1f", "scans_per_s": "scans/s:,.0f"}
+SWEEP_COLUMNS = {"noise_std_m": "noise (m)", "split_threshold_m": "split threshold (m)", "tp_rate": "TruePos:.3f",
+                 "fp_rate": "FalsePos:.3f", "sigma_dr_m": "sigma dr (mm):", "lines_per_scan": "lines/scan:.1f"}
+
+
+def markdown_table(rows: Sequence[dict], columns: dict[str, str]) -> str:
+    """``rows`` as a Markdown table; ``columns`` maps a row key to ``header`` or
+    ``header:format`` (a format spec such as ``.3f``)."""
+    heads, keys, fmts = [], [], []
+    for key, spec in columns.items():
+        head, _, fmt = spec.partition(":")
+        heads.append(head)
+        keys.append(key)
+        fmts.append(fmt)
+    lines = ["| " + " | ".join(heads) + " |", "|" + "---|" * len(heads)]
+    for row in rows:
+        cells = []
+        for key, head, fmt in zip(keys, heads, fmts, strict=False):
+            v = row.get(key, "")
+            if isinstance(v, float) and math.isnan(v):
+                cells.append("—")
+            elif "(mm)" in head and isinstance(v, float):
+                cells.append(f"{v * 1000:.1f}")  # stored in metres
+            else:
+                cells.append(format(v, fmt) if fmt else str(v))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
