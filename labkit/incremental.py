@@ -148,7 +148,13 @@ def incremental_lines(
         _hand_back_corners(run_spans, sums, xs, ys, min_points)  # step 6
         spans += run_spans
 
-    # step 7: every line fitted to its points, the short ones dropped
+    return _fitted(xy, beams, spans, min_length_m)  # step 7
+
+
+def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float) -> list[LineSegment]:
+    """Step 7, shared with :mod:`labkit.line_regression`: every line, the points ``a..b-1`` of
+    ``xy`` (beams ``beams[a:b]``) for each ``(a, b)`` of ``spans``, fitted by
+    :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped."""
     lines = []
     for a, b in spans:
         line = line_segment(xy[a:b], beams[a:b])

@@ -55,8 +55,8 @@ import math
 import numpy as np
 
 from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment, line_segment
-from .incremental import _PrefixSums, _runs
+from .features import LineSegment
+from .incremental import _fitted, _PrefixSums, _runs
 from .scan import Scan
 from .segmentation import _remembered
 
@@ -180,12 +180,7 @@ def regression_lines(
     spans = _absorb(spans, runs, table, xy, 3.0 * range_sigma_m)
 
     # step 7: every line fitted to its points, the short ones dropped
-    out = []
-    for a, b in spans:
-        line = line_segment(xy[a:b], beams[a:b])
-        if line.length >= min_length_m:
-            out.append(line)
-    return out
+    return _fitted(xy, beams, spans, min_length_m)
 
 
 @_remembered

@@ -6,18 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
-from labkit import Scan, segment_labels
 from labkit.hough import hough_lines
 from labkit.sim import scenario, simulate
-from tests.test_ransac import HEXAGON_ROOM, SQUARE_ROOM, check_room, doorway_scan, polygon_scan
-from tests.test_split_merge import score, wall_scan
-
-
-def key(lines):
-    return [(ln.r, ln.alpha, ln.indices.tolist()) for ln in lines]
+from tests.line_scans import HEXAGON_ROOM, SQUARE_ROOM, check_room, key, polygon_scan, score, wall_scan
 
 
 # ---------------------------------------------------------------------------- closed form cases
@@ -65,18 +57,6 @@ def test_the_line_survives_clutter_in_front_of_the_wall():
     assert wall.n_points == scan.n_beams - clutter.size
 
 
-def test_a_gap_wider_than_max_gap_cuts_a_line():
-    """Both sides of a doorway are one peak (y = 2) but two segments when the doorway is wider
-    than max_gap_m; a narrower one is spanned."""
-    wide = hough_lines(doorway_scan(1.0))
-    assert len(wide) == 2
-    for ln in wide:
-        assert ln.r == pytest.approx(2.0, abs=1e-9) and ln.alpha == pytest.approx(math.pi / 2, abs=1e-9)
-    (narrow,) = hough_lines(doorway_scan(0.1))
-    assert narrow.n_points == np.isfinite(doorway_scan(0.1).ranges).sum()
-    assert len(hough_lines(doorway_scan(0.1), max_gap_m=0.05)) == 2
-
-
 def test_a_far_point_switches_to_the_sparse_accumulator():
     """One return 5 km away makes the dense accumulator 360 x 100,002 cells; only the cells that
     got votes are counted then. That point is on no line, so the lines are those of the scan
@@ -119,75 +99,3 @@ def test_walls_of_simulated_worlds_are_found(world, min_tp, max_fp):
     assert eligible >= 90
     assert tp / eligible >= min_tp
     assert fp / on_walls <= max_fp
-
-
-def test_same_scan_same_lines():
-    scan = next(iter(simulate("hall", 3, n_scans=1)))[0]
-    lines = key(hough_lines(scan))
-    assert lines and key(hough_lines(scan)) == lines
-
-
-# ---------------------------------------------------------------------------- invalid input
-def test_invalid_beams_are_masked():
-    scan = wall_scan(2.0, 0.0)
-    ranges = scan.ranges.copy()
-    bad = [10, 11, 50, 90, 91]
-    ranges[bad] = [np.nan, np.inf, 0.0, 30.0, 20.0]  # NaN, inf, zero, beyond and at range_max
-    scan = scan.replace(ranges=ranges, range_max=20.0)
-    (line,) = hough_lines(scan)
-    assert line.r == pytest.approx(2.0, abs=1e-9) and line.alpha == pytest.approx(0.0, abs=1e-9)
-    assert not set(bad) & set(line.indices.tolist())
-    assert line.n_points == scan.n_beams - len(bad)
-
-
-def test_empty_and_all_invalid_scans_give_no_lines():
-    assert hough_lines(Scan(ranges=[], angles=[])) == []
-    assert hough_lines(Scan(ranges=[np.nan] * 50, angles=np.arange(50) * 0.01)) == []
-    assert hough_lines(Scan(ranges=[1.0] * 5, angles=np.arange(5) * 0.01)) == []  # < min_votes
-
-
-def test_segments_mask_beams_and_cut_lines():
-    """Beams labelled -1 do not vote; a line never spans two labelled segments."""
-    scan = wall_scan(2.0, 0.0)
-    labels = segment_labels(scan)
-    labels[40:45] = -1  # e.g. the beams of a leg in front of the wall
-    labels[100:] = 1  # a second segment, with no gap between them
-    lines = hough_lines(scan, segments=labels)
-    assert [(ln.first, ln.last) for ln in lines] == [(0, 99), (100, scan.n_beams - 1)]
-    assert not set(range(40, 45)) & set(lines[0].indices.tolist()) and lines[0].n_points == 95
-    assert all(ln.r == pytest.approx(2.0, abs=1e-9) for ln in lines)
-
-
-@pytest.mark.parametrize("kwargs, name", [
-    ({"r_step_m": 0.0}, "r_step_m"), ({"r_step_m": np.inf}, "r_step_m"), ({"alpha_step": -0.1}, "alpha_step"),
-    ({"alpha_step": 2.0}, "alpha_step"), ({"alpha_step": 1e-5}, "alpha_step"), ({"threshold_m": 0}, "threshold_m"),
-    ({"min_votes": 1}, "min_votes"), ({"min_votes": True}, "min_votes"), ({"min_points": 1}, "min_points"),
-    ({"min_length_m": -0.1}, "min_length_m"), ({"max_gap_m": np.nan}, "max_gap_m"),
-    ({"segments": [1, 2]}, "segments"),
-])
-def test_bad_parameters_are_named(kwargs, name):
-    with pytest.raises(ValueError, match=name):
-        hough_lines(wall_scan(), **kwargs)
-
-
-def test_a_scan_is_required():
-    with pytest.raises(ValueError, match="scan"):
-        hough_lines([1.0, 2.0])
-
-
-@settings(max_examples=60, deadline=None)
-@given(st.lists(st.one_of(st.floats(0.01, 40.0), st.sampled_from([0.0, np.nan, np.inf, 30.0])), max_size=200),
-       st.booleans())
-def test_any_ranges_run_without_error(values, full):
-    n = len(values)
-    step = (2 * math.pi / max(n, 1)) if full else math.radians(0.5)
-    scan = Scan(ranges=np.array(values, dtype=float), angles=np.arange(n) * step, range_max=30.0)
-    lines = hough_lines(scan)
-    seen: set[int] = set()
-    for line in lines:
-        assert line.r >= 0 and -math.pi < line.alpha <= math.pi
-        assert line.n_points >= 5 and line.length >= 0.15
-        assert np.all(np.diff(line.indices) > 0) and scan.valid[line.indices].all()
-        assert not seen & set(line.indices.tolist())
-        seen |= set(line.indices.tolist())
-    assert [ln.first for ln in lines] == sorted(ln.first for ln in lines)

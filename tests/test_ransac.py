@@ -6,68 +6,13 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
-from labkit import Scan, segment_labels
 from labkit.ransac import ransac_lines
 from labkit.sim import scenario, simulate
-from tests.test_split_merge import score, wall_scan
-
-#: A square room around the sensor (not centred on it): walls as (r m, alpha rad).
-SQUARE_ROOM = ((2.3, 0.0), (1.7, math.pi / 2), (2.9, math.pi), (1.2, -math.pi / 2))
-
-#: A hexagonal room whose wall normals point into all four quadrants (20, 75, 140, -160,
-#: -100 and -40 degrees), so lines of every orientation and both signs of cos and sin occur.
-HEXAGON_ROOM = tuple((r, math.radians(a)) for r, a in
-                     ((2.0, 20.0), (1.5, 75.0), (2.5, 140.0), (1.8, -160.0), (2.2, -100.0), (1.6, -40.0)))
-
-
-def polygon_scan(walls, n: int = 720) -> Scan:
-    """A noiseless full-circle scan of ``n`` beams from inside a convex room given by its walls'
-    normal forms ``(r, alpha)``: each beam ends on the first wall it meets, at range
-    ``r / cos(theta - alpha)`` (the smallest over the walls it points towards)."""
-    angles = -math.pi + 2 * math.pi / n * np.arange(n)
-    r = np.array([w[0] for w in walls])
-    alpha = np.array([w[1] for w in walls])
-    c = np.cos(angles[:, None] - alpha[None, :])
-    ranges = np.where(c > 1e-12, r / np.where(c > 1e-12, c, 1.0), np.inf).min(axis=1)
-    return Scan(ranges=ranges, angles=angles, range_max=100.0)
-
-
-def wall_of(line, walls) -> int:
-    """Index of the wall ``(r, alpha)`` nearest to ``line`` (|dr| + |dalpha| in m and rad)."""
-    return int(np.argmin([abs(line.r - r) + abs(math.remainder(line.alpha - a, 2 * math.pi)) for r, a in walls]))
-
-
-def check_room(lines, walls, n_beams: int, r_tol: float, alpha_tol: float) -> None:
-    """Every wall found, every line on a wall within the tolerances, lines in scan order with
-    disjoint beams; the wall seen across the seam (direction pi) is cut there into two segments."""
-    assert [ln.first for ln in lines] == sorted(ln.first for ln in lines)
-    found = [wall_of(ln, walls) for ln in lines]
-    assert sorted(set(found)) == list(range(len(walls)))
-    assert len(lines) == len(walls) + 1  # one wall seen across the seam: two segments
-    for ln, k in zip(lines, found, strict=True):
-        r, alpha = walls[k]
-        assert ln.r == pytest.approx(r, abs=r_tol)
-        assert abs(math.remainder(ln.alpha - alpha, 2 * math.pi)) <= alpha_tol
-        assert -math.pi < ln.alpha <= math.pi
-        assert np.all(np.diff(ln.indices) > 0) and ln.first == ln.indices[0] and ln.last == ln.indices[-1]
-    beams = np.concatenate([ln.indices for ln in lines])
-    assert len(set(beams.tolist())) == beams.size  # no beam in two lines
-    assert lines[0].first == 0 and lines[-1].last == n_beams - 1
-    assert found[0] == found[-1] and abs(walls[found[0]][1]) > 2.5  # the wall behind, across the seam
+from tests.line_scans import HEXAGON_ROOM, SQUARE_ROOM, check_room, polygon_scan, score, wall_scan
 
 
 # ---------------------------------------------------------------------------- closed form cases
-def test_one_wall_gives_one_line():
-    scan = wall_scan(3.0, 0.4, fov=(-0.3, 1.1))
-    (line,) = ransac_lines(scan)
-    assert line.r == pytest.approx(3.0, abs=1e-9) and line.alpha == pytest.approx(0.4, abs=1e-9)
-    assert (line.first, line.last, line.n_points) == (0, scan.n_beams - 1, scan.n_beams)
-    assert line.error < 1e-9
-
-
 @pytest.mark.parametrize("walls", [SQUARE_ROOM, HEXAGON_ROOM], ids=["square", "hexagon"])
 def test_room_walls_exact_with_a_tight_band(walls):
     """Noiseless points lie exactly on their walls: with a 1 um band no point of a neighbouring
@@ -99,28 +44,6 @@ def test_the_line_survives_clutter_in_front_of_the_wall():
     assert wall.r == pytest.approx(3.0, abs=1e-9) and wall.alpha == pytest.approx(0.2, abs=1e-9)
     assert wall.n_points == scan.n_beams - clutter.size
     assert not set(clutter.tolist()) & set(wall.indices.tolist())
-
-
-def doorway_scan(width_m: float) -> Scan:
-    """The wall y = 2 m, seen from the origin, with a doorway of ``width_m`` centred on x = 0
-    (its beams see nothing: NaN)."""
-    theta = np.radians(np.arange(30.0, 150.25, 0.25))
-    ranges = 2.0 / np.sin(theta)
-    ranges[np.abs(2.0 / np.tan(theta)) < width_m / 2] = np.nan
-    return Scan(ranges=ranges, angles=theta)
-
-
-def test_a_gap_wider_than_max_gap_cuts_a_line(extract=ransac_lines):
-    """Both sides of a doorway are one line (y = 2) but two segments when the doorway is wider
-    than max_gap_m; a narrower one is spanned."""
-    wide = extract(doorway_scan(1.0))
-    assert len(wide) == 2
-    for ln in wide:
-        assert ln.r == pytest.approx(2.0, abs=1e-9) and ln.alpha == pytest.approx(math.pi / 2, abs=1e-9)
-    assert np.hypot(*(wide[1].start - wide[0].end)) > 1.0
-    (narrow,) = extract(doorway_scan(0.1))
-    assert narrow.n_points == np.isfinite(doorway_scan(0.1).ranges).sum()
-    assert len(extract(doorway_scan(0.1), max_gap_m=0.05)) == 2
 
 
 # ---------------------------------------------------------------------------- ground truth
@@ -189,69 +112,3 @@ def test_the_generator_passed_in_is_the_one_used():
     before = rng.bit_generator.state
     ransac_lines(scan, rng=rng)
     assert rng.bit_generator.state != before
-
-
-# ---------------------------------------------------------------------------- invalid input
-def test_invalid_beams_are_masked():
-    scan = wall_scan(2.0, 0.0)
-    ranges = scan.ranges.copy()
-    bad = [10, 11, 50, 90, 91]
-    ranges[bad] = [np.nan, np.inf, 0.0, 30.0, 20.0]  # NaN, inf, zero, beyond and at range_max
-    scan = scan.replace(ranges=ranges, range_max=20.0)
-    (line,) = ransac_lines(scan)
-    assert line.r == pytest.approx(2.0, abs=1e-9) and line.alpha == pytest.approx(0.0, abs=1e-9)
-    assert not set(bad) & set(line.indices.tolist())
-    assert line.n_points == scan.n_beams - len(bad)
-
-
-def test_empty_and_all_invalid_scans_give_no_lines():
-    assert ransac_lines(Scan(ranges=[], angles=[])) == []
-    assert ransac_lines(Scan(ranges=[np.nan] * 50, angles=np.arange(50) * 0.01)) == []
-    assert ransac_lines(Scan(ranges=[1.0] * 5, angles=np.arange(5) * 0.01)) == []  # < min_inliers
-
-
-def test_segments_mask_beams_and_cut_lines():
-    """Beams labelled -1 take no part; a line never spans two labelled segments."""
-    scan = wall_scan(2.0, 0.0)
-    labels = segment_labels(scan)
-    labels[40:45] = -1  # e.g. the beams of a leg in front of the wall
-    labels[100:] = 1  # a second segment, with no gap between them
-    lines = ransac_lines(scan, segments=labels)
-    assert [(ln.first, ln.last) for ln in lines] == [(0, 99), (100, scan.n_beams - 1)]
-    assert not set(range(40, 45)) & set(lines[0].indices.tolist()) and lines[0].n_points == 95
-    assert all(ln.r == pytest.approx(2.0, abs=1e-9) for ln in lines)
-
-
-@pytest.mark.parametrize("kwargs, name", [
-    ({"threshold_m": -0.01}, "threshold_m"), ({"threshold_m": np.nan}, "threshold_m"),
-    ({"min_inliers": 1}, "min_inliers"), ({"min_inliers": 8.0}, "min_inliers"),
-    ({"max_trials": 0}, "max_trials"), ({"draw_window": 0}, "draw_window"), ({"min_points": 1}, "min_points"),
-    ({"min_length_m": -0.1}, "min_length_m"), ({"max_gap_m": 0.0}, "max_gap_m"), ({"rng": 42}, "rng"),
-    ({"rng": np.random.RandomState(0)}, "rng"), ({"segments": np.zeros(3, dtype=int)}, "segments"),
-])
-def test_bad_parameters_are_named(kwargs, name):
-    with pytest.raises(ValueError, match=name):
-        ransac_lines(wall_scan(), **kwargs)
-
-
-def test_a_scan_is_required():
-    with pytest.raises(ValueError, match="scan"):
-        ransac_lines(np.ones(10))
-
-
-@settings(max_examples=60, deadline=None)
-@given(st.lists(st.one_of(st.floats(0.01, 40.0), st.sampled_from([0.0, np.nan, np.inf, 30.0])), max_size=200),
-       st.booleans())
-def test_any_ranges_run_without_error(values, full):
-    n = len(values)
-    step = (2 * math.pi / max(n, 1)) if full else math.radians(0.5)
-    scan = Scan(ranges=np.array(values, dtype=float), angles=np.arange(n) * step, range_max=30.0)
-    lines = ransac_lines(scan)
-    seen: set[int] = set()
-    for line in lines:
-        assert line.r >= 0 and -math.pi < line.alpha <= math.pi
-        assert line.n_points >= 5 and line.length >= 0.15
-        assert np.all(np.diff(line.indices) > 0) and scan.valid[line.indices].all()
-        assert not seen & set(line.indices.tolist())
-        seen |= set(line.indices.tolist())
-    assert [ln.first for ln in lines] == sorted(ln.first for ln in lines)
