@@ -44,9 +44,9 @@ import numpy as np
 
 from ._checks import check_int, check_nonneg, check_positive
 from .features import LineSegment
-from .ransac import _fit, _segments
+from .ransac import _fit, _segments, _taking_part
 from .scan import Scan
-from .segmentation import _remembered, labels_from
+from .segmentation import _remembered
 
 __all__ = ["hough_lines"]
 
@@ -145,17 +145,10 @@ def hough_lines(
     r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m = _params(
         r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m)
 
-    # the beams that vote: valid ones (and, given a segmentation, those in a segment)
-    labels = None if segments is None else labels_from(scan, segments)
-    use = scan.valid if labels is None else labels >= 0
-    with np.errstate(invalid="ignore"):  # NaN ranges of invalid beams
-        use = use & (scan.ranges < _MAX_R_CELLS * r_step_m)
-    beams = np.flatnonzero(use)
+    # the beams that vote: valid ones (given a segmentation, those in a segment) within the accumulator
+    labels, beams, xy, rho, w = _taking_part(scan, segments, _MAX_R_CELLS * r_step_m)
     if beams.size < max(min_votes, 2):
         return []
-    xy = scan.points[beams]  # (M, 2), row k is beam beams[k]
-    rho = scan.ranges[beams]
-    w = 1.0 / rho  # the least-squares weights of labkit's fits
 
     # step 1: the accumulator. Directions alpha_k = -pi + (k + 1) d_alpha, k = 0..n_alpha-1 (the
     # last one is pi); distances r_j = j r_step_m, j = 0..n_r-1, to beyond the farthest point

@@ -160,14 +160,9 @@ def ransac_lines(
         raise ValueError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), "
                          f"got {type(rng).__name__}")
 
-    # the beams that take part: valid ones (and, given a segmentation, those in a segment)
-    labels = None if segments is None else labels_from(scan, segments)
-    beams = np.flatnonzero(scan.valid if labels is None else labels >= 0)
+    labels, beams, xy, rho, w = _taking_part(scan, segments)
     if beams.size < max(min_inliers, 2):
         return []
-    xy = scan.points[beams]  # (M, 2), row k is beam beams[k]
-    rho = scan.ranges[beams]
-    w = 1.0 / rho  # the least-squares weights of labkit's fits
     remaining = np.ones(beams.size, dtype=bool)  # not yet taken by a line
     lines: list[LineSegment] = []
 
@@ -230,6 +225,21 @@ def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_l
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m
 
+
+
+def _taking_part(scan: Scan, segments, max_range: float = math.inf):
+    """The beams a global extractor uses: valid ones (given a segmentation, those in a
+    segment) nearer than ``max_range``. Returns the per-beam labels (None without a
+    segmentation) and the beams' indices, points (row k is beam ``beams[k]``), ranges and
+    the least-squares weights of labkit's fits (1 / range)."""
+    labels = None if segments is None else labels_from(scan, segments)
+    use = scan.valid if labels is None else labels >= 0
+    if math.isfinite(max_range):
+        with np.errstate(invalid="ignore"):  # NaN ranges of invalid beams
+            use = use & (scan.ranges < max_range)
+    beams = np.flatnonzero(use)
+    rho = scan.ranges[beams]
+    return labels, beams, scan.points[beams], rho, 1.0 / rho
 
 def _fit(p: np.ndarray, w: np.ndarray) -> tuple[float, float]:
     """``(r, alpha)`` of the weighted least-squares line through points ``p`` (M, 2), weights ``w``

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit import Scan
-from labkit.sim import Lidar, Wall, World, scan_at
+from labkit.sim import Lidar, Wall, World, scan_at, scenario, simulate
 from tests.test_split_merge import room_scan, score, wall_scan
 
 __all__ = ["HEXAGON_ROOM", "ROOM", "SQUARE_ROOM", "check_room", "doorway_scan", "key", "noiseless", "polygon_scan",
@@ -87,3 +87,14 @@ def check_room(lines, walls, n_beams: int, r_tol: float, alpha_tol: float) -> No
     assert len(set(beams.tolist())) == beams.size  # no beam in two lines
     assert lines[0].first == 0 and lines[-1].last == n_beams - 1
     assert found[0] == found[-1] and abs(walls[found[0]][1]) > 2.5  # the wall behind, across the seam
+
+
+def wall_rates(extract, world: str, n_scans: int = 20, seed: int = 0) -> tuple[float, float, int]:
+    """(true-positive rate, false-positive rate, walls scored) of ``extract(scan)`` over
+    ``n_scans`` scans of a bundled scenario, scored by ``tests.test_split_merge.score``."""
+    n_walls = len(scenario(world).world.walls)
+    tp = eligible = fp = on_walls = 0
+    for scan, truth in simulate(world, seed, n_scans=n_scans):
+        a, b, c, d = score(extract(scan), truth, n_walls)
+        tp, eligible, fp, on_walls = tp + a, eligible + b, fp + c, on_walls + d
+    return tp / eligible, fp / max(on_walls, 1), eligible
