@@ -59,6 +59,13 @@ def _as_1d_float(name: str, values) -> np.ndarray:
     return arr
 
 
+def _as_ns(name: str, value) -> int:
+    try:
+        return int(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be an integer (nanoseconds), got {value!r}") from None
+
+
 def _as_limit(name: str, value) -> float:
     try:
         v = float(value)
@@ -93,6 +100,13 @@ class Scan:
     pose : (x, y, theta) or None
         The sensor's pose in a world frame when the source knows it (CARMEN logs record
         it; the simulator knows it exactly). Metres and radians.
+    receive_ns : int or None
+        When the recorder received the scan (a bag's receive/log time, a CARMEN log's
+        ``logger_timestamp``), integer nanoseconds; None when the source does not say.
+        ``stamp_ns`` is the sensor's own time stamp (the message header).
+    time_increment, scan_time : float, seconds
+        As in ``sensor_msgs/LaserScan``: time between beams and between scans (0 when
+        unknown), carried through I/O unchanged.
 
     Examples
     --------
@@ -113,6 +127,9 @@ class Scan:
     frame_id: str = "laser"
     intensities: np.ndarray | None = field(default=None, repr=False)
     pose: tuple[float, float, float] | None = None
+    receive_ns: int | None = field(default=None, repr=False)
+    time_increment: float = field(default=0.0, repr=False)
+    scan_time: float = field(default=0.0, repr=False)
 
     def __post_init__(self) -> None:
         ranges = _as_1d_float("ranges", self.ranges)
@@ -137,10 +154,15 @@ class Scan:
         range_max = _as_limit("range_max", self.range_max)
         if not range_max > range_min:
             raise ValueError(f"range_max must be > range_min, got {range_max:g} <= {range_min:g}")
-        try:
-            stamp_ns = int(self.stamp_ns)
-        except (TypeError, ValueError, OverflowError):
-            raise ValueError(f"stamp_ns must be an integer (nanoseconds), got {self.stamp_ns!r}") from None
+        stamp_ns = _as_ns("stamp_ns", self.stamp_ns)
+        receive_ns = None if self.receive_ns is None else _as_ns("receive_ns", self.receive_ns)
+        timing = []
+        for name in ("time_increment", "scan_time"):
+            try:
+                value = float(getattr(self, name))
+            except (TypeError, ValueError):
+                raise ValueError(f"{name} must be a number (seconds), got {getattr(self, name)!r}") from None
+            timing.append(value)
         if not isinstance(self.frame_id, str):
             raise ValueError(f"frame_id must be a string, got {type(self.frame_id).__name__}")
         intensities = self.intensities
@@ -166,6 +188,9 @@ class Scan:
             ("stamp_ns", stamp_ns),
             ("intensities", intensities),
             ("pose", pose),
+            ("receive_ns", receive_ns),
+            ("time_increment", timing[0]),
+            ("scan_time", timing[1]),
         ]:
             object.__setattr__(self, name, value)
 
@@ -207,13 +232,13 @@ class Scan:
         return cls(ranges=r, angles=angles, intensities=intensities, **kwargs)
 
     @classmethod
-    def from_ros(cls, msg: Any, *, pose=None) -> Scan:
+    def from_ros(cls, msg: Any, *, pose=None, receive_ns: int | None = None) -> Scan:
         """Build a scan from a ``sensor_msgs/LaserScan`` message (ROS1 or ROS2).
 
         Any object with the message's fields works (a rosbags message, a rospy or rclpy
         message). ``header.stamp`` becomes ``stamp_ns``; ROS1 stamps (``secs``/``nsecs``)
         and ROS2 stamps (``sec``/``nanosec``) are both understood. Empty intensities
-        become ``None``.
+        become ``None``. ``receive_ns`` is the bag's receive time, when known.
         """
         try:
             header = msg.header
@@ -229,6 +254,7 @@ class Scan:
             angle_min, angle_increment = msg.angle_min, msg.angle_increment
             range_min, range_max = msg.range_min, msg.range_max
             frame_id = header.frame_id
+            timing = {k: getattr(msg, k, 0.0) for k in ("time_increment", "scan_time")}
         except AttributeError as exc:
             raise ValueError(f"msg is not a sensor_msgs/LaserScan message: {exc}") from None
         if intensities is not None and len(intensities) != len(ranges):
@@ -243,6 +269,8 @@ class Scan:
             frame_id=frame_id,
             intensities=intensities,
             pose=pose,
+            receive_ns=receive_ns,
+            **timing,
         )
 
     # ------------------------------------------------------------------ derived data
