@@ -85,7 +85,7 @@ def end_to_end(n_scans: int) -> None:
         rows = []
         for label, kwargs in (("scans only (no features)", {"features": False}), ("every feature", {})):
             t0 = time.perf_counter()
-            summary = lkrr.record(bag, Path(tmp) / "out.rrd", **kwargs)
+            summary = lkrr.record(bag, Path(tmp) / "out.rrd", overwrite=True, **kwargs)
             rows.append((label, summary.n_scans / (time.perf_counter() - t0)))
         t0 = time.perf_counter()
         read = list(read_scans(bag))

@@ -26,7 +26,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from . import sim
+from ._safe import check_output
 from .io import write_bag
+from .io.bags import bag_format
+from .io.bags import output_kind as bag_output_kind
 
 __all__ = ["BUNDLED", "bundled_data", "data_dir", "write_simulation", "generate_bundled"]
 
@@ -82,10 +85,16 @@ def write_simulation(
     """Simulate a scenario into a bag and write its ground truth beside it.
 
     Returns ``(bag_path, truth_path, n_scans)``. ``progress`` may wrap the scan iterator
-    (e.g. ``functools.partial(tqdm, total=...)``).
+    (e.g. ``functools.partial(tqdm, total=...)``). Both files are checked before anything is
+    written (``overwrite`` replaces only a bag and a ground-truth file), and each is written
+    under a temporary name and renamed when complete.
     """
     sc = sim.scenario(scenario) if isinstance(scenario, str) else scenario
     path = Path(path)
+    fmt = bag_format(path, format)
+    check_output(path, bag_output_kind(path, fmt), overwrite=overwrite)
+    truth_path = sim.truth_path_for(path)
+    check_output(truth_path, sim.TRUTH_FILE, overwrite=overwrite)
     truths: list[sim.ScanTruth] = []
 
     def scans():
@@ -94,16 +103,15 @@ def write_simulation(
             truths.append(truth)
             yield scan
 
-    count = write_bag(scans(), path, format, topic=sc.topic, overwrite=overwrite)
-    truth_path = sim.truth_path_for(path)
-    sim.write_truth(truth_path, sc, truths, seed=seed)
+    count = write_bag(scans(), path, fmt, topic=sc.topic, overwrite=overwrite)
+    sim.write_truth(truth_path, sc, truths, seed=seed, overwrite=overwrite)
     return path, truth_path, count
 
 
-def generate_bundled(folder: str | Path, *, progress: bool = False) -> list[Path]:
-    """Regenerate every bundled recording (and its truth) into ``folder``."""
+def generate_bundled(folder: str | Path, *, progress: bool = False, overwrite: bool = True) -> list[Path]:
+    """Regenerate every bundled recording (and its truth) into ``folder``. ``overwrite``
+    replaces earlier copies (only bags and ground-truth files: see :mod:`labkit._safe`)."""
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     out = []
     for name, (scenario, fmt, seed) in BUNDLED.items():
         wrap = None
@@ -113,7 +121,7 @@ def generate_bundled(folder: str | Path, *, progress: bool = False) -> list[Path
             from tqdm.auto import tqdm
 
             wrap = partial(tqdm, total=sim.scenario(scenario).n_scans, unit="scan", desc=name)
-        bag, truth, _ = write_simulation(scenario, folder / name, fmt, seed=seed, overwrite=True,
+        bag, truth, _ = write_simulation(scenario, folder / name, fmt, seed=seed, overwrite=overwrite,
                                          progress=wrap)
         out += [bag, truth]
     return out

@@ -204,20 +204,32 @@ def score_round_objects(n_scans: int = 300, *, seed: int = 0, config: Config | N
 
 
 def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable] | None = None, *,
-                    n_scans: int = 100, progress: Callable | None = None, repeat: int = 1) -> list[dict]:
+                    n_scans: int = 100, progress: Callable | None = None, repeat: int = 1, topic: str | None = None,
+                    strict: bool = False, on_damage: Callable[[Exception], None] | None = None) -> list[dict]:
     """Ray-axis RMSE, median error, share of errors over 10 cm, coverage and lines per scan
     of every extractor on the first ``n_scans`` scans of each recording (any format
-    :func:`labkit.read_scans` reads)."""
-    from .io import read_scans  # I/O stays out of the algorithm imports above
+    :func:`labkit.read_scans` reads; ``topic`` and ``strict`` as there).
+
+    A damaged recording is scored on the scans that could be read; its
+    :class:`labkit.CorruptFileError` goes to ``on_damage`` (default: raised after every
+    recording was scored).
+    """
+    from .io import CorruptFileError, read_scans  # I/O stays out of the algorithm imports above
 
     extractors = LINE_EXTRACTORS if extractors is None else extractors
     rows = []
+    damage = []
     for path in paths:
         scans = []
-        for scan in read_scans(path):
-            scans.append(scan)
-            if len(scans) >= n_scans:
-                break
+        try:
+            for scan in read_scans(path, topic=topic, strict=strict):
+                scans.append(scan)
+                if len(scans) >= n_scans:
+                    break
+        except CorruptFileError as exc:
+            damage.append(exc)
+            if on_damage is not None:
+                on_damage(exc)
         for name, extract in extractors.items():
             bar = None if progress is None else partial(progress, desc=f"{Path(path).name} {name}")
             lines, spent = _timed(extract, scans, bar, repeat)
@@ -230,6 +242,8 @@ def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable]
                          "over_10cm": total.share_over(0.1), "coverage": total.coverage,
                          "lines_per_scan": sum(map(len, lines)) / max(len(scans), 1),
                          "scans_per_s": len(scans) / spent if spent else math.nan})
+    if damage and on_damage is None:
+        raise damage[0]
     return rows
 
 

@@ -48,6 +48,7 @@ from time import perf_counter
 
 import numpy as np
 
+from ._safe import OutputKind, safe_output
 from .angular import angular_segmentation
 from .features import Features, find_corners
 from .iav import detect_arcs, detect_circles
@@ -374,11 +375,27 @@ class Config:
         except ValueError as exc:
             raise ValueError(f"{path}: {exc}") from None
 
-    def save(self, path: str | Path) -> Path:
-        """Write the config to a TOML file; returns the path."""
+    def save(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write the config to a TOML file (under a temporary name, then renamed); returns the
+        path. ``overwrite`` replaces only a labkit config file."""
         path = Path(path)
-        path.write_text(self.to_toml(), encoding="utf-8")
+        with safe_output(path, CONFIG_FILE, overwrite=overwrite) as tmp:
+            tmp.write_text(self.to_toml(), encoding="utf-8")
         return path
+
+
+def _is_config_file(path: Path) -> bool:
+    """A TOML file whose tables are all sections of :class:`Config` (written by labkit or by hand)."""
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    sections = {f.name for f in dataclasses.fields(Config)}
+    return bool(data) and set(data) <= sections and all(isinstance(v, dict) for v in data.values())
+
+
+#: What :meth:`Config.save` writes (see labkit._safe): how an existing config is recognised.
+CONFIG_FILE = OutputKind("a labkit config (.toml)", (".toml",), _is_config_file)
 
 
 # ---------------------------------------------------------------------------- the pipeline

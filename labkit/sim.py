@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._safe import OutputKind, first_json_line_with, safe_output
 from .geometry import line_through_points, wrap_angle
 from .scan import Scan
 
@@ -958,11 +959,17 @@ class GroundTruth:
         return self.header["objects"]
 
 
-def write_truth(path: str | Path, sc: Scenario, truths, *, seed: int) -> int:
+#: What :func:`write_truth` writes (see labkit._safe): how an existing one is recognised.
+TRUTH_FILE = OutputKind("a labkit ground-truth file (.truth.jsonl)", (".truth.jsonl",),
+                        first_json_line_with("labkit_truth"))
+
+
+def write_truth(path: str | Path, sc: Scenario, truths, *, seed: int, overwrite: bool = False) -> int:
     """Write ``truths`` (an iterable of :class:`ScanTruth`) as JSON lines; returns the count.
 
     Line 1 is a header (format version, world, lidar, object table, seed); every further
-    line is one scan's truth keyed by ``stamp_ns``.
+    line is one scan's truth keyed by ``stamp_ns``. Written under a temporary name and
+    renamed when complete; ``overwrite`` replaces only a ground-truth file.
     """
     header = {
         "labkit_truth": 1,
@@ -974,7 +981,8 @@ def write_truth(path: str | Path, sc: Scenario, truths, *, seed: int) -> int:
         "frame_id": sc.frame_id,
     }
     count = 0
-    with open(path, "w", encoding="utf-8", newline="\n") as fh:
+    with safe_output(path, TRUTH_FILE, overwrite=overwrite) as tmp, \
+            open(tmp, "w", encoding="utf-8", newline="\n") as fh:
         fh.write(json.dumps(header, separators=(",", ":")) + "\n")
         for tr in truths:
             fh.write(json.dumps(tr.to_json(), separators=(",", ":")) + "\n")

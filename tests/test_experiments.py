@@ -74,7 +74,8 @@ def test_cli_evaluate_simulated_with_json(tmp_path, capsys):
     assert "| 0.01 | split-and-merge (IEPF) |" in text
     report = json.loads(out.read_text())
     assert report["lines"][0]["scans"] == 3 and "round_objects" not in report
-    assert main(["evaluate", "-q", "--scans", "3", "--method", "Hough", "--json", str(out)]) == 1  # exists
+    assert main(["evaluate", "-q", "--scans", "3", "--method", "Hough", "--json", str(out)]) == 2  # exists
+    assert "pass -f" in capsys.readouterr().err
 
 
 def test_cli_evaluate_recordings(capsys):
@@ -84,7 +85,7 @@ def test_cli_evaluate_recordings(capsys):
 
 
 def test_cli_evaluate_names_an_unknown_method(capsys):
-    assert main(["evaluate", "-q", "--scans", "3", "--method", "magic"]) == 1
+    assert main(["evaluate", "-q", "--scans", "3", "--method", "magic"]) == 2
     assert "magic" in capsys.readouterr().err
 
 

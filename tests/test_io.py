@@ -255,8 +255,13 @@ def test_carmen_malformed_line_and_truncated_gzip(tmp_path):
     log = tmp_path / "m.log"
     log.write_text(_flaser([1.0] * 180) * 3 + "FLASER 180 1 2 3\n" + _flaser([1.0] * 180))
     got = []
-    with pytest.raises(CorruptFileError, match="at line 4") as info:
+    with pytest.raises(CorruptFileError, match="at line 4") as info:  # skipped, and reading goes on
         for s in read_carmen(log):
+            got.append(s)
+    assert len(got) == 4 and info.value.n_read == 4 and info.value.n_skipped == 1
+    got = []
+    with pytest.raises(CorruptFileError, match="at line 4") as info:  # strict: stops there
+        for s in read_carmen(log, strict=True):
             got.append(s)
     assert len(got) == 3 and info.value.n_read == 3
     gz = tmp_path / "t.log.gz"

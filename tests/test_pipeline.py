@@ -237,8 +237,13 @@ def test_a_corrupt_features_file_gives_what_it_can_then_an_error(tmp_path):
     lines = (tmp_path / "f.jsonl").read_text().splitlines()
     (tmp_path / "f.jsonl").write_text("\n".join(lines[:3] + [lines[3][:40]] + lines[4:]) + "\n")
     got = []
-    with pytest.raises(CorruptFileError, match="at line 4") as err:
+    with pytest.raises(CorruptFileError, match="at line 4") as err:  # the bad line is skipped
         for rec in read_features(tmp_path / "f.jsonl"):
+            got.append(rec)
+    assert [r["scan"] for r in got] == [0, 1, 2, 4] and err.value.n_read == 4 and err.value.n_skipped == 1
+    got = []
+    with pytest.raises(CorruptFileError, match="at line 4") as err:
+        for rec in read_features(tmp_path / "f.jsonl", strict=True):
             got.append(rec)
     assert len(got) == 3 and err.value.n_read == 3
 

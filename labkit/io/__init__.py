@@ -6,26 +6,36 @@ One entry point reads them all::
         ...
 
 The format is told from the path (see :func:`detect_format`). A damaged file yields every
-scan that could be read and then raises :class:`CorruptFileError` naming the file and
-where it broke.
+scan that could be read -- a record that does not decode is skipped and counted, and reading
+goes on -- and then raises :class:`CorruptFileError` naming the file, how many records were
+skipped and where the first was (``strict=True``: reading stops at the first bad record).
+
+Writers never lose data (:mod:`labkit._safe`): they write under a temporary name and
+rename when complete, replace an existing output only when asked and only when it is their
+own kind of file, and never write over their input.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+from .._safe import OutputKind, check_output
+from ..errors import RefusedError
 from ..scan import Scan
 from . import bags
-from .bags import write_bag
+from .bags import StampsChangedWarning, plan_stamps, write_bag
 from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_carmen
-from .errors import CorruptFileError
+from .errors import CorruptFileError, EmptyRecordingError
 from .features import read_features, write_features
-from .jsonscan import read_json_lines, read_json_scan, write_json_lines, write_json_scan
+from .jsonscan import JSON_LINES, JSON_SCAN, read_json_lines, read_json_scan, write_json_lines, write_json_scan
 
 __all__ = [
     "FORMATS",
     "CorruptFileError",
+    "EmptyRecordingError",
+    "StampsChangedWarning",
     "ScanStream",
     "detect_format",
     "read_scans",
@@ -112,19 +122,23 @@ class ScanStream:
         How many scans the file says it holds (for progress bars), when known up front.
     readable : bool
         False when the file is damaged and is being read sequentially.
+    strict : bool
+        Stop at the first bad record instead of skipping it.
     """
 
-    def __init__(self, path: Path, fmt: str, topic: str | None, count: int | None, readable: bool) -> None:
+    def __init__(self, path: Path, fmt: str, topic: str | None, count: int | None, readable: bool,
+                 strict: bool = False) -> None:
         self.path, self.format, self.topic, self.count, self.readable = path, fmt, topic, count, readable
+        self.strict = strict
 
     def __iter__(self) -> Iterator[Scan]:
         if self.format in bags.BAG_FORMATS:
-            return bags.iter_bag(self.path, self.format, self.topic, self.readable)
+            return bags.iter_bag(self.path, self.format, self.topic, self.readable, self.strict)
         if self.format == "carmen":
-            return read_carmen(self.path, self.topic)
+            return read_carmen(self.path, self.topic, strict=self.strict)
         if self.format == "json":
             return iter([read_json_scan(self.path)])
-        return read_json_lines(self.path)
+        return read_json_lines(self.path, strict=self.strict)
 
     def __len__(self) -> int:
         if self.count is None:
@@ -136,7 +150,7 @@ class ScanStream:
                 f"count={self.count})")
 
 
-def read_scans(path: str | Path, topic: str | None = None) -> ScanStream:
+def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = False) -> ScanStream:
     """Open any supported file and return its scans as an iterable :class:`ScanStream`.
 
     Parameters
@@ -147,14 +161,19 @@ def read_scans(path: str | Path, topic: str | None = None) -> ScanStream:
     topic : str, optional
         For bags, the ``sensor_msgs/LaserScan`` topic; by default the only one. For
         CARMEN logs, the laser message type (``"FLASER"``, ``"ROBOTLASER1"``...).
+    strict : bool
+        Stop reading at the first record that cannot be decoded (default: skip it, count
+        it and read on).
 
     Raises
     ------
     ValueError
         Unknown format (the message lists the supported ones); no LaserScan topic (it
         lists the bag's topics); several LaserScan topics and no ``topic`` (it lists them).
+        :class:`EmptyRecordingError` (a ValueError) for a bag without any topic.
     CorruptFileError
-        While iterating, after the last scan that could be read from a damaged file.
+        While iterating, after the last scan that could be read from a damaged file: every
+        record that could not be decoded was skipped and counted.
 
     Examples
     --------
@@ -169,74 +188,121 @@ def read_scans(path: str | Path, topic: str | None = None) -> ScanStream:
         topics, readable = bags.list_topics(p, fmt)
         chosen = bags.resolve_topic(p, topics, topic)
         count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
-        return ScanStream(p, fmt, chosen, count, readable)
+        return ScanStream(p, fmt, chosen, count, readable, strict)
     if fmt == "carmen":
         if topic is not None and topic not in LASER_MESSAGES:
-            raise ValueError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}")
+            raise RefusedError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}",
+                               f"for a CARMEN log, --topic is a laser message type {LASER_MESSAGES}, got {topic!r}")
         counts = carmen_message_types(p)
         if topic is None:
             topic = default_message(counts)
         if topic is None:
-            raise ValueError(f"{p} has no laser messages ({', '.join(LASER_MESSAGES)})")
+            raise EmptyRecordingError(f"{p} has no laser messages ({', '.join(LASER_MESSAGES)})")
         if topic not in counts:
             found = ", ".join(f"{k} ({v})" for k, v in sorted(counts.items()))
             raise ValueError(f"{p} has no {topic} messages; laser messages found: {found}")
-        return ScanStream(p, fmt, topic, counts[topic], True)
+        return ScanStream(p, fmt, topic, counts[topic], True, strict)
     if topic is not None:
-        raise ValueError(f"topic does not apply to {FORMATS[fmt]} files")
+        raise RefusedError(f"topic does not apply to {FORMATS[fmt]} files",
+                           f"--topic does not apply to {FORMATS[fmt]} files")
     if fmt == "json":
-        return ScanStream(p, fmt, None, 1, True)
-    return ScanStream(p, fmt, None, None, True)
+        return ScanStream(p, fmt, None, 1, True, strict)
+    return ScanStream(p, fmt, None, None, True, strict)
 
 
 def write_scans(
     scans: Iterable[Scan], path: str | Path, format: str | None = None, *, topic: str = "/scan",
-    overwrite: bool = False,
+    overwrite: bool = False, inputs: Iterable[str | Path] = (),
 ) -> int:
     """Write scans to any writable format (bags, ``.jsonl``, a single-scan ``.json``).
 
     Returns the number written. Bags: see :func:`write_bag`. CARMEN logs are read-only.
+    ``overwrite`` replaces only an output of the same kind; ``inputs`` are the files the
+    scans come from, which the output may not be (see :mod:`labkit._safe`).
     """
     p = Path(path)
-    fmt = format or _format_for_output(p)
+    fmt = output_format(p, format)
     if fmt in bags.BAG_FORMATS:
-        return write_bag(scans, p, fmt, topic=topic, overwrite=overwrite)
-    if p.exists() and not overwrite:
-        raise ValueError(f"{p} exists; pass overwrite=True to replace it")
+        return write_bag(scans, p, fmt, topic=topic, overwrite=overwrite, inputs=inputs)
     if fmt == "jsonl":
-        return write_json_lines(scans, p)
-    if fmt == "json":
-        items = list(scans)
-        if len(items) != 1:
-            raise ValueError(f"a .json file holds exactly one scan, got {len(items)}; use .jsonl")
-        write_json_scan(items[0], p)
-        return 1
-    raise ValueError(f"cannot write {fmt!r}; writable formats: ros1, ros2, mcap, jsonl, json")
+        return write_json_lines(scans, p, overwrite=overwrite, inputs=inputs)
+    items = list(scans)
+    if len(items) != 1:
+        raise ValueError(f"a .json file holds exactly one scan, got {len(items)}; use .jsonl")
+    write_json_scan(items[0], p, overwrite=overwrite, inputs=inputs)
+    return 1
 
 
-def _format_for_output(p: Path) -> str:
-    fmt = _format_from_suffix(p.name)
-    if fmt == "carmen":
-        raise ValueError("labkit reads CARMEN logs but does not write them")
-    if fmt is not None:
-        return fmt
-    if p.suffix == "":
-        return "ros2"
-    raise ValueError(f"cannot tell the output format of {p}; use .bag, .mcap, .jsonl, .json or a folder name"
-                     " (ROS2 bag)")
+def output_format(p: Path, format: str | None = None) -> str:
+    """The format written to ``p``: from its name (a name without suffix is a ROS2 bag folder),
+    checked against ``format`` when one is given."""
+    guess = _format_from_suffix(p.name)
+    if guess == "carmen":
+        raise RefusedError("labkit reads CARMEN logs but does not write them")
+    if guess is None and p.suffix not in ("", ".") and format is None:
+        raise RefusedError(f"cannot tell the output format of {p}; use .bag, .mcap, .jsonl, .json or a folder name"
+                           " (ROS2 bag)")
+    if format is None:
+        return guess or "ros2"
+    if format not in WRITABLE:
+        raise ValueError(f"cannot write {format!r}; writable formats: {', '.join(WRITABLE)}")
+    if format in bags.BAG_FORMATS:
+        return bags.bag_format(p, format)
+    if guess != format:
+        raise RefusedError(f"{p}: format={format!r} needs a name ending in .{format}",
+                           f"{p}: --format {format} needs a name ending in .{format}")
+    return format
+
+
+def output_kind(p: Path, fmt: str) -> OutputKind:
+    """What the writer of format ``fmt`` writes at ``p`` (for :func:`labkit._safe.check_output`)."""
+    if fmt in bags.BAG_FORMATS:
+        return bags.output_kind(p, fmt)
+    return JSON_LINES if fmt == "jsonl" else JSON_SCAN
+
+
+#: Formats labkit writes.
+WRITABLE = ("ros1", "ros2", "mcap", "jsonl", "json")
+_FREE_STAMPS = ("carmen", "json", "jsonl")  # formats whose stamps may be anything
 
 
 def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
-            overwrite: bool = False, progress: bool = False) -> int:
+            overwrite: bool = False, progress: bool = False, strict: bool = False) -> int:
     """Copy the scans of ``src`` into ``dst`` (formats from the names); return the count.
 
-    A damaged ``src`` still produces a complete ``dst`` holding every readable scan,
-    then the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar.
+    A damaged ``src`` still produces a complete ``dst`` holding every readable scan, then
+    the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar. ``dst``
+    may not be ``src`` (nor inside it), and an existing ``dst`` is replaced only with
+    ``overwrite=True`` and only when it is the same kind of output.
+
+    Time stamps that the output bag format cannot hold (CARMEN logs and JSON scans may have
+    negative stamps, or garbage) are changed on purpose, as :func:`labkit.io.bags.plan_stamps`
+    describes, and a :class:`StampsChangedWarning` says how.
     """
-    stream = read_scans(src, topic=topic)
+    src, dst = Path(src), Path(dst)
+    fmt = output_format(dst, format)
+    stream = read_scans(src, topic=topic, strict=strict)
+    check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
+    restamp = None
+    if fmt in bags.BAG_FORMATS and stream.format in _FREE_STAMPS:
+        try:
+            restamp, note = plan_stamps(read_scans(src, topic=topic), fmt)
+        except CorruptFileError:  # read what can be read; the conversion reports the damage
+            restamp, note = plan_stamps(_readable(read_scans(src, topic=topic)), fmt)
+        if note:
+            warnings.warn(f"{src}: {note}", StampsChangedWarning, stacklevel=2)
     scans: Iterable[Scan] = stream
+    if restamp is not None:
+        scans = (restamp(scan, k) for k, scan in enumerate(stream))
     if progress:
         from tqdm.auto import tqdm
 
-        scans = tqdm(stream, total=stream.count, unit="scan", desc=f"convert {Path(src).name}")
-    return write_scans(scans, dst, format, overwrite=overwrite)
+        scans = tqdm(scans, total=stream.count, unit="scan", desc=f"convert {src.name}")
+    return write_scans(scans, dst, fmt, overwrite=overwrite, inputs=[src])
+
+
+def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
+    try:
+        yield from stream
+    except CorruptFileError:
+        return

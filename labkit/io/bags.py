@@ -8,18 +8,21 @@ raises :class:`~labkit.io.CorruptFileError` saying where the file broke.
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from collections.abc import Iterable, Iterator
+import itertools
+import warnings
+from collections import Counter
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
 from rosbags import rosbag1, rosbag2
 from rosbags.highlevel import AnyReader
 
+from .._safe import OutputKind, safe_output, starts_with
+from ..errors import RefusedError
 from ..scan import Scan
 from . import salvage
-from .errors import CorruptFileError
+from .errors import CorruptFileError, EmptyRecordingError, Faults
 
 BAG_FORMATS = ("ros1", "ros2", "mcap")
 _MSGTYPE = "sensor_msgs/msg/LaserScan"
@@ -45,9 +48,24 @@ def _topics_via_rosbags(path: Path) -> list[tuple[str, str, int | None]]:
 
 
 def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None]]:
-    seen = {}
-    for name, _stamp, msgtype in _salvager(fmt)(path, None, want_topics=True):
-        seen.setdefault(name, msgtype)
+    """The topics a damaged bag declares before its damage; a bag too damaged to declare any
+    is a :class:`CorruptFileError` (0 scans read), not an empty bag."""
+    seen: dict[str, str] = {}
+    gen = _salvager(fmt)(path, None, want_topics=True)
+    first_fault = None
+    while True:
+        try:
+            item = next(gen)
+        except StopIteration as stop:
+            first_fault = first_fault or stop.value
+            break
+        if isinstance(item, salvage.Fault):
+            first_fault = first_fault or item
+        else:
+            name, _stamp, msgtype = item
+            seen.setdefault(name, msgtype)
+    if not seen and first_fault is not None:
+        raise CorruptFileError(path, first_fault.where, 0, first_fault.reason, n_skipped=first_fault.count)
     return sorted((name, msgtype, None) for name, msgtype in seen.items())
 
 
@@ -87,50 +105,103 @@ def resolve_topic(path: Path, topics, topic: str | None) -> str:
             f"topic {topic!r} is not a sensor_msgs/LaserScan topic of {path}; LaserScan topics: {choices};"
             f" all topics: {listing}"
         )
+    if not topics:
+        raise EmptyRecordingError(f"{path} is an empty bag: it has no topics and no messages")
     if not scans:
         raise ValueError(f"{path} has no sensor_msgs/LaserScan topic; its topics are: {listing}")
     if len(scans) > 1:
         names = ", ".join(t[0] for t in scans)
-        raise ValueError(f"{path} has several LaserScan topics ({names}); choose one with topic=...")
+        raise RefusedError(f"{path} has several LaserScan topics ({names}); choose one with topic=...",
+                           f"{path} has several LaserScan topics ({names}); choose one with --topic")
     return scans[0][0]
 
 
-def _scan_from(msg, bag_stamp_ns: int) -> Scan:
-    scan = Scan.from_ros(msg)
-    if scan.stamp_ns == 0 and bag_stamp_ns:
-        scan = scan.replace(stamp_ns=bag_stamp_ns)  # drivers that leave header.stamp empty
+def _scan_from(msg, receive_ns: int) -> Scan:
+    """The scan of a LaserScan message the bag received at ``receive_ns``. A header stamp of 0
+    (drivers that leave it empty) is replaced by the receive time."""
+    scan = Scan.from_ros(msg, receive_ns=receive_ns)
+    if scan.stamp_ns == 0 and receive_ns:
+        scan = scan.replace(stamp_ns=receive_ns)
     return scan
 
 
-def iter_bag(path: Path, fmt: str, topic: str, readable: bool) -> Iterator[Scan]:
-    """Yield the scans of ``topic``; raise CorruptFileError after the last good one."""
+def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False) -> Iterator[Scan]:
+    """Yield the scans of ``topic``; a message that does not decode or holds impossible
+    fields (``angle_increment`` 0, ...) is skipped and counted; after the last good scan,
+    raise :class:`CorruptFileError` if anything was skipped (``strict``: stop at the first).
+
+    Bags rosbags can open are read through it; if rosbags stops part-way (a garbled chunk
+    or page), the rest is read by labkit's sequential reader (:mod:`labkit.io.salvage`),
+    which walks past the damage where the file's framing allows.
+    """
+    faults = Faults(path, strict)
     n_read = 0
+    done: Counter[int] = Counter()  # receive times read through rosbags, not to be read twice
     if readable:
         reader = _open(path)
+        failure = None
         try:
-            conns = [c for c in reader.connections if c.topic == topic]
-            try:
-                for conn, stamp, raw in reader.messages(connections=conns):
-                    msg = reader.deserialize(raw, conn.msgtype)
-                    yield _scan_from(msg, stamp)
-                    n_read += 1
-            except Exception as exc:  # noqa: BLE001 - rosbags raises many kinds on damaged data
-                raise CorruptFileError(path, f"after message {n_read} of {topic}", n_read,
-                                       f"{type(exc).__name__}: {exc}") from exc
+            messages = reader.messages(connections=[c for c in reader.connections if c.topic == topic])
+            for k in itertools.count(1):
+                try:
+                    conn, stamp, raw = next(messages)
+                except StopIteration:
+                    break
+                except Exception as exc:  # noqa: BLE001 - rosbags raises many kinds on damaged data
+                    failure = f"after message {k - 1} of {topic}", f"{type(exc).__name__}: {exc}"
+                    break
+                try:
+                    scan = _scan_from(reader.deserialize(raw, conn.msgtype), stamp)
+                except Exception as exc:  # noqa: BLE001 - a garbled message: skip it
+                    if not faults.skip(f"in message {k} of {topic}", _why(exc)):
+                        break
+                    continue
+                yield scan
+                n_read += 1
+                done[stamp] += 1
         finally:
             reader.close()
-        return
+        if failure is None or not faults.skip(*failure, count=0):
+            faults.check(n_read)
+            return
     gen = _salvager(fmt)(_storage_file(path, fmt), topic)
-    try:
-        while True:
-            _name, stamp, msg = next(gen)
-            yield _scan_from(msg, stamp)
-            n_read += 1
-    except StopIteration as stop:
-        where = stop.value or "somewhere"
-    except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
-        where = f"in message {n_read + 1} ({type(exc).__name__}: {exc})"
-    raise CorruptFileError(path, where, n_read, "rosbags could not open it; read sequentially")
+    k = 0
+    while True:
+        try:
+            item = next(gen)
+        except StopIteration as stop:
+            if stop.value is not None:
+                faults.skip(stop.value.where, stop.value.reason, stop.value.count)
+            break
+        if isinstance(item, salvage.Fault):
+            if not faults.skip(item.where, item.reason, item.count):
+                break
+            continue
+        _name, stamp, raw = item
+        k += 1
+        if done[stamp]:
+            done[stamp] -= 1
+            continue
+        try:
+            scan = _scan_from(_deserialize(fmt, raw), stamp)
+        except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
+            if not faults.skip(f"in message {k} of {topic}", _why(exc)):
+                break
+            continue
+        yield scan
+        n_read += 1
+    gen.close()
+    faults.check(n_read)
+
+
+def _why(exc: Exception) -> str:
+    return f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)
+
+
+def _deserialize(fmt: str, raw: bytes):
+    if fmt == "ros1":
+        return _typestore(ros1=True).deserialize_ros1(raw, _MSGTYPE)
+    return _typestore(ros1=False).deserialize_cdr(raw, _MSGTYPE)
 
 
 # ============================================================================ writing
@@ -147,6 +218,81 @@ def _check_uniform(scan: Scan, index: int) -> float:
     return inc
 
 
+# What each format's time fields hold, in nanoseconds: the header stamp (builtin_interfaces/Time:
+# rosbags writes sec as int32 for ROS1 too, and ROS1 time is unsigned, so ROS1 keeps 0..2^31 s)
+# and the receive time (ROS1 record time: uint32 s + uint32 ns; MCAP log_time: uint64 ns; the
+# ROS2 sqlite3 column: int64 ns).
+_S = 1_000_000_000
+STAMP_RANGE_NS = {"ros1": (0, 2**31 * _S), "ros2": (-(2**31) * _S, 2**31 * _S), "mcap": (-(2**31) * _S, 2**31 * _S)}
+RECEIVE_RANGE_NS = {"ros1": (0, 2**32 * _S), "ros2": (-(2**63), 2**63), "mcap": (0, 2**64)}
+_FORMAT_NAMES = {"ros1": "a ROS1 bag", "ros2": "a ROS2 bag", "mcap": "an MCAP bag"}
+
+
+class StampRangeError(RefusedError):
+    """A scan's time stamp does not fit the time fields of the bag format being written."""
+
+
+class StampsChangedWarning(UserWarning):
+    """A writer changed time stamps on purpose so that the output holds them (see :func:`plan_stamps`)."""
+
+
+def stamps_fit(fmt: str, stamp_ns: int, receive_ns: int) -> bool:
+    """Whether a bag of format ``fmt`` can hold these header and receive times."""
+    (lo, hi), (rlo, rhi) = STAMP_RANGE_NS[fmt], RECEIVE_RANGE_NS[fmt]
+    return lo <= stamp_ns < hi and rlo <= receive_ns < rhi
+
+
+def plan_stamps(scans: Iterable[Scan], fmt: str) -> tuple[Callable[[Scan, int], Scan], str | None]:
+    """How to stamp ``scans`` (one pass over them) so that a bag of format ``fmt`` holds them.
+
+    Returns ``(restamp, note)``: ``restamp(scan, k)`` gives the scan to write as the ``k``-th,
+    and ``note`` says what was changed (None when nothing was). The rule:
+
+    1. every stamp (header and receive time) fits: nothing changes;
+    2. else, if one offset added to every stamp makes them all fit: they are shifted so that the
+       earliest is 0 s (the note gives the offset, so the original stamps can be recovered);
+    3. else (they span more than the format's time fields hold, e.g. a log with garbage stamps):
+       scan ``k`` is stamped ``k`` times the median positive step between the stamps (0.1 s when
+       there is none; clipped to 1 ms..10 s), from 0 s; the note says so. The log's own stamps
+       are not in that copy.
+    """
+    stamps, receives = [], []
+    for scan in scans:
+        stamps.append(int(scan.stamp_ns))
+        receives.append(int(scan.receive_ns if scan.receive_ns is not None else scan.stamp_ns))
+    if not stamps:
+        return (lambda scan, k: scan), None
+    what = _FORMAT_NAMES[fmt]
+    if all(stamps_fit(fmt, s, r) for s, r in zip(stamps, receives, strict=True)):
+        return (lambda scan, k: scan), None
+    lo = min(min(stamps), min(receives))
+    if all(stamps_fit(fmt, s - lo, r - lo) for s, r in zip(stamps, receives, strict=True)):
+        def shifted(scan: Scan, k: int) -> Scan:
+            receive = scan.receive_ns if scan.receive_ns is not None else scan.stamp_ns
+            return scan.replace(stamp_ns=scan.stamp_ns - lo, receive_ns=receive - lo)
+
+        return shifted, (f"the stamps do not fit {what} as they are: every stamp was shifted by {-lo / _S:+.9g} s "
+                         f"(the earliest is now 0 s); subtract that to get the original stamps back")
+    steps = np.diff(np.asarray(stamps, dtype=np.float64))
+    step_ns = int(np.clip(np.median(steps[steps > 0]) if np.any(steps > 0) else 1e8, 1e6, 1e10))
+
+    def renumbered(scan: Scan, k: int) -> Scan:
+        return scan.replace(stamp_ns=k * step_ns, receive_ns=k * step_ns)
+
+    span = (max(max(stamps), max(receives)) - lo) / _S
+    return renumbered, (f"the stamps span {span:.6g} s, more than {what} can hold: scan k was stamped k x "
+                        f"{step_ns / _S:g} s from 0 s; the original stamps are not in this copy")
+
+
+def _check_stamps(fmt: str, scan: Scan, receive_ns: int, index: int) -> None:
+    if not stamps_fit(fmt, scan.stamp_ns, receive_ns):
+        (lo, hi), (rlo, rhi) = STAMP_RANGE_NS[fmt], RECEIVE_RANGE_NS[fmt]
+        raise StampRangeError(
+            f"scan {index} has stamp {scan.stamp_ns / _S:.9g} s (received {receive_ns / _S:.9g} s), which "
+            f"{_FORMAT_NAMES[fmt]} cannot hold (stamps {lo / _S:g}..{hi / _S:g} s, receive times "
+            f"{rlo / _S:g}..{rhi / _S:g} s); labkit.convert shifts or renumbers such stamps, or shift them yourself")
+
+
 def _message(typestore, scan: Scan, seq: int, ros1: bool):
     t = typestore.types
     sec, nsec = divmod(int(scan.stamp_ns), 1_000_000_000)
@@ -160,13 +306,63 @@ def _message(typestore, scan: Scan, seq: int, ros1: bool):
         angle_min=float(scan.angles[0]) if scan.n_beams else 0.0,
         angle_max=float(scan.angles[-1]) if scan.n_beams else 0.0,
         angle_increment=float(inc),
-        time_increment=0.0,
-        scan_time=0.0,
+        time_increment=float(scan.time_increment),
+        scan_time=float(scan.scan_time),
         range_min=float(scan.range_min),
         range_max=float(scan.range_max),
         ranges=np.asarray(scan.ranges, dtype=np.float32),
         intensities=np.asarray(intensities, dtype=np.float32),
     )
+
+
+_BAG_FILES = ("metadata.yaml", ".db3", ".db3-shm", ".db3-wal", ".db3-journal", ".mcap")
+
+
+def _is_bag_folder(path: Path) -> bool:
+    """A ROS2 bag folder and nothing else: metadata.yaml plus storage files, no other entry."""
+    try:
+        meta = (path / "metadata.yaml").read_text(encoding="utf-8", errors="replace")
+        entries = list(path.iterdir())
+    except OSError:
+        return False
+    return "rosbag2_bagfile_information" in meta and all(
+        e.is_file() and not e.is_symlink() and (e.name == "metadata.yaml" or e.name.endswith(_BAG_FILES[1:]))
+        for e in entries)
+
+
+#: What each bag writer writes (see labkit._safe): how an existing output is recognised.
+ROS1_BAG = OutputKind("a ROS1 bag (.bag)", (".bag",), starts_with(salvage._ROS1_MAGIC))
+MCAP_FILE = OutputKind("an MCAP file (.mcap)", (".mcap",), starts_with(salvage._MCAP_MAGIC))
+BAG_FOLDER = OutputKind("a ROS2 bag folder", (), _is_bag_folder, folder=True,
+                        avoid=(".bag", ".mcap", ".json", ".jsonl", ".rrd", ".log", ".gz", ".clf", ".toml", ".db3",
+                               ".png", ".csv", ".parquet", ".txt"))
+
+
+def output_kind(path: Path, fmt: str) -> OutputKind:
+    """The kind of output ``write_bag`` writes for ``path`` in format ``fmt``."""
+    if fmt == "ros1":
+        return ROS1_BAG
+    return MCAP_FILE if fmt == "mcap" and path.name.lower().endswith(".mcap") else BAG_FOLDER
+
+
+def bag_format(path: str | Path, format: str | None = None) -> str:
+    """The bag format written for ``path``: ``format``, else from the name (``.bag`` ROS1,
+    ``.mcap`` MCAP, anything else a ROS2 sqlite3 folder). A ``format`` that contradicts the
+    name (``.bag`` with ``"mcap"``) is refused."""
+    path = Path(path)
+    name = path.name.lower()
+    guess = "ros1" if name.endswith(".bag") else "mcap" if name.endswith(".mcap") else "ros2"
+    if format is None:
+        return guess
+    if format not in BAG_FORMATS:
+        raise ValueError(f"format must be one of {BAG_FORMATS}, got {format!r}")
+    if (name.endswith(".bag") and format != "ros1") or (format == "ros1" and not name.endswith(".bag")) or (
+            name.endswith(".mcap") and format != "mcap"):
+        raise RefusedError(f"{path}: the name says {_FORMAT_NAMES[guess]} but format={format!r}; name a ROS1 bag "
+                           "*.bag, an MCAP file *.mcap and a ROS2 bag folder without a suffix",
+                           f"{path}: the name says {_FORMAT_NAMES[guess]} but --format {format}; name a ROS1 bag "
+                           "*.bag, an MCAP file *.mcap and a ROS2 bag folder without a suffix")
+    return format
 
 
 def write_bag(
@@ -176,6 +372,7 @@ def write_bag(
     *,
     topic: str = "/scan",
     overwrite: bool = False,
+    inputs: Iterable[str | Path] = (),
 ) -> int:
     """Write scans as ``sensor_msgs/LaserScan`` messages; return how many were written.
 
@@ -183,8 +380,11 @@ def write_bag(
     ----------
     scans : iterable of Scan
         Scans with evenly spaced angles (a LaserScan stores ``angle_min`` and a constant
-        ``angle_increment``). Each scan's ``stamp_ns`` is both the header stamp and the
-        bag's receive time.
+        ``angle_increment``). Each scan's ``stamp_ns`` is the header stamp; the bag's receive
+        time is its ``receive_ns`` (its stamp when None), raised where it would go back in
+        time so that readers, which order a bag by receive time, keep the scans in order
+        (a :class:`StampsChangedWarning` says how many). A stamp the format cannot hold is
+        refused (:class:`StampRangeError`; :func:`labkit.io.convert` shifts such stamps).
     path : str or Path
         ``.bag`` for ROS1; ``.mcap`` for a single MCAP file; any other name is a ROS2
         bag folder (sqlite3, or MCAP with ``format="mcap"``).
@@ -193,51 +393,56 @@ def write_bag(
     topic : str
         Topic name, default ``"/scan"``.
     overwrite : bool
-        Replace an existing file or folder (rosbags refuses to by default).
+        Replace an existing bag (only a bag: see :mod:`labkit._safe` for the rules).
+    inputs : iterable of paths
+        Files being read to make ``scans``: the output may not be one of them.
 
-    If iterating ``scans`` raises (a damaged input being converted), the bag is closed
-    with every scan written so far and the error propagates.
+    The bag is written under a temporary name beside ``path`` and renamed when complete.
+    If iterating ``scans`` raises :class:`~labkit.io.CorruptFileError` (a damaged input
+    being converted), the bag holds every scan before it and the error propagates.
     """
     path = Path(path)
-    fmt = format or ("ros1" if path.suffix == ".bag" else "mcap" if path.suffix == ".mcap" else "ros2")
-    if fmt not in BAG_FORMATS:
-        raise ValueError(f"format must be one of {BAG_FORMATS}, got {format!r}")
+    fmt = bag_format(path, format)
     if not topic.startswith("/"):
         raise ValueError(f"topic must start with '/', got {topic!r}")
-    if path.exists():
-        if not overwrite:
-            raise ValueError(f"{path} exists; pass overwrite=True to replace it")
-        shutil.rmtree(path) if path.is_dir() else path.unlink()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if fmt == "ros1":
-        return _write_ros1(scans, path, topic)
-    if fmt == "mcap" and path.suffix == ".mcap":
-        # rosbags writes MCAP inside a rosbag2 folder; a bare .mcap file is what most tools
-        # (Foxglove, rosbags, `ros2 bag` with the MCAP plugin) open directly.
-        with tempfile.TemporaryDirectory(prefix=".labkit-", dir=path.parent) as tmp:
-            folder = Path(tmp) / path.stem
+    with safe_output(path, output_kind(path, fmt), overwrite=overwrite, inputs=inputs) as tmp:
+        if fmt == "ros1":
+            return _write_ros1(scans, tmp, topic)
+        if fmt == "mcap" and path.name.lower().endswith(".mcap"):
+            # rosbags writes MCAP inside a rosbag2 folder; a bare .mcap file is what most tools
+            # (Foxglove, rosbags, `ros2 bag` with the MCAP plugin) open directly.
+            folder = tmp.parent / path.stem  # the name rosbags records inside the file
             try:
-                return _write_ros2(scans, folder, topic, rosbag2.StoragePlugin.MCAP)
+                return _write_ros2(scans, folder, topic, rosbag2.StoragePlugin.MCAP, fmt)
             finally:
                 written = folder / f"{path.stem}.mcap"
                 if written.exists():
-                    written.replace(path)
-    plugin = rosbag2.StoragePlugin.MCAP if fmt == "mcap" else rosbag2.StoragePlugin.SQLITE3
-    return _write_ros2(scans, path, topic, plugin)
+                    written.replace(tmp)
+        plugin = rosbag2.StoragePlugin.MCAP if fmt == "mcap" else rosbag2.StoragePlugin.SQLITE3
+        return _write_ros2(scans, tmp, topic, plugin, fmt)
 
 
-def _write_all(writer, conn, scans, serialize) -> int:
+def _write_all(writer, conn, scans, serialize, fmt: str) -> int:
     """Write every scan; if the input fails part-way, close the bag properly (rosbags
     aborts a bag left by an exception) with what was written, then re-raise."""
-    count = 0
+    count = raised = 0
+    last = None
     try:
         for scan in scans:
-            writer.write(conn, int(scan.stamp_ns), serialize(scan, count))
+            receive = int(scan.receive_ns if scan.receive_ns is not None else scan.stamp_ns)
+            if last is not None and receive < last:
+                receive, raised = last, raised + 1
+            _check_stamps(fmt, scan, receive, count)
+            writer.write(conn, receive, serialize(scan, count))
+            last = receive
             count += 1
     except BaseException:
         writer.close()
         raise
     writer.close()
+    if raised:
+        warnings.warn(f"{raised} of {count} receive times went back in time and were raised to the one before, so "
+                      "that readers keep the scans in order", StampsChangedWarning, stacklevel=3)
     return count
 
 
@@ -247,13 +452,13 @@ def _write_ros1(scans, path: Path, topic: str) -> int:
     writer.open()
     conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
     return _write_all(writer, conn, scans,
-                      lambda scan, k: ts.serialize_ros1(_message(ts, scan, k, True), _MSGTYPE))
+                      lambda scan, k: ts.serialize_ros1(_message(ts, scan, k, True), _MSGTYPE), "ros1")
 
 
-def _write_ros2(scans, path: Path, topic: str, plugin) -> int:
+def _write_ros2(scans, path: Path, topic: str, plugin, fmt: str) -> int:
     ts = _typestore(ros1=False)
     writer = rosbag2.Writer(path, version=9, storage_plugin=plugin)
     writer.open()
     conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
     return _write_all(writer, conn, scans,
-                      lambda scan, k: ts.serialize_cdr(_message(ts, scan, k, False), _MSGTYPE))
+                      lambda scan, k: ts.serialize_cdr(_message(ts, scan, k, False), _MSGTYPE), fmt)

@@ -26,7 +26,9 @@ there are many of them (at least 10, and at least 0.1 % of all readings).
 
 from __future__ import annotations
 
-import gzip
+import contextlib
+import math
+import zlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import NamedTuple
@@ -34,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..scan import Scan
-from .errors import CorruptFileError
+from .errors import Faults
 
 LASER_MESSAGES = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2", "RAWLASER1", "RAWLASER2",
                   "RAWLASER3", "RAWLASER4")
@@ -47,10 +49,80 @@ def old_style_increment(n: int) -> float:
     return np.pi / (n - 1) if n % 2 else np.pi / n
 
 
-def _open_text(path: Path):
-    if path.suffix == ".gz":
-        return gzip.open(path, "rt", encoding="latin-1")
-    return open(path, encoding="latin-1")
+_CHUNK = 1 << 16  # compressed bytes fed at a time
+_PIECE = 256  # after a fault: feed this much at a time, to keep what decompresses before it
+
+
+class _StreamFault(Exception):
+    """The file could not be read on from here (a cut-off or garbled compressed stream)."""
+
+
+def _inflate(d, data: bytes) -> bytes:
+    """Decompress ``data`` with ``d``; if it holds a fault, what decompresses before the fault
+    (fed again in small pieces from a copy of the decompressor) and then :class:`_StreamFault`."""
+    backup = d.copy()
+    try:
+        return d.decompress(data)
+    except zlib.error:
+        pass
+    d, out = backup, []
+    for i in range(0, len(data), _PIECE):
+        try:
+            out.append(d.decompress(data[i : i + _PIECE]))
+        except zlib.error as exc:
+            raise _StreamFault(f"the compressed data is garbled ({exc})", b"".join(out)) from None
+        if d.eof:
+            break
+    return b"".join(out)  # pragma: no cover - the whole block decompressed after all
+
+
+def _gzip_blocks(fh) -> Iterator[bytes]:
+    """Decompressed blocks of a gzip file, member after member; raise :class:`_StreamFault`
+    where the stream is cut short or garbled (after yielding everything before it)."""
+    d = zlib.decompressobj(wbits=31)
+    while True:
+        data = fh.read(_CHUNK)
+        if not data:
+            if not d.eof:
+                raise _StreamFault("the compressed stream is cut short")
+            return
+        while data:
+            try:
+                out = _inflate(d, data)
+            except _StreamFault as fault:
+                if fault.args[1]:
+                    yield fault.args[1]
+                raise _StreamFault(fault.args[0]) from None
+            if out:
+                yield out
+            if not d.eof:
+                break
+            data = d.unused_data
+            if not data.strip(b"\0"):  # trailing zero padding ends the file, as gzip allows
+                return
+            d = zlib.decompressobj(wbits=31)  # the next gzip member
+
+
+def _lines(path: Path) -> Iterator[tuple[int, str]]:
+    """``(line number, text)`` of every complete line of a plain or gzipped log.
+
+    A gzipped log cut short or garbled yields every complete line before the fault and then
+    raises :class:`_StreamFault` (the cut-off part of the last line is not yielded).
+    """
+    with open(path, "rb") as fh:
+        if path.suffix.lower() != ".gz":
+            for lineno, raw in enumerate(fh, start=1):
+                yield lineno, raw.decode("latin-1")
+            return
+        pending, lineno = b"", 0
+        for block in _gzip_blocks(fh):
+            parts = (pending + block).split(b"\n")
+            pending = parts.pop()
+            for raw in parts:
+                lineno += 1
+                yield lineno, raw.decode("latin-1")
+        if pending:
+            yield lineno + 1, pending.decode("latin-1")
 
 
 class _Record(NamedTuple):
@@ -60,7 +132,8 @@ class _Record(NamedTuple):
     increment: float
     range_max: float | None  # stated by the message, or None (found from the data)
     pose: tuple[float, float, float] | None
-    stamp_ns: int
+    stamp_ns: int  # the message's (ipc) timestamp
+    receive_ns: int  # when the logger received it (logger_timestamp)
 
 
 def _parse(tokens: list[str]) -> _Record:
@@ -71,9 +144,8 @@ def _parse(tokens: list[str]) -> _Record:
             raise ValueError(f"expected {2 + n + 9} fields for {n} readings, got {len(tokens)}")
         ranges = np.array(tokens[2 : 2 + n], dtype=np.float64)
         x, y, theta = (float(v) for v in tokens[2 + n : 5 + n])
-        stamp = float(tokens[2 + n + 6])
         return _Record(kind, ranges, -np.pi / 2, old_style_increment(n), None, (x, y, theta),
-                       int(round(stamp * 1e9)))
+                       _ns(tokens[2 + n + 6]), _ns(tokens[2 + n + 8]))
     # ROBOTLASERx / RAWLASERx
     start, _fov, res, max_range = (float(v) for v in tokens[2:6])
     n = int(tokens[8])
@@ -84,14 +156,22 @@ def _parse(tokens: list[str]) -> _Record:
         if len(rest) != 14:
             raise ValueError(f"expected 14 fields after the remissions, got {len(rest)}")
         pose = tuple(float(v) for v in rest[0:3])
-        stamp = float(rest[11])
+        stamp, logged = rest[11], rest[13]
     else:
         if len(rest) != 3:
             raise ValueError(f"expected 3 fields after the remissions, got {len(rest)}")
-        pose, stamp = None, float(rest[0])
+        pose, stamp, logged = None, rest[0], rest[2]
     if len(ranges) != n:
         raise ValueError(f"expected {n} readings, got {len(ranges)}")
-    return _Record(kind, ranges, start, res, max_range, pose, int(round(stamp * 1e9)))
+    return _Record(kind, ranges, start, res, max_range, pose, _ns(stamp), _ns(logged))
+
+
+def _ns(seconds: str) -> int:
+    """A CARMEN time stamp (seconds, as text) in integer nanoseconds."""
+    value = float(seconds)
+    if not math.isfinite(value):
+        raise ValueError(f"time stamp {seconds!r} is not a finite number")
+    return int(round(value * 1e9))
 
 
 def default_message(counts: dict[str, int]) -> str | None:
@@ -103,9 +183,9 @@ def default_message(counts: dict[str, int]) -> str | None:
 def carmen_message_types(path: str | Path) -> dict[str, int]:
     """Count the laser messages of each type in a log (a quick first look)."""
     counts: dict[str, int] = {}
-    with _open_text(Path(path)) as fh:
-        for line in fh:
-            kind = line.split(" ", 1)[0]
+    with contextlib.suppress(_StreamFault):  # read_carmen reports the fault
+        for _lineno, line in _lines(Path(path)):
+            kind = line.split(None, 1)[0] if line.strip() else ""
             if kind in LASER_MESSAGES:
                 counts[kind] = counts.get(kind, 0) + 1
     return counts
@@ -130,6 +210,7 @@ def read_carmen(
     message: str | None = None,
     *,
     range_max: float | None = None,
+    strict: bool = False,
 ) -> Iterator[Scan]:
     """Yield the scans of one laser in a CARMEN log.
 
@@ -145,52 +226,61 @@ def read_carmen(
         Readings at or beyond this range (metres) are "no return". Default: the maximum
         range a ROBOTLASER/RAWLASER message states, or the value found from the data for
         FLASER/RLASER (see the module docstring).
+    strict : bool
+        Stop at the first malformed line instead of skipping it.
 
     Raises
     ------
     ValueError
         ``message`` names no laser message of the log.
     CorruptFileError
-        After yielding every scan before a malformed line or a truncated gzip stream.
+        After yielding every good scan, when lines were malformed (each is skipped and
+        counted; with ``strict``, reading stops at the first) or a gzipped log is cut short or
+        garbled (every complete line before the fault is read).
     """
     path = Path(path)
     if message is not None and message not in LASER_MESSAGES:
         raise ValueError(f"message must be one of {LASER_MESSAGES}, got {message!r}")
-    records: list[_Record] = []
+    faults = Faults(path, strict)
+    records: list[tuple[int, _Record]] = []
     seen: dict[str, int] = {}
-    fault: tuple[str, str] | None = None
     lineno = 0
     try:
-        with _open_text(path) as fh:
-            for lineno, line in enumerate(fh, start=1):  # noqa: B007 - lineno is used after the loop
-                tokens = line.split()
-                if not tokens or tokens[0] not in LASER_MESSAGES:
-                    continue
-                seen[tokens[0]] = seen.get(tokens[0], 0) + 1
-                if message is not None and tokens[0] != message:
-                    continue
-                try:
-                    records.append(_parse(tokens))
-                except (ValueError, IndexError) as exc:
-                    fault = (f"at line {lineno}", f"malformed {tokens[0]} message ({exc})")
+        for lineno, line in _lines(path):  # noqa: B007 - lineno is used after the loop
+            tokens = line.split()
+            if not tokens or tokens[0] not in LASER_MESSAGES:
+                continue
+            seen[tokens[0]] = seen.get(tokens[0], 0) + 1
+            if message is not None and tokens[0] != message:
+                continue
+            try:
+                records.append((lineno, _parse(tokens)))
+            except (ValueError, IndexError) as exc:
+                if not faults.skip(f"at line {lineno}", f"malformed {tokens[0]} message ({exc})"):
                     break
-    except (EOFError, OSError, gzip.BadGzipFile) as exc:
-        fault = (f"after line {lineno}", f"the compressed stream is cut short ({exc})")
-    except UnicodeDecodeError as exc:
-        fault = (f"after line {lineno}", f"not a text log ({exc})")
+    except _StreamFault as exc:
+        faults.skip(f"after line {lineno}", str(exc))
 
     if message is None:
-        records = [r for r in records if r.kind == default_message(seen)]
-    elif message not in seen and fault is None:
+        wanted = default_message(seen)
+        records = [(n, r) for n, r in records if r.kind == wanted]
+    elif message not in seen and not faults:
         found = ", ".join(f"{k} ({v})" for k, v in sorted(seen.items())) or "none"
         raise ValueError(f"{path} has no {message} messages; laser messages found: {found}")
 
-    auto_max = _auto_range_max([r for r in records if r.range_max is None])
-    for rec in records:
+    auto_max = _auto_range_max([r for _, r in records if r.range_max is None])
+    n_read = 0
+    for lineno, rec in records:
         limit = range_max if range_max is not None else (rec.range_max if rec.range_max else auto_max)
-        yield Scan.from_angle_increment(
-            rec.ranges, rec.angle_min, rec.increment, range_min=0.0, range_max=limit,
-            stamp_ns=rec.stamp_ns, frame_id=rec.kind.lower(), pose=rec.pose,
-        )
-    if fault is not None:
-        raise CorruptFileError(path, fault[0], len(records), fault[1])
+        try:
+            scan = Scan.from_angle_increment(
+                rec.ranges, rec.angle_min, rec.increment, range_min=0.0, range_max=limit,
+                stamp_ns=rec.stamp_ns, frame_id=rec.kind.lower(), pose=rec.pose, receive_ns=rec.receive_ns,
+            )
+        except ValueError as exc:
+            if not faults.skip(f"at line {lineno}", f"impossible {rec.kind} message ({exc})"):
+                break
+            continue
+        yield scan
+        n_read += 1
+    faults.check(n_read)

@@ -1,34 +1,56 @@
-"""Errors raised by labkit's readers."""
+"""Errors raised by labkit's readers, and the one way every reader skips and counts bad records."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["CorruptFileError"]
+from ..errors import CorruptFileError, EmptyRecordingError
+
+__all__ = ["CorruptFileError", "EmptyRecordingError", "Faults"]
 
 
-class CorruptFileError(ValueError):
-    """A file is damaged (truncated, garbled, missing its index).
+class Faults:
+    """The bad records one reader met in one file.
 
-    Raised by a reader *after* it has yielded every scan that could be read before the
-    fault, so nothing readable is lost and nothing is lost silently.
+    A reader calls :meth:`skip` for every record it cannot decode and goes on while it
+    returns True; when it has yielded every good scan it calls :meth:`check`, which raises
+    one :class:`CorruptFileError` naming the file, how many records were skipped and where
+    the first was. With ``strict=True``, :meth:`skip` returns False at the first bad record:
+    the reader stops there, yields what it has and calls :meth:`check`.
 
-    Attributes
-    ----------
-    path : Path
-        The damaged file.
-    where : str
-        Where it broke (a byte offset, a line number, a message count).
-    n_read : int
-        How many scans were yielded before the fault.
+    Examples
+    --------
+    >>> faults = Faults("run.jsonl", strict=False)
+    >>> faults.skip("at line 3", "not JSON")
+    True
+    >>> faults.skip("at line 7", "not JSON")
+    True
+    >>> try:
+    ...     faults.check(n_read=9)
+    ... except CorruptFileError as error:
+    ...     print(error)
+    run.jsonl is damaged: 2 records were skipped, the first at line 3: not JSON; 9 scan(s) were read
     """
 
-    def __init__(self, path: str | Path, where: str, n_read: int, reason: str = "") -> None:
+    def __init__(self, path: str | Path, strict: bool = False) -> None:
         self.path = Path(path)
-        self.where = where
-        self.n_read = n_read
-        self.reason = reason
-        detail = f": {reason}" if reason else ""
-        super().__init__(
-            f"{self.path} is damaged {where}{detail}; the {n_read} scan(s) before the fault were read"
-        )
+        self.strict = strict
+        self.count = 0
+        self.first: tuple[str, str] | None = None
+
+    def skip(self, where: str, reason: str, count: int = 1) -> bool:
+        """Note ``count`` unreadable records at ``where`` (``count=0``: the file is damaged
+        there, e.g. its index is missing, but no record was lost). Returns whether to read on
+        (False in strict mode)."""
+        if self.first is None:
+            self.first = (where, reason)
+        self.count += count
+        return not self.strict
+
+    def __bool__(self) -> bool:
+        return self.first is not None
+
+    def check(self, n_read: int) -> None:
+        """Raise the :class:`CorruptFileError` that sums up the faults, if there were any."""
+        if self.first is not None:
+            raise CorruptFileError(self.path, self.first[0], n_read, self.first[1], n_skipped=self.count)

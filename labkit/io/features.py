@@ -20,70 +20,79 @@ import json
 import math
 import sys
 from collections.abc import Iterable, Iterator
-from contextlib import nullcontext
 from pathlib import Path
 
+import numpy as np
+
+from .._safe import OutputKind, first_json_line_with, safe_output
 from ..features import Features
-from .errors import CorruptFileError
+from .errors import Faults
+from .jsonscan import json_lines
 
-__all__ = ["write_features", "read_features"]
+__all__ = ["write_features", "read_features", "json_safe"]
 
 
-def _clean(obj):
-    """JSON has no NaN or infinity: write them as null."""
+def json_safe(obj):
+    """A copy of ``obj`` (dicts, lists, tuples, numbers) that strict JSON can hold: NaN and
+    infinity become null ("no value")."""
+    if isinstance(obj, np.generic):
+        obj = obj.item()
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else None
     if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
+        return {k: json_safe(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
+        return [json_safe(v) for v in obj]
     return obj
 
 
-def write_features(features: Iterable[Features], out, *, overwrite: bool = False) -> int:
+#: What :func:`write_features` writes (see labkit._safe): how an existing output is recognised.
+FEATURES_FILE = OutputKind("a labkit features file (.jsonl)", (".jsonl",), first_json_line_with("features"))
+
+
+def write_features(features: Iterable[Features], out, *, overwrite: bool = False, inputs=()) -> int:
     """Write one JSON line per :class:`labkit.Features` to ``out`` (a path, ``"-"`` for
     standard output, or an open text file); returns how many were written.
 
-    Each record also gets ``"scan"``, its place in the stream. Lines are flushed as they
-    are written, so if iterating ``features`` raises (a damaged recording), every scan
-    before the fault is in the file and the error propagates.
+    Each record also gets ``"scan"``, its place in the stream. A path is written under a
+    temporary name and renamed when complete (see :mod:`labkit._safe`): if iterating
+    ``features`` raises :class:`~labkit.io.CorruptFileError` (a damaged recording), the file
+    holds every scan before it and the error propagates. ``inputs``: the recordings read,
+    which the output may not be.
     """
     if isinstance(out, (str, Path)) and str(out) != "-":
-        path = Path(out)
-        if path.exists() and not overwrite:
-            raise ValueError(f"{path} exists; pass overwrite=True (--force) to replace it")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        ctx = open(path, "w", encoding="utf-8")  # noqa: SIM115 - closed by the with below
-    else:
-        ctx = nullcontext(sys.stdout if str(out) == "-" else out)
+        with safe_output(out, FEATURES_FILE, overwrite=overwrite, inputs=inputs) as tmp, \
+                open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            return _write_records(features, fh)
+    return _write_records(features, sys.stdout if str(out) == "-" else out)
+
+
+def _write_records(features: Iterable[Features], fh) -> int:
     n = 0
-    with ctx as fh:
-        try:
-            for f in features:
-                record = {"scan": n, **f.as_record()}
-                fh.write(json.dumps(_clean(record), separators=(",", ":")) + "\n")
-                n += 1
-        finally:
-            fh.flush()
+    try:
+        for f in features:
+            record = {"scan": n, **f.as_record()}
+            fh.write(json.dumps(json_safe(record), separators=(",", ":"), allow_nan=False) + "\n")
+            n += 1
+    finally:
+        fh.flush()
     return n
 
 
-def read_features(path: str | Path) -> Iterator[dict]:
-    """The records of a features file, one dict per scan. A line that is not a JSON
-    object raises :class:`labkit.CorruptFileError` after the records before it."""
+def read_features(path: str | Path, *, strict: bool = False) -> Iterator[dict]:
+    """The records of a features file, one dict per scan. A line that is not a features
+    record is skipped and counted; after the last good record :class:`labkit.CorruptFileError`
+    says how many and where the first was (``strict``: reading stops at the first)."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path} does not exist")
+    faults = Faults(path, strict)
     n = 0
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, 1):
-            if not line.strip():
-                continue
-            try:
-                record = json.loads(line)
-            except json.JSONDecodeError as exc:
-                raise CorruptFileError(path, f"at line {lineno}", n, f"not JSON ({exc.msg})") from None
-            if not isinstance(record, dict) or "features" not in record:
-                raise CorruptFileError(path, f"at line {lineno}", n, "not a labkit features record")
-            n += 1
-            yield record
+    for lineno, record in json_lines(path, faults):
+        if not isinstance(record, dict) or "features" not in record:
+            if not faults.skip(f"at line {lineno}", "not a labkit features record"):
+                break
+            continue
+        n += 1
+        yield record
+    faults.check(n)

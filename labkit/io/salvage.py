@@ -6,19 +6,25 @@ short (a crashed recorder, an interrupted copy) does not open at all. These read
 the file from the start instead, record by record, yield every ``sensor_msgs/LaserScan``
 message that is complete, and then report where the file broke.
 
-Each reader yields ``(topic, stamp_ns, message)`` and finally returns a string saying
-where it stopped; the caller turns that into a :class:`~labkit.io.CorruptFileError`.
-Only LaserScan messages are decoded; other topics are listed but skipped.
+Each reader yields ``(topic, receive_ns, raw_bytes)`` for every LaserScan message it finds
+(the caller deserialises them, and skips a message that does not decode), and a
+:class:`Fault` for every damaged part it skips: a chunk that does not decompress, a record
+whose header is garbled, a database row sqlite cannot read. It goes on past a fault whenever
+the file's framing lets it find the next record, and finally returns a :class:`Fault` saying
+where the file ends early (or None when it reached a proper end). The caller counts them
+(:class:`labkit.io.errors.Faults`).
 """
 
 from __future__ import annotations
 
 import bz2
+import contextlib
 import mmap
 import sqlite3
 import struct
 import tempfile
 from collections.abc import Generator
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
@@ -33,7 +39,18 @@ except ImportError:  # Python < 3.14
 LASERSCAN_TYPES = {"sensor_msgs/LaserScan", "sensor_msgs/msg/LaserScan"}
 _MSGTYPE = "sensor_msgs/msg/LaserScan"
 
-Salvage = Generator[tuple[str, int, object], None, str]
+
+
+@dataclass(frozen=True)
+class Fault:
+    """A damaged part of a file: where, what, and how many records it cost (0: none lost)."""
+
+    where: str
+    reason: str
+    count: int = 1
+
+
+Salvage = Generator["tuple[str, int, bytes | str] | Fault", None, "Fault | None"]
 
 
 @lru_cache(maxsize=2)
@@ -114,58 +131,71 @@ def _ros1_records(buf, start: int, end: int, *, partial: bool = False):
 
 def salvage_ros1(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
     """Walk a ROS1 bag's chunks in file order (see the ROS bag format 2.0)."""
-    ts = typestore(ros1=True)
     connections: dict[int, tuple[str, str]] = {}
     with open(path, "rb") as fh:
         size = Path(path).stat().st_size
         if size < len(_ROS1_MAGIC):
-            return "at byte 0: the file is shorter than the bag magic"
+            return Fault("at byte 0", "the file is shorter than the bag magic")
         buf = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
         try:
             if buf[: len(_ROS1_MAGIC)] != _ROS1_MAGIC:
-                return "at byte 0: not a ROS1 bag (magic '#ROSBAG V2.0' missing)"
+                return Fault("at byte 0", "not a ROS1 bag (magic '#ROSBAG V2.0' missing)")
+            indexed = False
             try:
                 for offset, fields, data, complete in _ros1_records(buf, len(_ROS1_MAGIC), size, partial=True):
                     op = fields.get("op", b"\x00")[:1]
                     if op == b"\x05":  # chunk (the last one may be cut off: read what is there)
-                        (chunk_size,) = struct.unpack("<I", fields.get("size", b"\0\0\0\0")[:4])
-                        cut = not complete
-                        compression = fields.get("compression", b"none").decode()
-                        try:
-                            inner = _decompress(data, compression, partial=cut)
-                        except (OSError, ValueError, RuntimeError, EOFError) as exc:
-                            raise _Truncated(offset, f"a chunk does not decompress ({exc})") from None
-                        try:
-                            for _, ifields, idata, _ in _ros1_records(inner, 0, len(inner)):
-                                yield from _ros1_record(ifields, idata, connections, ts, topic,
-                                                        want_topics)
-                        except _Truncated as exc:
-                            state = "is cut off" if len(inner) < chunk_size else f"is garbled ({exc.what})"
-                            raise _Truncated(offset, f"the chunk at byte {offset} {state}") from None
+                        yield from _ros1_chunk(offset, fields, data, complete, connections, topic, want_topics)
                     elif op in (b"\x07", b"\x02") and complete:  # unchunked records (old bags)
-                        yield from _ros1_record(fields, data, connections, ts, topic, want_topics)
+                        yield from _ros1_record(offset, fields, data, connections, topic, want_topics)
+                    elif op in (b"\x04", b"\x06"):  # index data, chunk info: the bag was closed properly
+                        indexed = True
             except _Truncated as exc:
-                return f"at byte {exc.offset}: {exc.what}"
-            return f"at byte {size}: the file ends before its index (the recording was cut short)"
+                return Fault(f"at byte {exc.offset}", exc.what)
+            if indexed:
+                return None
+            return Fault(f"at byte {size}", "the file ends before its index (the recording was cut short)", 0)
         finally:
             buf.close()
 
 
-def _ros1_record(fields, data, connections, ts, topic, want_topics):
+def _ros1_chunk(offset, fields, data, complete, connections, topic, want_topics):
+    """The records of one chunk; a chunk that does not decompress or whose records are garbled
+    is a :class:`Fault` (the walk goes on with the next chunk); a cut-off chunk ends the walk."""
+    try:
+        (chunk_size,) = struct.unpack("<I", fields.get("size", b"\0\0\0\0")[:4])
+        inner = _decompress(data, fields.get("compression", b"none").decode(), partial=not complete)
+    except (OSError, ValueError, RuntimeError, EOFError, struct.error, UnicodeDecodeError) as exc:
+        if not complete:
+            raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
+        yield Fault(f"at byte {offset}", f"a chunk does not decompress ({exc})")
+        return
+    try:
+        for pos, ifields, idata, _ in _ros1_records(inner, 0, len(inner)):
+            yield from _ros1_record(pos, ifields, idata, connections, topic, want_topics)
+    except _Truncated as exc:
+        if not complete or len(inner) < chunk_size:
+            raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
+        yield Fault(f"at byte {offset}", f"the chunk at byte {offset} is garbled ({exc.what})")
+
+
+def _ros1_record(offset, fields, data, connections, topic, want_topics):
     op = fields.get("op", b"\x00")[:1]
-    if op == b"\x07":
-        (conn,) = struct.unpack("<I", fields["conn"])
-        conn_fields = _ros1_fields(bytes(data))
-        connections[conn] = (fields["topic"].decode(), conn_fields.get("type", b"").decode())
-        if want_topics:
-            yield connections[conn][0], 0, connections[conn][1]
-    elif op == b"\x02" and not want_topics:
-        (conn,) = struct.unpack("<I", fields["conn"])
-        name, msgtype = connections.get(conn, ("", ""))
-        if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
-            sec, nsec = struct.unpack("<II", fields["time"])
-            msg = ts.deserialize_ros1(bytes(data), _MSGTYPE)
-            yield name, sec * 1_000_000_000 + nsec, msg
+    try:
+        if op == b"\x07":
+            (conn,) = struct.unpack("<I", fields["conn"])
+            conn_fields = _ros1_fields(bytes(data))
+            connections[conn] = (fields["topic"].decode(), conn_fields.get("type", b"").decode())
+            if want_topics:
+                yield connections[conn][0], 0, connections[conn][1]
+        elif op == b"\x02" and not want_topics:
+            (conn,) = struct.unpack("<I", fields["conn"])
+            name, msgtype = connections.get(conn, ("", ""))
+            if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
+                sec, nsec = struct.unpack("<II", fields["time"])
+                yield name, sec * 1_000_000_000 + nsec, bytes(data)
+    except (KeyError, ValueError, struct.error, UnicodeDecodeError) as exc:
+        yield Fault(f"in the record at byte {offset}", f"its header is garbled ({type(exc).__name__}: {exc})")
 
 
 # ============================================================================ MCAP
@@ -195,114 +225,154 @@ def _mcap_records(buf, start: int, end: int, *, partial: bool = False):
 
 def salvage_mcap(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
     """Walk an MCAP file's records in file order (see the MCAP specification)."""
-    ts = typestore(ros1=False)
     schemas: dict[int, str] = {}
     channels: dict[int, tuple[str, str]] = {}
     with open(path, "rb") as fh:
         size = Path(path).stat().st_size
         if size < len(_MCAP_MAGIC):
-            return "at byte 0: the file is shorter than the MCAP magic"
+            return Fault("at byte 0", "the file is shorter than the MCAP magic")
         buf = mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
         try:
             if buf[: len(_MCAP_MAGIC)] != _MCAP_MAGIC:
-                return "at byte 0: not an MCAP file (magic missing)"
+                return Fault("at byte 0", "not an MCAP file (magic missing)")
 
-            def handle(op, content):
-                if op == 0x03:  # schema
-                    (sid,) = struct.unpack_from("<H", content, 0)
-                    name, _ = _mcap_str(content, 2)
-                    schemas[sid] = name
-                elif op == 0x04:  # channel
-                    cid, sid = struct.unpack_from("<HH", content, 0)
-                    name, _ = _mcap_str(content, 4)
-                    channels[cid] = (name, schemas.get(sid, ""))
-                    if want_topics:
-                        yield name, 0, schemas.get(sid, "")
-                elif op == 0x05 and not want_topics:  # message
-                    cid, _seq, log_time, _pub = struct.unpack_from("<HIQQ", content, 0)
-                    name, msgtype = channels.get(cid, ("", ""))
-                    if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
-                        msg = ts.deserialize_cdr(bytes(content[22:]), _MSGTYPE)
-                        yield name, log_time, msg
+            def handle(offset, op, content):
+                try:
+                    if op == 0x03:  # schema
+                        (sid,) = struct.unpack_from("<H", content, 0)
+                        name, _ = _mcap_str(content, 2)
+                        schemas[sid] = name
+                    elif op == 0x04:  # channel
+                        cid, sid = struct.unpack_from("<HH", content, 0)
+                        name, _ = _mcap_str(content, 4)
+                        channels[cid] = (name, schemas.get(sid, ""))
+                        if want_topics:
+                            yield name, 0, schemas.get(sid, "")
+                    elif op == 0x05 and not want_topics:  # message
+                        cid, _seq, log_time, _pub = struct.unpack_from("<HIQQ", content, 0)
+                        name, msgtype = channels.get(cid, ("", ""))
+                        if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
+                            yield name, log_time, bytes(content[22:])
+                except (struct.error, UnicodeDecodeError) as exc:
+                    yield Fault(f"in the record at byte {offset}", f"it is garbled ({exc})")
 
             try:
                 for offset, op, content, complete in _mcap_records(buf, len(_MCAP_MAGIC), size, partial=True):
                     if op == 0x02:  # footer: the file is complete
-                        return f"at byte {offset}: the file is complete but its summary is unreadable"
+                        return None
                     if op == 0x06:  # chunk (the last one may be cut off: read what is there)
-                        try:
-                            (uncompressed_size,) = struct.unpack_from("<Q", content, 16)
-                            compression, rpos = _mcap_str(content, 28)
-                            (rlen,) = struct.unpack_from("<Q", content, rpos)
-                            records = _decompress(content[rpos + 8 : rpos + 8 + rlen], compression,
-                                                  partial=not complete)
-                        except (struct.error, ValueError, RuntimeError, OSError, EOFError) as exc:
-                            raise _Truncated(offset, f"a chunk does not decompress ({exc})") from None
-                        try:
-                            for _, iop, icontent, _ in _mcap_records(records, 0, len(records)):
-                                yield from handle(iop, icontent)
-                        except _Truncated as exc:
-                            state = ("is cut off" if len(records) < uncompressed_size
-                                     else f"is garbled ({exc.what})")
-                            raise _Truncated(offset, f"the chunk at byte {offset} {state}") from None
+                        yield from _mcap_chunk(offset, content, complete, handle)
                     elif complete:
-                        yield from handle(op, content)
+                        yield from handle(offset, op, content)
             except _Truncated as exc:
-                return f"at byte {exc.offset}: {exc.what}"
-            except (struct.error, UnicodeDecodeError) as exc:
-                return f"in a garbled record ({exc})"
-            return f"at byte {size}: the file ends before its footer (the recording was cut short)"
+                return Fault(f"at byte {exc.offset}", exc.what)
+            return Fault(f"at byte {size}", "the file ends before its footer (the recording was cut short)", 0)
         finally:
             buf.close()
 
 
+def _mcap_chunk(offset, content, complete, handle):
+    """The records of one MCAP chunk (see :func:`_ros1_chunk` for what is a fault)."""
+    try:
+        (uncompressed_size,) = struct.unpack_from("<Q", content, 16)
+        compression, rpos = _mcap_str(content, 28)
+        (rlen,) = struct.unpack_from("<Q", content, rpos)
+        records = _decompress(content[rpos + 8 : rpos + 8 + rlen], compression, partial=not complete)
+    except (struct.error, ValueError, RuntimeError, OSError, EOFError, UnicodeDecodeError) as exc:
+        if not complete:
+            raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
+        yield Fault(f"at byte {offset}", f"a chunk does not decompress ({exc})")
+        return
+    try:
+        for pos, iop, icontent, _ in _mcap_records(records, 0, len(records)):
+            yield from handle(offset + pos, iop, icontent)
+    except _Truncated as exc:
+        if not complete or len(records) < uncompressed_size:
+            raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
+        yield Fault(f"at byte {offset}", f"the chunk at byte {offset} is garbled ({exc.what})")
+
+
 # ============================================================================ sqlite3
 def salvage_sqlite3(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
-    """Read the rows of a damaged rosbag2 sqlite3 database until the first bad page.
+    """Read the rows of a damaged rosbag2 sqlite3 database one by one.
 
-    A truncated database file still carries its original page count; sqlite then
-    refuses the whole file. A temporary copy with the page count set to what is really
-    there reads row by row up to the missing pages.
+    A truncated database file still carries its original page count; sqlite then refuses
+    the whole file. A temporary copy with the page count set to what is really there opens,
+    and each message row is then read on its own, so a garbled page costs only the rows on it.
     """
-    ts = typestore(ros1=False)
     data = Path(path).read_bytes()
     if len(data) < 100 or not data.startswith(b"SQLite format 3\x00"):
-        return "at byte 0: not an sqlite3 database"
+        return Fault("at byte 0", "not an sqlite3 database")
     page_size = int.from_bytes(data[16:18], "big") or 65536
     if page_size == 1:
         page_size = 65536
     n_pages = len(data) // page_size
+    pages_stated = int.from_bytes(data[28:32], "big")
     with tempfile.TemporaryDirectory(prefix="labkit-salvage-") as tmp:
         copy = Path(tmp) / "salvage.db3"
         fixed = bytearray(data[: n_pages * page_size])
         fixed[28:32] = n_pages.to_bytes(4, "big")
         copy.write_bytes(bytes(fixed))
         con = sqlite3.connect(f"file:{copy}?mode=ro", uri=True)
-        last_id = None
         try:
             try:
                 topics = {row[0]: (row[1], row[2]) for row in con.execute("SELECT id, name, type FROM topics")}
             except sqlite3.DatabaseError as exc:
-                return f"in its topics table ({exc})"
+                return Fault("in its topics table", str(exc))
             if want_topics:
                 for name, msgtype in topics.values():
                     yield name, 0, msgtype
-                return "topics listed"
-            wanted = [
-                tid for tid, (name, msgtype) in topics.items()
-                if msgtype in LASERSCAN_TYPES and (topic is None or name == topic)
-            ]
-            if not wanted:
-                return "with no readable LaserScan rows"
-            marks = ",".join("?" * len(wanted))
-            query = f"SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id IN ({marks})"
-            try:
-                for row_id, tid, stamp, blob in con.execute(query, wanted):
-                    last_id = row_id
-                    yield topics[tid][0], int(stamp), ts.deserialize_cdr(bytes(blob), _MSGTYPE)
-            except sqlite3.DatabaseError as exc:
-                after = f"after message row {last_id}" if last_id is not None else "before the first message"
-                return f"{after} ({exc})"
-            return f"at byte {len(data)}: the database opened only after repair (size {len(data)} bytes)"
+                return None
+            wanted = {tid for tid, (name, msgtype) in topics.items()
+                      if msgtype in LASERSCAN_TYPES and (topic is None or name == topic)}
+            yield from _rows_one_by_one(con, topics, wanted)
+            if len(data) % page_size or pages_stated > n_pages:
+                return Fault(f"at byte {len(data)}", f"the database is cut short ({n_pages} of its "
+                             f"{max(pages_stated, n_pages + 1)} pages are there); rows on the missing pages are lost")
+            return None
         finally:
             con.close()
+
+
+_MISSES = 64  # ids tried past the last readable row before giving up on a table whose end is unreadable
+
+
+def _rows_one_by_one(con: sqlite3.Connection, topics: dict, wanted: set):
+    """Every readable LaserScan row, read by id; a row sqlite cannot read is a :class:`Fault`.
+
+    The ids run to ``max(id)``; when even that is unreadable (a file cut short), to the last id
+    a scan of the table reaches, and on until ``_MISSES`` ids in a row are missing or unreadable.
+    """
+    last = _last_row_id(con)
+    end_known = last is not None
+    if not end_known:
+        last = 0
+        with contextlib.suppress(sqlite3.DatabaseError):
+            for (row_id,) in con.execute("SELECT id FROM messages"):
+                last = max(last, row_id)
+    row_id = misses = 0
+    while row_id < last or (not end_known and misses < _MISSES):
+        row_id += 1
+        try:
+            row = con.execute("SELECT topic_id, timestamp, data FROM messages WHERE id = ?", (row_id,)).fetchone()
+        except sqlite3.DatabaseError as exc:
+            if row_id <= last:
+                yield Fault(f"in message row {row_id}", str(exc))
+            else:
+                misses += 1
+            continue
+        if row is None:
+            misses += row_id > last
+            continue
+        misses = 0
+        last = max(last, row_id)
+        if row[0] in wanted:
+            yield topics[row[0]][0], int(row[1]), bytes(row[2])
+
+
+def _last_row_id(con: sqlite3.Connection) -> int | None:
+    try:
+        row = con.execute("SELECT max(id) FROM messages").fetchone()
+    except sqlite3.DatabaseError:
+        return None
+    return int(row[0]) if row and row[0] is not None else 0

@@ -46,6 +46,8 @@ import numpy as np  # noqa: E402
 import rerun as rr  # noqa: E402
 import rerun.blueprint as rrb  # noqa: E402
 
+from .._safe import OutputKind, check_output, safe_output, starts_with  # noqa: E402
+from ..errors import CorruptFileError  # noqa: E402
 from ..features import Features  # noqa: E402
 from ..geometry import arc_points  # noqa: E402
 from ..pipeline import Config, extract_features  # noqa: E402
@@ -463,6 +465,8 @@ def record_scans(
     config: Config | None = None,
     segment_threshold_m: float | None = 0.08,
     description: str | None = None,
+    overwrite: bool = False,
+    inputs: Iterable[str | Path] = (),
 ) -> RecordSummary:
     """Write scans to an ``.rrd`` file with the default blueprint.
 
@@ -470,13 +474,23 @@ def record_scans(
     ``config`` (a :class:`labkit.Config`); otherwise only the scans and their range
     segments (``labels`` per scan, or adaptive with ``segment_threshold_m`` as floor). ``truth`` is
     a :class:`labkit.sim.GroundTruth` to log beside them. If iterating ``scans`` raises
-    ``ValueError``/``OSError`` (a damaged file), the ``.rrd`` still holds every scan before
-    the fault, the error is logged to ``log`` and returned in the summary (not raised).
+    :class:`labkit.CorruptFileError` (a damaged file), the ``.rrd`` holds every scan that
+    could be read, the error is logged to ``log`` and returned in the summary (not raised).
+
+    The file is written under a temporary name and renamed when complete; ``overwrite``
+    replaces only an existing ``.rrd``, and the output may not be one of ``inputs`` (see
+    :mod:`labkit._safe`). Interrupted (Ctrl-C), the recording so far is closed and kept as
+    ``<name>.partial.rrd``.
     """
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    with safe_output(out, RRD_FILE, overwrite=overwrite, inputs=inputs) as tmp:
+        return _record_scans(scans, tmp, Path(out), name=name, truth=truth, labels=labels, features=features,
+                             config=config, segment_threshold_m=segment_threshold_m, description=description)
+
+
+def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features, config, segment_threshold_m,
+                  description) -> RecordSummary:
     rec = new_recording(name)
-    rec.save(out, default_blueprint=blueprint())
+    rec.save(tmp, default_blueprint=blueprint())
     log_static(rec, description)
     stamps: list[int] = []
     counts: dict[str, int] = {}
@@ -506,16 +520,24 @@ def record_scans(
     error: Exception | None = None
     try:
         n = _log_frames(rec, frames(), 0, True)
-    except (ValueError, OSError) as exc:  # CorruptFileError is a ValueError
+    except CorruptFileError as exc:
         error, n = exc, len(stamps)
         rec.set_time(SEQUENCE, sequence=max(n - 1, 0))
-        log_text(rec, f"reading stopped: {exc}", level="ERROR")
+        log_text(rec, f"damaged input: {exc}", level="ERROR")
+    except BaseException:  # interrupted or failed: close the file properly (labkit._safe decides its fate)
+        rec.flush()
+        rec.disconnect()
+        raise
     n_truth = log_truth(rec, truth, {s: k for k, s in enumerate(stamps)}) if truth is not None else 0
     rec.set_time(SEQUENCE, sequence=0)
     log_text(rec, f"{n} scans from {name}" + (f", ground truth for {n_truth}" if n_truth else ""))
     rec.flush()
     rec.disconnect()
     return RecordSummary(out, n, n_truth, error, counts, seconds)
+
+
+#: What :func:`record_scans` writes (see labkit._safe): how an existing recording is recognised.
+RRD_FILE = OutputKind("a rerun recording (.rrd)", (".rrd",), starts_with(b"RRF"))
 
 
 def record(
@@ -528,17 +550,21 @@ def record(
     progress: bool = False,
     segment_threshold_m: float | None = 0.08,
     description: str | None = None,
+    overwrite: bool = False,
+    strict: bool = False,
 ) -> RecordSummary:
     """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
     ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
     (``config``, default :class:`labkit.Config` (); ``features=False``: scans and range
     segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it. See
-    :func:`record_scans` for damaged inputs.
+    :func:`record_scans` for damaged inputs and for ``overwrite``; ``strict`` stops reading
+    at the first bad record.
     """
     from ..io import read_scans
     from ..sim import read_truth, truth_path_for
 
-    stream = read_scans(source, topic=topic)
+    check_output(out, RRD_FILE, overwrite=overwrite, inputs=[source])  # before any reading
+    stream = read_scans(source, topic=topic, strict=strict)
     name = Path(source).name
     if features and config is None:
         config = Config()
@@ -554,8 +580,10 @@ def record(
         from tqdm.auto import tqdm
 
         scans = tqdm(scans, total=stream.count, unit="scan", desc=f"view {name}")
+    inputs = [source, truth_file] if truth is not None else [source]
     return record_scans(scans, out, name=name, truth=truth, config=config if features else None,
-                        segment_threshold_m=segment_threshold_m, description=description)
+                        segment_threshold_m=segment_threshold_m, description=description, overwrite=overwrite,
+                        inputs=inputs)
 
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=()) -> None:
