@@ -41,7 +41,7 @@ lab: $(VENV)/.installed
 	PATH="$(abspath $(BIN)):$$PATH" $(BIN)/jupyter lab --notebook-dir=. notebooks/00_tour.ipynb
 
 data: $(VENV)/.installed
-	$(BIN)/labkit simulate --bundled -o data
+	$(BIN)/labkit simulate --bundled -o data -f
 
 release: $(VENV)/.installed
 	cd exercises && PATH="$(abspath $(BIN)):$$PATH" ../$(BIN)/nbgrader generate_assignment "*" --force

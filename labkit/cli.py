@@ -1,23 +1,51 @@
 """The ``labkit`` command line: simulate, extract features, view, convert, evaluate, benchmark and inspect recordings.
 
-Run ``labkit --help`` or ``labkit COMMAND --help``. Errors print one line that says what
-to do and exit with status 1; a damaged input file still produces its output with every
-readable scan, then exits with status 1.
+Run ``labkit --help`` or ``labkit COMMAND --help``. Every expected problem prints one line
+``labkit: error: ...`` and exits with a documented status (README, "When things go wrong"):
+
+====  ==========================================================================================
+0     done
+1     done, but an input was damaged: the output holds every record that could be read, and
+      the line says how many records were skipped and where the first one was
+2     nothing was done: the command line or an input was refused (unknown format, missing
+      file, an output that exists without ``-f`` or is not labkit's kind of file, an output
+      that is the input, a wrong suffix, a bad value)
+3     nothing was done: the system refused (permission denied, disk full, read-only folder)
+70    a bug in labkit: the traceback is shown; please report it with the command line
+130   interrupted (Ctrl-C): the output is unchanged; what was written so far is kept as
+      ``<name>.partial<suffix>``
+141   standard output was closed by the reader (``labkit extract run.bag | head``)
+====  ==========================================================================================
+
+Outputs are written under a temporary name and renamed when complete; ``-f`` replaces only
+labkit's own kind of output, never another file or folder, and never an input.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import subprocess
 import sys
 import time
+import traceback
+import warnings
 from functools import partial
 from pathlib import Path
 
-from . import sim
-from .io import FORMATS, CorruptFileError, convert, detect_format, read_scans
+from . import __version__, sim
+from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with, starts_with
+from .errors import CorruptFileError, RefusedError
+from .io import FORMATS, convert, detect_format, read_scans
 
-EXIT_ERROR = 1
+EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
+EXIT_ERROR = EXIT_DAMAGED  # the name earlier versions used
+
+#: What ``labkit evaluate --json`` and ``labkit demo`` write (see labkit._safe).
+REPORT_FILE = OutputKind("a labkit evaluate report (.json)", (".json",),
+                         json_object_with(allowed=("lines", "sweep", "round_objects", "recordings")))
+PNG_FILE = OutputKind("a PNG image (.png)", (".png",), starts_with(b"\x89PNG\r\n\x1a\n"))
 
 
 def _progress(total: int | None, desc: str):
@@ -46,13 +74,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     if args.bundled:
         out = Path(args.output or "data")
-        paths = generate_bundled(out, progress=not args.quiet)
+        paths = generate_bundled(out, progress=not args.quiet, overwrite=args.force)
         for p in paths:
             print(p)
         return 0
     if not args.world or not args.output:
-        raise ValueError("give a WORLD and -o OUTPUT (or --bundled); worlds: hall, corridor, office, "
-                         "random_polygons_<seed>")
+        raise RefusedError("give a WORLD and -o OUTPUT (or --bundled); worlds: hall, corridor, office, "
+                           "random_polygons_<seed>")
     sc = sim.scenario(args.world)
     n = args.scans or sc.n_scans
     bag, truth, count = write_simulation(
@@ -65,7 +93,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_convert(args: argparse.Namespace) -> int:
     n = convert(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
-                progress=not args.quiet)
+                progress=not args.quiet, strict=args.strict)
     print(f"wrote {n} scans to {args.output}")
     return 0
 
@@ -88,7 +116,8 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     config = None if args.no_features else _config(args)
     summary = lkrr.record(args.input, args.output, topic=args.topic, config=config,
-                          features=not args.no_features, progress=not args.quiet)
+                          features=not args.no_features, progress=not args.quiet, overwrite=args.force,
+                          strict=args.strict)
     extra = f" and ground truth for {summary.n_truth}" if summary.n_truth else ""
     print(f"wrote {summary.n_scans} scans{extra} to {summary.path}")
     if summary.counts:
@@ -104,12 +133,15 @@ def cmd_view(args: argparse.Namespace) -> int:
 
 def cmd_extract(args: argparse.Namespace) -> int:
     from .io import write_features
+    from .io.features import FEATURES_FILE
     from .pipeline import extract_all
 
-    config = _config(args)
-    stream = read_scans(args.input, topic=args.topic)
-    scans = iter(stream)
     to_stdout = args.output == "-"
+    if not to_stdout:
+        check_output(args.output, FEATURES_FILE, overwrite=args.force, inputs=[args.input])
+    config = _config(args)
+    stream = read_scans(args.input, topic=args.topic, strict=args.strict)
+    scans = iter(stream)
     if not args.quiet:
         scans = _progress(stream.count, f"extract {Path(args.input).name}")(scans)
     counts: dict[str, int] = {}
@@ -121,7 +153,7 @@ def cmd_extract(args: argparse.Namespace) -> int:
                 counts[k] = counts.get(k, 0) + v
             yield f
 
-    n = write_features(tallied(), args.output, overwrite=args.force)
+    n = write_features(tallied(), args.output, overwrite=args.force, inputs=[args.input])
     dt = time.perf_counter() - t0
     report = sys.stderr if to_stdout else sys.stdout
     where = "standard output" if to_stdout else args.output
@@ -137,9 +169,7 @@ def cmd_config(args: argparse.Namespace) -> int:
     config = Config.load(args.input) if args.input else Config()
     if args.output:
         out = Path(args.output)
-        if out.exists() and not args.force:
-            raise ValueError(f"{out} exists; pass --force to replace it")
-        config.save(out)
+        config.save(out, overwrite=args.force)
         print(f"wrote {out}; edit it and pass it with --config to extract, view or bench")
     else:
         print(config.to_toml())
@@ -147,6 +177,7 @@ def cmd_config(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    import itertools
     import tempfile
 
     import numpy as np
@@ -157,34 +188,56 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     config = _config(args)
     source = Path(args.input) if args.input else bundled_data("hall.bag")
-    t0 = time.perf_counter()
-    scans = list(read_scans(source, topic=args.topic))[: args.scans]
-    t_read = time.perf_counter() - t0
-    if not scans:
-        raise ValueError(f"{source} holds no scans")
-    for s in scans[:20]:  # warm up caches and lazy imports
-        extract_features(s, config)
+    stream = read_scans(source, topic=args.topic, strict=args.strict)
+    scans = iter(stream)
+    if args.scans is not None:
+        scans = itertools.islice(scans, args.scans)
+    spent = {"read": 0.0, "extract": 0.0}
     stages: dict[str, list[float]] = {}
-    t0 = time.perf_counter()
-    feats = [extract_features(s, config) for s in scans]
-    t_extract = time.perf_counter() - t0
-    for f in feats:
-        for k, v in f.timings.items():
-            stages.setdefault(k, []).append(v)
+    shape: list[int] = []
+
+    def timed():  # one streaming pass: read a scan, extract its features, hand both to the logger
+        warm = 0
+        while True:
+            t0 = time.perf_counter()
+            scan = next(scans, None)
+            t1 = time.perf_counter()
+            if scan is None:
+                return
+            if warm < 20:  # warm up caches and lazy imports (not timed)
+                extract_features(scan, config)
+                warm += 1
+            t2 = time.perf_counter()
+            f = extract_features(scan, config)
+            t3 = time.perf_counter()
+            spent["read"] += t1 - t0
+            spent["extract"] += t3 - t2
+            for k, v in f.timings.items():
+                stages.setdefault(k, []).append(v)
+            shape[:] = [scan.n_beams]
+            yield scan, f
+
     with tempfile.TemporaryDirectory() as tmp:
+        for_scans, for_features = itertools.tee(timed())  # zipped in step: tee holds one pair at a time
         t0 = time.perf_counter()
-        lkrr.record_scans(scans, Path(tmp) / "bench.rrd", name=source.name, features=feats)
-        t_rrd = time.perf_counter() - t0
-    n = len(scans)
-    print(f"labkit bench: {n} scans of {scans[0].n_beams} beams from {source}, lines by {config.lines.method}")
+        summary = lkrr.record_scans((scan for scan, _ in for_scans), Path(tmp) / "bench.rrd", name=source.name,
+                                    features=(f for _, f in for_features))
+        t_all = time.perf_counter() - t0
+    n = summary.n_scans
+    if not n:
+        raise RefusedError(f"{source} holds no scans" + (f" ({summary.error})" if summary.error else ""))
+    t_rrd = max(t_all - spent["read"] - spent["extract"], 1e-9)
+    print(f"labkit bench: {n} scans of {shape[0]} beams from {source}, lines by {config.lines.method}")
     print(f"{'stage':14s} {'median us':>10s} {'mean us':>10s} {'p99 us':>10s} {'share':>7s}")
     total = float(np.sum(stages["total"]))
     for k, v in stages.items():
         v = np.asarray(v) * 1e6
         print(f"{k:14s} {np.median(v):10.0f} {v.mean():10.0f} {np.percentile(v, 99):10.0f} "
               f"{v.sum() / 1e6 / total:7.1%}")
-    print(f"read {n / t_read:,.0f} scans/s | extract {n / t_extract:,.0f} scans/s | log .rrd {n / t_rrd:,.0f} scans/s"
-          f" | bag -> features -> .rrd {n / (t_read + t_extract + t_rrd):,.0f} scans/s")
+    print(f"read {n / spent['read']:,.0f} scans/s | extract {n / spent['extract']:,.0f} scans/s | "
+          f"log .rrd {n / t_rrd:,.0f} scans/s | bag -> features -> .rrd {n / t_all:,.0f} scans/s")
+    if summary.error is not None:
+        raise summary.error
     return 0
 
 
@@ -214,6 +267,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
+    from ._safe import safe_output
     from .data import bundled_data
     from .pipeline import extract_features
     from .viz import plot
@@ -222,12 +276,18 @@ def cmd_demo(args: argparse.Namespace) -> int:
     config = _config(args)
     source = Path(args.input) if args.input else bundled_data("hall.bag")
     out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
+    # make demo runs again and again: its own two files are replaced, nothing else ever is
+    check_output(out / "demo.rrd", lkrr.RRD_FILE, overwrite=True, inputs=[source])
+    check_output(out / "demo.png", PNG_FILE, overwrite=True, inputs=[source])
     t0 = time.perf_counter()
-    scans = list(read_scans(source))
+    scans, damage = [], None
+    try:
+        scans.extend(read_scans(source, topic=args.topic, strict=args.strict))
+    except CorruptFileError as exc:  # show what could be read, then report the damage
+        damage = exc
     t_read = time.perf_counter() - t0
     if not scans:
-        raise ValueError(f"{source} holds no scans")
+        raise RefusedError(f"{source} holds no scans" + (f" ({damage})" if damage else ""))
     t0 = time.perf_counter()
     feats = [extract_features(s, config) for s in scans]
     t_extract = time.perf_counter() - t0
@@ -235,7 +295,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     truth = sim.read_truth(truth_file) if truth_file.exists() else None
     t0 = time.perf_counter()
     summary = lkrr.record_scans(
-        scans, out / "demo.rrd", name=source.name, truth=truth, features=feats,
+        scans, out / "demo.rrd", name=source.name, truth=truth, features=feats, overwrite=True,
+        inputs=[source, truth_file],
         description=lkrr.describe(f"labkit demo: {source.name}", config=config, truth=truth is not None,
                                   source="Every scan through `labkit.extract_features` with the default config."))
     t_rrd = time.perf_counter() - t0
@@ -247,7 +308,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     plot.plot_features(scans[k], features=f, truth=truth.scans.get(scans[k].stamp_ns) if truth else None, ax=ax,
                        title=f"{source.name}, scan {k}: " + ", ".join(f"{v} {n}" for n, v in f.counts().items()))
     fig.tight_layout()
-    fig.savefig(out / "demo.png", dpi=110)
+    with safe_output(out / "demo.png", PNG_FILE, overwrite=True, inputs=[source]) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
     n = len(scans)
     per_scan = {name: sum(x.counts()[name] for x in feats) / n for name in feats[0].counts()}
     stage_us = {name: 1e6 * float(np.median([x.timings[name] for x in feats])) for name in feats[0].timings}
@@ -261,6 +323,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"  wrote {out / 'demo.rrd'} ({summary.n_scans} scans, ground truth for {summary.n_truth})"
           f" and {out / 'demo.png'} (scan {k})")
     print(f"next: '{_rerun_command()} {out / 'demo.rrd'}' to scrub through it, 'make lab' for the notebooks")
+    if damage is not None:
+        raise damage
     return 0
 
 
@@ -268,17 +332,25 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     import json
 
     from . import experiments as ex
+    from ._safe import safe_output
+    from .io.features import json_safe
 
     extractors = ex.LINE_EXTRACTORS
     if args.method:
         unknown = [m for m in args.method if m not in extractors]
         if unknown:
-            raise ValueError(f"--method {unknown[0]!r} is not a line extractor; choose from {sorted(extractors)}")
+            raise RefusedError(f"--method {unknown[0]!r} is not a line extractor; choose from {sorted(extractors)}")
         extractors = {m: extractors[m] for m in args.method}
+    if args.json:
+        check_output(args.json, REPORT_FILE, overwrite=args.force, inputs=args.inputs)
+    if args.topic and not args.inputs:
+        raise RefusedError("--topic needs recordings to read (IN ...)")
     progress = None if args.quiet else _bar
     report: dict[str, list] = {}
+    damage: list[CorruptFileError] = []
     if args.inputs:
-        rows = ex.compare_on_logs(args.inputs, extractors, n_scans=args.scans or 100, progress=progress)
+        rows = ex.compare_on_logs(args.inputs, extractors, n_scans=args.scans or 100, progress=progress,
+                                  topic=args.topic, strict=args.strict, on_damage=damage.append)
         report["recordings"] = rows
         print(f"## Ray-axis RMSE on {len(args.inputs)} recording(s), first {args.scans or 100} scans each\n")
         print(ex.markdown_table(rows, ex.LOG_COLUMNS))
@@ -301,11 +373,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             print("\n## Circles and legs of the pipeline on 300 scans of the hall\n")
             print(ex.markdown_table(rows, ex.ROUND_COLUMNS))
     if args.json:
-        out = Path(args.json)
-        if out.exists() and not args.force:
-            raise ValueError(f"{out} exists; pass -f to overwrite it")
-        out.write_text(json.dumps(report, indent=1, default=float, allow_nan=True) + "\n", encoding="utf-8")
-        print(f"\nwrote {out}", file=sys.stderr)
+        with safe_output(args.json, REPORT_FILE, overwrite=args.force, inputs=args.inputs) as tmp:
+            tmp.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        print(f"\nwrote {args.json}", file=sys.stderr)
+    for exc in damage[1:]:
+        print(f"labkit: error: {exc}", file=sys.stderr)
+    if damage:
+        raise damage[0]
     return 0
 
 
@@ -315,11 +389,23 @@ def _bar(items, total=None, desc=None):
     return tqdm(items, total=total, desc=desc, unit="scan", leave=False, file=sys.stderr)
 
 
+FORCE_HELP = "replace an existing output, if it is labkit's own kind of output (never another file or folder)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="labkit", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(prog="labkit", description=__doc__.splitlines()[0],
+                                epilog="Exit status: 0 done; 1 done, but an input was damaged (every readable "
+                                       "record is in the output); 2 refused (bad command line or input); 3 the "
+                                       "system refused (permissions, disk full); 70 a bug in labkit; 130 "
+                                       "interrupted. See the README, 'When things go wrong'.")
+    p.add_argument("--version", action="version", version=f"labkit {__version__}")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--debug", action="store_true", help="show the traceback of every error")
     common = argparse.ArgumentParser(add_help=False)  # -q also after the command
     common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help="no progress bars")
+    reading = argparse.ArgumentParser(add_help=False)  # every command that reads recordings
+    reading.add_argument("--strict", action="store_true",
+                         help="stop at the first record that cannot be read (default: skip it, count it, read on)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     sub.add_parser = partial(sub.add_parser, parents=[common])  # every command takes -q
 
@@ -330,15 +416,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     s.add_argument("--scans", type=int, help="number of scans (default: the scenario's duration)")
     s.add_argument("--bundled", action="store_true", help="regenerate every bundled recording into -o (data/)")
-    s.add_argument("-f", "--force", action="store_true", help="overwrite the output")
+    s.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     s.set_defaults(func=cmd_simulate)
 
-    c = sub.add_parser("convert", help="convert between bag formats, CARMEN logs and JSON")
+    c = sub.add_parser("convert", parents=[common, reading],
+                       help="convert between bag formats, CARMEN logs and JSON")
     c.add_argument("input")
     c.add_argument("output", help=".bag, .mcap, a folder (ROS2 sqlite3), .jsonl or .json")
     c.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
-    c.add_argument("--format", choices=["ros1", "ros2", "mcap", "jsonl", "json"])
-    c.add_argument("-f", "--force", action="store_true", help="overwrite the output")
+    c.add_argument("--format", choices=["ros1", "ros2", "mcap", "jsonl", "json"],
+                   help="output format (default: from the name; must agree with it)")
+    c.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     c.set_defaults(func=cmd_convert)
 
     pipeline = argparse.ArgumentParser(add_help=False)  # what every command that runs the pipeline takes
@@ -347,22 +435,23 @@ def build_parser() -> argparse.ArgumentParser:
     pipeline.add_argument("--method", choices=["iepf", "split_and_merge", "angular", "none"],
                           help="line extractor (overrides the config's lines.method)")
 
-    e = sub.add_parser("extract", parents=[common, pipeline],
+    e = sub.add_parser("extract", parents=[common, pipeline, reading],
                        help="extract every feature of every scan into JSON lines (one record per scan)")
     e.add_argument("input", help="a recording: .bag, .mcap, ROS2 folder, CARMEN .log/.gz, .json, .jsonl")
     e.add_argument("-o", "--output", default="-", help="features file (.jsonl; default: standard output)")
-    e.add_argument("-f", "--force", action="store_true", help="overwrite the output")
+    e.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     e.set_defaults(func=cmd_extract)
 
-    v = sub.add_parser("view", parents=[common, pipeline],
+    v = sub.add_parser("view", parents=[common, pipeline, reading],
                        help="write a recording's scans and features to a rerun .rrd file")
     v.add_argument("input")
     v.add_argument("-o", "--output", required=True, help="the .rrd file to write")
+    v.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     v.add_argument("--no-features", action="store_true", help="scans and range segments only")
     v.add_argument("--spawn", action="store_true", help="open the rerun viewer on the result")
     v.set_defaults(func=cmd_view)
 
-    b = sub.add_parser("bench", parents=[common, pipeline],
+    b = sub.add_parser("bench", parents=[common, pipeline, reading],
                        help="time every pipeline stage on a recording (default: the bundled hall.bag)")
     b.add_argument("input", nargs="?", help="recording (default: the bundled hall.bag)")
     b.add_argument("--scans", type=int, default=None, help="use the first N scans (default: all)")
@@ -371,17 +460,19 @@ def build_parser() -> argparse.ArgumentParser:
     g = sub.add_parser("config", help="print the default extractor config as TOML, or write it with -o")
     g.add_argument("input", nargs="?", help="a config to check and print (default: the defaults)")
     g.add_argument("-o", "--output", help="write the TOML file here")
-    g.add_argument("-f", "--force", action="store_true", help="overwrite the output")
+    g.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     g.set_defaults(func=cmd_config)
 
     i = sub.add_parser("info", help="format, topics and scan counts of a file")
     i.add_argument("input")
     i.set_defaults(func=cmd_info)
 
-    ev = sub.add_parser("evaluate", help="score the line extractors against ground truth (simulated) or by ray-axis"
+    ev = sub.add_parser("evaluate", parents=[common, reading],
+                        help="score the line extractors against ground truth (simulated) or by ray-axis"
                         " RMSE on recordings, and circles and legs on the hall")
     ev.add_argument("inputs", nargs="*", metavar="IN",
                     help="recordings to score by ray-axis RMSE (default: the simulated sets with ground truth)")
+    ev.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN) of the recordings")
     ev.add_argument("--scans", type=int, help="scans per noise level (simulated, default 102) or per recording"
                     " (default 100)")
     ev.add_argument("--noise", type=float, nargs="+", default=[0.005, 0.02], metavar="M",
@@ -389,30 +480,98 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--method", action="append", metavar="NAME",
                     help="only this line extractor (repeatable), e.g. 'RANSAC'")
     ev.add_argument("--sweep", action="store_true", help="also sweep split-and-merge's split threshold")
-    ev.add_argument("--json", help="also write every table's rows to this JSON file")
-    ev.add_argument("-f", "--force", action="store_true", help="overwrite the JSON file")
+    ev.add_argument("--json", help="also write every table's rows to this JSON file (strict JSON: null for no value)")
+    ev.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     ev.set_defaults(func=cmd_evaluate)
 
-    d = sub.add_parser("demo", parents=[common, pipeline],
+    d = sub.add_parser("demo", parents=[common, pipeline, reading],
                        help="the README's demo: every feature of the bundled hall bag into .rrd and .png")
     d.add_argument("input", nargs="?", help="recording (default: the bundled hall.bag)")
-    d.add_argument("-o", "--output", default="out", help="output folder (default out/)")
+    d.add_argument("-o", "--output", default="out", help="output folder (default out/); demo.rrd and demo.png "
+                   "there are replaced")
     d.set_defaults(func=cmd_demo)
     return p
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings reach the user as one line each: ``labkit: note: ...``."""
+    print(f"labkit: note: {message}", file=sys.stderr)
+
+
+def _raised_by_labkit(exc: BaseException) -> bool:
+    """Whether ``exc`` was raised by labkit's own code (an expected error: bad input, refused
+    request) rather than deep inside a library labkit calls (a bug to report)."""
+    tb = exc.__traceback__
+    last = None
+    while tb is not None:
+        last = tb.tb_frame.f_code.co_filename
+        tb = tb.tb_next
+    here = os.path.dirname(os.path.abspath(__file__))
+    return last is None or os.path.abspath(last).startswith(here + os.sep)
+
+
+def _error(message: str) -> None:
+    print(f"labkit: error: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit status (see the module docstring)."""
     args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except CorruptFileError as exc:
-        print(f"labkit: error: {exc}", file=sys.stderr)
-        return EXIT_ERROR
-    except (ValueError, FileNotFoundError) as exc:
-        print(f"labkit: error: {exc}", file=sys.stderr)
-        return EXIT_ERROR
-    except KeyboardInterrupt:
-        return 130
+    debug = args.debug or bool(os.environ.get("LABKIT_DEBUG"))
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        try:
+            return args.func(args)
+        except CorruptFileError as exc:
+            if debug:
+                traceback.print_exc()
+            _error(str(exc))
+            return EXIT_DAMAGED
+        except OutputInterrupted as exc:
+            where = f"; what was written so far is in {exc.partial}" if exc.partial else ""
+            print(f"labkit: interrupted: {exc.target} was not changed{where}", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        except KeyboardInterrupt:
+            print("labkit: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:
+            with contextlib.suppress(OSError):  # stdout's reader went away: say nothing more there
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return EXIT_PIPE
+        except RefusedError as exc:
+            if debug:
+                traceback.print_exc()
+            _error(exc.cli)
+            return EXIT_REFUSED
+        except FileNotFoundError as exc:
+            if debug:
+                traceback.print_exc()
+            _error(f"{exc.filename}: no such file or folder" if exc.filename else str(exc))
+            return EXIT_REFUSED
+        except OSError as exc:
+            if debug:
+                traceback.print_exc()
+            _error(f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else
+                   exc.strerror or str(exc))
+            return EXIT_SYSTEM
+        except ValueError as exc:
+            if _raised_by_labkit(exc):
+                if debug:
+                    traceback.print_exc()
+                _error(str(exc))
+                return EXIT_REFUSED
+            _report_bug()
+            return EXIT_BUG
+        except Exception:  # noqa: BLE001 - anything else is a bug: show it, and how to report it
+            _report_bug()
+            return EXIT_BUG
+
+
+def _report_bug() -> None:
+    traceback.print_exc()
+    print(f"labkit: internal error: this is a bug in labkit {__version__}, not a problem with your data or "
+          "command line. Please report it to the labkit developers with the command you ran, `labkit --version` "
+          "and the traceback above.", file=sys.stderr)
 
 
 if __name__ == "__main__":
