@@ -159,24 +159,42 @@ def salvage_ros1(path: Path, topic: str | None, want_topics: bool = False) -> Sa
             buf.close()
 
 
-def _ros1_chunk(offset, fields, data, complete, connections, topic, want_topics):
-    """The records of one chunk; a chunk that does not decompress or whose records are garbled
-    is a :class:`Fault` (the walk goes on with the next chunk); a cut-off chunk ends the walk."""
+_CHUNK_ERRORS = (OSError, ValueError, RuntimeError, EOFError, struct.error, UnicodeDecodeError)
+
+
+def _chunk(offset: int, complete: bool, unpack, walk):
+    """The records of one chunk (ROS1 or MCAP), with one rule for faults: a chunk that does not
+    decompress, or whose records are garbled, is a :class:`Fault` and the walk goes on with the
+    next chunk; a chunk cut off by the end of the file ends the walk (:class:`_Truncated`).
+
+    ``unpack()`` returns ``(records, size)``: the decompressed records (as much as there is of a
+    cut-off chunk) and the size the chunk header promises; ``walk(records)`` yields the items.
+    """
     try:
-        (chunk_size,) = struct.unpack("<I", fields.get("size", b"\0\0\0\0")[:4])
-        inner = _decompress(data, fields.get("compression", b"none").decode(), partial=not complete)
-    except (OSError, ValueError, RuntimeError, EOFError, struct.error, UnicodeDecodeError) as exc:
+        records, size = unpack()
+    except _CHUNK_ERRORS as exc:
         if not complete:
             raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
         yield Fault(f"at byte {offset}", f"a chunk does not decompress ({exc})")
         return
     try:
-        for pos, ifields, idata, _ in _ros1_records(inner, 0, len(inner)):
-            yield from _ros1_record(pos, ifields, idata, connections, topic, want_topics)
+        yield from walk(records)
     except _Truncated as exc:
-        if not complete or len(inner) < chunk_size:
+        if not complete or len(records) < size:
             raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
         yield Fault(f"at byte {offset}", f"the chunk at byte {offset} is garbled ({exc.what})")
+
+
+def _ros1_chunk(offset, fields, data, complete, connections, topic, want_topics):
+    def unpack():
+        (size,) = struct.unpack("<I", fields.get("size", b"\0\0\0\0")[:4])
+        return _decompress(data, fields.get("compression", b"none").decode(), partial=not complete), size
+
+    def walk(inner):
+        for pos, ifields, idata, _ in _ros1_records(inner, 0, len(inner)):
+            yield from _ros1_record(pos, ifields, idata, connections, topic, want_topics)
+
+    return _chunk(offset, complete, unpack, walk)
 
 
 def _ros1_record(offset, fields, data, connections, topic, want_topics):
@@ -272,24 +290,17 @@ def salvage_mcap(path: Path, topic: str | None, want_topics: bool = False) -> Sa
 
 
 def _mcap_chunk(offset, content, complete, handle):
-    """The records of one MCAP chunk (see :func:`_ros1_chunk` for what is a fault)."""
-    try:
-        (uncompressed_size,) = struct.unpack_from("<Q", content, 16)
+    def unpack():
+        (size,) = struct.unpack_from("<Q", content, 16)
         compression, rpos = _mcap_str(content, 28)
         (rlen,) = struct.unpack_from("<Q", content, rpos)
-        records = _decompress(content[rpos + 8 : rpos + 8 + rlen], compression, partial=not complete)
-    except (struct.error, ValueError, RuntimeError, OSError, EOFError, UnicodeDecodeError) as exc:
-        if not complete:
-            raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
-        yield Fault(f"at byte {offset}", f"a chunk does not decompress ({exc})")
-        return
-    try:
+        return _decompress(content[rpos + 8 : rpos + 8 + rlen], compression, partial=not complete), size
+
+    def walk(records):
         for pos, iop, icontent, _ in _mcap_records(records, 0, len(records)):
             yield from handle(offset + pos, iop, icontent)
-    except _Truncated as exc:
-        if not complete or len(records) < uncompressed_size:
-            raise _Truncated(offset, f"the chunk at byte {offset} is cut off") from None
-        yield Fault(f"at byte {offset}", f"the chunk at byte {offset} is garbled ({exc.what})")
+
+    return _chunk(offset, complete, unpack, walk)
 
 
 # ============================================================================ sqlite3
