@@ -22,6 +22,7 @@ import json
 import os
 import shutil
 import signal
+import sqlite3
 import subprocess
 import sys
 import time
@@ -511,6 +512,17 @@ def test_garbled_bytes_cost_only_the_records_they_hit(rec, tmp_path, fmt):
     positions = _assert_in_order(kept, rec.scans, fmt, garbled=2 if lost is None and fmt != "carmen-gz" else 0)
     if lost is not None:
         assert p.returncode == 1 and positions == [k for k in range(N) if k not in lost]
+    elif fmt == "ros2":  # exactly the rows sqlite itself can still read one by one
+        con = sqlite3.connect(f"file:{storage}?mode=ro", uri=True)
+        readable = []
+        for row_id in range(1, N + 1):
+            try:
+                readable.append(con.execute("SELECT id FROM messages WHERE id = ?", (row_id,)).fetchone() is not None)
+            except sqlite3.DatabaseError:
+                readable.append(False)
+        con.close()
+        assert not all(readable) and positions == [k for k in range(N) if readable[k]]
+        assert p.returncode == 1 and f"{N - sum(readable)} record" in one_error_line(p)
     elif fmt == "carmen-gz":  # every line before the garbled bytes
         before = zlib.decompressobj(wbits=31).decompress(bytes(data[: len(data) // 2]))
         assert len(kept) >= _complete_lines(before) - 1 and positions == list(range(len(kept)))
