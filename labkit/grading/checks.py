@@ -1,0 +1,170 @@
+"""Comparisons for the hidden tests: the student's answer against the reference, in words a student can act on.
+
+:func:`assert_beams_result` compares a ``(points, indices)`` answer with the reference,
+:func:`assert_labels_result` a per-item label array and :func:`assert_line_result` a line
+``(r, alpha)`` in normal form. They run on the grader's trusted side, on the plain values the
+worker sent back (numbers, strings, lists, tuples, exact numpy arrays of numeric dtype): nothing
+the student's code built reaches them.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from typing import Any
+
+import numpy as np
+
+__all__ = ["assert_beams_result", "assert_labels_result", "assert_line_result"]
+
+
+def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float = 1e-9) -> None:
+    """Check a ``(points, indices)`` answer against the expected points and beam indices.
+
+    Parameters
+    ----------
+    result : object
+        What the student's function returned; expected a tuple ``(points, indices)``.
+    points : array_like of shape (M, 2), metres
+        Expected points, e.g. :attr:`labkit.Scan.xy`.
+    indices : array_like of shape (M,), int
+        Expected beam indices, e.g. :attr:`labkit.Scan.valid_indices`.
+    atol : float, metres
+        Absolute tolerance on the coordinates (a relative tolerance of 1e-9 applies too).
+
+    Raises
+    ------
+    AssertionError
+        With a message that says which part (type, shape, dtype, indices, values) is wrong.
+
+    Examples
+    --------
+    >>> assert_beams_result((np.array([[1.0, 0.0]]), np.array([0])), [[1.0, 0.0]], [0])
+    >>> assert_beams_result((np.zeros((1, 2)), np.array([0])), [[1.0, 0.0]], [0])
+    Traceback (most recent call last):
+    ...
+    AssertionError: points are wrong: row 0 (beam 0) should be [1.0, 0.0], got [0.0, 0.0]
+    """
+    expected_points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    expected_indices = np.asarray(indices, dtype=np.int64).reshape(-1)
+    if not isinstance(result, tuple) or len(result) != 2:
+        raise AssertionError(f"expected a tuple (points, indices), got {type(result).__name__}")
+    got_points, got_indices = result
+    for name, value in [("points", got_points), ("indices", got_indices)]:
+        if not isinstance(value, np.ndarray):
+            raise AssertionError(f"{name} must be a numpy array, got {type(value).__name__}")
+    if got_points.shape != expected_points.shape:
+        raise AssertionError(f"points must have shape {expected_points.shape}, got {got_points.shape}")
+    if got_points.dtype != np.float64:
+        raise AssertionError(f"points must have dtype float64, got {got_points.dtype}")
+    if got_indices.shape != expected_indices.shape:
+        raise AssertionError(f"indices must have shape {expected_indices.shape}, got {got_indices.shape}")
+    if not np.issubdtype(got_indices.dtype, np.integer):
+        raise AssertionError(f"indices must be integers, got dtype {got_indices.dtype}")
+    if not np.array_equal(got_indices, expected_indices):
+        wrong = int(np.flatnonzero(got_indices != expected_indices)[0])
+        raise AssertionError(
+            f"indices are wrong: position {wrong} should be beam {expected_indices[wrong]},"
+            f" got {got_indices[wrong]}"
+        )
+    close = np.isclose(got_points, expected_points, rtol=1e-9, atol=atol)
+    if not np.all(close):
+        row = int(np.flatnonzero(~np.all(close, axis=1))[0])
+        raise AssertionError(
+            f"points are wrong: row {row} (beam {expected_indices[row]}) should be"
+            f" {expected_points[row].tolist()}, got {got_points[row].tolist()}"
+        )
+
+
+def assert_labels_result(result: Any, expected: Any, *, name: str = "labels", item: str = "beam") -> None:
+    """Check an array of integer labels (one per item, -1 for "none") against the expected one.
+
+    Parameters
+    ----------
+    result : object
+        What the student's function returned; expected a numpy integer array.
+    expected : array_like of shape (N,), int
+        The reference labels, e.g. from :func:`labkit.segment_labels`.
+    name, item : str
+        How the message calls the array and its items ("labels", "beam").
+
+    Raises
+    ------
+    AssertionError
+        With a message that says which part (type, shape, dtype, first wrong item) is wrong.
+
+    Examples
+    --------
+    >>> assert_labels_result(np.array([0, 0, -1]), [0, 0, -1])
+    >>> assert_labels_result(np.array([0, 1, -1]), [0, 0, -1])
+    Traceback (most recent call last):
+    ...
+    AssertionError: labels are wrong: beam 1 should be 0, got 1 (expected [0, 0, -1], got [0, 1, -1])
+    """
+    want = np.asarray(expected, dtype=np.int64).reshape(-1)
+    if not isinstance(result, np.ndarray):
+        raise AssertionError(f"{name} must be a numpy array, got {type(result).__name__}")
+    if result.shape != want.shape:
+        raise AssertionError(f"{name} must have shape {want.shape} (one per {item}), got {result.shape}")
+    if not np.issubdtype(result.dtype, np.integer):
+        raise AssertionError(f"{name} must be integers, got dtype {result.dtype}")
+    wrong = np.flatnonzero(result != want)
+    if wrong.size:
+        i = int(wrong[0])
+        lo, hi = max(i - 3, 0), min(i + 4, want.size)
+        where = "" if (lo, hi) == (0, want.size) else f" around {item}s {lo}..{hi - 1}"
+        raise AssertionError(
+            f"{name} are wrong: {item} {i} should be {want[i]}, got {result[i]} (expected{where}"
+            f" {want[lo:hi].tolist()}, got {result[lo:hi].tolist()})"
+        )
+
+
+def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-7) -> None:
+    """Check a line ``(r, alpha)`` in normal form ``x cos(alpha) + y sin(alpha) = r``.
+
+    Parameters
+    ----------
+    result : object
+        What the student's function returned; expected a tuple of two real numbers
+        ``(r, alpha)`` with ``r >= 0`` (metres) and ``alpha`` in (-pi, pi] (radians).
+    r, alpha : float
+        The expected line, e.g. :attr:`labkit.LineFit.r` and :attr:`labkit.LineFit.alpha`.
+    atol : float
+        Absolute tolerance on ``r`` (metres) and on ``alpha`` (radians; the difference is
+        taken across the wrap, so -pi + 1e-12 is close to pi).
+
+    Raises
+    ------
+    AssertionError
+        With a message that says which part (type, sign of r, range of alpha, value) is wrong.
+
+    Examples
+    --------
+    >>> assert_line_result((2.0, 0.0), 2.0, 1e-12)
+    >>> assert_line_result((-2.0, math.pi), 2.0, 0.0)
+    Traceback (most recent call last):
+    ...
+    AssertionError: r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got -2.0
+    """
+    if not isinstance(result, tuple) or len(result) != 2:
+        raise AssertionError(f"expected a tuple (r, alpha), got {type(result).__name__}")
+    for name, value in zip(("r", "alpha"), result, strict=True):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise AssertionError(f"{name} must be a number (float), got {type(value).__name__}")
+        if not math.isfinite(value):
+            raise AssertionError(f"{name} must be finite, got {value}")
+    got_r, got_alpha = float(result[0]), float(result[1])
+    if got_r < 0:
+        raise AssertionError(
+            f"r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got {got_r}"
+        )
+    if not -math.pi < got_alpha <= math.pi:
+        raise AssertionError(f"alpha must be in (-pi, pi], got {got_alpha} (wrap it)")
+    if abs(got_r - r) > atol:
+        raise AssertionError(f"r is wrong: should be {r:.9f} m, got {got_r:.9f} m")
+    gap = abs(math.remainder(got_alpha - alpha, 2 * math.pi))
+    if gap > atol:
+        raise AssertionError(
+            f"alpha is wrong: should be {alpha:.9f} rad ({math.degrees(alpha):.4f} deg),"
+            f" got {got_alpha:.9f} rad ({math.degrees(got_alpha):.4f} deg)"
+        )

@@ -1,0 +1,386 @@
+"""``labkit grade``: grade a class, or check one notebook the way it will be graded.
+
+``labkit grade <exercise|all> [--jobs N]`` collects every submission under ``exercises/submitted/``,
+grades each in its own sandboxed worker (:mod:`labkit.grading.runner`), with ``N`` trusted grading
+processes (:class:`concurrent.futures.ProcessPoolExecutor`) while this process alone writes the
+gradebook, the autograded notebooks, the records and ``grades.csv``
+(:mod:`labkit.grading.records`). It shows a progress bar and ends with a summary per exercise;
+the exit status is 0 when every submission got a verdict (whatever it was).
+
+``labkit grade --check my.ipynb`` runs one notebook's visible tests with the same trusted grader
+and sandbox and prints a verdict per graded cell.
+
+:func:`add_grade_parser` and :func:`run_grade` are what ``labkit``'s command line calls;
+``python -m labkit.grading`` runs the same command on its own.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import contextlib
+import fcntl
+import multiprocessing
+import os
+import secrets
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .course import Course, Exercise, find_course
+from .notebook import read_notebook
+from .records import Records
+from .runner import (
+    GRADER_ERROR,
+    NOT_SUBMITTED,
+    STATUSES,
+    Job,
+    SubmissionResult,
+    grade_submission,
+    set_slot,
+)
+from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap
+
+__all__ = ["grade", "check", "add_grade_parser", "run_grade", "main", "GradingRun"]
+
+
+@dataclass
+class GradingRun:
+    """What one ``labkit grade`` run did."""
+
+    results: list[SubmissionResult] = field(default_factory=list)
+    seconds: float = 0.0
+    jobs: int = 1
+    csv: Path | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when every submission got a verdict (no grader error)."""
+        return all(result.status != GRADER_ERROR for result in self.results)
+
+    def summary(self) -> str:
+        """A table per exercise: submissions per status, mean score; then the throughput."""
+        by_exercise: dict[str, list[SubmissionResult]] = {}
+        for result in self.results:
+            by_exercise.setdefault(result.exercise, []).append(result)
+        shown = [s for s in STATUSES if any(r.status == s for r in self.results)] or [STATUSES[0]]
+        header = ["exercise", *shown, "mean score"]
+        rows = []
+        for name, results in sorted(by_exercise.items()):
+            counts = Counter(r.status for r in results)
+            handed_in = [r for r in results if r.status != NOT_SUBMITTED]
+            mean = sum(r.score for r in handed_in) / len(handed_in) if handed_in else 0.0
+            top = results[0].max_score
+            rows.append([name, *(str(counts[s]) for s in shown), f"{mean:.1f} / {top:g}"])
+        widths = [max(len(row[i]) for row in [header, *rows]) for i in range(len(header))]
+        lines = ["  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in
+                           enumerate(zip(row, widths, strict=True))) for row in [header, *rows]]
+        graded = sum(1 for r in self.results if r.status != NOT_SUBMITTED)
+        rate = graded / self.seconds * 60 if self.seconds > 0 else 0.0
+        plural = "s" if self.jobs != 1 else ""
+        where = f"; grades in {self.csv}" if self.csv else ""
+        lines.append(f"{graded} submissions graded in {self.seconds:.1f} s ({rate:.0f} per minute, "
+                     f"{self.jobs} job{plural}){where}")
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------- the class
+def _secret(course: Course) -> bytes:
+    """The course secret the hidden inputs' seeds come from: created once, kept beside the gradebook."""
+    path = course.secret_file
+    if not path.exists():
+        with contextlib.suppress(FileExistsError):
+            handle = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            with os.fdopen(handle, "w") as f:
+                f.write(secrets.token_hex(32) + "\n")
+    return bytes.fromhex(path.read_text(encoding="utf-8").strip())
+
+
+@contextlib.contextmanager
+def _locked(course: Course):
+    """One ``labkit grade`` per course at a time (they would share one gradebook)."""
+    with open(course.root / ".grading.lock", "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ValueError(f"another `labkit grade` is grading {course.root}; wait for it to finish") from None
+        yield
+
+
+def _roster(course: Course, records: Records) -> list[str]:
+    """Every student: those in the gradebook and those with a folder under submitted/."""
+    students = {student.id for student in records.gradebook.students}
+    if course.submitted.is_dir():
+        students |= {p.name for p in course.submitted.iterdir() if p.is_dir() and not p.name.startswith(".")}
+    return sorted(students)
+
+
+def _handed_in(course: Course, student: str, exercise: str) -> tuple[Path | None, bool]:
+    """(the notebook to grade or None, whether the student has a folder for the exercise).
+
+    The notebook is ``<exercise>.ipynb``, or the only notebook in the folder when it was renamed.
+    """
+    folder = course.submitted / student / exercise
+    if not folder.is_dir():
+        return None, False
+    expected = folder / f"{exercise}.ipynb"
+    if expected.is_file():
+        return expected, True
+    others = [p for p in folder.glob("*.ipynb") if p.is_file()]
+    return (others[0] if len(others) == 1 else None), True
+
+
+def _probe(isolate: bool) -> None:
+    """Start one worker, so that a broken sandbox stops the run before any student is graded."""
+    try:
+        Worker(Sandbox(isolate=isolate)).kill()
+    except SandboxBroken as broken:
+        raise PermissionError(f"labkit grade cannot start its sandbox: {broken}") from None
+
+
+def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
+    """Yield a result per job as it completes (in this process, or in ``workers`` trusted children)."""
+    if workers <= 1:
+        set_slot(first_slot)
+        for job in jobs:
+            yield _guarded(job)
+        return
+    context = multiprocessing.get_context("spawn")
+    slots = context.Queue()
+    for slot in range(first_slot, first_slot + workers):
+        slots.put(slot)
+    with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context, initializer=set_slot,
+                                                initargs=(slots,)) as pool:
+        futures = {pool.submit(_guarded, job): job for job in jobs}
+        try:
+            for future in concurrent.futures.as_completed(futures):
+                try:
+                    yield future.result()
+                except Exception as problem:  # noqa: BLE001 -- a dead grading process: that job's verdict
+                    yield _grader_error(futures[future], problem)
+        except BaseException:
+            pool.shutdown(cancel_futures=True)
+            raise
+
+
+def _grader_error(job: Job, problem: BaseException) -> SubmissionResult:
+    return SubmissionResult(job.exercise, job.student, GRADER_ERROR, [],
+                            detail=f"the grader failed: {type(problem).__name__}: {problem}"[:2000])
+
+
+def _guarded(job: Job) -> SubmissionResult:
+    try:
+        return grade_submission(job)
+    except Exception as problem:  # noqa: BLE001 -- one submission's grader failure must not stop the class
+        return _grader_error(job, problem)
+
+
+def _fill(result: SubmissionResult, exercise: Exercise) -> SubmissionResult:
+    if not result.cells:
+        from .runner import CellResult
+
+        result.cells = [CellResult(c.grade_id, c.points, 0.0, result.status) for c in exercise.cells]
+    return result
+
+
+def grade(
+    wanted: str,
+    *,
+    course: Course | Path | str | None = None,
+    jobs: int = 1,
+    students: list[str] | None = None,
+    output: Path | str | None = None,
+    isolate: bool = True,
+    progress: bool = False,
+    first_slot: int = 0,
+) -> GradingRun:
+    """Grade every submission of ``wanted`` (an exercise, a prefix such as ``ex01``, or ``all``).
+
+    Parameters
+    ----------
+    course : Course or path, optional
+        The course folder (default: ``./exercises``).
+    jobs : int
+        Trusted grading processes working in parallel (each with its own sandboxed worker).
+    students : list of str, optional
+        Grade only these students.
+    output : path, optional
+        The grades CSV (default: ``<course>/grades.csv``).
+    isolate : bool
+        False runs student code without the sandbox (``--no-sandbox``): see :class:`~labkit.grading.sandbox.Sandbox`.
+    progress : bool
+        Show a progress bar on stderr.
+    first_slot : int
+        The first job's slot: job ``k`` runs student code as :func:`~labkit.grading.sandbox.worker_uid`
+        ``(first_slot + k)`` (so that concurrent runs, e.g. tests, use different uids).
+
+    Raises
+    ------
+    ValueError, FileNotFoundError, PermissionError
+        No such exercise or course folder, no bwrap, a sandbox that cannot start, a stale release.
+    """
+    if jobs < 1:
+        raise ValueError(f"--jobs must be at least 1, got {jobs}")
+    course = course if isinstance(course, Course) else find_course(course)
+    names = course.resolve(wanted)
+    if isolate:
+        check_bwrap()
+    exercises = {name: course.exercise(name) for name in names}
+    started = time.perf_counter()
+    run = GradingRun(jobs=jobs, csv=Path(output) if output else course.root / "grades.csv")
+    with _locked(course), Records(course) as records:
+        _probe(isolate)
+        secret = _secret(course)
+        for exercise in exercises.values():
+            records.ensure_assignment(exercise)
+        roster = _roster(course, records)
+        if students:
+            unknown = sorted(set(students) - set(roster))
+            if unknown:
+                raise ValueError(f"no student {', '.join(unknown)} in {course.submitted} or the gradebook")
+            roster = [s for s in roster if s in students]
+        todo, folders = [], {}
+        for name in names:
+            for student in roster:
+                notebook, folders[name, student] = _handed_in(course, student, name)
+                todo.append(Job(str(course.root), name, student, str(notebook) if notebook else None, secret, isolate))
+        bar = _progress(len(todo), progress)
+        try:
+            for result in _grade_jobs(todo, min(jobs, max(len(todo), 1)), first_slot):
+                run.results.append(records.save(_fill(result, exercises[result.exercise]),
+                                                has_folder=folders[result.exercise, result.student]))
+                bar.update(1)
+                bar.set_postfix_str(f"{result.student}: {result.status}", refresh=False)
+        finally:
+            bar.close()
+        records.write_csv(run.csv)
+    run.seconds = time.perf_counter() - started
+    return run
+
+
+def _progress(total: int, show: bool):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc="grading", unit="nb", file=sys.stderr, disable=not show, leave=False)
+
+
+# ---------------------------------------------------------------------------- one notebook
+def _exercise_of(course: Course, notebook: Path, wanted: str | None) -> str:
+    if wanted:
+        return course.resolve(wanted)[0]
+    names = course.names()
+    stem = notebook.stem
+    matches = [n for n in names if stem == n or stem.startswith(n) or n.startswith(stem)]
+    if len(matches) == 1:
+        return matches[0]
+    ids = {cell.get("metadata", {}).get("nbgrader", {}).get("grade_id") for cell in read_notebook(notebook)["cells"]}
+    matches = [n for n in names if course.exercise(n).test_cells.keys() <= ids
+               and all(f"def {f}(" in "".join(c["source"] for c in read_notebook(notebook)["cells"])
+                       for f in course.exercise(n).functions)]
+    if len(matches) != 1:
+        raise ValueError(f"cannot tell which exercise {notebook.name} is: pass --exercise (one of {', '.join(names)})")
+    return matches[0]
+
+
+def check(notebook: Path | str, *, course: Course | Path | str | None = None, exercise: str | None = None,
+          isolate: bool = True) -> tuple[Exercise, SubmissionResult]:
+    """Run one notebook's visible tests the way the grader runs them (sandbox, trusted tests)."""
+    notebook = Path(notebook)
+    if not notebook.is_file():
+        raise FileNotFoundError(f"no notebook {notebook}")
+    course = course if isinstance(course, Course) else find_course(course)
+    if isolate:
+        check_bwrap()
+    name = _exercise_of(course, notebook, exercise)
+    try:
+        result = grade_submission(Job(str(course.root), name, "you", str(notebook.resolve()), None, isolate,
+                                      visible_only=True))
+    except SandboxBroken as broken:
+        raise PermissionError(f"labkit grade cannot start its sandbox: {broken}") from None
+    return course.exercise(name), result
+
+
+def _check_report(exercise: Exercise, result: SubmissionResult) -> tuple[str, bool]:
+    lines = [f"{exercise.name}: the visible tests, run the way your notebook will be graded"]
+    if result.detail and result.status == "invalid notebook":
+        return "\n".join([*lines, f"  invalid notebook: {result.detail}"]), False
+    for error in result.cell_errors:
+        lines.append(f"  note: code cell {error['cell'] + 1} raised {error['error']}: {error['message'][:300]}")
+    width = max(len(c.grade_id) for c in exercise.cells)
+    passed = True
+    for cell, verdict in zip(exercise.cells, result.cells, strict=True):
+        if cell.auto and not cell.visible:
+            text = "hidden tests only: graded on inputs you have not seen when you hand in"
+        else:
+            text = verdict.verdict
+            passed &= verdict.points is not None and verdict.points == cell.points
+        lines.append(f"  {cell.grade_id.ljust(width)}  {cell.points:g} points  {text}")
+    lines.append("all visible tests passed; the hidden tests run when your notebook is graded" if passed
+                 else "some visible tests failed: fix them before you hand in")
+    return "\n".join(lines), passed
+
+
+# ---------------------------------------------------------------------------- command line
+def _default_jobs() -> int:
+    return max(len(os.sched_getaffinity(0)), 1)
+
+
+def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``grade`` to a command line's sub-commands (the parent parser provides ``-q/--quiet``)."""
+    parser = subparsers.add_parser(
+        "grade", help="grade the submissions in exercises/submitted/, or --check one notebook",
+        description="Grade every submission of an exercise: student code runs in a bubblewrap sandbox, the tests "
+        "in a trusted process; scores go to nbgrader's gradebook and to grades.csv with a status per submission.",
+    )
+    parser.add_argument("exercise", nargs="?", help="an exercise (ex01 or ex01_range_segmentation), or all")
+    parser.add_argument("-j", "--jobs", type=int, default=_default_jobs(),
+                        help="grading processes in parallel (default: the number of CPUs)")
+    parser.add_argument("--course", help="the course folder (default: ./exercises)")
+    parser.add_argument("--student", action="append", metavar="ID", help="grade only this student (repeatable)")
+    parser.add_argument("-o", "--output", help="the grades CSV (default: <course>/grades.csv)")
+    parser.add_argument("--check", metavar="NOTEBOOK",
+                        help="run one notebook's visible tests the way it will be graded, and print a verdict per test")
+    parser.add_argument("--exercise", dest="check_exercise", metavar="NAME",
+                        help="with --check: the exercise, when the notebook's name does not say")
+    parser.add_argument("--no-sandbox", action="store_true",
+                        help="run student code without bubblewrap (NOT isolated: it can read your files and "
+                        "reach the network); only where you accept that risk")
+    parser.set_defaults(func=run_grade)
+    return parser
+
+
+def run_grade(args: argparse.Namespace) -> int:
+    """Run ``labkit grade``; the exit status."""
+    quiet = getattr(args, "quiet", False)
+    if args.check:
+        exercise, result = check(args.check, course=args.course, exercise=args.check_exercise,
+                                 isolate=not args.no_sandbox)
+        report, passed = _check_report(exercise, result)
+        print(report)
+        return 0 if passed else 1
+    if not args.exercise:
+        raise ValueError("say what to grade: an exercise (e.g. ex01) or all; or --check NOTEBOOK")
+    run = grade(args.exercise, course=args.course, jobs=args.jobs, students=args.student, output=args.output,
+                isolate=not args.no_sandbox, progress=not quiet)
+    print(run.summary())
+    for result in run.results:
+        if result.status == GRADER_ERROR:
+            print(f"{result.exercise} {result.student}: {result.detail}", file=sys.stderr)
+    return 0 if run.ok else 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m labkit.grading``: the ``grade`` command on its own."""
+    parser = argparse.ArgumentParser(prog="python -m labkit.grading")
+    commands = parser.add_subparsers(dest="command")
+    add_grade_parser(commands).add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    args = parser.parse_args(["grade", *(argv if argv is not None else sys.argv[1:])])
+    try:
+        return args.func(args)
+    except (ValueError, FileNotFoundError, PermissionError) as error:
+        print(f"labkit grade: error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130

@@ -1,0 +1,203 @@
+"""Reading notebooks as plain JSON (submissions are untrusted), and building the autograded notebook.
+
+A submission is only ever *read* here: :func:`read_notebook` parses its JSON (nothing in it runs
+in the grader), checks the nbformat 4 shape and caps its size. :func:`student_cells` picks the
+code the worker runs: every code cell except the test cells, recognised by the grade ids of the
+source notebook's test cells *and* by their text, so that a pasted copy without metadata, a
+duplicated grade id or a cell with deleted metadata is still dropped. :func:`autograded_notebook`
+writes what ``nbgrader generate_feedback`` and the formgrader read: the student's own cells with
+their outputs cleared, the instructor's copy of every test cell (once, with the grader's verdict as
+its output), and nbgrader metadata only where the gradebook knows the grade id.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "MAX_NOTEBOOK_BYTES",
+    "InvalidNotebook",
+    "read_notebook",
+    "cell_source",
+    "grade_id",
+    "same_code",
+    "student_cells",
+    "autograded_notebook",
+]
+
+#: Larger submissions are refused as invalid notebooks (images in outputs count).
+MAX_NOTEBOOK_BYTES = 32 << 20
+#: More student code than this (all code cells together) is refused.
+MAX_CODE_CHARS = 2 << 20
+_CELL_ID = re.compile(r"^[a-zA-Z0-9_-]{1,64}$")
+
+
+class InvalidNotebook(ValueError):
+    """A file that is not a readable Jupyter notebook (nbformat 4)."""
+
+
+def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
+    """A notebook's JSON, checked to have the nbformat 4 shape the grader relies on.
+
+    Every cell comes back with ``cell_type``, ``source`` (one string) and ``metadata`` (a dict).
+    With ``inside``, the file must be a regular file under that folder, reached without a
+    symbolic link (a submission must not point at another student's notebook or a file of yours).
+
+    Raises
+    ------
+    InvalidNotebook
+        Too large, not UTF-8 JSON, not nbformat 4, cells of the wrong shape, or outside ``inside``.
+    """
+    path = Path(path)
+    if inside is not None and (path.is_symlink() or not path.resolve().is_relative_to(Path(inside).resolve())
+                               or path.resolve() != path.absolute()):
+        raise InvalidNotebook("the notebook is a symbolic link: hand in the file itself")
+    try:
+        size = path.stat().st_size
+        if size > MAX_NOTEBOOK_BYTES:
+            raise InvalidNotebook(f"the notebook is {size / 1e6:.0f} MB, more than the "
+                                  f"{MAX_NOTEBOOK_BYTES / 1e6:.0f} MB allowed (clear its outputs)")
+        data = json.loads(path.read_bytes().decode("utf-8"))
+    except InvalidNotebook:
+        raise
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as error:
+        raise InvalidNotebook(f"the notebook cannot be read as JSON: {str(error)[:200]}") from None
+    if type(data) is not dict or data.get("nbformat") != 4 or type(data.get("cells")) is not list:
+        raise InvalidNotebook("the file is not a Jupyter notebook in nbformat 4")
+    cells = []
+    for index, cell in enumerate(data["cells"]):
+        if type(cell) is not dict or cell.get("cell_type") not in ("code", "markdown", "raw"):
+            raise InvalidNotebook(f"cell {index} is not a notebook cell")
+        source = cell.get("source", "")
+        if type(source) is list and all(type(line) is str for line in source):
+            source = "".join(source)
+        if type(source) is not str:
+            raise InvalidNotebook(f"cell {index} has a source that is not text")
+        metadata = cell.get("metadata", {})
+        cells.append({**cell, "source": source, "metadata": metadata if type(metadata) is dict else {}})
+    if sum(len(c["source"]) for c in cells if c["cell_type"] == "code") > MAX_CODE_CHARS:
+        raise InvalidNotebook(f"the notebook holds more than {MAX_CODE_CHARS} characters of code")
+    metadata = data.get("metadata")
+    return {**data, "cells": cells, "metadata": metadata if type(metadata) is dict else {}}
+
+
+def cell_source(cell: dict) -> str:
+    source = cell.get("source", "")
+    return "".join(source) if isinstance(source, list) else source
+
+
+def nbgrader_metadata(cell: dict) -> dict:
+    meta = cell.get("metadata", {}).get("nbgrader")
+    return meta if type(meta) is dict else {}
+
+
+def grade_id(cell: dict) -> str | None:
+    value = nbgrader_metadata(cell).get("grade_id")
+    return value if type(value) is str else None
+
+
+def _words(source: str) -> str:
+    return " ".join(source.split())
+
+
+def same_code(a: str, b: str) -> bool:
+    """True when two cells hold the same code up to whitespace."""
+    return _words(a) == _words(b)
+
+
+def student_cells(notebook: dict, test_cells: dict[str, str]) -> list[str]:
+    """The code the worker runs: the notebook's code cells, in order, without its test cells.
+
+    A cell is a test cell when its grade id is one of ``test_cells`` (grade id -> the source
+    notebook's text) or when its text is one of theirs (up to whitespace).
+    """
+    texts = {_words(text) for text in test_cells.values()}
+    return [
+        cell["source"]
+        for cell in notebook["cells"]
+        if cell["cell_type"] == "code" and grade_id(cell) not in test_cells and _words(cell["source"]) not in texts
+    ]
+
+
+def _test_cell_of(cell: dict, test_cells: dict[str, str]) -> str | None:
+    if cell["cell_type"] != "code":
+        return None
+    gid = grade_id(cell)
+    if gid in test_cells:
+        return gid
+    words = _words(cell["source"])
+    return next((name for name, text in test_cells.items() if _words(text) == words), None)
+
+
+def autograded_notebook(
+    submission: dict | None, release: dict, test_cells: dict[str, str], outputs: dict[str, list[dict]]
+) -> dict:
+    """The notebook nbgrader's feedback and formgrader show for one graded submission.
+
+    Parameters
+    ----------
+    submission : dict or None
+        The student's notebook as :func:`read_notebook` returned it; None when it could not be read
+        (the release is shown instead).
+    release : dict
+        The release notebook (trusted): its test cells, locked cells and metadata are the instructor's.
+    test_cells : dict
+        Grade id -> source text of every test cell.
+    outputs : dict
+        Grade id -> the nbformat outputs to show under that graded cell.
+    """
+    release_cells = {grade_id(c): c for c in release["cells"] if grade_id(c) is not None}
+    solutions = {gid for gid, c in release_cells.items() if nbgrader_metadata(c).get("solution")}
+    cells, seen = [], set()
+    for cell in (submission or release)["cells"]:
+        gid = _test_cell_of(cell, test_cells) or grade_id(cell)
+        if gid in release_cells and gid not in solutions:  # a test or locked cell: the instructor's copy, once
+            if gid not in seen:
+                cells.append(copy.deepcopy(release_cells[gid]))
+            seen.add(gid)
+            continue
+        kept = {"cell_type": cell["cell_type"], "metadata": {}, "source": cell["source"]}
+        if gid in solutions and gid not in seen:
+            kept["metadata"] = copy.deepcopy(release_cells[gid]["metadata"])
+            seen.add(gid)
+        if "id" in cell:
+            kept["id"] = cell["id"]
+        cells.append(kept)
+    cells += [copy.deepcopy(c) for gid, c in release_cells.items() if gid not in seen]
+    used: set[str] = set()
+    for index, cell in enumerate(cells):
+        cell_id = cell.get("id")
+        if type(cell_id) is not str or not _CELL_ID.match(cell_id) or cell_id in used:
+            cell["id"] = f"cell-{index}"
+            while cell["id"] in used:
+                cell["id"] += "x"
+        used.add(cell["id"])
+        if cell["cell_type"] == "code":
+            cell["outputs"] = copy.deepcopy(outputs.get(grade_id(cell), []))
+            cell["execution_count"] = None
+        else:
+            cell.pop("outputs", None)
+            cell.pop("execution_count", None)
+            cell.pop("attachments", None)
+    return {"cells": cells, "metadata": copy.deepcopy(release["metadata"]), "nbformat": 4,
+            "nbformat_minor": release.get("nbformat_minor", 5)}
+
+
+def write_notebook_text(notebook: dict) -> str:
+    return json.dumps(notebook, indent=1, ensure_ascii=False) + "\n"
+
+
+def stream(text: str) -> dict:
+    return {"output_type": "stream", "name": "stdout", "text": text}
+
+
+def error(name: str, message: str, traceback: list[str] | None = None) -> dict:
+    return {"output_type": "error", "ename": name, "evalue": message, "traceback": traceback or [f"{name}: {message}"]}
+
+
+def code_of(notebook: dict, kinds: Any = ("code",)) -> list[dict]:
+    return [cell for cell in notebook["cells"] if cell["cell_type"] in kinds]

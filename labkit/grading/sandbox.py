@@ -1,0 +1,616 @@
+"""Start the student's worker in a sandbox and talk to it: the only door between the grader and student code.
+
+The worker (``worker.py`` beside this file) runs under `bubblewrap <https://github.com/containers/bubblewrap>`_
+(``bwrap``) in new pid, network, IPC, UTS and mount namespaces. It sees:
+
+- the Python runtime that runs the grader (``sys.base_prefix``, read-only) and the system's shared
+  libraries (``/usr/lib``, read-only), with every other ``site-packages`` / ``dist-packages`` of the
+  machine hidden;
+- the virtualenv's site-packages (read-only) with the *masked* packages replaced by a stub that
+  raises ``ModuleNotFoundError`` (labkit always; an exercise adds more, e.g. scikit-learn), and
+  every ``__editable__`` finder stubbed too (labkit's editable install points into the repository);
+- an empty ``/tmp`` (a size-capped tmpfs, the working directory), ``/proc`` of its own pid
+  namespace and a minimal ``/dev``; no network but loopback; no environment but a few variables
+  set here (``--clearenv``).
+
+Not the repository, not ``exercises/`` (sources, specs, gradebook, other submissions), not the
+home directory, not ``/etc``, no shell. ``--die-with-parent`` and the pid namespace make killing
+the outer ``bwrap`` process (or the grader) kill every process of the sandbox.
+
+When the grader runs as root, bwrap keeps only ``CAP_SETUID``/``CAP_SETGID`` and the worker drops
+to an unprivileged uid (``nobody``, 65534, and unused uids below it for parallel jobs) before any
+student byte runs, so ``RLIMIT_NPROC`` holds (the kernel does not enforce it for uid 0) and the
+student owns nothing. As another user bwrap makes a user namespace and the worker runs as uid
+65534 inside it (your own uid outside), with ``RLIMIT_NPROC`` counting your processes too. The
+worker also sets CPU seconds, address space, file size, open files and processes limits
+(:class:`Limits`). There is no seccomp filter.
+
+:class:`Worker` is one running worker; :class:`Session` grades one submission with as many
+workers as it takes (a fresh one after a call that timed out or killed its worker).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import pwd
+import selectors
+import shutil
+import signal
+import site
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from . import protocol
+
+__all__ = [
+    "Limits",
+    "Sandbox",
+    "Worker",
+    "Session",
+    "WorkerLost",
+    "CallTimedOut",
+    "WorkerCrashed",
+    "SandboxBroken",
+    "check_bwrap",
+]
+
+HERE = Path(__file__).resolve().parent
+WORKER_FILES = ("worker.py", "protocol.py")
+INSTALL_HINT = "install bubblewrap (Debian/Ubuntu: `sudo apt-get install bubblewrap`)"
+STARTUP_TIMEOUT_S = 60.0  # bwrap + python + numpy; generous, as a loaded machine can be slow
+
+
+class WorkerLost(BaseException):
+    """The worker stopped answering: a call timed out, or the worker died or broke the protocol.
+
+    A ``BaseException``, so that no ``except Exception`` in a test can swallow it: the test fails.
+    """
+
+
+class CallTimedOut(WorkerLost):
+    """A call (or loading the notebook) ran past its time; the worker was killed."""
+
+
+class WorkerCrashed(WorkerLost):
+    """The worker died (exit, signal, resource limit) or sent something that is not the protocol."""
+
+
+class SandboxBroken(RuntimeError):
+    """The sandbox could not start a worker at all: the grader's problem, not the student's."""
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Resource limits of one worker (``setrlimit``, soft = hard), and the size of its ``/tmp``.
+
+    Attributes
+    ----------
+    cpu_s : int
+        CPU seconds of the worker process (``RLIMIT_CPU``; it is killed by SIGXCPU beyond).
+    memory_bytes : int
+        Address space (``RLIMIT_AS``): a larger allocation raises ``MemoryError`` in the student's code.
+    file_bytes : int
+        Largest file the student may write (``RLIMIT_FSIZE``).
+    open_files : int
+        ``RLIMIT_NOFILE``.
+    processes : int
+        Processes and threads of the worker's uid (``RLIMIT_NPROC``): a fork bomb stops there.
+    tmp_bytes : int
+        Size of the tmpfs mounted on ``/tmp``, the working directory.
+    """
+
+    cpu_s: int = 120
+    memory_bytes: int = 2 << 30
+    file_bytes: int = 64 << 20
+    open_files: int = 128
+    processes: int = 32
+    tmp_bytes: int = 128 << 20
+
+    def rlimits(self) -> dict[str, int]:
+        return {
+            "RLIMIT_CORE": 0,
+            "RLIMIT_CPU": self.cpu_s,
+            "RLIMIT_AS": self.memory_bytes,
+            "RLIMIT_FSIZE": self.file_bytes,
+            "RLIMIT_NOFILE": self.open_files,
+            "RLIMIT_NPROC": self.processes,
+        }
+
+
+def check_bwrap() -> str:
+    """The path of ``bwrap``, or FileNotFoundError saying how to install it."""
+    path = shutil.which("bwrap")
+    if path is None:
+        raise FileNotFoundError(
+            f"labkit grade runs student code in a bubblewrap sandbox, and bwrap is not installed: {INSTALL_HINT}"
+            " (or pass --no-sandbox to run student code unisolated, at your own risk)"
+        )
+    return path
+
+
+@functools.cache
+def worker_uid(slot: int) -> int:
+    """The unprivileged uid of parallel job ``slot``: ``nobody`` (65534), then unused uids below it."""
+    free = [65534]
+    for uid in range(65533, 60000, -1):
+        if len(free) > slot:
+            break
+        if not _uid_exists(uid):
+            free.append(uid)
+    return free[slot % len(free)]
+
+
+def _uid_exists(uid: int) -> bool:
+    try:
+        pwd.getpwuid(uid)
+    except KeyError:
+        return False
+    return True
+
+
+@functools.lru_cache(maxsize=1)
+def _runtime() -> tuple[str, str, tuple[str, ...], tuple[str, ...]]:
+    """(interpreter, runtime prefix, site-packages to show, Python package folders to hide)."""
+    python = os.path.realpath(sys.executable)
+    prefix = os.path.realpath(sys.base_prefix)
+    shown = tuple(dict.fromkeys(os.path.realpath(p) for p in site.getsitepackages() if os.path.isdir(p)))
+    hidden = [os.path.realpath(p) for p in site.getsitepackages([sys.base_prefix, sys.base_exec_prefix])]
+    for root in ("/usr/lib", "/usr/local/lib"):
+        if os.path.isdir(root):
+            hidden += [os.path.join(root, name) for name in os.listdir(root) if name.startswith("python")]
+    hidden = [p for p in dict.fromkeys(hidden) if os.path.isdir(p) and p not in shown]
+    stdlib = os.path.realpath(sysconfig.get_path("stdlib"))
+    hidden = [p for p in hidden if not (stdlib + os.sep).startswith(p + os.sep)]
+    return python, prefix, shown, tuple(hidden)
+
+
+@functools.lru_cache(maxsize=1)
+def _stubs() -> tuple[str, str]:
+    """A stub module file and a stub package folder that raise ModuleNotFoundError when imported."""
+    folder = tempfile.mkdtemp(prefix="labkit-grading-stubs-")
+    os.chmod(folder, 0o755)
+    text = 'raise ModuleNotFoundError(f"{__name__} is not available when your notebook is graded")\n'
+    module = os.path.join(folder, "stub.py")
+    package = os.path.join(folder, "package")
+    os.mkdir(package, 0o755)
+    for path in (module, os.path.join(package, "__init__.py")):
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.chmod(path, 0o644)
+    return module, package
+
+
+def _masked_entries(site_dir: str, masked: tuple[str, ...]) -> list[tuple[str, bool]]:
+    """Entries of ``site_dir`` that provide a masked top-level name, as (name, is_folder)."""
+    found = []
+    for name in sorted(os.listdir(site_dir)):
+        path = os.path.join(site_dir, name)
+        module = name.split(".")[0]
+        if name.startswith("__editable__") or module in masked and (
+            os.path.isdir(path) or name.endswith((".py", ".pyc", ".so", ".pth"))
+        ):
+            found.append((name, os.path.isdir(path)))
+    return found
+
+
+class Sandbox:
+    """How to start workers for one exercise: the bwrap command line, or a plain process with ``isolate=False``.
+
+    Parameters
+    ----------
+    masked : tuple of str
+        Top-level packages the student's code must not import (labkit is always added).
+    limits : Limits
+    slot : int
+        Parallel job number: picks the worker's uid (see :func:`worker_uid`).
+    isolate : bool
+        False runs the worker as a plain subprocess with the same limits, a scrubbed environment,
+        an empty temporary working directory and (as root, when the Python runtime is readable by
+        other users) an unprivileged uid, but without namespaces: it can read every file its uid
+        can, reach the network and import the masked packages by path. For instructors who accept
+        that risk (``--no-sandbox``).
+    user_namespace : bool or None
+        Use a user namespace instead of dropping root (the only way as another user; None picks
+        by the current uid).
+    """
+
+    def __init__(
+        self,
+        masked: tuple[str, ...] = (),
+        *,
+        limits: Limits = Limits(),
+        slot: int = 0,
+        isolate: bool = True,
+        user_namespace: bool | None = None,
+    ) -> None:
+        self.masked = tuple(dict.fromkeys(("labkit", *masked)))
+        self.limits = limits
+        self.isolate = isolate
+        self.user_namespace = os.getuid() != 0 if user_namespace is None else user_namespace
+        self.uid = worker_uid(slot)
+        self.gid = 65534
+        self.bwrap = check_bwrap() if isolate else None
+        self._plain_dir: str | None = None
+
+    def _config(self, site_dirs: list[str], *, drop: bool) -> str:
+        return json.dumps({
+            "limits": self.limits.rlimits(),
+            "uid": self.uid if drop else None,
+            "gid": self.gid if drop else None,
+            "site": site_dirs,
+            "masked": list(self.masked),
+        })
+
+    def command(self) -> tuple[list[str], dict[str, str] | None, str | None]:
+        """(argv, environment, working directory) of a new worker."""
+        python, prefix, shown, hidden = _runtime()
+        if not self.isolate:
+            return self._plain_command(python, shown)
+        args = [self.bwrap, "--die-with-parent", "--new-session", "--unshare-pid", "--unshare-net",
+                "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try", "--hostname", "grader"]
+        if self.user_namespace:
+            args += ["--unshare-user", "--uid", "65534", "--gid", "65534"]
+        else:
+            args += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
+        args += ["--clearenv"]
+        for name, value in _ENVIRONMENT.items():
+            args += ["--setenv", name, value]
+        made: set[str] = set()
+
+        def folder(path: str) -> None:  # every folder bwrap makes: world-readable (it uses 0700)
+            for parent in reversed(Path(path).parents):
+                if str(parent) != "/" and str(parent) not in made:
+                    args.extend(["--perms", "0755", "--dir", str(parent)])
+                    made.add(str(parent))
+            if path not in made:
+                args.extend(["--perms", "0755", "--dir", path])
+                made.add(path)
+
+        for link in ("/lib", "/lib64", "/lib32", "/bin"):
+            if os.path.islink(link):
+                args += ["--symlink", os.readlink(link), link]
+        for libs in ("/usr/lib", "/usr/lib64", "/usr/lib32", "/lib", "/lib64"):
+            if os.path.isdir(libs) and not os.path.islink(libs):
+                folder(libs)
+                args += ["--ro-bind", libs, libs]
+        folder(prefix)
+        args += ["--ro-bind", prefix, prefix]
+        if not python.startswith(prefix + os.sep):
+            folder(os.path.dirname(python))
+            args += ["--ro-bind", python, python]
+        for path in hidden:
+            args += ["--tmpfs", path]
+        args += ["--ro-bind-try", "/etc/ld.so.cache", "/etc/ld.so.cache"]
+        module_stub, package_stub = _stubs()
+        site_dirs = []
+        for index, real in enumerate(shown):
+            inside = f"/opt/site{index}"
+            folder(inside)
+            args += ["--ro-bind", real, inside]
+            for name, is_folder in _masked_entries(real, self.masked):
+                args += ["--ro-bind", package_stub if is_folder else module_stub, f"{inside}/{name}"]
+            site_dirs.append(inside)
+        folder("/grader")
+        for name in WORKER_FILES:
+            args += ["--ro-bind", str(HERE / name), f"/grader/{name}"]
+        args += ["--proc", "/proc", "--dev", "/dev", "--size", str(self.limits.tmp_bytes), "--perms", "1777",
+                 "--tmpfs", "/tmp", "--chdir", "/tmp"]
+        config = self._config(site_dirs, drop=not self.user_namespace)
+        return [*args, "--", python, "-I", "-S", "-B", "/grader/worker.py", config], None, None
+
+    def _plain_command(self, python: str, shown: tuple[str, ...]) -> tuple[list[str], dict[str, str], str]:
+        if self._plain_dir is None:
+            self._plain_dir = tempfile.mkdtemp(prefix="labkit-grading-worker-")
+            os.chmod(self._plain_dir, 0o755)
+            for name in WORKER_FILES:
+                shutil.copy(HERE / name, os.path.join(self._plain_dir, name))
+        workdir = tempfile.mkdtemp(prefix="labkit-grading-cwd-")
+        drop = os.getuid() == 0 and all(_world_readable(p) for p in (sys.base_prefix, *shown, self._plain_dir))
+        if drop:
+            os.chown(workdir, self.uid, self.gid)
+        environment = dict(_ENVIRONMENT, HOME=workdir, TMPDIR=workdir, MPLCONFIGDIR=f"{workdir}/.matplotlib")
+        config = self._config(list(shown), drop=drop)
+        return [python, "-I", "-S", "-B", os.path.join(self._plain_dir, "worker.py"), config], environment, workdir
+
+
+def _world_readable(path: str) -> bool:
+    """True when every folder down to ``path`` lets other users through (an unprivileged uid can import from it)."""
+    real = Path(os.path.realpath(path))
+    return all(os.stat(folder).st_mode & 0o005 == 0o005 for folder in [*real.parents, real])
+
+
+_ENVIRONMENT = {
+    "HOME": "/tmp",
+    "TMPDIR": "/tmp",
+    "LANG": "C.UTF-8",
+    "MPLBACKEND": "Agg",
+    "MPLCONFIGDIR": "/tmp/.matplotlib",
+    "OPENBLAS_NUM_THREADS": "1",
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "PYTHONDONTWRITEBYTECODE": "1",
+}
+
+
+def _describe_exit(code: int | None) -> str:
+    if code is None:
+        return "stopped answering"
+    signum = -code if code < 0 else code - 128 if code > 128 else None
+    reasons = {
+        signal.SIGKILL: "killed (SIGKILL)",
+        signal.SIGXCPU: "stopped at its CPU time limit (SIGXCPU)",
+        signal.SIGXFSZ: "stopped at its file size limit (SIGXFSZ)",
+        signal.SIGSEGV: "crashed (segmentation fault; a recursion too deep?)",
+        signal.SIGABRT: "aborted (SIGABRT)",
+    }
+    if signum is not None and signum > 0:
+        try:
+            return reasons.get(signal.Signals(signum), f"killed by signal {signal.Signals(signum).name}")
+        except ValueError:
+            pass
+    return f"exited with status {code}"
+
+
+class Worker:
+    """One running worker process and its channel (stdin/stdout pipes of length-prefixed JSON frames)."""
+
+    def __init__(self, sandbox: Sandbox) -> None:
+        argv, environment, workdir = sandbox.command()
+        self.workdir = workdir
+        self.errors = tempfile.TemporaryFile()
+        started = time.perf_counter()
+        self.process = subprocess.Popen(
+            argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, env=environment or {},
+            cwd=workdir, start_new_session=True, close_fds=True,
+        )
+        self._out = self.process.stdin.fileno()
+        self._in = self.process.stdout.fileno()
+        os.set_blocking(self._out, False)
+        os.set_blocking(self._in, False)
+        self._selector = selectors.DefaultSelector()
+        self._next_id = 1
+        try:
+            hello = self._receive(time.monotonic() + STARTUP_TIMEOUT_S)
+        except WorkerLost:
+            message = self.stderr() or "no message"
+            self.kill()
+            raise SandboxBroken(f"the sandbox could not start a worker: {message}") from None
+        if "hello" not in hello:
+            self.kill()
+            raise SandboxBroken(f"the worker said {str(hello)[:200]} instead of hello")
+        self.uid = hello.get("uid")
+        self.start_s = time.perf_counter() - started
+
+    def stderr(self) -> str:
+        """What bwrap and the worker's bootstrap wrote to stderr (the student's stderr goes to /dev/null)."""
+        self.errors.seek(0)
+        return self.errors.read(4000).decode("utf-8", "replace").strip()
+
+    # ------------------------------------------------------------------ channel
+    def _wait(self, fd: int, event: int, deadline: float) -> None:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            raise CallTimedOut("timed out")
+        self._selector.register(fd, event)
+        try:
+            ready = self._selector.select(left)
+        finally:
+            self._selector.unregister(fd)
+        if not ready:
+            raise CallTimedOut("timed out")
+
+    def _send(self, message: dict, deadline: float) -> None:
+        view = memoryview(protocol.pack(message))
+        while view:
+            self._wait(self._out, selectors.EVENT_WRITE, deadline)
+            try:
+                view = view[os.write(self._out, view):]
+            except BlockingIOError:
+                continue
+            except (BrokenPipeError, ConnectionResetError):
+                raise WorkerCrashed(self._died()) from None
+
+    def _read(self, size: int, deadline: float) -> bytes:
+        data = bytearray()
+        while len(data) < size:
+            self._wait(self._in, selectors.EVENT_READ, deadline)
+            try:
+                chunk = os.read(self._in, min(size - len(data), 1 << 20))
+            except BlockingIOError:
+                continue
+            if not chunk:
+                raise WorkerCrashed(self._died())
+            data += chunk
+        return bytes(data)
+
+    def _receive(self, deadline: float) -> dict:
+        try:
+            return protocol.unpack(self._read(protocol.frame_length(self._read(4, deadline)), deadline))
+        except protocol.ProtocolError as error:
+            raise WorkerCrashed(f"sent something that is not the grader's protocol ({error})") from None
+
+    def _died(self) -> str:
+        try:
+            code = self.process.wait(timeout=2)
+        except subprocess.TimeoutExpired:
+            code = None
+        return _describe_exit(code)
+
+    # ------------------------------------------------------------------ requests
+    def load(self, cells: list[str], deadline: float) -> list[dict]:
+        """Run the student's code cells; the cells that raised, as ``{"cell", "types", "message"}``."""
+        self._send({"op": "load", "cells": cells}, deadline)
+        reply = self._receive(deadline)
+        errors = reply.get("errors")
+        if type(errors) is not list:
+            raise WorkerCrashed("answered the notebook with something that is not the protocol")
+        return [_cell_error(error) for error in errors[:100]]
+
+    def call(self, name: str, args: tuple, kwargs: dict, deadline: float) -> Any:
+        """``name(*args, **kwargs)`` in the worker: its result decoded, or the exception it raised rebuilt."""
+        request = {"op": "call", "id": self._next_id, "name": name,
+                   "args": protocol.encode(list(args)), "kwargs": protocol.encode(dict(kwargs))}
+        self._next_id += 1
+        self._send(request, deadline)
+        reply = self._receive(deadline)
+        try:
+            if reply.get("id") != request["id"] or len(reply) != 2:
+                raise protocol.ProtocolError("an answer to another question")
+            if "value" in reply:
+                return protocol.decode(reply["value"])
+            raised = reply.get("raised")
+            if type(raised) is not dict:
+                raise protocol.ProtocolError("an answer with neither value nor exception")
+            error = protocol.rebuild_exception(raised.get("types"), raised.get("message"))
+        except protocol.ProtocolError as problem:
+            raise WorkerCrashed(f"sent something that is not the grader's protocol ({problem})") from None
+        raise error
+
+    def kill(self) -> None:
+        """Kill the worker and everything in its sandbox; wait for it."""
+        try:
+            os.killpg(self.process.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+        self.process.wait()
+        for stream in (self.process.stdin, self.process.stdout, self.errors):
+            try:
+                stream.close()
+            except OSError:
+                pass
+        self._selector.close()
+        if self.workdir:
+            shutil.rmtree(self.workdir, ignore_errors=True)
+            self.workdir = None
+
+
+def _cell_error(error: Any) -> dict:
+    if type(error) is not dict or type(error.get("cell")) is not int:
+        raise WorkerCrashed("answered the notebook with something that is not the protocol")
+    exception = protocol.rebuild_exception(error.get("types"), error.get("message"))
+    return {"cell": error["cell"], "error": type(exception).__name__, "message": str(exception)}
+
+
+@dataclass
+class Timing:
+    """Where one submission's time went (seconds)."""
+
+    start_s: float = 0.0  # starting workers (bwrap, python, numpy)
+    load_s: float = 0.0  # running the student's cells
+    calls_s: float = 0.0  # waiting for the student's functions (including the channel)
+    workers: int = 0
+
+
+class Session:
+    """The student's functions for one submission: a worker started on first use, replaced after a loss.
+
+    Calls go through :meth:`call` with the deadline of the current test (:meth:`begin_test`). A call
+    that times out or kills its worker raises :class:`WorkerLost`; further calls in the same test
+    fail at once with the same loss, and the next test gets a fresh worker that runs the cells
+    again. When loading the cells itself times out or kills the worker, every later call fails
+    with that loss (running them again would end the same way).
+    """
+
+    def __init__(self, sandbox: Sandbox, cells: list[str], *, load_timeout_s: float, call_timeout_s: float) -> None:
+        self.sandbox = sandbox
+        self.cells = cells
+        self.load_timeout_s = load_timeout_s
+        self.call_timeout_s = call_timeout_s
+        self.worker: Worker | None = None
+        self.cell_errors: list[dict] | None = None
+        self.load_failure: WorkerLost | None = None
+        self.test_failure: WorkerLost | None = None
+        self.test_deadline = float("inf")
+        self.timed_out = False
+        self.crashed = False
+        self.timing = Timing()
+
+    def begin_test(self, budget_s: float) -> None:
+        self.test_deadline = time.monotonic() + budget_s
+        self.test_failure = None
+
+    def _lose(self, lost: WorkerLost) -> WorkerLost:
+        if isinstance(lost, CallTimedOut):
+            self.timed_out = True
+        else:
+            self.crashed = True
+        if self.worker is not None:
+            self.worker.kill()
+            self.worker = None
+        return lost
+
+    def _ready_worker(self) -> Worker:
+        if self.load_failure is not None:
+            raise type(self.load_failure)(*self.load_failure.args)
+        if self.worker is not None:
+            return self.worker
+        worker = Worker(self.sandbox)
+        self.worker = worker
+        self.timing.workers += 1
+        self.timing.start_s += worker.start_s
+        started = time.perf_counter()
+        try:
+            errors = worker.load(self.cells, time.monotonic() + self.load_timeout_s)
+        except CallTimedOut:
+            self.load_failure = self._lose(CallTimedOut(
+                f"running your notebook's cells took more than {self.load_timeout_s:g} s, so none of its"
+                " functions could be called (an endless loop or a long computation outside a function?)"))
+            raise type(self.load_failure)(*self.load_failure.args) from None
+        except WorkerCrashed as crash:
+            self.load_failure = self._lose(WorkerCrashed(
+                f"the process running your notebook {crash.args[0]} while running its cells, so none of"
+                " its functions could be called"))
+            raise type(self.load_failure)(*self.load_failure.args) from None
+        finally:
+            self.timing.load_s += time.perf_counter() - started
+        if self.cell_errors is None:
+            self.cell_errors = errors
+        return worker
+
+    def call(self, name: str, args: tuple, kwargs: dict) -> Any:
+        if self.test_failure is not None:
+            raise type(self.test_failure)(*self.test_failure.args)
+        try:
+            worker = self._ready_worker()
+        except WorkerLost as lost:
+            self.test_failure = lost
+            raise
+        started = time.perf_counter()
+        deadline = min(time.monotonic() + self.call_timeout_s, self.test_deadline)
+        try:
+            return worker.call(name, args, kwargs, deadline)
+        except CallTimedOut:
+            limit = "this test's time" if deadline == self.test_deadline else f"{self.call_timeout_s:g} s"
+            self.test_failure = self._lose(CallTimedOut(
+                f"{name}(...) did not return within {limit}; it was stopped and this test scores 0"))
+            raise type(self.test_failure)(*self.test_failure.args) from None
+        except WorkerCrashed as crash:
+            self.test_failure = self._lose(WorkerCrashed(
+                f"the process running your code {crash.args[0]} during {name}(...); this test scores 0"))
+            raise type(self.test_failure)(*self.test_failure.args) from None
+        finally:
+            self.timing.calls_s += time.perf_counter() - started
+
+    def close(self) -> None:
+        if self.worker is not None:
+            self.worker.kill()
+            self.worker = None
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+
+def describe_limits(limits: Limits) -> dict[str, int]:
+    """The limits as a plain dict (for records)."""
+    return asdict(limits)

@@ -1,0 +1,209 @@
+"""The student's side of the grader: run one submission's code cells, then answer calls to its functions.
+
+This file runs inside the sandbox as a plain script (``python -I -S worker.py CONFIG``), beside
+``protocol.py``; it imports the standard library, numpy and ``protocol`` only, and there is no
+labkit where it runs. Its first lines are the grader's: they move the protocol off stdin and
+stdout (the student's prints go to ``/dev/null``), set the resource limits, drop root to the
+unprivileged user the grader chose and make the masked packages unimportable with a clear
+message. Only then does it read the student's code:
+
+1. ``{"op": "load", "cells": [source, ...]}``: every code cell is run in order in one namespace, as
+   Jupyter's *Run All* would (IPython magics and ``!`` lines do nothing; a cell that raises is
+   recorded and the next one runs). The answer lists the cells that raised.
+2. ``{"op": "call", "id": n, "name": f, "args": [...], "kwargs": {...}}``: the answer is
+   ``{"id": n, "value": ...}`` or ``{"id": n, "raised": {"types": [...], "message": ...}}``.
+
+Nothing here is trusted once the student's code ran: the student can replace any of it. The
+trusted grader therefore believes only what :func:`protocol.decode` builds from the bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+import types
+
+CHANNEL_IN = 0
+CHANNEL_OUT = 1
+_MAGIC = re.compile(r"^\s*(%|!)|\?\s*$", re.M)
+_RUN_BODY_MAGICS = frozenset({"time", "timeit", "capture", "prun"})  # cell magics whose body is Python
+
+
+def _read_exact(fd: int, size: int) -> bytes:
+    chunks, left = [], size
+    while left:
+        chunk = os.read(fd, min(left, 1 << 20))
+        if not chunk:
+            raise EOFError("the grader closed the channel")
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _limit(limits: dict[str, int]) -> None:
+    import resource
+
+    for name, value in limits.items():
+        resource.setrlimit(getattr(resource, name), (value, value))
+
+
+def _drop_privileges(uid: int | None, gid: int | None) -> None:
+    """Become ``uid``/``gid`` for good (no supplementary groups); refuse to go on as root."""
+    if uid is not None and os.getuid() == 0:
+        os.setgroups([])
+        os.setresgid(gid, gid, gid)
+        os.setresuid(uid, uid, uid)
+    if uid is not None and (os.getresuid() != (uid, uid, uid) or os.getresgid() != (gid, gid, gid)):
+        raise SystemExit(f"worker: could not drop to uid {uid}, gid {gid}")
+    if uid is not None and uid != 0 and 0 in os.getresuid():
+        raise SystemExit("worker: still root after dropping privileges")
+
+
+class _Unavailable:
+    """A meta path finder that turns ``import <masked>`` into a clear ModuleNotFoundError.
+
+    Only a message: the masked packages are not in the sandbox at all, so removing this finder
+    gives the plain "No module named ..." instead.
+    """
+
+    def __init__(self, names: list[str]) -> None:
+        self.names = frozenset(names)
+
+    def find_spec(self, fullname, path=None, target=None):
+        top = fullname.partition(".")[0]
+        if top in self.names:
+            raise ModuleNotFoundError(
+                f"{top} is not available when your notebook is graded: this exercise asks you to write"
+                " the computation yourself (numpy is fine)",
+                name=fullname,
+            )
+        return None
+
+
+class _Shell:
+    """What ``get_ipython()`` returns in the worker: magics and shell commands do nothing.
+
+    ``%%time``, ``%%timeit``, ``%%capture`` and ``%%prun`` run their body once (it is Python), and
+    ``%time`` / ``%timeit`` their statement.
+    """
+
+    def __init__(self, namespace: dict) -> None:
+        self.user_ns = namespace
+
+    def run_line_magic(self, name, line, *args, **kwargs):
+        if name in _RUN_BODY_MAGICS and line.strip():
+            exec(compile(line, "<magic>", "exec"), self.user_ns)
+
+    def run_cell_magic(self, name, line, cell, *args, **kwargs):
+        if name in _RUN_BODY_MAGICS:
+            exec(compile(cell, "<magic>", "exec"), self.user_ns)
+
+    def system(self, *args, **kwargs):
+        return None
+
+    def getoutput(self, *args, **kwargs):
+        return []
+
+
+def python_source(source: str) -> str:
+    """A cell's source with IPython's syntax (magics, ``!cmd``, ``obj?``) turned into plain Python."""
+    if not _MAGIC.search(source):
+        return source
+    try:
+        from IPython.core.inputtransformer2 import TransformerManager
+    except ImportError:  # no IPython: drop the lines IPython would have rewritten
+        return "\n".join(
+            line[: len(line) - len(line.lstrip())] + "pass" if _MAGIC.search(line) else line
+            for line in source.splitlines()
+        )
+    return TransformerManager().transform_cell(source)
+
+
+def _raised(error: BaseException) -> dict:
+    import protocol
+
+    try:
+        message = str(error)
+    except BaseException:  # noqa: BLE001 -- a student's __str__ may raise anything
+        message = f"<{type(error).__name__} that cannot be printed>"
+    return {"types": protocol.exception_names(error), "message": message[: protocol.MAX_MESSAGE_CHARS]}
+
+
+def _load(cells: list[str], namespace: dict) -> dict:
+    errors = []
+    for index, source in enumerate(cells):
+        try:
+            code = compile(python_source(source), f"<cell {index}>", "exec")
+            exec(code, namespace)
+        except BaseException as error:  # noqa: BLE001 -- as in Jupyter: record it, run the next cell
+            errors.append({"cell": index, **_raised(error)})
+    return {"errors": errors}
+
+
+def _call(message: dict, namespace: dict) -> bytes:
+    """The answer to one call, as a frame."""
+    import protocol
+
+    name = message["name"]
+    try:
+        function = namespace.get(name)
+        if not callable(function):
+            raise NameError(f"{name} is not defined in your notebook (keep the function's name and signature)")
+        result = function(*protocol.decode(message["args"]), **protocol.decode(message["kwargs"]))
+        try:
+            return protocol.pack({"id": message["id"], "value": protocol.encode(result)})
+        except (TypeError, ValueError, RecursionError) as error:
+            raise TypeError(f"{name} returned something the grader cannot compare: {error}") from None
+    except BaseException as error:  # noqa: BLE001 -- the student's error goes back to the grader as data
+        return protocol.pack({"id": message["id"], "raised": _raised(error)})
+
+
+def serve(config: dict) -> None:
+    """Bootstrap (limits, privileges, masks), then load the student's cells and answer calls until EOF."""
+    channel_in, channel_out = os.dup(CHANNEL_IN), os.dup(CHANNEL_OUT)
+    devnull = os.open(os.devnull, os.O_RDWR)
+    os.dup2(devnull, CHANNEL_IN)
+    os.dup2(devnull, CHANNEL_OUT)
+    _limit(config["limits"])
+    _drop_privileges(config["uid"], config["gid"])
+    sys.path.extend(config["site"])
+    sys.meta_path.insert(0, _Unavailable(config["masked"]))
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import numpy  # noqa: F401 -- imported once here, so that the student's cells find it warm
+    import protocol
+
+    del sys.path[0]  # the student's code sees the runtime and site-packages only
+
+    def send(message: dict) -> None:
+        _write_all(channel_out, protocol.pack(message))
+
+    def receive() -> dict:
+        return protocol.unpack(_read_exact(channel_in, protocol.frame_length(_read_exact(channel_in, 4))))
+
+    send({"hello": os.getpid(), "uid": os.getuid()})
+    main = types.ModuleType("__main__")
+    main.__dict__["get_ipython"] = lambda: shell
+    shell = _Shell(main.__dict__)
+    sys.modules["__main__"] = main
+    while True:
+        try:
+            message = receive()
+        except EOFError:
+            return
+        if message.get("op") == "load":
+            os.dup2(devnull, 2)  # from here on only the student writes to stderr
+            send(_load(message["cells"], main.__dict__))
+        elif message.get("op") == "call":
+            _write_all(channel_out, _call(message, main.__dict__))
+
+
+if __name__ == "__main__":
+    serve(json.loads(sys.argv[1]))
