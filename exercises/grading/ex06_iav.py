@@ -1,0 +1,163 @@
+"""Hidden tests of exercise 6, ``inscribed_angles(points)`` and ``is_circle(points, std_max, mean_range)``.
+
+Trusted: the grader runs this file in its own process, never where the student's code runs, and
+nbgrader never copies it into the release. Each ``test_<cell>`` function holds the hidden tests of
+the graded cell with that grade id; it gets the student's functions (calls into their sandboxed
+worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
+"""
+
+import numpy as np
+
+import labkit
+
+FUNCTIONS = ("inscribed_angles", "is_circle")
+
+
+def _random_shape(rng, kind, n):
+    """``n`` points of a random noisy arc, line or V corner, shifted by up to 5 m."""
+    if kind == "arc":
+        radius = float(rng.uniform(0.05, 2.0))
+        span = np.radians(float(rng.uniform(20.0, 340.0)))
+        t = float(rng.uniform(-np.pi, np.pi)) + np.sort(rng.uniform(0.0, span, n))
+        t[0], t[-1] = t[0] - 1e-3, t[-1] + 1e-3  # distinct ends
+        p = radius * np.column_stack([np.cos(t), np.sin(t)])
+        noise = radius * float(rng.choice([0.0, 0.003, 0.01, 0.03, 0.06]))
+    elif kind == "line":
+        heading = float(rng.uniform(-np.pi, np.pi))
+        s = np.sort(rng.uniform(0.0, float(rng.uniform(0.1, 5.0)), n)) + np.arange(n) * 1e-3
+        p = np.column_stack([s * np.cos(heading), s * np.sin(heading)])
+        noise = float(rng.choice([0.0, 0.0, 0.002, 0.01]))
+    else:  # a V corner: two legs of random lengths at a random angle
+        opening = np.radians(float(rng.uniform(30.0, 170.0)))
+        k = int(rng.integers(1, n - 1))
+        left = np.linspace(1.0, 0.0, k + 1)[:-1] * float(rng.uniform(0.2, 2.0))
+        right = np.linspace(0.0, 1.0, n - k) * float(rng.uniform(0.2, 2.0))
+        p = np.concatenate([left[:, None] * [[1.0, 0.0]], right[:, None] * [[np.cos(opening), np.sin(opening)]]])
+        noise = float(rng.choice([0.0, 0.005]))
+    p = p + noise * rng.standard_normal(p.shape) + rng.uniform(-5.0, 5.0, 2)
+    return p
+
+
+def test_hidden_random(inscribed_angles, is_circle, rng):
+    """200 random noisy arcs, lines and V-corners: angles and verdicts against ``labkit``'s IAV."""
+    checked = 0
+    for trial in range(200):
+        kind = ("arc", "arc", "line", "corner")[trial % 4]
+        n = int(rng.integers(3, 61)) if trial % 3 else int(rng.integers(3, 8))
+        points = _random_shape(rng, kind, n)
+        setting = f"random {kind} {trial} ({n} points)"
+        reference = labkit.inscribed_angles(points)
+        angles = inscribed_angles(points)
+        assert isinstance(angles, np.ndarray), f"{setting}: angles must be a numpy array, got {type(angles).__name__}"
+        assert angles.shape == reference.shape, (
+            f"{setting}: angles must have shape {reference.shape}, got {angles.shape}"
+        )
+        assert np.issubdtype(angles.dtype, np.floating), f"{setting}: angles must be floats, got {angles.dtype}"
+        if not np.allclose(angles, reference, rtol=0.0, atol=1e-6):
+            i = int(np.flatnonzero(~np.isclose(angles, reference, rtol=0.0, atol=1e-6))[0])
+            raise AssertionError(f"{setting}: the angle at interior point {i} should be {reference[i]:.9f} rad, "
+                                 f"got {angles[i]:.9f}")
+        if trial % 2:
+            kwargs = {}
+            std_max, low, high = 0.15, np.pi / 2, 3 * np.pi / 4
+        else:
+            std_max = float(rng.uniform(0.02, 0.4))
+            low = float(rng.uniform(0.0, 2.5))
+            high = float(rng.uniform(low + 0.1, np.pi))
+            kwargs = {"std_max": std_max, "mean_range": (low, high)}
+        mean, std, _ = labkit.iav_stats(points)
+        if min(abs(std - std_max), abs(mean - low), abs(mean - high)) < 1e-6:
+            continue  # too close to a threshold to grade fairly
+        want = bool(std < std_max and low <= mean <= high)
+        verdict = is_circle(points, **kwargs)
+        assert isinstance(verdict, (bool, np.bool_)), f"{setting}: is_circle must return a bool, got {type(verdict)}"
+        assert verdict == want, (f"{setting} with std_max={std_max:.3f}, mean_range=({low:.3f}, {high:.3f}): "
+                                 f"inscribed angles have mean {mean:.4f} and std {std:.4f} rad, so is_circle "
+                                 f"should be {want}, got {verdict}")
+        checked += 1
+    assert checked > 150, "the hidden test skipped too many cases"
+
+
+def test_hidden_edges(inscribed_angles, is_circle, rng):
+    """0 to 3 points, identical ends, an interior point on an end, lists of integers, other thresholds."""
+    undefined = [[], [[1.0, 2.0]], [[0.0, 0.0], [1.0, 1.0]], [[0, 0], [0, 0], [2, 0]], [[0, 0], [1, 1], [2, 0], [2, 0]]]
+    for case, points in enumerate(undefined):
+        try:
+            inscribed_angles(points)
+        except ValueError as error:
+            assert "points" in str(error), f"undefined case {case} ({points}): name the argument points: {error}"
+        else:
+            raise AssertionError(f"undefined case {case} ({points}): the angles are undefined, raise ValueError")
+        assert not is_circle(points), f"undefined case {case} ({points}): is_circle must return False"
+        assert not is_circle(np.array(points, dtype=float).reshape(-1, 2)), f"undefined case {case} as an array"
+
+    t = np.radians(np.linspace(-60.0, 60.0, 9))
+    arc_120 = np.column_stack([-np.cos(t), np.sin(t)])  # mean 120 degrees, std 0
+    cases = [
+        ([[0, 0], [1, 1], [2, 0]], {}),  # 3 points, integers: one angle of 90 degrees
+        ([[0, 0], [1, 1], [2, 0]], {"mean_range": (0.5, 1.5)}),
+        ([[0.0, 0.0], [1.0, 0.0], [2.0, 1.0], [0.0, 0.0]], {}),  # identical ends: angles 0
+        ([[0.0, 0.0], [1.0, 0.0], [2.0, 1.0], [0.0, 0.0]], {"mean_range": (0.0, 0.5), "std_max": 0.01}),
+        ([[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 0]], {}),  # a line of integers
+        ([[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [5, 0]], {"std_max": 0.05, "mean_range": (3.0, np.pi)}),
+        (arc_120.tolist(), {}),
+        (arc_120.tolist(), {"mean_range": (np.pi / 2, 2.0)}),  # 120 deg = 2.094 rad: mean too large
+        (arc_120 + np.array([[0.0, 0.0]] * 4 + [[0.0, 0.05]] * 5), {"std_max": 0.01}),  # a bent arc: spread too large
+        ([[0.0, 1.0], [0.0, 0.0], [1.0, 0.0]], {"mean_range": (1.5, 1.6), "std_max": 1e-3}),
+    ]
+    for case, (points, kwargs) in enumerate(cases):
+        reference = labkit.inscribed_angles(points)
+        mean, std, _ = labkit.iav_stats(points)
+        std_max = kwargs.get("std_max", 0.15)
+        low, high = kwargs.get("mean_range", (np.pi / 2, 3 * np.pi / 4))
+        want = bool(std < std_max and low <= mean <= high)
+        angles = inscribed_angles(points)
+        assert isinstance(angles, np.ndarray) and angles.shape == reference.shape, \
+            f"edge case {case}: angles must be an array of shape {reference.shape}, got {angles!r}"
+        np.testing.assert_allclose(angles, reference, rtol=0.0, atol=1e-6, err_msg=f"edge case {case} ({points})")
+        verdict = is_circle(points, **kwargs)
+        assert isinstance(verdict, (bool, np.bool_)), f"edge case {case}: is_circle must return a bool"
+        assert verdict == want, f"edge case {case} ({kwargs}): mean {mean:.4f}, std {std:.4f}: should be {want}"
+
+
+def test_own_work(inscribed_angles, is_circle, rng):
+    """Six more random arcs: right answers where labkit cannot be imported."""
+    for _ in range(6):
+        t = float(rng.uniform(-np.pi, np.pi)) + np.sort(rng.uniform(0.0, np.radians(200.0), int(rng.integers(4, 40))))
+        points = float(rng.uniform(0.1, 1.0)) * np.column_stack([np.cos(t), np.sin(t)])
+        points = points + 0.01 * rng.standard_normal(points.shape)
+        np.testing.assert_allclose(inscribed_angles(points), labkit.inscribed_angles(points), rtol=0.0, atol=1e-6)
+        mean, std, _ = labkit.iav_stats(points)
+        assert is_circle(points) == bool(std < 0.15 and np.pi / 2 <= mean <= 3 * np.pi / 4)
+
+
+# ---------------------------------------------------------------------------- proof (tests/test_exercises.py)
+#: A submission that gets the right answers by calling labkit: it must score 0.
+DELEGATE = {"iav": '''
+import labkit
+
+
+def inscribed_angles(points):
+    return labkit.inscribed_angles(points)
+
+
+def is_circle(points, std_max=0.15, mean_range=(np.pi / 2, 3 * np.pi / 4)):
+    try:
+        mean, std, _ = labkit.iav_stats(points)
+    except ValueError:
+        return False
+    return bool(std < std_max and mean_range[0] <= mean <= mean_range[1])
+'''}
+
+#: Plausible wrong answers, as (text in the solution, replacement): a hidden test must catch each.
+MISTAKES = {
+    "degrees instead of radians": (
+        "return np.arccos(np.clip(cosine, -1.0, 1.0))", "return np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))"
+    ),
+    "arccos without clipping the cosine (nan on straight lines)": ("np.clip(cosine, -1.0, 1.0)", "cosine"),
+    "the ray from P_1 to P_i instead of P_i to P_1 (pi minus the angle)": ("a = p[0] - inner", "a = inner - p[0]"),
+    "mean and standard deviation swapped": (
+        "mean, std = angles.mean(), angles.std()", "std, mean = angles.mean(), angles.std()"
+    ),
+    "sample standard deviation (ddof=1) instead of the population one": ("angles.std()", "angles.std(ddof=1)"),
+}
