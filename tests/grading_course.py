@@ -1,0 +1,101 @@
+"""Shared by the grading tests: a throw-away copy of the course and submissions written into it.
+
+The tests never grade inside the repository: :func:`copy_course` copies the trusted part of
+``exercises/`` (sources, release, specs, nbgrader config) into a temporary folder, and
+:func:`submit` writes a student's notebook under its ``submitted/`` the way ``nbgrader collect``
+lays it out. Notebooks are built from the committed release, with the solution cells replaced by
+the instructor's solution (:func:`solutions`), a mistake in it (:func:`with_mistake`) or any code.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import textwrap
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+EXERCISES = REPO / "exercises"
+SOLUTION_MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
+
+
+def read_notebook(path: Path) -> dict:
+    return json.loads(Path(path).read_text(encoding="utf-8"))
+
+
+def cell_source(cell: dict) -> str:
+    source = cell["source"]
+    return source if isinstance(source, str) else "".join(source)
+
+
+def grade_id(cell: dict) -> str | None:
+    return cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+
+
+def cells_by_grade_id(notebook: dict) -> dict[str, dict]:
+    return {grade_id(c): c for c in notebook["cells"] if grade_id(c) is not None}
+
+
+def names() -> list[str]:
+    return sorted(p.name for p in (EXERCISES / "source").iterdir() if (p / f"{p.name}.ipynb").is_file())
+
+
+def source_notebook(name: str) -> dict:
+    return read_notebook(EXERCISES / "source" / name / f"{name}.ipynb")
+
+
+def release_notebook(name: str) -> dict:
+    return read_notebook(EXERCISES / "release" / name / f"{name}.ipynb")
+
+
+def solutions(name: str) -> dict[str, str]:
+    """The instructor's answer: each solution cell of the source without its marker lines."""
+    return {
+        gid: "\n".join(line for line in cell_source(cell).splitlines() if line.strip() not in SOLUTION_MARKERS)
+        for gid, cell in cells_by_grade_id(source_notebook(name)).items()
+        if cell["metadata"]["nbgrader"].get("solution")
+    }
+
+
+def with_mistake(name: str, old: str, new: str) -> dict[str, str]:
+    answers = solutions(name)
+    found = sum(code.count(old) for code in answers.values())
+    assert found == 1, f"{name}: {old!r} occurs {found} times in the solution, not once"
+    return {gid: code.replace(old, new) for gid, code in answers.items()}
+
+
+def notebook_with(name: str, answers: dict[str, str], *, extra: list[str] = (), before: list[str] = ()) -> dict:
+    """The release of ``name`` with ``answers`` (grade id -> code) in its solution cells, and extra code
+    cells (without metadata) after the last cell (``extra``) or before the first (``before``)."""
+    notebook = json.loads(json.dumps(release_notebook(name)))
+    cells = cells_by_grade_id(notebook)
+    for gid, code in answers.items():
+        cells[gid]["source"] = textwrap.dedent(code).strip("\n")
+    plain = [{"cell_type": "code", "metadata": {}, "source": textwrap.dedent(code).strip("\n"), "outputs": [],
+              "execution_count": None} for code in (*before, *extra)]
+    notebook["cells"] = plain[:len(before)] + notebook["cells"] + plain[len(before):]
+    return notebook
+
+
+def copy_course(destination: Path) -> Path:
+    """The trusted part of exercises/ (no gradebook, submissions or records) in ``destination``."""
+    destination.mkdir(parents=True)
+    for part in ("source", "release", "grading"):
+        shutil.copytree(EXERCISES / part, destination / part, ignore=shutil.ignore_patterns("__pycache__",
+                                                                                            ".ipynb_checkpoints"))
+    shutil.copy(EXERCISES / "nbgrader_config.py", destination / "nbgrader_config.py")
+    return destination
+
+
+def submit(course: Path, student: str, name: str, notebook: dict | str | bytes, *, file: str | None = None) -> Path:
+    """Write a submission: a notebook (dict), or the file's raw text/bytes (for broken notebooks)."""
+    folder = course / "submitted" / student / name
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / (file or f"{name}.ipynb")
+    if isinstance(notebook, dict):
+        path.write_text(json.dumps(notebook, indent=1), encoding="utf-8")
+    elif isinstance(notebook, bytes):
+        path.write_bytes(notebook)
+    else:
+        path.write_text(notebook, encoding="utf-8")
+    return path

@@ -1,0 +1,552 @@
+"""The attack suite: a class of honest, broken and cheating submissions graded in one ``labkit grade`` run.
+
+Every attack the grading issue lists (adapted to the sandboxed grader) and more get their own
+student. Each must score exactly what its own code earns -- 0 for the cheats, full marks for an
+honest answer wrapped in a disruption (a fork bomb, a memory bomb, 50 MB of output, killing its
+parent) -- while the honest solution graded in the same run scores full marks and every student
+gets a verdict. The run's gradebook, ``grades.csv``, records and autograded notebooks are checked
+afterwards, and ``nbgrader export`` and ``generate_feedback`` run on them.
+
+The attacks know the real paths of the course, the gradebook, the repository and the other
+students' submissions (they are formatted into their code), so "unreachable" is tested, not
+assumed.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from labkit.grading import grade
+from labkit.grading.sandbox import worker_uid
+from tests.grading_course import REPO, copy_course, grade_id, notebook_with, release_notebook, solutions, submit
+
+pytestmark = pytest.mark.slow
+
+EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02_weighted_line_fit", "ex04_dbscan1d"
+FULL = 10.0
+SLOT = 10  # this run's students are uids worker_uid(10) and worker_uid(11): no other test uses them
+
+WRONG_SEGMENT = '''
+def segment(ranges, angles, threshold_m, min_points):
+    return np.zeros(len(ranges), dtype=np.int64)
+'''
+
+
+def solution(name: str) -> str:
+    (code,) = solutions(name).values()
+    return code
+
+
+def wrapped_segment(guard: str) -> str:
+    """The instructor's segment, renamed, behind a function that first runs ``guard``."""
+    body = textwrap.indent(textwrap.dedent(guard).strip(), "    ")
+    return (solution(EX1).replace("def segment(", "def _segment(")
+            + f"\n\n\ndef segment(ranges, angles, threshold_m, min_points):\n{body}\n"
+            + "    return _segment(ranges, angles, threshold_m, min_points)\n")
+
+
+# ---------------------------------------------------------------------------- the class
+# student -> (exercise, code of the solution cell, extra cells before it, expected score, expected status)
+CHEATS = {
+    # calling labkit (or switching the old own-work profiler off first): labkit is not in the sandbox
+    "delegate": (EX1, "DELEGATE", [], 0.0, "graded"),
+    "delegate_guard_off": (EX1, "DELEGATE", ["""
+        import sys
+        sys.setprofile(None)
+        import labkit.grading
+        labkit.grading.own_work = lambda f, *args, **kwargs: f
+    """], 0.0, "graded"),
+    "delegate_raw_thread": (EX1, '''
+        import _thread
+        import time
+
+        def segment(ranges, angles, threshold_m, min_points):
+            box = []
+
+            def work():
+                try:
+                    import labkit
+                    box.append(labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m,
+                                                     min_points=min_points))
+                except BaseException:
+                    box.append(np.zeros(len(ranges), dtype=np.int64))
+
+            _thread.start_new_thread(work, ())
+            while not box:
+                time.sleep(0.001)
+            return box[0]
+    ''', [], 0.0, "graded"),
+    # labkit by path: the repository, a copy of the package, the editable finder, getsource + exec
+    "delegate_by_path": (EX1, '''
+        import importlib.util, inspect, site, sys
+
+        def _labkit():
+            for folder in ["{repo}", "/work/main", "{repo}/.venv/lib/python3.11/site-packages", *sys.path]:
+                try:
+                    site.addsitedir(folder)
+                except Exception:
+                    pass
+                for init in [folder + "/labkit/__init__.py", folder + "/labkit_copy/__init__.py"]:
+                    try:
+                        spec = importlib.util.spec_from_file_location("labkit", init)
+                        module = importlib.util.module_from_spec(spec)
+                        spec.loader.exec_module(module)
+                        return module
+                    except Exception:
+                        pass
+            import labkit
+            namespace = {}
+            exec(inspect.getsource(labkit.segmentation), namespace)
+            return labkit
+
+        def segment(ranges, angles, threshold_m, min_points):
+            try:
+                labkit = _labkit()
+                return labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m,
+                                             min_points=min_points)
+            except Exception:
+                return np.zeros(len(ranges), dtype=np.int64)
+    ''', [], 0.0, "graded"),
+    # reading the answers: the trusted side's globals and locals, gc, the files of the course
+    "reads_reference": (EX1, '''
+        import gc, sys
+
+        def segment(ranges, angles, threshold_m, min_points):
+            frame = sys._getframe()
+            while frame is not None:
+                for scope in (frame.f_locals, frame.f_globals):
+                    for name in ("reference", "expected", "want", "want_labels"):
+                        if name in scope:
+                            return np.asarray(scope[name])
+                frame = frame.f_back
+            for thing in gc.get_objects():
+                if isinstance(thing, np.ndarray) and thing.dtype.kind == "i" and thing.shape == (len(ranges),):
+                    return thing
+            return np.zeros(len(ranges), dtype=np.int64)
+    ''', [], 0.0, "graded"),
+    "reads_files": (EX1, '''
+        import glob, json, os
+
+        def _solution():
+            places = ["{course}/source/{ex1}/{ex1}.ipynb", "{repo}/exercises/source/{ex1}/{ex1}.ipynb",
+                      "{course}/submitted/solution/{ex1}/{ex1}.ipynb", "../source/{ex1}/{ex1}.ipynb",
+                      "../../source/{ex1}/{ex1}.ipynb", *glob.glob("/*/{ex1}*"), *glob.glob("/*/*/{ex1}*")]
+            for place in places:
+                try:
+                    cells = json.load(open(place))["cells"]
+                except Exception:
+                    continue
+                namespace = {"np": np}
+                for cell in cells:
+                    source = "".join(cell["source"]).replace("### BEGIN SOLUTION", "").replace("### END SOLUTION", "")
+                    if source.lstrip().startswith("def segment"):
+                        exec(source, namespace)
+                        return namespace["segment"]
+            return None
+
+        def segment(ranges, angles, threshold_m, min_points):
+            found = _solution()
+            if found is not None:
+                return found(ranges, angles, threshold_m, min_points)
+            return np.zeros(len(ranges), dtype=np.int64)
+    ''', [], 0.0, "graded"),
+    "writes_gradebook": (EX1, WRONG_SEGMENT, ["""
+        import sqlite3
+        for path in ["{course}/gradebook.db", "{repo}/exercises/gradebook.db", "gradebook.db"]:
+            try:
+                with sqlite3.connect(path) as db:
+                    db.execute("UPDATE grade SET manual_score = 10")
+                    db.execute("UPDATE grade SET auto_score = 10")
+            except Exception:
+                pass
+    """], 0.0, "graded"),
+    # changing what the comparison sees: monkeypatches, an ndarray with a lying __eq__, a transformer
+    "monkeypatches": (EX1, WRONG_SEGMENT, ["""
+        import builtins, sys, types
+        import numpy.testing
+        numpy.testing.assert_array_equal = lambda *args, **kwargs: None
+        np.array_equal = lambda *args, **kwargs: True
+        builtins.isinstance = lambda *args: True
+        fake = types.ModuleType("labkit")
+        fake.segment_labels = lambda *args, **kwargs: np.zeros(3, dtype=np.int64)
+        fake.Scan = lambda **kwargs: None
+        sys.modules["labkit"] = fake
+        sklearn, cluster = types.ModuleType("sklearn"), types.ModuleType("sklearn.cluster")
+        cluster.DBSCAN = lambda **kwargs: None
+        sys.modules["sklearn"], sys.modules["sklearn.cluster"] = sklearn, cluster
+    """], 0.0, "graded"),
+    "lying_array": (EX1, '''
+        class Equal(np.ndarray):
+            def __eq__(self, other):
+                return np.ones(np.shape(other), dtype=bool)
+
+            def __ne__(self, other):
+                return np.zeros(np.shape(other), dtype=bool)
+
+            def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+                return np.zeros(np.shape(inputs[0]), dtype=bool) if ufunc is np.not_equal else True
+
+        def segment(ranges, angles, threshold_m, min_points):
+            return np.zeros(len(ranges), dtype=np.int64).view(Equal)
+    ''', [], 0.0, "graded"),
+    "ipython_transformer": (EX1, WRONG_SEGMENT, ["""
+        shell = get_ipython()
+        shell.input_transformers_cleanup.append(lambda lines: ["pass\\n"])
+        shell.input_transformers_post.append(lambda lines: ["pass\\n"])
+    """], 0.0, "graded"),
+    "protocol_forger": (EX1, WRONG_SEGMENT, ["""
+        import json, os, struct, threading, time
+
+        def forge():
+            answer = {"A": "<i8", "s": [7], "b": "AAAAAAAAAAAAAAAAAAAAAAAAAAABAAAAAAAAAAEAAAAAAAAA//////////8="}
+            for attempt in range(200):
+                for fd in range(3, 40):
+                    for call in range(1, 20):
+                        body = json.dumps({"id": call, "value": answer}).encode()
+                        try:
+                            os.write(fd, struct.pack(">I", len(body)) + body)
+                        except OSError:
+                            pass
+                time.sleep(0.01)
+
+        threading.Thread(target=forge, daemon=True).start()
+    """], 0.0, None),
+    "huge_and_recursive_returns": (EX1, '''
+        def segment(ranges, angles, threshold_m, min_points):
+            if min_points == 2:
+                loop = []
+                loop.append(loop)
+                return loop
+            return np.zeros(20_000_000)  # 160 MB: more than a message may hold
+    ''', [], 0.0, "graded"),
+    "float_subclass": (EX2, '''
+        class Liar(float):
+            def __eq__(self, other):
+                return True
+
+            def __sub__(self, other):
+                return 0.0
+
+            __rsub__ = __sub__
+
+        def fit_line(rho, theta):
+            return Liar(0.0), Liar(0.0)
+    ''', [], 0.0, "graded"),
+    "nan_answers": (EX2, '''
+        def fit_line(rho, theta):
+            return float("nan"), float("nan")
+    ''', [], 0.0, "graded"),
+    "sklearn_monkeypatch": (EX4, '''
+        import sys, types
+        sklearn, cluster = types.ModuleType("sklearn"), types.ModuleType("sklearn.cluster")
+
+        class DBSCAN:
+            def __init__(self, **kwargs):
+                pass
+
+            def fit(self, x):
+                self.labels_ = np.zeros(len(x), dtype=np.int64)
+                return self
+
+        cluster.DBSCAN = DBSCAN
+        sys.modules["sklearn"], sys.modules["sklearn.cluster"] = sklearn, cluster
+
+        def neighbourhood_bounds(x, eps):
+            return np.zeros(len(x), dtype=np.int64), np.zeros(len(x), dtype=np.int64)
+
+        def dbscan_sorted(x, eps, min_pts):
+            from sklearn.cluster import DBSCAN
+            return DBSCAN(eps=eps).fit(x).labels_
+    ''', [], 0.0, "graded"),
+    "sklearn_delegate": (EX4, '''
+        from sklearn.cluster import DBSCAN
+
+        def neighbourhood_bounds(x, eps):
+            x = np.asarray(x, dtype=np.float64)
+            return np.searchsorted(x, x - eps, side="left"), np.searchsorted(x, x + eps, side="right") - 1
+
+        def dbscan_sorted(x, eps, min_pts):
+            return DBSCAN(eps=eps, min_samples=min_pts).fit(np.asarray(x)[:, None]).labels_
+    ''', [], 0.0, "graded"),
+    "pypi_dbscan1d": (EX4, '''
+        from dbscan1d.core import DBSCAN1D
+
+        def neighbourhood_bounds(x, eps):
+            raise NotImplementedError()
+
+        def dbscan_sorted(x, eps, min_pts):
+            return DBSCAN1D(eps, min_pts).fit_predict(np.asarray(x))
+    ''', [], 0.0, "graded"),
+}
+
+# honest answers in a disruption: they earn full marks, and nothing they do reaches anyone else
+CONTAINED = {
+    "solution": (EX1, solution(EX1), [], FULL, "graded"),
+    "solution_ex04": (EX4, solution(EX4), [], FULL, "graded"),
+    "kills_parent": (EX1, solution(EX1), ["""
+        import os, signal
+        for target in (os.getppid(), 1, -1):
+            try:
+                os.kill(target, signal.SIGKILL)
+            except OSError:
+                pass
+    """], FULL, "graded"),
+    "fork_bomb": (EX1, solution(EX1), ["""
+        import os, time
+        for _ in range(10_000):
+            try:
+                if os.fork() == 0:
+                    while True:
+                        time.sleep(1)
+            except OSError:
+                break
+    """], FULL, "graded"),
+    "memory_bomb": (EX1, solution(EX1), ["""
+        blob = bytearray(64 * 2**30)
+    """, """
+        blob = np.ones((100_000, 100_000))
+    """], FULL, "graded"),
+    "output_bomb": (EX1, wrapped_segment('print("y" * 100_000)'), ["""
+        import sys
+        print("x" * 50_000_000)
+        sys.stderr.write("z" * 10_000_000)
+    """], FULL, "graded"),
+    "warnings": (EX1, wrapped_segment('''
+        import sys, warnings
+        warnings.warn("a warning from correct code")
+        np.log(np.zeros(3))
+        print("a message on stderr", file=sys.stderr)
+    '''), ["""
+        import numpy as np
+        np.seterr(all="warn")
+    """], FULL, "graded"),
+    "magics_and_plots": (EX1, solution(EX1), ["""
+        %matplotlib inline
+        !pip install something
+        import matplotlib.pyplot as plt
+        plt.plot([0, 1], [1, 0])
+        plt.show()
+        x = %timeit -o 1 + 1
+    """, """
+        %%time
+        y = 1
+    """], FULL, "graded"),
+    # one test lost, the others earned: a crash and a loop that swallows KeyboardInterrupt, on one input
+    "crashes_on_one_input": (EX1, wrapped_segment('''
+        import os
+        if threshold_m > 1e8:
+            os._exit(3)
+    '''), [], FULL - 2, "crashed"),
+    "swallows_interrupt_on_one_input": (EX1, wrapped_segment('''
+        import time
+        if min_points >= 1000:
+            while True:
+                try:
+                    time.sleep(10)
+                except KeyboardInterrupt:
+                    pass
+    '''), [], FULL - 2, "timed out"),
+    "endless_loop": (EX0, '''
+        def beams_to_points(ranges, angles, range_min, range_max):
+            while True:
+                pass
+    ''', [], 0.0, "timed out"),
+    "loops_while_loading": (EX1, solution(EX1), ["""
+        while True:
+            pass
+    """], 0.0, "timed out"),
+    "segfault": (EX1, '''
+        import ctypes
+
+        def segment(ranges, angles, threshold_m, min_points):
+            return ctypes.string_at(0)
+    ''', [], 0.0, "crashed"),
+}
+STUDENTS = {**CHEATS, **CONTAINED}
+
+
+def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]:
+    """Write every submission; (exercise, student) -> (expected score, expected status)."""
+    paths = {"{course}": str(course), "{repo}": str(REPO), "{ex1}": EX1}
+
+    def fill(code: str) -> str:
+        for key, value in paths.items():
+            code = code.replace(key, value)
+        return textwrap.dedent(code)
+
+    expected = {}
+    for student, (name, code, before, score, status) in STUDENTS.items():
+        if code == "DELEGATE":
+            answers = dict(_spec(name).DELEGATE)
+        else:
+            (gid,) = solutions(name)
+            answers = {gid: fill(code)}
+        submit(course, student, name, notebook_with(name, answers, before=[fill(cell) for cell in before]))
+        expected[name, student] = (score, status)
+    # fault isolation by the notebook file: a duplicated grade id, deleted test cells, a renamed file
+    release = release_notebook(EX1)
+    honest = notebook_with(EX1, solutions(EX1))
+    pasted = json.loads(json.dumps(honest))
+    visible = next(c for c in release["cells"] if grade_id(c) == "test_visible")
+    pasted["cells"] += [json.loads(json.dumps(visible)), {**json.loads(json.dumps(visible)), "metadata": {}}]
+    submit(course, "pasted_test_cell", EX1, pasted)
+    deleted = json.loads(json.dumps(honest))
+    deleted["cells"] = [c for c in deleted["cells"]
+                        if not (grade_id(c) or "").startswith("test_")]
+    submit(course, "deleted_test_cells", EX1, deleted)
+    submit(course, "renamed_file", EX1, honest, file="my_segmentation.ipynb")
+    submit(course, "not_json", EX1, '{"cells": [')
+    submit(course, "nbformat_3", EX1, json.dumps({"nbformat": 3, "worksheets": []}))
+    (course / "submitted" / "symlink" / EX1).mkdir(parents=True)
+    (course / "submitted" / "symlink" / EX1 / f"{EX1}.ipynb").symlink_to(
+        course / "submitted" / "solution" / EX1 / f"{EX1}.ipynb")
+    (course / "submitted" / "empty_folder" / EX1).mkdir(parents=True)
+    expected.update({
+        (EX1, "pasted_test_cell"): (FULL, "graded"), (EX1, "deleted_test_cells"): (FULL, "graded"),
+        (EX1, "renamed_file"): (FULL, "graded"), (EX1, "not_json"): (0.0, "invalid notebook"),
+        (EX1, "nbformat_3"): (0.0, "invalid notebook"), (EX1, "symlink"): (0.0, "invalid notebook"),
+        (EX1, "empty_folder"): (0.0, "not submitted"),
+    })
+    return expected
+
+
+def _spec(module: str):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"spec_{module}", REPO / "exercises" / "grading" / f"{module}.py")
+    loaded = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(loaded)
+    return loaded
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    course = copy_course(tmp_path_factory.mktemp("attacks") / "course")
+    expected = build_class(course)
+    run = grade("all", course=course, jobs=2, first_slot=SLOT)
+    results = {(r.exercise, r.student): r for r in run.results}
+    return course, expected, results, run
+
+
+# ---------------------------------------------------------------------------- verdicts
+@pytest.mark.parametrize("student", sorted(STUDENTS) + ["pasted_test_cell", "deleted_test_cells", "renamed_file",
+                                                        "not_json", "nbformat_3", "symlink", "empty_folder"])
+def test_every_student_scores_what_their_own_code_earns(graded, student):
+    _, expected, results, _ = graded
+    (key,) = [key for key in expected if key[1] == student]
+    score, status = expected[key]
+    result = results[key]
+    verdicts = {cell.grade_id: cell.verdict for cell in result.cells}
+    assert result.score == score, f"{student}: {result.score} instead of {score}: {verdicts}"
+    if status is not None:
+        assert result.status == status, f"{student}: {result.status} ({result.detail})"
+    assert result.max_score == FULL
+
+
+def test_the_run_gives_every_submission_a_verdict(graded):
+    _, expected, results, run = graded
+    assert run.ok
+    assert set(expected) <= set(results)
+    # every student of the roster has a row for every exercise, the ones who handed nothing in too
+    assert results[EX2, "solution"].status == "not submitted"
+
+
+def test_partial_points_name_the_lost_test(graded):
+    _, _, results, _ = graded
+    for student in ("crashes_on_one_input", "swallows_interrupt_on_one_input"):
+        cells = {cell.grade_id: cell for cell in results[EX1, student].cells}
+        assert cells["test_hidden_edges"].points == 0.0
+        assert all(cells[name].points == cells[name].max_points for name in cells if name != "test_hidden_edges")
+    lost = {c.grade_id: c.verdict for c in results[EX1, "swallows_interrupt_on_one_input"].cells}
+    assert "did not return within" in lost["test_hidden_edges"], lost
+    crash = {c.grade_id: c.verdict for c in results[EX1, "crashes_on_one_input"].cells}
+    assert "exited with status 3" in crash["test_hidden_edges"], crash
+
+
+def test_delegating_fails_with_a_message_that_says_why(graded):
+    _, _, results, _ = graded
+    errors = results[EX1, "delegate"].cell_errors
+    assert any("labkit is not available when your notebook is graded" in e["message"] for e in errors), errors
+    errors = results[EX4, "sklearn_delegate"].cell_errors
+    assert any(e["error"] == "ModuleNotFoundError" and "sklearn" in e["message"] for e in errors), errors
+
+
+def test_the_gradebook_holds_the_scores_and_nothing_the_students_wrote(graded):
+    from nbgrader.api import Gradebook
+
+    course, expected, _, _ = graded
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", "labkit") as gradebook:
+        for (name, student), (score, status) in expected.items():
+            if status == "not submitted" and student != "empty_folder":
+                continue
+            submission = gradebook.find_submission(name, student)
+            assert submission.score == score, (name, student)
+            assert all(grade.manual_score is None for nb in submission.notebooks for grade in nb.grades)
+        ids = {s.id for s in gradebook.students}
+    assert {student for _, student in expected} <= ids
+
+
+def test_grades_csv_tells_the_statuses_apart(graded):
+    course, expected, _, _ = graded
+    with open(course / "grades.csv", newline="", encoding="utf-8") as f:
+        rows = {(row["assignment"], row["student_id"]): row for row in csv.DictReader(f)}
+    for key, (score, status) in expected.items():
+        assert float(rows[key]["score"]) == score, key
+        if status is not None:
+            assert rows[key]["status"] == status, key
+    assert {row["status"] for row in rows.values()} >= {"graded", "not submitted", "timed out", "crashed",
+                                                        "invalid notebook"}
+    assert rows[EX1, "not_json"]["detail"] and rows[EX1, "crashes_on_one_input"]["detail"]
+
+
+def test_nbgrader_export_and_feedback_work_on_the_gradebook(graded):
+    course, expected, _, _ = graded
+    env = dict(os.environ, PATH=os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""),
+               JUPYTER_CONFIG_DIR=str(course / ".jupyter-config"))
+    for args in (["export", "--to", "export.csv"], ["generate_feedback", EX1, "--student", "crashes_on_one_input"]):
+        proc = subprocess.run([sys.executable, "-m", "nbgrader", *args], cwd=course, env=env, capture_output=True,
+                              text=True, timeout=600)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+    with open(course / "export.csv", newline="", encoding="utf-8") as f:
+        exported = {(row["assignment"], row["student_id"]): float(row["score"]) for row in csv.DictReader(f)}
+    for key, (score, _) in expected.items():
+        assert exported[key] == score, key
+    html = (course / "feedback" / "crashes_on_one_input" / EX1 / f"{EX1}.html").read_text(encoding="utf-8")
+    assert "test_hidden_edges" in html and "exited with status 3" in html
+
+
+def test_autograded_notebooks_show_the_verdicts_but_no_seed(graded):
+    course, _, results, _ = graded
+    for student in ("solution", "crashes_on_one_input", "pasted_test_cell", "not_json"):
+        text = (course / "autograded" / student / EX1 / f"{EX1}.ipynb").read_text(encoding="utf-8")
+        notebook = json.loads(text)
+        ids = [c["metadata"].get("nbgrader", {}).get("grade_id") for c in notebook["cells"]]
+        graded_ids = [i for i in ids if i and i.startswith("test_")]
+        assert sorted(graded_ids) == sorted(set(graded_ids)), f"{student}: a grade id twice: {ids}"
+        assert len({c["id"] for c in notebook["cells"]}) == len(notebook["cells"])
+        for seed in results[EX1, student].seeds.values():
+            assert str(seed) not in text, f"{student}: the seed of the hidden inputs is in the feedback"
+    record = json.loads((course / "records" / EX1 / "solution.json").read_text(encoding="utf-8"))
+    assert set(record["seeds"]) == {"test_visible", "test_hidden_random", "test_hidden_edges", "test_own_work"}
+
+
+def test_submissions_are_left_as_they_were(graded):
+    course, _, _, _ = graded
+    written = sorted(p.relative_to(course / "submitted") for p in (course / "submitted").rglob("*"))
+    assert all(not str(p).endswith((".tmp", "timestamp.txt")) for p in written)
+    assert (course / "submitted" / "not_json" / EX1 / f"{EX1}.ipynb").read_text() == '{"cells": ['
+
+
+def test_no_student_process_outlives_the_run(graded):
+    uids = {str(worker_uid(SLOT)), str(worker_uid(SLOT + 1))}
+    survivors = subprocess.run(["ps", "-e", "-o", "uid=,pid=,comm="], capture_output=True, text=True).stdout
+    left = [line for line in survivors.splitlines() if line.split()[0] in uids]
+    assert not left, left

@@ -1,0 +1,186 @@
+"""The wire format between the grader and the student's worker (:mod:`labkit.grading.protocol`).
+
+What the trusted side decodes is built from scratch out of plain JSON: exact built-in types and
+plain ndarrays of numeric dtypes, never an object of the student's. Every way to smuggle
+something else (a subclass, an object array, a wrong size, deep nesting, a huge frame, an
+unknown exception class) is tried and refused.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+
+import numpy as np
+import pytest
+
+from labkit.grading.protocol import (
+    HEADER,
+    MAX_DEPTH,
+    MAX_FRAME_BYTES,
+    NUMERIC_DTYPES,
+    ProtocolError,
+    decode,
+    encode,
+    exception_names,
+    frame_length,
+    pack,
+    rebuild_exception,
+    unpack,
+)
+
+
+def through(value):
+    """``value`` sent over the wire and decoded on the trusted side."""
+    return decode(unpack(pack({"value": encode(value)})[HEADER.size:])["value"])
+
+
+@pytest.mark.parametrize("value", [
+    None, True, False, 0, -7, 2**80, 1.5, -0.0, math.inf, -math.inf, "text", "", [], [1, [2.0, None]], (1, "a"),
+    (), {"a": 1, "b": [1, 2]}, np.float64(0.1), np.int32(-3), np.bool_(True), np.complex128(1 + 2j),
+    np.arange(6, dtype=np.int64).reshape(2, 3), np.zeros((0, 2)), np.array(3.5), np.array([True, False]),
+    np.arange(4, dtype=np.uint8), np.linspace(0, 1, 5, dtype=np.float32),
+])
+def test_plain_values_cross_unchanged(value):
+    got = through(value)
+    assert type(got) is type(value)
+    if isinstance(value, np.ndarray):
+        assert got.dtype == value.dtype and got.shape == value.shape and np.array_equal(got, value)
+        assert got.flags.writeable
+    elif isinstance(value, np.generic):
+        assert got.dtype == value.dtype and got == value
+    else:
+        assert got == value
+
+
+def test_nan_crosses_as_a_float():
+    got = through([math.nan, np.float64(math.nan)])
+    assert type(got[0]) is float and math.isnan(got[0]) and math.isnan(got[1])
+
+
+def test_an_ndarray_subclass_arrives_as_a_plain_array():
+    class Equal(np.ndarray):
+        def __eq__(self, other):
+            return True
+
+    got = through(np.zeros(3, dtype=np.int64).view(Equal))
+    assert type(got) is np.ndarray
+    assert not np.array_equal(got, [1, 2, 3])
+
+
+def test_subclasses_of_builtins_arrive_as_their_base_type():
+    class Liar(float):
+        def __eq__(self, other):
+            return True
+
+    class Text(str):
+        pass
+
+    got = through((Liar(1.0), Text("x")))
+    assert type(got[0]) is float and got[0] != 2.0 and type(got[1]) is str
+
+
+def test_byte_order_is_made_native():
+    got = through(np.arange(3, dtype=">f8"))
+    assert got.dtype == np.dtype("<f8") and got.tolist() == [0.0, 1.0, 2.0]
+
+
+@pytest.mark.parametrize("value", [
+    np.array([object()]), np.array(["a"]), {1: "non-str key"}, {1, 2}, object(), b"bytes", lambda: 0,
+    np.datetime64("2025-01-01"), (x for x in ()),
+])
+def test_other_objects_cannot_be_sent(value):
+    with pytest.raises(TypeError):
+        encode(value)
+
+
+def test_recursive_and_deep_values_cannot_be_sent():
+    loop = []
+    loop.append(loop)
+    with pytest.raises(TypeError, match="nest"):
+        encode(loop)
+
+
+def array(dtype: str, shape: list, raw: bytes) -> dict:
+    return {"A": dtype, "s": shape, "b": base64.b64encode(raw).decode()}
+
+
+@pytest.mark.parametrize(("data", "match"), [
+    (array("|O", [1], b"\0" * 8), "not a numeric dtype"),
+    (array("<U1", [1], b"a\0\0\0"), "not a numeric dtype"),
+    (array(">f8", [1], b"\0" * 8), "not a numeric dtype"),
+    (array("<f8", [2], b"\0" * 8), "does not hold"),
+    (array("<f8", [-1], b""), "shape"),
+    (array("<f8", [1.5], b"\0" * 8), "shape"),
+    ({"A": "<f8", "s": [1], "b": "!!!!!!!!!!!="}, "base64"),
+    ({"A": "<f8", "s": [1], "b": "AAAAAAAAAAA=", "extra": 1}, "unknown"),
+    ({"S": "|O", "b": "AAAAAAAAAAA="}, "not a numeric dtype"),
+    ({"T": "not a list"}, "unknown"),
+    ({"D": [["k"]]}, "dict entry"),
+    ({"D": [[1, 2]]}, "dict entry"),
+    ({"X": 1}, "unknown"),
+    ({}, "unknown"),
+])
+def test_malformed_values_are_refused(data, match):
+    with pytest.raises(ProtocolError, match=match):
+        decode(data)
+
+
+def test_nesting_and_size_are_capped():
+    deep = 0
+    for _ in range(MAX_DEPTH + 2):
+        deep = [deep]
+    with pytest.raises(ProtocolError, match="nest"):
+        decode(deep)
+    with pytest.raises(ProtocolError, match="values in one message"):
+        decode([0] * (1 << 21 + 1))
+
+
+def test_every_numeric_dtype_is_little_or_no_endian():
+    assert all(name[0] in "<|" for name in NUMERIC_DTYPES)
+    assert {np.dtype(name).kind for name in NUMERIC_DTYPES} == set("biufc")
+
+
+def test_frames_are_capped_and_must_hold_an_object():
+    with pytest.raises(ProtocolError, match="larger than"):
+        frame_length(HEADER.pack(MAX_FRAME_BYTES + 1))
+    assert frame_length(HEADER.pack(12)) == 12
+    for body, match in [(b"[1, 2]", "JSON object"), (b"\xff", "not JSON"), (b"{" * 100_000, "not JSON")]:
+        with pytest.raises(ProtocolError, match=match):
+            unpack(body)
+    with pytest.raises(TypeError, match="bytes"):
+        pack({"value": "x" * (MAX_FRAME_BYTES + 1)})
+    assert json.loads(pack({"a": 1})[HEADER.size:]) == {"a": 1}
+
+
+class StudentError(ValueError):
+    pass
+
+
+@pytest.mark.parametrize(("error", "expected"), [
+    (StudentError("bad"), ValueError("bad")),
+    (NotImplementedError(), NotImplementedError("")),
+    (AssertionError("no"), AssertionError("no")),
+    (UnicodeDecodeError("utf-8", b"x", 0, 1, "why"), None),
+    (KeyboardInterrupt(), RuntimeError("KeyboardInterrupt: ")),
+    (SystemExit(3), RuntimeError("SystemExit: 3")),
+])
+def test_an_exception_comes_back_as_its_first_builtin_class(error, expected):
+    rebuilt = rebuild_exception(exception_names(error), str(error))
+    if expected is None:
+        assert type(rebuilt) is UnicodeError  # UnicodeDecodeError wants five arguments: its base class
+    else:
+        assert type(rebuilt) is type(expected) and str(rebuilt) == str(expected)
+
+
+@pytest.mark.parametrize(("names", "message"), [("ValueError", "m"), ([1], "m"), (["ValueError"], 3)])
+def test_malformed_exceptions_are_refused(names, message):
+    with pytest.raises(ProtocolError):
+        rebuild_exception(names, message)
+
+
+def test_exception_messages_are_cut_and_unknown_names_are_runtime_errors():
+    rebuilt = rebuild_exception(["NoSuchError", "Exception"], "x" * 10_000)
+    assert type(rebuilt) is Exception and len(str(rebuilt)) == 4000
+    assert type(rebuild_exception(["BaseExceptionGroup"], "m")) is RuntimeError

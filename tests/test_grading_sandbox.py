@@ -1,0 +1,391 @@
+"""The sandbox, probed from inside: what student code in the grader's worker can and cannot reach.
+
+Each test loads a ``probe()`` function into a fresh worker (:class:`labkit.grading.sandbox.Worker`)
+and calls it: the probe tries what a cheating or careless submission would (import labkit, read
+the course, write the gradebook, reach the network, kill its parent, fork or allocate without
+end) and returns what happened, as plain data. Where a guard could be doubted, a control shows
+that the same probe succeeds without it (scikit-learn imports when it is not masked; labkit
+imports in the unsandboxed mode).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from labkit.grading import sandbox
+from labkit.grading.sandbox import CallTimedOut, Limits, Sandbox, Session, Worker, WorkerCrashed, worker_uid
+from tests.grading_course import EXERCISES, REPO
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="the sandbox is Linux namespaces")
+SLOT = 30  # uids worker_uid(30..33): used by no other test, so "no process of this uid is left" is exact
+
+
+def probe(code: str, *args, slot: int = SLOT, **options):
+    """Load ``code`` (which defines ``probe``) into a fresh worker, call ``probe(*args)``, kill the worker."""
+    worker = Worker(Sandbox(slot=slot, **options))
+    try:
+        errors = worker.load([textwrap.dedent(code)], time.monotonic() + 60)
+        assert errors == [], errors
+        return worker.call("probe", args, {}, time.monotonic() + 60)
+    finally:
+        worker.kill()
+
+
+def processes_of(uid: int) -> list[str]:
+    listing = subprocess.run(["ps", "-e", "-o", "uid=,pid=,args="], capture_output=True, text=True).stdout
+    return [line for line in listing.splitlines() if line.split()[0] == str(uid)]
+
+
+# ---------------------------------------------------------------------------- who the student is
+def test_student_code_runs_unprivileged():
+    uid, gid, groups, status = probe("""
+        import os
+        def probe():
+            return os.getresuid(), os.getresgid(), os.getgroups(), open("/proc/self/status").read()
+    """)
+    expected = worker_uid(SLOT)
+    assert uid == (expected, expected, expected) and gid == (65534, 65534, 65534) and groups == []
+    fields = dict(line.split(":\t", 1) for line in status.splitlines() if ":\t" in line)
+    assert int(fields["CapEff"], 16) == 0 and int(fields["CapPrm"], 16) == 0
+    assert fields["NoNewPrivs"].strip() == "1"
+
+
+def test_the_environment_is_scrubbed():
+    environment = probe("""
+        import os
+        def probe():
+            return dict(os.environ)
+    """)
+    assert environment.pop("PWD", "/tmp") == "/tmp"  # bwrap's --chdir sets it
+    assert set(environment) <= set(sandbox._ENVIRONMENT), environment
+    assert environment["HOME"] == "/tmp" and environment["MPLBACKEND"] == "Agg"
+
+
+def test_proc_shows_the_sandbox_only():
+    pids, environ = probe("""
+        import os
+        def probe():
+            try:
+                open("/proc/1/environ").read()
+                environ = "readable"
+            except OSError as error:
+                environ = type(error).__name__
+            return sorted(int(p) for p in os.listdir("/proc") if p.isdigit()), environ
+    """)
+    assert pids == [1, 2], pids  # bwrap's init and the worker, nothing of the host
+    assert environ == "PermissionError"
+
+
+# ---------------------------------------------------------------------------- what the student cannot reach
+def test_labkit_cannot_be_imported_by_any_road():
+    tries = probe("""
+        import importlib.util, site, sys
+        def probe(repo):
+            found = {}
+            try:
+                import labkit
+                found["import"] = "imported"
+            except ImportError as error:
+                found["import"] = str(error)
+            for folder in [repo, *sys.path]:
+                site.addsitedir(folder)
+            sys.meta_path[:] = [f for f in sys.meta_path if type(f).__name__ != "_Unavailable"]
+            try:
+                import labkit
+                found["without the message"] = "imported"
+            except ImportError as error:
+                found["without the message"] = type(error).__name__
+            try:
+                spec = importlib.util.spec_from_file_location("labkit", repo + "/labkit/__init__.py")
+                spec.loader.exec_module(importlib.util.module_from_spec(spec))
+                found["by path"] = "imported"
+            except Exception as error:
+                found["by path"] = type(error).__name__
+            return found
+    """, str(REPO))
+    assert "labkit is not available when your notebook is graded" in tries["import"]
+    assert tries["without the message"] in ("ModuleNotFoundError", "ImportError"), tries
+    assert tries["by path"] == "FileNotFoundError", tries
+
+
+def test_masked_packages_are_gone_and_the_others_import():
+    code = """
+        def probe():
+            try:
+                from sklearn.cluster import DBSCAN
+                return "imported"
+            except ImportError as error:
+                return str(error)
+    """
+    assert "sklearn is not available" in probe(code, masked=("sklearn",))
+    assert probe(code) == "imported"  # the control: scikit-learn is there when the exercise does not mask it
+
+
+def test_the_course_and_the_machine_are_out_of_reach(tmp_path):
+    other = tmp_path / "submitted" / "alice" / "ex01" / "ex01.ipynb"
+    other.parent.mkdir(parents=True)
+    other.write_text("{}")
+    seen = probe("""
+        import os
+        def probe(paths):
+            return {path: os.path.exists(path) for path in paths}, sorted(os.listdir("/"))
+    """, [str(REPO), str(EXERCISES / "source"), str(EXERCISES / "grading"), str(EXERCISES / "gradebook.db"),
+          str(other), str(tmp_path), "/etc/passwd", "/etc/shadow", "/home", "/work", "/usr/bin", "/bin/sh"])
+    reachable, top = seen
+    assert not any(reachable.values()), reachable
+    assert set(top) <= {"bin", "dev", "etc", "grader", "lib", "lib32", "lib64", "opt", "proc", "root", "tmp",
+                        "usr"}, top
+
+
+def test_nothing_outside_tmp_can_be_written():
+    results = probe("""
+        import os, sys
+        def probe():
+            results = {}
+            for path in ["/opt/site0/planted.py", "/grader/worker.py", sys.prefix + "/planted", "/tmp/ok"]:
+                try:
+                    with open(path, "w") as f:
+                        f.write("x")
+                    results[path] = "written"
+                except OSError as error:
+                    results[path] = type(error).__name__
+            return results
+    """)
+    assert results.pop("/tmp/ok") == "written"
+    assert all(outcome != "written" for outcome in results.values()), results
+
+
+def test_there_is_no_network():
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    server.settimeout(0.5)
+    try:
+        tries = probe("""
+            import socket
+            def probe(port):
+                tries = {}
+                for host, target in [("grader", port), ("internet", 53)]:
+                    address = "127.0.0.1" if host == "grader" else "1.1.1.1"
+                    try:
+                        socket.create_connection((address, target), timeout=2).close()
+                        tries[host] = "connected"
+                    except OSError as error:
+                        tries[host] = type(error).__name__
+                try:
+                    socket.getaddrinfo("pypi.org", 443)
+                    tries["dns"] = "resolved"
+                except OSError as error:
+                    tries["dns"] = type(error).__name__
+                return tries
+        """, server.getsockname()[1])
+        with pytest.raises(TimeoutError):
+            server.accept()  # nothing from the sandbox ever knocked
+    finally:
+        server.close()
+    assert "connected" not in tries.values() and tries["dns"] != "resolved", tries
+
+
+# ---------------------------------------------------------------------------- what the student cannot break
+def test_killing_the_parent_does_nothing():
+    worker = Worker(Sandbox(slot=SLOT))
+    try:
+        worker.load([textwrap.dedent("""
+            import os, signal
+            def probe():
+                outcome = {}
+                for name, target in [("parent", os.getppid()), ("init", 1), ("everyone", -1)]:
+                    try:
+                        os.kill(target, signal.SIGKILL)
+                        outcome[name] = "sent"
+                    except OSError as error:
+                        outcome[name] = type(error).__name__
+                return outcome
+            def alive():
+                return "still here"
+        """)], time.monotonic() + 60)
+        outcome = worker.call("probe", (), {}, time.monotonic() + 60)
+        assert outcome["parent"] == outcome["init"] == "PermissionError", outcome  # both are bwrap's root processes
+        assert worker.call("alive", (), {}, time.monotonic() + 60) == "still here"
+    finally:
+        worker.kill()
+
+
+def test_a_fork_bomb_stops_at_the_process_limit():
+    uid = worker_uid(SLOT + 1)
+    forks = probe("""
+        import os, time
+        def probe():
+            count = 0
+            while count < 10_000:
+                try:
+                    if os.fork() == 0:
+                        while True:
+                            time.sleep(1)
+                except OSError:
+                    return count
+                count += 1
+            return count
+    """, slot=SLOT + 1)
+    assert 0 < forks < Limits().processes
+    time.sleep(0.2)
+    assert processes_of(uid) == [], "the fork bomb's processes outlived the sandbox"
+
+
+def test_memory_and_disk_are_capped():
+    outcome = probe("""
+        def probe():
+            outcome = {}
+            try:
+                blob = bytearray(8 * 2**30)
+                outcome["memory"] = len(blob)
+            except MemoryError:
+                outcome["memory"] = "MemoryError"
+            try:
+                with open("/tmp/big", "wb") as f:
+                    for _ in range(400):
+                        f.write(b"x" * 2**20)
+                outcome["disk"] = "written"
+            except OSError as error:
+                outcome["disk"] = type(error).__name__
+            return outcome
+    """)
+    assert outcome == {"memory": "MemoryError", "disk": "OSError"}, outcome
+
+
+def test_a_call_past_its_time_kills_the_whole_sandbox():
+    uid = worker_uid(SLOT + 2)
+    code = """
+        import os
+        def spin():
+            for _ in range(5):
+                if os.fork() == 0:
+                    while True:
+                        pass
+            while True:
+                pass
+    """
+    with Session(Sandbox(slot=SLOT + 2), [textwrap.dedent(code)], load_timeout_s=30, call_timeout_s=1.0) as session:
+        session.begin_test(60)
+        with pytest.raises(CallTimedOut, match="did not return within 1 s"):
+            session.call("spin", (), {})
+        assert session.timed_out and session.worker is None
+    time.sleep(0.2)
+    assert processes_of(uid) == []
+
+
+def test_the_sandbox_dies_with_the_grader():
+    """A stand-in grader starts a worker whose student code leaves a sleeping child, then is killed."""
+    uid = worker_uid(SLOT + 3)
+    script = textwrap.dedent(f"""
+        import time
+        from labkit.grading.sandbox import Sandbox, Worker
+        worker = Worker(Sandbox(slot={SLOT + 3}))
+        worker.load(["import os, time\\nif os.fork() == 0:\\n    time.sleep(600)"], time.monotonic() + 60)
+        print("ready", flush=True)
+        time.sleep(600)
+    """)
+    grader = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert grader.stdout.readline().strip() == "ready"
+        assert processes_of(uid), "the student's processes should be running"
+        grader.send_signal(signal.SIGKILL)
+        grader.wait()
+        deadline = time.monotonic() + 10
+        while processes_of(uid) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert processes_of(uid) == []
+    finally:
+        grader.kill()
+        grader.wait()
+        grader.stdout.close()
+
+
+# ---------------------------------------------------------------------------- the channel
+@pytest.mark.parametrize(("forged", "match"), [
+    ("b'\\x40\\x00\\x00\\x00'", "larger than"),  # announces a 1 GB frame
+    ("b'\\x00\\x00\\x00\\x05hello'", "not JSON"),
+    ("struct.pack('>I', 17) + b'{\"id\": 99, \"value\": 1}'[:17]", "not JSON|protocol"),
+])
+def test_forged_frames_end_the_worker_not_the_grader(forged, match):
+    worker = Worker(Sandbox(slot=SLOT))
+    try:
+        worker.load([textwrap.dedent(f"""
+            import os, struct
+            def probe():
+                for fd in range(3, 20):
+                    try:
+                        os.write(fd, {forged})
+                    except OSError:
+                        pass
+                return 1
+        """)], time.monotonic() + 60)
+        with pytest.raises(WorkerCrashed, match=match):
+            worker.call("probe", (), {}, time.monotonic() + 60)
+    finally:
+        worker.kill()
+
+
+def test_students_who_plot_still_can():
+    size = probe("""
+        import os
+        import matplotlib.pyplot as plt
+        def probe():
+            plt.plot([0, 1], [1, 0])
+            plt.savefig("/tmp/plot.png")
+            return os.path.getsize("/tmp/plot.png")
+    """)
+    assert size > 1000
+
+
+# ---------------------------------------------------------------------------- other modes
+def test_bwrap_missing_is_refused_with_how_to_install_it(monkeypatch):
+    monkeypatch.setattr(sandbox.shutil, "which", lambda name: None)
+    with pytest.raises(FileNotFoundError, match=r"apt-get install bubblewrap.*--no-sandbox"):
+        Sandbox()
+
+
+def test_the_user_namespace_mode_runs_and_masks_too():
+    """The mode for graders who are not root: bwrap maps uid 65534 in a user namespace."""
+    uid, error = probe("""
+        import os
+        def probe():
+            try:
+                import labkit
+                return os.getuid(), "imported"
+            except ImportError as error:
+                return os.getuid(), type(error).__name__
+    """, user_namespace=True)
+    assert (uid, error) == (65534, "ModuleNotFoundError")
+
+
+def test_without_the_sandbox_nothing_is_isolated():
+    """``--no-sandbox`` keeps the limits, but labkit and your files are reachable."""
+    found = probe("""
+        import os, sys
+        def probe(repo):
+            try:
+                import labkit
+                first = "imported"
+            except ImportError as error:
+                first = str(error)
+            sys.meta_path[:] = [f for f in sys.meta_path if type(f).__name__ != "_Unavailable"]
+            import site
+            for folder in list(sys.path):
+                site.addsitedir(folder)  # runs labkit's editable-install finder
+            import labkit
+            return first, labkit.__name__, os.path.exists(repo), os.getuid()
+    """, str(REPO), isolate=False)
+    message, imported, sees_repository, uid = found
+    assert "not available when your notebook is graded" in message  # only a message ...
+    assert imported == "labkit" and sees_repository  # ... which a student can remove
+    # it drops root only where the runtime is readable by others (here it lives under /root, mode 700)
+    assert uid in (worker_uid(SLOT), os.getuid())
