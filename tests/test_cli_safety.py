@@ -297,14 +297,18 @@ def test_read_only_folder(rec, open_tmp, writer):
     assert list(locked.iterdir()) == []
 
 
-@pytest.mark.parametrize("command", ["convert", "extract", "view", "info", "bench", "evaluate"])
+@pytest.mark.parametrize("command", ["convert", "extract", "view", "info", "bench", "evaluate", "demo", "config"])
 def test_unreadable_input(rec, open_tmp, command):
     python, _ = _as_nobody()
-    secret = open_tmp / "secret.bag"
-    shutil.copy(rec.bag, secret)
+    secret = open_tmp / ("secret.toml" if command == "config" else "secret.bag")
+    if command == "config":
+        secret.write_text("[lines]\n")
+    else:
+        shutil.copy(rec.bag, secret)
     secret.chmod(0o000)
     out = {"convert": [open_tmp / "o.jsonl"], "extract": ["-o", open_tmp / "o.jsonl"],
-           "view": ["-o", open_tmp / "o.rrd"], "info": [], "bench": [], "evaluate": ["--scans", "2"]}[command]
+           "view": ["-o", open_tmp / "o.rrd"], "info": [], "bench": [], "evaluate": ["--scans", "2"],
+           "demo": ["-o", open_tmp / "demo"], "config": []}[command]
     p = labkit(command, secret, *out, python=python)
     assert p.returncode == 3, p.stderr
     assert "Permission denied" in one_error_line(p)
