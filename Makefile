@@ -8,7 +8,7 @@ PIP     = $(BIN)/python -m pip
 # pytest workers: the notebook and grading tests are independent and slow; use both cores
 JOBS   ?= 2
 
-.PHONY: demo test lab data release lint clean help
+.PHONY: demo test lab data release grade lint clean help
 
 help:
 	@echo "make demo     set up .venv and run the demo on the bundled hall bag (out/demo.rrd, out/demo.png)"
@@ -16,6 +16,7 @@ help:
 	@echo "make lab      open JupyterLab on the course notebooks"
 	@echo "make data     regenerate the bundled recordings in data/ (bit-for-bit identical)"
 	@echo "make release  regenerate the student copies of the exercises (exercises/release/)"
+	@echo "make grade    grade exercises/submitted/ into the gradebook and exercises/grades.csv (EX=ex01 for one)"
 	@echo "make lint     ruff"
 
 $(BIN)/python:
@@ -45,6 +46,10 @@ data: $(VENV)/.installed
 
 release: $(VENV)/.installed
 	cd exercises && PATH="$(abspath $(BIN)):$$PATH" ../$(BIN)/nbgrader generate_assignment "*" --force
+
+# Student code runs in a bubblewrap sandbox (apt-get install bubblewrap); EX=ex01 grades one exercise
+grade: $(VENV)/.installed
+	$(BIN)/python -m labkit.grading $(or $(EX),all) --jobs $(JOBS)
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check labkit tests benchmarks

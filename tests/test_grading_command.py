@@ -240,3 +240,16 @@ def test_the_gradebook_is_stamped_with_the_revision_nbgrader_would_write(tmp_pat
     monkeypatch.setenv("PATH", os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""))
     monkeypatch.chdir(tmp_path)
     assert alembic_head() == get_alembic_version()
+
+
+def test_nbgrader_autograde_is_refused_with_what_to_run_instead(course):
+    """nbgrader's autograde would see only the visible tests, and give the hidden tests' points away."""
+    grade("ex00", course=course, first_slot=SLOT)  # the assignment is in the gradebook
+    (course / "autograded").rename(course / "graded by labkit")
+    env = dict(os.environ, PATH=os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""),
+               JUPYTER_CONFIG_DIR=str(course / ".jupyter-config"))
+    proc = subprocess.run([sys.executable, "-m", "nbgrader", "autograde", EX0], cwd=course, env=env,
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode != 0
+    assert "graded with `labkit grade" in proc.stdout + proc.stderr
+    assert not (course / "autograded" / "alice" / EX0 / f"{EX0}.ipynb").exists()
