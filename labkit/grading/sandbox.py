@@ -35,7 +35,7 @@ import functools
 import json
 import os
 import pwd
-import selectors
+import select
 import shutil
 import signal
 import site
@@ -375,7 +375,10 @@ class Worker:
         self._in = self.process.stdout.fileno()
         os.set_blocking(self._out, False)
         os.set_blocking(self._in, False)
-        self._selector = selectors.DefaultSelector()
+        self._readable, self._writable = select.poll(), select.poll()
+        self._readable.register(self._in, select.POLLIN)
+        self._writable.register(self._out, select.POLLOUT)
+        self._pending = bytearray()  # bytes read beyond the last frame
         self._next_id = 1
         try:
             hello = self._receive(time.monotonic() + STARTUP_TIMEOUT_S)
@@ -395,41 +398,35 @@ class Worker:
         return self.errors.read(4000).decode("utf-8", "replace").strip()
 
     # ------------------------------------------------------------------ channel
-    def _wait(self, fd: int, event: int, deadline: float) -> None:
+    @staticmethod
+    def _wait(poller: select.poll, deadline: float) -> None:
         left = deadline - time.monotonic()
-        if left <= 0:
-            raise CallTimedOut("timed out")
-        self._selector.register(fd, event)
-        try:
-            ready = self._selector.select(left)
-        finally:
-            self._selector.unregister(fd)
-        if not ready:
+        if left <= 0 or not poller.poll(int(left * 1000) + 1):
             raise CallTimedOut("timed out")
 
     def _send(self, message: dict, deadline: float) -> None:
         view = memoryview(protocol.pack(message))
         while view:
-            self._wait(self._out, selectors.EVENT_WRITE, deadline)
             try:
                 view = view[os.write(self._out, view):]
             except BlockingIOError:
-                continue
+                self._wait(self._writable, deadline)
             except (BrokenPipeError, ConnectionResetError):
                 raise WorkerCrashed(self._died()) from None
 
     def _read(self, size: int, deadline: float) -> bytes:
-        data = bytearray()
-        while len(data) < size:
-            self._wait(self._in, selectors.EVENT_READ, deadline)
+        while len(self._pending) < size:
             try:
-                chunk = os.read(self._in, min(size - len(data), 1 << 20))
+                chunk = os.read(self._in, 1 << 20)
             except BlockingIOError:
+                self._wait(self._readable, deadline)
                 continue
             if not chunk:
                 raise WorkerCrashed(self._died())
-            data += chunk
-        return bytes(data)
+            self._pending += chunk
+        data = bytes(self._pending[:size])
+        del self._pending[:size]
+        return data
 
     def _receive(self, deadline: float) -> dict:
         try:
@@ -486,7 +483,6 @@ class Worker:
                 stream.close()
             except OSError:
                 pass
-        self._selector.close()
         if self.workdir:
             shutil.rmtree(self.workdir, ignore_errors=True)
             self.workdir = None
