@@ -253,3 +253,27 @@ def test_nbgrader_autograde_is_refused_with_what_to_run_instead(course):
     assert proc.returncode != 0
     assert "graded with `labkit grade" in proc.stdout + proc.stderr
     assert not (course / "autograded" / "alice" / EX0 / f"{EX0}.ipynb").exists()
+
+
+def test_a_grader_failure_is_one_submissions_status_and_exit_1(course, monkeypatch, capsys):
+    from labkit.grading import command
+
+    real = command.grade_submission
+
+    def failing_for_bob(job):
+        if job.student == "bob":
+            raise RuntimeError("a bug in the grader")
+        return real(job)
+
+    submit(course, "bob", EX0, notebook_with(EX0, solutions(EX0)))
+    grade("ex00", course=course, first_slot=SLOT)  # bob has a grade from before: 10
+    monkeypatch.setattr(command, "grade_submission", failing_for_bob)
+    args = argparse.Namespace(check=None, exercise="ex00", course=str(course), jobs=1, student=None, output=None,
+                              no_sandbox=False, check_exercise=None, quiet=True)
+    assert run_grade(args) == 1
+    assert "bob: the grader failed: RuntimeError: a bug in the grader" in capsys.readouterr().err
+    table = rows(course / "grades.csv")
+    assert (table[EX0, "bob"]["status"], table[EX0, "alice"]["status"]) == ("grader error", "graded")
+    with gradebook(course) as gb:
+        assert gb.find_submission(EX0, "bob").score == 10.0  # the earlier verdict stays
+        assert gb.find_submission(EX0, "alice").score == 10.0

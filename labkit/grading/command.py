@@ -253,9 +253,9 @@ def grade(
                                                 has_folder=folders[result.exercise, result.student]))
                 bar.update(1)
                 bar.set_postfix_str(f"{result.student}: {result.status}", refresh=False)
-        finally:
+        finally:  # also when interrupted: the CSV of what is graded so far
             bar.close()
-        records.write_csv(run.csv)
+            records.write_csv(run.csv)
     run.seconds = time.perf_counter() - started
     return run
 

@@ -32,26 +32,33 @@ from pathlib import Path
 
 from .course import Course, Exercise
 from .notebook import grade_id, nbgrader_metadata, write_notebook_text
-from .runner import GRADED, MANUAL, NOT_SUBMITTED, SubmissionResult
+from .runner import GRADED, GRADER_ERROR, MANUAL, NOT_SUBMITTED, SubmissionResult
 
 __all__ = ["Records", "write_atomic", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("assignment", "student_id", "status", "score", "max_score", "detail")
 
 
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
+@contextlib.contextmanager
+def _beside(path: Path) -> Iterator[str]:
+    """A temporary file name in ``path``'s folder; renamed to ``path`` when the block completes."""
     path.parent.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(handle)
     try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
+        yield temporary
         os.chmod(temporary, 0o644)
         os.replace(temporary, path)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(temporary)
         raise
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
+    with _beside(path) as temporary, open(temporary, "w", encoding="utf-8", newline="") as f:
+        f.write(text)
 
 
 @contextlib.contextmanager
@@ -86,19 +93,10 @@ def _new_gradebook(path: Path) -> None:
     if path.exists():
         return
     head = alembic_head()
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(handle)
-    try:
-        with contextlib.closing(sqlite3.connect(temporary)) as db:
-            db.execute("CREATE TABLE alembic_version (version_num VARCHAR(32) NOT NULL)")
-            db.execute("INSERT INTO alembic_version (version_num) VALUES (?)", (head,))
-            db.commit()
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
-        raise
+    with _beside(path) as temporary, contextlib.closing(sqlite3.connect(temporary)) as db:
+        db.execute("CREATE TABLE alembic_version (version_num VARCHAR(32) NOT NULL)")
+        db.execute("INSERT INTO alembic_version (version_num) VALUES (?)", (head,))
+        db.commit()
 
 
 def course_id(course: Course) -> str:
@@ -184,9 +182,13 @@ class Records:
     # ------------------------------------------------------------------ one submission
     def save(self, result: SubmissionResult, *, has_folder: bool) -> SubmissionResult:
         """Record one result: gradebook scores, autograded notebook, record file. Returns the result,
-        its status turned into "needs manual grade" where a human score waits for review."""
+        its status turned into "needs manual grade" where a human score waits for review. A grader
+        error is recorded, but the gradebook and the autograded notebook keep what they had."""
         name, student = result.exercise, result.student
         folder = self.course.submitted / student / name
+        if result.status == GRADER_ERROR:  # no verdict: the gradebook keeps what it had
+            self._record(result)
+            return result
         if result.status != NOT_SUBMITTED or has_folder:
             with _quiet_sqlalchemy():
                 waiting = self._scores(result, folder)
