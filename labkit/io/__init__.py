@@ -30,6 +30,7 @@ from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_
 from .errors import CorruptFileError, EmptyRecordingError
 from .features import read_features, write_features
 from .jsonscan import JSON_LINES, JSON_SCAN, read_json_lines, read_json_scan, write_json_lines, write_json_scan
+from .poses import PosePlan, plan_poses, read_bag_poses
 
 __all__ = [
     "FORMATS",
@@ -124,21 +125,40 @@ class ScanStream:
         False when the file is damaged and is being read sequentially.
     strict : bool
         Stop at the first bad record instead of skipping it.
+    poses : str or None
+        Where the scans' poses come from (``"odometry /odom"``, ``"tf /tf, /tf_static, else
+        odometry /odom"``, ``"the log's corrected laser poses"``, ...); None when they get none.
+    pose_plan : PosePlan or None
+        For bags: the pose topics read (:mod:`labkit.io.poses`).
+    pose_sources : dict
+        After reading a bag: for each scan frame, how its pose was found.
     """
 
     def __init__(self, path: Path, fmt: str, topic: str | None, count: int | None, readable: bool,
-                 strict: bool = False) -> None:
+                 strict: bool = False, poses: str | None = None, pose_plan: PosePlan | None = None) -> None:
         self.path, self.format, self.topic, self.count, self.readable = path, fmt, topic, count, readable
         self.strict = strict
+        self.poses = poses
+        self.pose_plan = pose_plan
+        self.pose_sources: dict[str, str] = {}
 
     def __iter__(self) -> Iterator[Scan]:
         if self.format in bags.BAG_FORMATS:
-            return bags.iter_bag(self.path, self.format, self.topic, self.readable, self.strict)
+            return self._bag_scans()
         if self.format == "carmen":
-            return read_carmen(self.path, self.topic, strict=self.strict)
-        if self.format == "json":
-            return iter([read_json_scan(self.path)])
-        return read_json_lines(self.path, strict=self.strict)
+            scans = read_carmen(self.path, self.topic, strict=self.strict)
+        elif self.format == "json":
+            scans = iter([read_json_scan(self.path)])
+        else:
+            scans = read_json_lines(self.path, strict=self.strict)
+        return scans if self.poses is not None else _without_poses(scans)
+
+    def _bag_scans(self) -> Iterator[Scan]:
+        poses = None
+        if self.pose_plan is not None:
+            poses = read_bag_poses(self.path, self.format, self.pose_plan, self.readable, self.strict)
+            self.pose_sources = poses.sources  # filled in as scan frames are met
+        yield from bags.iter_bag(self.path, self.format, self.topic, self.readable, self.strict, poses=poses)
 
     def __len__(self) -> int:
         if self.count is None:
@@ -147,10 +167,16 @@ class ScanStream:
 
     def __repr__(self) -> str:
         return (f"ScanStream({str(self.path)!r}, format={self.format!r}, topic={self.topic!r}, "
-                f"count={self.count})")
+                f"count={self.count}, poses={self.poses!r})")
 
 
-def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = False) -> ScanStream:
+def _without_poses(scans: Iterable[Scan]) -> Iterator[Scan]:
+    for scan in scans:
+        yield scan if scan.pose is None else scan.replace(pose=None)
+
+
+def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = False,
+               poses: str | bool | None = None) -> ScanStream:
     """Open any supported file and return its scans as an iterable :class:`ScanStream`.
 
     Parameters
@@ -164,12 +190,19 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
     strict : bool
         Stop reading at the first record that cannot be decoded (default: skip it, count
         it and read on).
+    poses : str, bool or None
+        Where each scan's :attr:`~labkit.Scan.pose` (the sensor's pose in a world frame) comes
+        from. None (default): wherever the recording has poses -- a CARMEN log's corrected
+        poses, a JSON scan's ``pose``, a bag's ``/tf`` or its one ``nav_msgs/Odometry`` topic,
+        interpolated to each scan's stamp (:mod:`labkit.io.poses` gives the rules). A bag topic
+        name: that odometry or tf topic. False: no poses.
 
     Raises
     ------
     ValueError
         Unknown format (the message lists the supported ones); no LaserScan topic (it
-        lists the bag's topics); several LaserScan topics and no ``topic`` (it lists them).
+        lists the bag's topics); several LaserScan topics and no ``topic`` (it lists them);
+        ``poses`` names no pose topic, or a bag has several odometry topics and no tf.
         :class:`EmptyRecordingError` (a ValueError) for a bag without any topic.
     CorruptFileError
         While iterating, after the last scan that could be read from a damaged file: every
@@ -184,11 +217,20 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
     """
     p = Path(path)
     fmt = detect_format(p)
+    if poses is not None and not isinstance(poses, (bool, str)):
+        raise ValueError(f"poses must be None, True, False or a topic name, got {poses!r}")
     if fmt in bags.BAG_FORMATS:
         topics, readable = bags.list_topics(p, fmt)
         chosen = bags.resolve_topic(p, topics, topic)
         count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
-        return ScanStream(p, fmt, chosen, count, readable, strict)
+        plan = plan_poses(p, topics, None if poses is True else poses)
+        return ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
+    if isinstance(poses, str):
+        raise RefusedError(f"poses names a bag topic; {FORMATS[fmt]} files carry their poses in the scans "
+                           "(poses=False: none)",
+                           f"--poses names a bag topic; {FORMATS[fmt]} files carry their poses in the scans "
+                           "(--poses none: none)")
+    inline = None if poses is False else ("the log's laser poses" if fmt == "carmen" else "the scans' 'pose' fields")
     if fmt == "carmen":
         if topic is not None and topic not in LASER_MESSAGES:
             raise RefusedError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}",
@@ -201,13 +243,16 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         if topic not in counts:
             found = ", ".join(f"{k} ({v})" for k, v in sorted(counts.items()))
             raise ValueError(f"{p} has no {topic} messages; laser messages found: {found}")
-        return ScanStream(p, fmt, topic, counts[topic], True, strict)
+        return ScanStream(p, fmt, topic, counts[topic], True, strict, inline if topic in _POSED else None)
     if topic is not None:
         raise RefusedError(f"topic does not apply to {FORMATS[fmt]} files",
                            f"--topic does not apply to {FORMATS[fmt]} files")
     if fmt == "json":
-        return ScanStream(p, fmt, None, 1, True, strict)
-    return ScanStream(p, fmt, None, None, True, strict)
+        return ScanStream(p, fmt, None, 1, True, strict, inline)
+    return ScanStream(p, fmt, None, None, True, strict, inline)
+
+
+_POSED = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # CARMEN laser messages that carry a pose
 
 
 def write_scans(

@@ -8,7 +8,9 @@ raises :class:`~labkit.io.CorruptFileError` saying where the file broke.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
+import shutil
 import warnings
 from collections import Counter
 from collections.abc import Callable, Iterable, Iterator
@@ -116,16 +118,31 @@ def resolve_topic(path: Path, topics, topic: str | None) -> str:
     return scans[0][0]
 
 
-def _scan_from(msg, receive_ns: int) -> Scan:
+def _stamp_of(msg) -> int:
+    """The header stamp of a ROS1 (``secs``/``nsecs``) or ROS2 (``sec``/``nanosec``) message, ns."""
+    stamp = msg.header.stamp
+    sec = getattr(stamp, "sec", None)
+    nsec = getattr(stamp, "nanosec", None)
+    return int(stamp.secs if sec is None else sec) * 1_000_000_000 + int(stamp.nsecs if nsec is None else nsec)
+
+
+def _scan_from(msg, receive_ns: int, poses=None) -> Scan:
     """The scan of a LaserScan message the bag received at ``receive_ns``. A header stamp of 0
-    (drivers that leave it empty) is replaced by the receive time."""
-    scan = Scan.from_ros(msg, receive_ns=receive_ns)
-    if scan.stamp_ns == 0 and receive_ns:
-        scan = scan.replace(stamp_ns=receive_ns)
-    return scan
+    (drivers that leave it empty) is replaced by the receive time. ``poses`` (see
+    :func:`iter_bag`) gives the sensor's pose at the scan's stamp."""
+    if poses is None:
+        scan = Scan.from_ros(msg, receive_ns=receive_ns)
+        return scan.replace(stamp_ns=receive_ns) if scan.stamp_ns == 0 and receive_ns else scan
+    try:
+        stamp = _stamp_of(msg) or receive_ns
+        pose = poses.pose_at(stamp, msg.header.frame_id)
+    except AttributeError as exc:
+        raise ValueError(f"msg is not a sensor_msgs/LaserScan message: {exc}") from None
+    scan = Scan.from_ros(msg, pose=pose, receive_ns=receive_ns)
+    return scan.replace(stamp_ns=receive_ns) if scan.stamp_ns == 0 and receive_ns else scan
 
 
-def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False) -> Iterator[Scan]:
+def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False, poses=None) -> Iterator[Scan]:
     """Yield the scans of ``topic``; a message that does not decode or holds impossible
     fields (``angle_increment`` 0, ...) is skipped and counted; after the last good scan,
     raise :class:`CorruptFileError` if anything was skipped (``strict``: stop at the first).
@@ -133,75 +150,111 @@ def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = Fa
     Bags rosbags can open are read through it; if rosbags stops part-way (a garbled chunk
     or page), the rest is read by labkit's sequential reader (:mod:`labkit.io.salvage`),
     which walks past the damage where the file's framing allows.
+
+    ``poses`` (a :class:`labkit.io.poses.BagPoses`, read beforehand) gives every scan its
+    sensor pose, and brings the faults met while reading the poses: they count with the
+    scans' own (once each), and with ``strict`` reading stops at the first scan after the
+    last pose read before a fault.
     """
     faults = Faults(path, strict)
     n_read = 0
-    done: Counter[int] = Counter()  # receive times read through rosbags, not to be read twice
+    messages = read_messages(path, fmt, {topic: _MSGTYPE}, readable, faults, lambda _t, stamp, msg: _scan_from(
+        msg, stamp, poses), salvage_topic=topic)
+    try:
+        for scan in messages:
+            if poses is not None and poses.stops_before(scan.stamp_ns):
+                faults.skip(*poses.first_fault)
+                break
+            yield scan
+            n_read += 1
+    finally:
+        messages.close()
+    if poses is not None and poses.faults:
+        faults.merge(poses.faults)
+    faults.check(n_read)
+
+
+def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, faults: Faults,
+                  convert: Callable, *, salvage_topic: str | frozenset[str] | None = None) -> Iterator:
+    """``convert(topic, receive_ns, message)`` for every message on ``topics`` (name -> message
+    type), in the bag's order; a message that does not decode, or that ``convert`` refuses (any
+    exception), is skipped and noted in ``faults`` (whose strictness decides whether to read on).
+
+    Bags rosbags can open are read through it; if rosbags stops part-way, the rest is read by the
+    sequential reader (:mod:`labkit.io.salvage`; ``salvage_topic`` tells it what to yield, by
+    default the names of ``topics``), skipping what rosbags already gave.
+    """
+    what = next(iter(topics)) if len(topics) == 1 else ", ".join(sorted(topics))
+    done: Counter[tuple[str, int]] = Counter()  # messages read through rosbags, not to be read twice
     if readable:
         reader = _open(path)
         failure = None
         try:
-            messages = reader.messages(connections=[c for c in reader.connections if c.topic == topic])
+            messages = reader.messages(connections=[c for c in reader.connections if c.topic in topics])
             for k in itertools.count(1):
                 try:
                     conn, stamp, raw = next(messages)
                 except StopIteration:
                     break
                 except Exception as exc:  # noqa: BLE001 - rosbags raises many kinds on damaged data
-                    failure = f"after message {k - 1} of {topic}", f"{type(exc).__name__}: {exc}"
+                    failure = f"after message {k - 1} of {what}", f"{type(exc).__name__}: {exc}"
                     break
                 try:
-                    scan = _scan_from(reader.deserialize(raw, conn.msgtype), stamp)
+                    item = convert(conn.topic, stamp, reader.deserialize(raw, conn.msgtype))
                 except Exception as exc:  # noqa: BLE001 - a garbled message: skip it
-                    if not faults.skip(f"in message {k} of {topic}", _why(exc)):
-                        break
+                    if not faults.skip(f"in message {k} of {what}", _why(exc)):
+                        return
                     continue
-                yield scan
-                n_read += 1
-                done[stamp] += 1
+                yield item
+                done[conn.topic, stamp] += 1
         finally:
             reader.close()
         if failure is None or not faults.skip(*failure, count=0):
-            faults.check(n_read)
             return
-    gen = _salvager(fmt)(_storage_file(path, fmt), topic)
+    gen = _salvager(fmt)(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None else salvage_topic)
     k = 0
-    while True:
-        try:
-            item = next(gen)
-        except StopIteration as stop:
-            if stop.value is not None:
-                faults.skip(stop.value.where, stop.value.reason, stop.value.count)
-            break
-        if isinstance(item, salvage.Fault):
-            if not faults.skip(item.where, item.reason, item.count):
-                break
-            continue
-        _name, stamp, raw = item
-        k += 1
-        if done[stamp]:
-            done[stamp] -= 1
-            continue
-        try:
-            scan = _scan_from(_deserialize(fmt, raw), stamp)
-        except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
-            if not faults.skip(f"in message {k} of {topic}", _why(exc)):
-                break
-            continue
-        yield scan
-        n_read += 1
-    gen.close()
-    faults.check(n_read)
+    try:
+        while True:
+            try:
+                item = next(gen)
+            except StopIteration as stop:
+                if stop.value is not None:
+                    faults.skip(stop.value.where, stop.value.reason, stop.value.count)
+                return
+            if isinstance(item, salvage.Fault):
+                if not faults.skip(item.where, item.reason, item.count):
+                    return
+                continue
+            name, stamp, raw = item
+            k += 1
+            if done[name, stamp]:
+                done[name, stamp] -= 1
+                continue
+            try:
+                item = convert(name, stamp, _deserialize(fmt, raw, topics.get(name, _MSGTYPE)))
+            except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
+                if not faults.skip(f"in message {k} of {what}", _why(exc)):
+                    return
+                continue
+            yield item
+    finally:
+        gen.close()
 
 
 def _why(exc: Exception) -> str:
     return f"{type(exc).__name__}: {exc}" if not isinstance(exc, ValueError) else str(exc)
 
 
-def _deserialize(fmt: str, raw: bytes):
+def _typename(msgtype: str) -> str:
+    """The typestore's name of a message type: ``nav_msgs/Odometry`` -> ``nav_msgs/msg/Odometry``."""
+    pkg, _, name = msgtype.rpartition("/")
+    return msgtype if pkg.endswith("/msg") or not pkg else f"{pkg}/msg/{name}"
+
+
+def _deserialize(fmt: str, raw: bytes, msgtype: str = _MSGTYPE):
     if fmt == "ros1":
-        return _typestore(ros1=True).deserialize_ros1(raw, _MSGTYPE)
-    return _typestore(ros1=False).deserialize_cdr(raw, _MSGTYPE)
+        return _typestore(ros1=True).deserialize_ros1(raw, _typename(msgtype))
+    return _typestore(ros1=False).deserialize_cdr(raw, _typename(msgtype))
 
 
 # ============================================================================ writing
@@ -373,6 +426,7 @@ def write_bag(
     topic: str = "/scan",
     overwrite: bool = False,
     inputs: Iterable[str | Path] = (),
+    pose_topic: str | None = "/odom",
 ) -> int:
     """Write scans as ``sensor_msgs/LaserScan`` messages; return how many were written.
 
@@ -396,6 +450,10 @@ def write_bag(
         Replace an existing bag (only a bag: see :mod:`labkit._safe` for the rules).
     inputs : iterable of paths
         Files being read to make ``scans``: the output may not be one of them.
+    pose_topic : str or None
+        Where the pose of every scan that has one goes, as ``nav_msgs/Odometry`` at the scan's
+        stamp (frame ``map``, child frame the scan's ``frame_id``: the sensor itself, so no
+        mounting transform is needed); default ``/odom``. None: poses are not written.
 
     The bag is written under a temporary name beside ``path`` and renamed when complete.
     If iterating ``scans`` raises :class:`~labkit.io.CorruptFileError` (a damaged input
@@ -403,37 +461,71 @@ def write_bag(
     """
     path = Path(path)
     fmt = bag_format(path, format)
-    if not topic.startswith("/"):
-        raise ValueError(f"topic must start with '/', got {topic!r}")
+    for name, value in (("topic", topic), ("pose_topic", pose_topic or "/")):
+        if not value.startswith("/"):
+            raise ValueError(f"{name} must start with '/', got {value!r}")
+    if pose_topic == topic:
+        raise ValueError(f"pose_topic and topic must differ, both are {topic!r}")
     with safe_output(path, output_kind(path, fmt), overwrite=overwrite, inputs=inputs) as tmp:
         if fmt == "ros1":
-            return _write_ros1(scans, tmp, topic)
+            return _write_ros1(scans, tmp, topic, pose_topic)
         if fmt == "mcap" and path.name.lower().endswith(".mcap"):
             # rosbags writes MCAP inside a rosbag2 folder; a bare .mcap file is what most tools
             # (Foxglove, rosbags, `ros2 bag` with the MCAP plugin) open directly.
             folder = tmp.parent / path.stem  # the name rosbags records inside the file
             try:
-                return _write_ros2(scans, folder, topic, rosbag2.StoragePlugin.MCAP, fmt)
+                return _write_ros2(scans, folder, topic, rosbag2.StoragePlugin.MCAP, fmt, pose_topic)
             finally:
                 written = folder / f"{path.stem}.mcap"
                 if written.exists():
                     written.replace(tmp)
         plugin = rosbag2.StoragePlugin.MCAP if fmt == "mcap" else rosbag2.StoragePlugin.SQLITE3
-        return _write_ros2(scans, tmp, topic, plugin, fmt)
+        return _write_ros2(scans, tmp, topic, plugin, fmt, pose_topic)
 
 
-def _write_all(writer, conn, scans, serialize, fmt: str) -> int:
-    """Write every scan; if the input fails part-way, close the bag properly (rosbags
-    aborts a bag left by an exception) with what was written, then re-raise."""
+def _odometry(typestore, scan: Scan, seq: int, ros1: bool):
+    """The scan's pose as a ``nav_msgs/Odometry`` message: the sensor frame (child) in ``map``."""
+    from ..poses import quaternion_from_yaw
+    from .poses import ODOM_FRAME
+
+    t = typestore.types
+    sec, nsec = divmod(int(scan.stamp_ns), 1_000_000_000)
+    header = t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),
+                                      frame_id=ODOM_FRAME, **({"seq": seq} if ros1 else {}))
+    x, y, theta = scan.pose
+    qx, qy, qz, qw = quaternion_from_yaw(theta)
+    pose = t["geometry_msgs/msg/Pose"](position=t["geometry_msgs/msg/Point"](x=x, y=y, z=0.0),
+                                       orientation=t["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw))
+    zero = t["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+    return t[_ODOMETRY](
+        header=header, child_frame_id=scan.frame_id,
+        pose=t["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+        twist=t["geometry_msgs/msg/TwistWithCovariance"](twist=t["geometry_msgs/msg/Twist"](linear=zero, angular=zero),
+                                                         covariance=np.zeros(36)))
+
+
+_ODOMETRY = "nav_msgs/msg/Odometry"
+
+
+def _write_all(writer, conn, scans, typestore, serialize, fmt: str, pose_topic: str | None) -> int:
+    """Write every scan (and, on ``pose_topic``, the pose of each scan that has one); if the
+    input fails part-way, close the bag properly (rosbags aborts a bag left by an exception)
+    with what was written, then re-raise."""
+    ros1 = fmt == "ros1"
     count = raised = 0
     last = None
+    poses = None  # the odometry connection, added with the first pose
     try:
         for scan in scans:
             receive = int(scan.receive_ns if scan.receive_ns is not None else scan.stamp_ns)
             if last is not None and receive < last:
                 receive, raised = last, raised + 1
             _check_stamps(fmt, scan, receive, count)
-            writer.write(conn, receive, serialize(scan, count))
+            writer.write(conn, receive, serialize(_message(typestore, scan, count, ros1), _MSGTYPE))
+            if scan.pose is not None and pose_topic is not None:
+                if poses is None:
+                    poses = writer.add_connection(pose_topic, _ODOMETRY, typestore=typestore)
+                writer.write(poses, receive, serialize(_odometry(typestore, scan, count, ros1), _ODOMETRY))
             last = receive
             count += 1
     except BaseException:
@@ -446,19 +538,31 @@ def _write_all(writer, conn, scans, serialize, fmt: str) -> int:
     return count
 
 
-def _write_ros1(scans, path: Path, topic: str) -> int:
+def _open_writer(writer, path: Path, topic: str, typestore):
+    """Open a rosbags writer and add the LaserScan connection. Interrupted (or failing) before
+    that is done, the half-made bag is removed: there is nothing in it to keep."""
+    try:
+        writer.open()
+        return writer.add_connection(topic, _MSGTYPE, typestore=typestore)
+    except BaseException:
+        with contextlib.suppress(Exception):
+            writer.close()
+        if path.is_dir():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+        raise
+
+
+def _write_ros1(scans, path: Path, topic: str, pose_topic: str | None) -> int:
     ts = _typestore(ros1=True)
     writer = rosbag1.Writer(path)
-    writer.open()
-    conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
-    return _write_all(writer, conn, scans,
-                      lambda scan, k: ts.serialize_ros1(_message(ts, scan, k, True), _MSGTYPE), "ros1")
+    conn = _open_writer(writer, path, topic, ts)
+    return _write_all(writer, conn, scans, ts, ts.serialize_ros1, "ros1", pose_topic)
 
 
-def _write_ros2(scans, path: Path, topic: str, plugin, fmt: str) -> int:
+def _write_ros2(scans, path: Path, topic: str, plugin, fmt: str, pose_topic: str | None) -> int:
     ts = _typestore(ros1=False)
     writer = rosbag2.Writer(path, version=9, storage_plugin=plugin)
-    writer.open()
-    conn = writer.add_connection(topic, _MSGTYPE, typestore=ts)
-    return _write_all(writer, conn, scans,
-                      lambda scan, k: ts.serialize_cdr(_message(ts, scan, k, False), _MSGTYPE), fmt)
+    conn = _open_writer(writer, path, topic, ts)
+    return _write_all(writer, conn, scans, ts, ts.serialize_cdr, fmt, pose_topic)

@@ -37,6 +37,7 @@ class Faults:
         self.strict = strict
         self.count = 0
         self.first: tuple[str, str] | None = None
+        self.wheres: set[str] = set()
 
     def skip(self, where: str, reason: str, count: int = 1) -> bool:
         """Note ``count`` unreadable records at ``where`` (``count=0``: the file is damaged
@@ -44,8 +45,15 @@ class Faults:
         (False in strict mode)."""
         if self.first is None:
             self.first = (where, reason)
+        self.wheres.add(where)
         self.count += count
         return not self.strict
+
+    def merge(self, other: Faults) -> None:
+        """Count the faults another pass over the same file met (the poses read before the
+        scans), unless this one already noted the place of its first: the same damage, seen twice."""
+        if other.first is not None and other.first[0] not in self.wheres:
+            self.skip(*other.first, count=other.count)
 
     def __bool__(self) -> bool:
         return self.first is not None

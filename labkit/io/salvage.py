@@ -7,6 +7,7 @@ the file from the start instead, record by record, yield every ``sensor_msgs/Las
 message that is complete, and then report where the file broke.
 
 Each reader yields ``(topic, receive_ns, raw_bytes)`` for every LaserScan message it finds
+(or, given a set of topic names, every message on those: poses and transforms)
 (the caller deserialises them, and skips a message that does not decode), and a
 :class:`Fault` for every damaged part it skips: a chunk that does not decompress, a record
 whose header is garbled, a database row sqlite cannot read. It goes on past a fault whenever
@@ -29,7 +30,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import lz4.frame
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 try:  # the same zstd rosbags itself uses
     from compression import zstd  # type: ignore[import-not-found]
@@ -38,6 +39,14 @@ except ImportError:  # Python < 3.14
 
 LASERSCAN_TYPES = {"sensor_msgs/LaserScan", "sensor_msgs/msg/LaserScan"}
 _MSGTYPE = "sensor_msgs/msg/LaserScan"
+
+
+def wanted(name: str, msgtype: str, topic: str | frozenset[str] | None) -> bool:
+    """Whether a reader yields a message of topic ``name``: with ``topic`` a set of names, any
+    message on them (poses, transforms); else a LaserScan message (on ``topic``, if one is named)."""
+    if isinstance(topic, frozenset):
+        return name in topic
+    return msgtype in LASERSCAN_TYPES and (topic is None or name == topic)
 
 
 
@@ -56,8 +65,12 @@ Salvage = Generator["tuple[str, int, bytes | str] | Fault", None, "Fault | None"
 @lru_cache(maxsize=2)
 def typestore(ros1: bool):
     """The rosbags typestore for ROS1 (Noetic) or ROS2 (Humble) messages, built once:
-    rosbags generates ~175 message classes for each."""
-    return get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    rosbags generates ~175 message classes for each. rosbags' Noetic store lacks
+    ``tf2_msgs/TFMessage`` (the ``/tf`` message): it is added, as ROS defines it."""
+    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    if "tf2_msgs/msg/TFMessage" not in store.types:
+        store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+    return store
 
 
 def _decompress(data, compression: str, partial: bool) -> bytes:
@@ -129,7 +142,7 @@ def _ros1_records(buf, start: int, end: int, *, partial: bool = False):
         pos = data_start + dlen
 
 
-def salvage_ros1(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
+def salvage_ros1(path: Path, topic: str | frozenset[str] | None, want_topics: bool = False) -> Salvage:
     """Walk a ROS1 bag's chunks in file order (see the ROS bag format 2.0)."""
     connections: dict[int, tuple[str, str]] = {}
     with open(path, "rb") as fh:
@@ -209,7 +222,7 @@ def _ros1_record(offset, fields, data, connections, topic, want_topics):
         elif op == b"\x02" and not want_topics:
             (conn,) = struct.unpack("<I", fields["conn"])
             name, msgtype = connections.get(conn, ("", ""))
-            if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
+            if wanted(name, msgtype, topic):
                 sec, nsec = struct.unpack("<II", fields["time"])
                 yield name, sec * 1_000_000_000 + nsec, bytes(data)
     except (KeyError, ValueError, struct.error, UnicodeDecodeError) as exc:
@@ -241,7 +254,7 @@ def _mcap_records(buf, start: int, end: int, *, partial: bool = False):
         pos += 9 + length
 
 
-def salvage_mcap(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
+def salvage_mcap(path: Path, topic: str | frozenset[str] | None, want_topics: bool = False) -> Salvage:
     """Walk an MCAP file's records in file order (see the MCAP specification)."""
     schemas: dict[int, str] = {}
     channels: dict[int, tuple[str, str]] = {}
@@ -269,7 +282,7 @@ def salvage_mcap(path: Path, topic: str | None, want_topics: bool = False) -> Sa
                     elif op == 0x05 and not want_topics:  # message
                         cid, _seq, log_time, _pub = struct.unpack_from("<HIQQ", content, 0)
                         name, msgtype = channels.get(cid, ("", ""))
-                        if msgtype in LASERSCAN_TYPES and (topic is None or name == topic):
+                        if wanted(name, msgtype, topic):
                             yield name, log_time, bytes(content[22:])
                 except (struct.error, UnicodeDecodeError) as exc:
                     yield Fault(f"in the record at byte {offset}", f"it is garbled ({exc})")
@@ -304,7 +317,7 @@ def _mcap_chunk(offset, content, complete, handle):
 
 
 # ============================================================================ sqlite3
-def salvage_sqlite3(path: Path, topic: str | None, want_topics: bool = False) -> Salvage:
+def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics: bool = False) -> Salvage:
     """Read the rows of a damaged rosbag2 sqlite3 database one by one.
 
     A truncated database file still carries its original page count; sqlite then refuses
@@ -334,9 +347,9 @@ def salvage_sqlite3(path: Path, topic: str | None, want_topics: bool = False) ->
                 for name, msgtype in topics.values():
                     yield name, 0, msgtype
                 return None
-            wanted = {tid for tid, (name, msgtype) in topics.items()
-                      if msgtype in LASERSCAN_TYPES and (topic is None or name == topic)}
-            yield from _rows_one_by_one(con, topics, wanted)
+            chosen = {tid for tid, (name, msgtype) in topics.items()
+                      if wanted(name, msgtype, topic)}
+            yield from _rows_one_by_one(con, topics, chosen)
             if len(data) % page_size or pages_stated > n_pages:
                 return Fault(f"at byte {len(data)}", f"the database is cut short ({n_pages} of its "
                              f"{max(pages_stated, n_pages + 1)} pages are there); rows on the missing pages are lost")
