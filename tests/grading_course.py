@@ -99,3 +99,25 @@ def submit(course: Path, student: str, name: str, notebook: dict | str | bytes, 
     else:
         path.write_text(notebook, encoding="utf-8")
     return path
+
+
+def once_per_session(tmp_path_factory, name: str, build):
+    """``build(folder)``'s result, computed by one pytest process of the session and shared with the
+    others (pytest-xdist runs a module's tests in several processes, each of which would otherwise
+    build a module-scoped fixture again). ``build`` gets an empty folder and returns a picklable value."""
+    import fcntl
+    import os
+    import pickle
+
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent  # the session's folder, above each worker's own
+    folder = shared / f"shared-{name}"
+    with open(shared / f"shared-{name}.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = shared / f"shared-{name}.pickle"
+        if not done.exists():
+            folder.mkdir()
+            value = build(folder)
+            done.write_bytes(pickle.dumps(value))
+        return pickle.loads(done.read_bytes())

@@ -35,6 +35,7 @@ from tests.grading_course import (
     grade_id,
     names,
     notebook_with,
+    once_per_session,
     read_notebook,
     release_notebook,
     solutions,
@@ -145,16 +146,20 @@ def test_hidden_tests_pass_the_solution_for_every_student(name):
 
 
 # ---------------------------------------------------------------------------- the release
-@pytest.fixture(scope="module")
-def generated_course(tmp_path_factory) -> Path:
-    """A copy of the course with release/ generated for every assignment (``--no-db``: no gradebook)."""
-    course = copy_course(tmp_path_factory.mktemp("ex") / "course")
+def generate_release(folder: Path) -> Path:
+    course = copy_course(folder / "course")
     env = dict(os.environ, PATH=os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""),
                JUPYTER_CONFIG_DIR=str(course / ".jupyter-config"))
     proc = subprocess.run([sys.executable, "-m", "nbgrader", "generate_assignment", "*", "--force", "--no-db"],
                           cwd=course, env=env, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     return course
+
+
+@pytest.fixture(scope="module")
+def generated_course(tmp_path_factory) -> Path:
+    """A copy of the course with release/ generated for every assignment (``--no-db``: no gradebook)."""
+    return once_per_session(tmp_path_factory, "release", generate_release)
 
 
 def files_under(folder: Path) -> list[str]:

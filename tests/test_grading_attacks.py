@@ -26,7 +26,16 @@ import pytest
 
 from labkit.grading import grade
 from labkit.grading.sandbox import worker_uid
-from tests.grading_course import REPO, copy_course, grade_id, notebook_with, release_notebook, solutions, submit
+from tests.grading_course import (
+    REPO,
+    copy_course,
+    grade_id,
+    notebook_with,
+    once_per_session,
+    release_notebook,
+    solutions,
+    submit,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -427,13 +436,17 @@ def _spec(module: str):
     return loaded
 
 
-@pytest.fixture(scope="module")
-def graded(tmp_path_factory):
-    course = copy_course(tmp_path_factory.mktemp("attacks") / "course")
+def grade_the_class(folder: Path):
+    course = copy_course(folder / "course")
     expected = build_class(course)
     run = grade("all", course=course, jobs=2, first_slot=SLOT)
     results = {(r.exercise, r.student): r for r in run.results}
     return course, expected, results, run
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    return once_per_session(tmp_path_factory, "attacks", grade_the_class)
 
 
 # ---------------------------------------------------------------------------- verdicts
