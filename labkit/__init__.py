@@ -18,12 +18,15 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.experiments` the evaluation experiments (simulated sets, comparisons, sweeps)
 - :mod:`labkit.pipeline` one :class:`Config` and :func:`extract_features` for every feature
 - :mod:`labkit.sim` the simulator with ground truth
-- :mod:`labkit.io` bags, CARMEN logs, JSON
+- :mod:`labkit.poses` SE(2) poses: composition, interpolation to a scan's stamp, frame trees
+- :mod:`labkit.io` bags, CARMEN logs, JSON (and the poses they carry)
+- :mod:`labkit.tables` features as a pandas DataFrame / Parquet table (needs ``labkit[research]``)
+- :mod:`labkit.parallel` many recordings on Dask (needs ``labkit[research]``; import explicitly)
 - :mod:`labkit.data` the bundled recordings
 - :mod:`labkit.viz` matplotlib, rerun and ipywidgets viewers (import explicitly)
 """
 
-from . import evaluation, geometry, iav, legs, sim
+from . import evaluation, geometry, iav, legs, poses, sim
 from .angular import AngularSteps, angular_segmentation, local_directions
 from .data import bundled_data
 from .dbscan1d import DBSCAN1D, dbscan1d, dbscan1d_reference
@@ -62,6 +65,7 @@ from .ransac import ransac_lines
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
 from .split_merge import Step, lines_similar, split_and_merge
+from .tables import features_table, read_table
 
 __version__ = "0.1.0"
 
@@ -138,5 +142,8 @@ __all__ = [
     "match_legs",
     "score_detections",
     "ray_errors",
+    "poses",
+    "features_table",
+    "read_table",
     "__version__",
 ]

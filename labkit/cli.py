@@ -93,7 +93,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_convert(args: argparse.Namespace) -> int:
     n = convert(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
-                progress=not args.quiet, strict=args.strict)
+                progress=not args.quiet, strict=args.strict, poses=_poses(args))
     print(f"wrote {n} scans to {args.output}")
     return 0
 
@@ -131,36 +131,107 @@ def cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _poses(args: argparse.Namespace):
+    """``--poses``: None (auto), False (``none``) or a topic."""
+    value = getattr(args, "poses", None)
+    return False if value == "none" else value
+
+
 def cmd_extract(args: argparse.Namespace) -> int:
     from .io import write_features
     from .io.features import FEATURES_FILE
-    from .pipeline import extract_all
+    from .parallel import recordings_in
+    from .pipeline import extract_features
+    from .tables import PARQUET_FILE, write_features_table
 
+    inputs = recordings_in(args.inputs)
+    if len(inputs) > 1 or args.workers is not None or args.scheduler:
+        return _extract_many(args, inputs)
+    source = inputs[0]
     to_stdout = args.output == "-"
+    table = args.output.lower().endswith(".parquet")
     if not to_stdout:
-        check_output(args.output, FEATURES_FILE, overwrite=args.force, inputs=[args.input])
+        check_output(args.output, PARQUET_FILE if table else FEATURES_FILE, overwrite=args.force, inputs=[source])
     config = _config(args)
-    stream = read_scans(args.input, topic=args.topic, strict=args.strict)
+    stream = read_scans(source, topic=args.topic, strict=args.strict, poses=_poses(args))
     scans = iter(stream)
     if not args.quiet:
-        scans = _progress(stream.count, f"extract {Path(args.input).name}")(scans)
+        scans = _progress(stream.count, f"extract {source.name}")(scans)
     counts: dict[str, int] = {}
     t0 = time.perf_counter()
 
     def tallied():
-        for f in extract_all(scans, config):
+        for scan in scans:
+            f = extract_features(scan, config)
             for k, v in f.counts().items():
                 counts[k] = counts.get(k, 0) + v
-            yield f
+            yield scan, f
 
-    n = write_features(tallied(), args.output, overwrite=args.force, inputs=[args.input])
+    if table:
+        n, n_rows = write_features_table(tallied(), args.output, recording=source.name, method=config.lines.method,
+                                         overwrite=args.force, inputs=[source])
+    else:
+        n = write_features((f for _, f in tallied()), args.output, overwrite=args.force, inputs=[source])
     dt = time.perf_counter() - t0
     report = sys.stderr if to_stdout else sys.stdout
-    where = "standard output" if to_stdout else args.output
+    where = "standard output" if to_stdout else args.output + (f" ({n_rows} rows)" if table else "")
     print(f"wrote features of {n} scans to {where} ({n / max(dt, 1e-9):,.0f} scans/s, lines by "
           f"{config.lines.method})", file=report)
     print(f"  per scan: {_counts_line(counts, n)}", file=report)
     return 0
+
+
+def _extract_many(args: argparse.Namespace, inputs: list[Path]) -> int:
+    """``labkit extract`` of several recordings (or with --workers/--scheduler): on Dask."""
+    from . import parallel
+
+    out = args.output
+    if out == "-" or out.lower().endswith(".jsonl"):
+        raise RefusedError(f"{len(inputs)} recordings need -o FOLDER (one features file each) or -o TABLE.parquet "
+                           "(one table for all)" if len(inputs) > 1 else
+                           "--workers and --scheduler write through -o FOLDER or -o TABLE.parquet")
+    config = _config(args)
+    t0 = time.perf_counter()
+    try:
+        results = parallel.extract_many(inputs, out, config=config, topic=args.topic, poses=_poses(args),
+                                        strict=args.strict, overwrite=args.force, workers=args.workers,
+                                        scheduler=args.scheduler, progress=None if args.quiet else _set_bar(
+                                            f"extract {len(inputs)} recordings"))
+    except KeyboardInterrupt as exc:
+        return _interrupted_many(exc)
+    dt = time.perf_counter() - t0
+    n = sum(r.n_scans for r in results)
+    counts: dict[str, int] = {}
+    for r in results:
+        for k, v in r.counts.items():
+            counts[k] = counts.get(k, 0) + v
+    where = (f"a local Dask cluster of {args.workers or 'one worker per core'}" if args.workers != 0 and not
+             args.scheduler else f"the Dask scheduler at {args.scheduler}" if args.scheduler else "this process")
+    print(f"wrote features of {n} scans from {len(inputs)} recordings to {out} ({n / max(dt, 1e-9):,.0f} scans/s "
+          f"on {where}, lines by {config.lines.method})")
+    for r in results:
+        print(f"  {Path(r.input).name}: {r.n_scans} scans, {r.status}" + (f" -> {r.output}" if r.output else ""))
+    print(f"  per scan: {_counts_line(counts, n)}")
+    return parallel.report(results)
+
+
+def _set_bar(desc: str):
+    """A progress bar over a whole set of recordings (advanced as each finishes)."""
+    from tqdm.auto import tqdm
+
+    return partial(tqdm, desc=desc, file=sys.stderr)
+
+
+def _interrupted_many(exc: KeyboardInterrupt) -> int:
+    """Ctrl-C during a run over several recordings: what finished, and what was kept, then 130."""
+    from . import parallel
+
+    if isinstance(exc, OutputInterrupted):
+        raise exc
+    parallel.report([r for r in getattr(exc, "results", []) if r is not None])
+    print("labkit: interrupted: finished outputs are in place; each recording stopped part-way kept what it had "
+          "written as NAME.partial.SUFFIX", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def cmd_config(args: argparse.Namespace) -> int:
@@ -348,11 +419,22 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     progress = None if args.quiet else _bar
     report: dict[str, list] = {}
     damage: list[CorruptFileError] = []
+    results = []
     if args.inputs:
-        rows = ex.compare_on_logs(args.inputs, extractors, n_scans=args.scans or 100, progress=progress,
-                                  topic=args.topic, strict=args.strict, on_damage=damage.append)
+        from . import parallel
+
+        inputs = parallel.recordings_in(args.inputs)
+        alone = len(inputs) == 1 and args.workers is None and not args.scheduler  # one file: no Dask
+        try:
+            results = parallel.evaluate_many(
+                inputs, extractors, n_scans=args.scans or 100, topic=args.topic, strict=args.strict,
+                workers=0 if alone else args.workers, scheduler=args.scheduler,
+                progress=None if args.quiet else _set_bar(f"evaluate {len(inputs)} recording(s)"))
+        except KeyboardInterrupt as exc:
+            return _interrupted_many(exc)
+        rows = [row for r in results for row in r.rows]
         report["recordings"] = rows
-        print(f"## Ray-axis RMSE on {len(args.inputs)} recording(s), first {args.scans or 100} scans each\n")
+        print(f"## Ray-axis RMSE on {len(inputs)} recording(s), first {args.scans or 100} scans each\n")
         print(ex.markdown_table(rows, ex.LOG_COLUMNS))
     else:
         n = args.scans or 102
@@ -380,6 +462,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"labkit: error: {exc}", file=sys.stderr)
     if damage:
         raise damage[0]
+    if results:
+        from . import parallel
+
+        return parallel.report(results)
     return 0
 
 
@@ -406,6 +492,16 @@ def build_parser() -> argparse.ArgumentParser:
     reading = argparse.ArgumentParser(add_help=False)  # every command that reads recordings
     reading.add_argument("--strict", action="store_true",
                          help="stop at the first record that cannot be read (default: skip it, count it, read on)")
+    reading.add_argument("--poses", metavar="TOPIC",
+                         help="where a bag's sensor poses come from: a nav_msgs/Odometry or tf topic, or 'none' "
+                         "(default: /tf if it moves the laser, else the one odometry topic; CARMEN logs: the log's)")
+    many = argparse.ArgumentParser(add_help=False)  # commands that run many recordings on Dask
+    many.add_argument("--workers", type=int, metavar="N",
+                      help="run the recordings on a local Dask cluster of N worker processes (default: one per "
+                      "core when there are several recordings; 0: one after another in this process)")
+    many.add_argument("--scheduler", metavar="ADDRESS",
+                      help="run the recordings on an existing Dask cluster (tcp://host:8786); its workers must see "
+                      "the inputs and outputs under the same paths")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     sub.add_parser = partial(sub.add_parser, parents=[common])  # every command takes -q
 
@@ -435,10 +531,14 @@ def build_parser() -> argparse.ArgumentParser:
     pipeline.add_argument("--method", choices=["iepf", "split_and_merge", "angular", "none"],
                           help="line extractor (overrides the config's lines.method)")
 
-    e = sub.add_parser("extract", parents=[common, pipeline, reading],
-                       help="extract every feature of every scan into JSON lines (one record per scan)")
-    e.add_argument("input", help="a recording: .bag, .mcap, ROS2 folder, CARMEN .log/.gz, .json, .jsonl")
-    e.add_argument("-o", "--output", default="-", help="features file (.jsonl; default: standard output)")
+    e = sub.add_parser("extract", parents=[common, pipeline, reading, many],
+                       help="extract every feature of every scan into JSON lines (one record per scan) or a "
+                       "Parquet table (one row per feature); several recordings run in parallel on Dask")
+    e.add_argument("inputs", nargs="+", metavar="IN",
+                   help="recordings (.bag, .mcap, ROS2 folder, CARMEN .log/.gz, .json, .jsonl) or folders of them")
+    e.add_argument("-o", "--output", default="-",
+                   help="features file (.jsonl; default: standard output) or table (.parquet); for several "
+                   "recordings a folder (one NAME.features.jsonl each) or one .parquet table for all")
     e.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     e.set_defaults(func=cmd_extract)
 
@@ -467,11 +567,12 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("input")
     i.set_defaults(func=cmd_info)
 
-    ev = sub.add_parser("evaluate", parents=[common, reading],
+    ev = sub.add_parser("evaluate", parents=[common, reading, many],
                         help="score the line extractors against ground truth (simulated) or by ray-axis"
                         " RMSE on recordings, and circles and legs on the hall")
     ev.add_argument("inputs", nargs="*", metavar="IN",
-                    help="recordings to score by ray-axis RMSE (default: the simulated sets with ground truth)")
+                    help="recordings (or folders of them) to score by ray-axis RMSE, in parallel on Dask when "
+                    "there are several (default: the simulated sets with ground truth)")
     ev.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN) of the recordings")
     ev.add_argument("--scans", type=int, help="scans per noise level (simulated, default 102) or per recording"
                     " (default 100)")

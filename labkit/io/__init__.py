@@ -312,8 +312,12 @@ _FREE_STAMPS = ("carmen", "json", "jsonl")  # formats whose stamps may be anythi
 
 
 def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
-            overwrite: bool = False, progress: bool = False, strict: bool = False) -> int:
+            overwrite: bool = False, progress: bool = False, strict: bool = False,
+            poses: str | bool | None = None) -> int:
     """Copy the scans of ``src`` into ``dst`` (formats from the names); return the count.
+
+    The scans keep their poses (``poses`` as in :func:`read_scans`): a bag written gets them as
+    ``nav_msgs/Odometry`` on ``/odom``, JSON lines as ``pose`` fields.
 
     A damaged ``src`` still produces a complete ``dst`` holding every readable scan, then
     the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar. ``dst``
@@ -326,14 +330,14 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     """
     src, dst = Path(src), Path(dst)
     fmt = output_format(dst, format)
-    stream = read_scans(src, topic=topic, strict=strict)
+    stream = read_scans(src, topic=topic, strict=strict, poses=poses)
     check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
     restamp = None
     if fmt in bags.BAG_FORMATS and stream.format in _FREE_STAMPS:
         try:
-            restamp, note = plan_stamps(read_scans(src, topic=topic), fmt)
+            restamp, note = plan_stamps(read_scans(src, topic=topic, poses=False), fmt)
         except CorruptFileError:  # read what can be read; the conversion reports the damage
-            restamp, note = plan_stamps(_readable(read_scans(src, topic=topic)), fmt)
+            restamp, note = plan_stamps(_readable(read_scans(src, topic=topic, poses=False)), fmt)
         if note:
             warnings.warn(f"{src}: {note}", StampsChangedWarning, stacklevel=2)
     scans: Iterable[Scan] = stream
