@@ -205,8 +205,12 @@ def _extract_many(args: argparse.Namespace, inputs: list[Path]) -> int:
     for r in results:
         for k, v in r.counts.items():
             counts[k] = counts.get(k, 0) + v
-    where = (f"a local Dask cluster of {args.workers or 'one worker per core'}" if args.workers != 0 and not
-             args.scheduler else f"the Dask scheduler at {args.scheduler}" if args.scheduler else "this process")
+    if args.scheduler:
+        where = f"the Dask scheduler at {args.scheduler}"
+    elif args.workers == 0:
+        where = "this process"
+    else:
+        where = f"a local Dask cluster of {f'{args.workers} workers' if args.workers else 'one worker per core'}"
     print(f"wrote features of {n} scans from {len(inputs)} recordings to {out} ({n / max(dt, 1e-9):,.0f} scans/s "
           f"on {where}, lines by {config.lines.method})")
     for r in results:

@@ -323,7 +323,7 @@ def _client(workers: int | None, scheduler: str | None, n_tasks: int):
         return
     n = workers if workers else max(1, min(n_tasks, os.cpu_count() or 1))
     with _sigint_ignored():  # the worker processes inherit it: Ctrl-C reaches this process only
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
     try:
         client = Client(cluster)
         try:
