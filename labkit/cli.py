@@ -117,7 +117,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     config = None if args.no_features else _config(args)
     summary = lkrr.record(args.input, args.output, topic=args.topic, config=config,
                           features=not args.no_features, progress=not args.quiet, overwrite=args.force,
-                          strict=args.strict)
+                          strict=args.strict, poses=_poses(args))
     extra = f" and ground truth for {summary.n_truth}" if summary.n_truth else ""
     print(f"wrote {summary.n_scans} scans{extra} to {summary.path}")
     if summary.counts:

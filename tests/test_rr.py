@@ -8,7 +8,7 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
-from labkit import sim, write_bag
+from labkit import geometry, sim, write_bag
 from labkit.data import write_simulation
 from labkit.viz import rr as lkrr
 
@@ -172,3 +172,94 @@ def test_log_scans_batches_keep_the_sequence(tmp_path, n):
     rec.disconnect()
     rows, _ = rrd_rows(tmp_path / "b.rrd")
     assert rows["/world/scan/points"] == n
+
+
+# ---------------------------------------------------------------------------- the map (world frame)
+def _transforms(path, entity="/map/sensor"):
+    """{scan index: (translation, quaternion)} of the per-scan transforms in an .rrd."""
+    out = {}
+    for k, row in _batches(path, entity).items():
+        out[k] = (np.array(row["Transform3D:translation"]).reshape(3),
+                  np.array(row["Transform3D:quaternion"]).reshape(4))
+    return out
+
+
+def _distance_to_walls(points, walls):
+    d = np.full(len(points), np.inf)
+    for w in walls:
+        a, b = np.array(w.start), np.array(w.end)
+        t = np.clip(((points - a) @ (b - a)) / ((b - a) @ (b - a)), 0.0, 1.0)
+        d = np.minimum(d, np.linalg.norm(points - (a + t[:, None] * (b - a)), axis=1))
+    return d
+
+
+def test_a_recording_with_poses_gets_the_map_view(tmp_path):
+    """The simulator's bags carry its exact sensor poses: every scan's transform is that pose, the
+    accumulated map is decimated and lies on the world's walls, and the map view sits beside the scan view."""
+    data = list(sim.simulate("corridor", seed=0, n_scans=45))
+    write_bag([s for s, _ in data], tmp_path / "c.bag")
+    summary = lkrr.record(tmp_path / "c.bag", tmp_path / "c.rrd")
+    assert summary.n_scans == 45
+    rrd = tmp_path / "c.rrd"
+    transforms = _transforms(rrd)
+    assert sorted(transforms) == list(range(45))
+    for k, (_, truth) in enumerate(data):
+        x, y, theta = truth.pose
+        translation, q = transforms[k]
+        np.testing.assert_allclose(translation, [x, y, 0.0], atol=1e-5)
+        np.testing.assert_allclose(q, [0.0, 0.0, np.sin(theta / 2), np.cos(theta / 2)], atol=1e-6)
+    rows, timelines = rrd_rows(rrd)
+    assert rows["/map/sensor/points"] == rows["/map/sensor/lines"] == 45
+    assert rows["/map/accumulated/points"] == rows["/map/accumulated/lines"] == 5  # scans 0, 10, ... 40
+    assert {"ros_time", "scan"} <= timelines["/map/accumulated/points"]
+    acc = np.concatenate([np.array(r["Points2D:positions"], dtype=float).reshape(-1, 2)
+                          for r in _batches(rrd, "/map/accumulated/points").values()])
+    cells = {tuple(c) for c in np.floor(acc / lkrr.MAP_CELL_M).astype(int)}
+    assert len(cells) == len(acc)  # one point per 5 cm cell
+    keyframes = np.concatenate([geometry.transform_points(data[k][0].xy, data[k][1].pose) for k in range(0, 45, 10)])
+    assert len(acc) < len(keyframes)
+    d = _distance_to_walls(acc, sim.make_world("corridor").walls)
+    assert np.mean(d < 0.08) > 0.9  # walls (the rest: the walking person)
+    assert "/map/path" in rows and timelines["/map/path"] == set()  # static: the whole path
+    views = _views(rrd)
+    assert ("2D", "") in views and len([v for v in views if v[0] == "2D"]) == 1  # both spatial views sit at the root
+    names = _view_names(rrd)
+    assert {"Scan (sensor frame)", "Map (world frame)"} <= names
+
+
+def _view_names(path):
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    names = set()
+    for chunk in reader.store(store=store).stream():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:display_name" in batch.schema.names:
+            names |= {v[0] for v in batch.column("ViewBlueprint:display_name").to_pylist() if v}
+    return names
+
+
+def test_without_poses_the_layout_is_as_before(tmp_path):
+    write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "o.bag", pose_topic=None)
+    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd")
+    rows, _ = rrd_rows(tmp_path / "o.rrd")
+    assert not any(e.startswith("/map") for e in rows)
+    assert "Map (world frame)" not in _view_names(tmp_path / "o.rrd")
+    # and a bag with poses read with poses=False too
+    write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "p.bag")
+    lkrr.record(tmp_path / "p.bag", tmp_path / "p.rrd", poses=False)
+    assert not any(e.startswith("/map") for e in rrd_rows(tmp_path / "p.rrd")[0])
+
+
+def test_a_scan_without_a_pose_shows_nothing_in_the_map(tmp_path):
+    scans = [s for s, _ in sim.simulate("corridor", seed=0, n_scans=12)]
+    scans[5] = scans[5].replace(pose=None)
+    from labkit import Config
+
+    lkrr.record_scans(scans, tmp_path / "g.rrd", name="gap", config=Config())
+    points = _batches(tmp_path / "g.rrd", "/map/sensor/points")
+    assert points[5]["Points2D:positions"] in (None, []) and len(points[4]["Points2D:positions"]) > 100
+    assert sorted(_transforms(tmp_path / "g.rrd")) == [k for k in range(12) if k != 5]
+    lines = _batches(tmp_path / "g.rrd", "/map/sensor/lines")
+    assert lines[5]["LineStrips2D:strips"] in (None, [])

@@ -16,6 +16,19 @@ Entities
     ``world`` is the sensor frame, drawn with x to the right and y up, as in labkit's
     matplotlib figures (rerun's 2D views point y down, so ``world`` carries a static
     mirror transform).
+Map (when the scans carry poses: :attr:`labkit.Scan.pose`)
+    ``map`` is the world frame (y up too): ``map/path`` the sensor's path, ``map/sensor`` the
+    sensor's pose at each scan as a rerun transform, under it ``map/sensor/points`` and the
+    current scan's features (``map/sensor/lines`` ...) -- the scan placed in the world --, and
+    ``map/accumulated/{points,lines,corners,circles,legs}`` what the scans saw so far, in world
+    coordinates: every ``map_every``-th scan with a pose (a keyframe; default 10) adds its points
+    that fall in grid cells of ``map_cell_m`` (default 5 cm) no earlier keyframe filled, and its
+    features. The map view shows the accumulated entities from the start of the recording up to
+    the time cursor, so the map grows as you scrub; thinning keeps it to one point per cell, so
+    even a 5000-scan log draws smoothly (a few tens of thousands of points for a building).
+    ``map/truth/walls``: the simulator's walls, when its ground truth lies beside the recording.
+    The map view sits beside the sensor view, on the same timelines; without poses there is
+    no ``map`` and the layout is as before.
 
 Importing this module sets ``RERUN_NOTEBOOK_ASSET=serve-local`` (unless already set) before
 it imports rerun, so the viewer embedded in a notebook loads its assets from the installed
@@ -38,6 +51,7 @@ if "rerun_notebook" in sys.modules and "RERUN_NOTEBOOK_ASSET" not in os.environ:
     )
 os.environ.setdefault("RERUN_NOTEBOOK_ASSET", "serve-local")
 
+import itertools  # noqa: E402
 from collections.abc import Iterable  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -49,8 +63,9 @@ import rerun.blueprint as rrb  # noqa: E402
 from .._safe import OutputKind, check_output, safe_output, starts_with  # noqa: E402
 from ..errors import CorruptFileError  # noqa: E402
 from ..features import Features  # noqa: E402
-from ..geometry import arc_points  # noqa: E402
+from ..geometry import arc_points, transform_points  # noqa: E402
 from ..pipeline import Config, extract_features  # noqa: E402
+from ..poses import GridThinning  # noqa: E402
 from ..scan import Scan  # noqa: E402
 from ..segmentation import segment_labels  # noqa: E402
 from .style import COLORS, label_colors  # noqa: E402
@@ -81,14 +96,33 @@ INVALID_RAY_M = 0.4  # length of the grey ray drawn for an invalid beam
 POINT_RADIUS_UI = -1.5
 SEGMENT_RADIUS_UI = -2.5
 _BATCH = 256  # scans per send_columns call
+#: Map decimation: every MAP_EVERY-th scan with a pose adds to the accumulated map, one point per
+#: MAP_CELL_M grid cell; the path keeps a point every PATH_STEP_M.
+MAP_EVERY = 10
+MAP_CELL_M = 0.05
+PATH_STEP_M = 0.02
+_MAP_COLORS = {"path": (40, 100, 210), "accumulated": (120, 120, 120), "lines": (235, 150, 140),
+               "pose": (220, 40, 40)}
+_ACCUMULATED = ("points", "lines", "corners", "circles", "legs")
 
 # rerun's 2D views have y pointing down; mirror so that y points up as in matplotlib.
 _Y_UP = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
 
 
-def blueprint(compare: tuple[str, ...] | list[str] = ()) -> rrb.Blueprint:
+def map_view() -> rrb.Spatial2DView:
+    """The world-frame view: ``map/**``, the accumulated map shown from the start up to the cursor."""
+    grow = rrb.VisibleTimeRanges([
+        rrb.VisibleTimeRange(timeline, start=rrb.TimeRangeBoundary.infinite(),
+                             end=rrb.TimeRangeBoundary.cursor_relative())
+        for timeline in (SEQUENCE, TIME)])
+    return rrb.Spatial2DView(origin="/", contents="map/**", name="Map (world frame)",
+                             overrides={f"/map/accumulated/{layer}": grow for layer in _ACCUMULATED})
+
+
+def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False) -> rrb.Blueprint:
     """The default layout: the scan view on the left; counts, stage times, log and notes on
-    the right. With ``compare=("A", "B")`` there is one scan view per named configuration
+    the right. ``with_map``: the map view (world frame) beside the scan view. With
+    ``compare=("A", "B")`` there is one scan view per named configuration
     (features logged with ``log_features(..., name="A")``), side by side, each showing the
     scan, the ground truth and that configuration's features."""
     if compare:
@@ -100,9 +134,12 @@ def blueprint(compare: tuple[str, ...] | list[str] = ()) -> rrb.Blueprint:
                  for n in compare]
         below = rrb.Horizontal(*plots, rrb.TextDocumentView(origin="description", name="About"))
         return rrb.Blueprint(rrb.Vertical(rrb.Horizontal(*views), below, row_shares=[3, 2]), collapse_panels=False)
+    views = [rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)")]
+    if with_map:
+        views.append(map_view())
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)"),
+            *views,
             rrb.Vertical(
                 rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts"),
                 rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage"),
@@ -110,7 +147,7 @@ def blueprint(compare: tuple[str, ...] | list[str] = ()) -> rrb.Blueprint:
                 rrb.TextDocumentView(origin="description", name="About"),
                 row_shares=[2, 2, 1, 2],
             ),
-            column_shares=[3, 2],
+            column_shares=[3, 3, 2] if with_map else [3, 2],
         ),
         collapse_panels=False,
     )
@@ -214,9 +251,115 @@ def log_scans(
 
 
 def _log_frames(rec, frames: Iterable[tuple[Scan, np.ndarray | None, Features | None]], start_index: int,
-                show_invalid: bool) -> int:
-    """Send ``(scan, labels, features)`` frames in batches (see :func:`_batched`)."""
-    return _batched(frames, lambda batch, k: _send_batch(rec, batch, start_index + k, show_invalid))
+                show_invalid: bool, world_map: _Map | None = None) -> int:
+    """Send ``(scan, labels, features)`` frames in batches (see :func:`_batched`), and to the
+    map (``world_map``) those that have a pose."""
+
+    def send(batch, k: int) -> None:
+        _send_batch(rec, batch, start_index + k, show_invalid)
+        if world_map is not None:
+            world_map.send(batch, start_index + k)
+
+    return _batched(frames, send)
+
+
+class _Map:
+    """Logs the world frame (module docstring, "Map"): the sensor's transform per scan, the
+    scan and its features under it, and the decimated accumulated map; the path at the end."""
+
+    def __init__(self, rec: rr.RecordingStream, every: int = MAP_EVERY, cell_m: float = MAP_CELL_M) -> None:
+        if every < 1:
+            raise ValueError(f"map_every must be >= 1, got {every}")
+        self.rec, self.every, self.thin = rec, int(every), GridThinning(cell_m)
+        self.n_posed = 0
+        self.path: list[tuple[float, float]] = []
+        rec.log("map", rr.Transform3D(mat3x3=_Y_UP), static=True)
+        rec.log("map/sensor/marker", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[_MAP_COLORS["pose"]],
+                                                 labels=["sensor"], show_labels=False), static=True)
+        rec.log("map/sensor/heading", rr.Arrows2D(vectors=[[0.6, 0.0]], colors=[_MAP_COLORS["pose"]],
+                                                  radii=[-1.5]), static=True)
+        _hide_labels(rec, "map/sensor")
+        for layer, archetype in (("points", rr.Points2D), ("lines", rr.LineStrips2D), ("corners", rr.Points2D),
+                                 ("circles", rr.Points2D), ("legs", rr.Points2D)):
+            rec.log(f"map/accumulated/{layer}", archetype.from_fields(show_labels=False, draw_order=10.0 + len(layer)),
+                    static=True)
+
+    def send(self, items: list, first_index: int) -> None:
+        scans = [scan for scan, _, _ in items]
+        posed = [k for k, scan in enumerate(scans) if scan.pose is not None]
+        idx = np.arange(first_index, first_index + len(items))
+        stamps = np.array([s.stamp_ns for s in scans], dtype=np.int64)
+        if posed:
+            poses = np.array([scans[k].pose for k in posed])
+            half = poses[:, 2] / 2
+            quaternions = np.column_stack([np.zeros((len(posed), 2)), np.sin(half), np.cos(half)])
+            self.rec.send_columns("map/sensor", indexes=_time_columns(idx[posed], stamps[posed]),
+                                  columns=rr.Transform3D.columns(
+                                      translation=np.column_stack([poses[:, :2], np.zeros(len(posed))]),
+                                      quaternion=quaternions))
+        # the scan under the transform; a scan without a pose shows nothing (not the last one's place)
+        times = _time_columns(idx, stamps)
+        pts = [s.xy if s.pose is not None else np.zeros((0, 2)) for s in scans]
+        self.rec.send_columns("map/sensor/points", indexes=times, columns=rr.Points2D.columns(
+            positions=np.concatenate(pts), colors=_colors("points", sum(map(len, pts))),
+            radii=np.full(sum(map(len, pts)), POINT_RADIUS_UI, dtype=np.float32)).partition([len(p) for p in pts]))
+        if items[0][2] is not None:
+            feats = [f if s.pose is not None else Features(f.stamp_ns, f.n_beams, f.labels)
+                     for s, (_, _, f) in zip(scans, items, strict=True)]
+            _send_features(self.rec, times, feats, "map/sensor", None, segment_count=False)
+        keys = []
+        for k in posed:
+            if self.n_posed % self.every == 0:
+                keys.append(k)
+            self.n_posed += 1
+            x, y = scans[k].pose[:2]
+            if not self.path or np.hypot(x - self.path[-1][0], y - self.path[-1][1]) >= PATH_STEP_M:
+                self.path.append((x, y))
+        if keys:
+            self._accumulate([items[k] for k in keys], _time_columns(idx[keys], stamps[keys]), idx[keys])
+
+    def _accumulate(self, items: list, times, indices) -> None:
+        """The keyframes' new points and their features, in world coordinates."""
+        rec = self.rec
+        pts = []
+        for scan, _, _ in items:
+            world = transform_points(scan.xy, scan.pose)
+            pts.append(world[self.thin.new(world)])
+        rec.send_columns("map/accumulated/points", indexes=times, columns=rr.Points2D.columns(
+            positions=np.concatenate(pts), colors=_colors_rgb(_MAP_COLORS["accumulated"], sum(map(len, pts))),
+            radii=np.full(sum(map(len, pts)), -1.0, dtype=np.float32)).partition([len(p) for p in pts]))
+        if items[0][2] is None:
+            return
+        where = [f"scan {k}" for k in indices]
+
+        def world(scan, points):
+            return transform_points(np.asarray(points, dtype=float).reshape(-1, 2), scan.pose)
+
+        strips = [world(s, [p for ln in f.lines for p in (ln.start, ln.end)]).reshape(-1, 2, 2) for s, _, f in items]
+        rec.send_columns("map/accumulated/lines", indexes=times, columns=rr.LineStrips2D.columns(
+            strips=np.concatenate(strips), colors=_colors_rgb(_MAP_COLORS["lines"], sum(map(len, strips))),
+            radii=np.full(sum(map(len, strips)), -1.5, dtype=np.float32),
+            labels=[w for w, st in zip(where, strips, strict=True) for _ in st]).partition([len(x) for x in strips]))
+        for layer, attr in (("corners", "point"), ("circles", "center"), ("legs", "center")):
+            centres = [world(s, [getattr(x, attr) for x in getattr(f, layer)]) for s, _, f in items]
+            n = sum(map(len, centres))
+            labels = [w for w, c in zip(where, centres, strict=True) for _ in c]
+            rec.send_columns(f"map/accumulated/{layer}", indexes=times, columns=rr.Points2D.columns(
+                positions=np.concatenate(centres), colors=_colors(layer, n), radii=np.full(n, -2.5, dtype=np.float32),
+                labels=labels).partition([len(c) for c in centres]))
+
+    def finish(self, truth=None) -> None:
+        """The path (and the simulator's walls, from ``truth``), static: they hold for the whole recording."""
+        if self.path:
+            self.rec.log("map/path", rr.LineStrips2D([np.array(self.path)], colors=[_MAP_COLORS["path"]],
+                                                     radii=[-0.75], labels=["path"], show_labels=False,
+                                                     draw_order=15.0), static=True)
+        walls = (truth.header.get("world", {}) if truth is not None else {}).get("walls", [])
+        if walls:
+            self.rec.log("map/truth/walls", rr.LineStrips2D(
+                np.array([[w["start"], w["end"]] for w in walls], dtype=float), colors=_colors("truth", len(walls)),
+                radii=np.full(len(walls), -1.0, dtype=np.float32), labels=[w.get("name", "") for w in walls],
+                show_labels=False, draw_order=1.0), static=True)
 
 
 def _batched(items: Iterable, send) -> int:
@@ -297,11 +440,16 @@ def _forever(value):
 
 
 def _colors(name: str, n: int) -> np.ndarray:
-    return np.tile(np.array(COLORS[name], dtype=np.uint8), (n, 1))
+    return _colors_rgb(COLORS[name], n)
 
 
-def _send_features(rec, times, feats: list[Features], world: str, metrics: str, segment_count: bool) -> None:
-    """Every feature layer of a batch of scans, as one ``send_columns`` call per layer."""
+def _colors_rgb(rgb, n: int) -> np.ndarray:
+    return np.tile(np.array(rgb, dtype=np.uint8), (n, 1))
+
+
+def _send_features(rec, times, feats: list[Features], world: str, metrics: str | None, segment_count: bool) -> None:
+    """Every feature layer of a batch of scans, as one ``send_columns`` call per layer (and,
+    under ``metrics``, their counts and stage times)."""
 
     def send(layer: str, archetype, colour: str, size_ui: float, **columns) -> None:
         per_scan = [getattr(f, layer) for f in feats]
@@ -332,6 +480,8 @@ def _send_features(rec, times, feats: list[Features], world: str, metrics: str, 
     send("legs", rr.Ellipses2D, "legs", -2.0, centers=xy("center"), half_sizes=half_sizes(lambda g: g.diameter / 2),
          labels=lambda legs: [f"leg d={g.diameter * 100:.0f} cm" for g in legs])
     send("people", rr.Points2D, "people", -3.5, positions=xy("center"), labels=lambda people: ["person"] * len(people))
+    if metrics is None:
+        return
     for layer in ("segments",) * segment_count + Features.LAYERS:
         _scalars(rec, f"{metrics}/count/{layer}", times,
                  [f.n_segments if layer == "segments" else len(getattr(f, layer)) for f in feats])
@@ -429,8 +579,16 @@ _LAYER_NOTES = {
 }
 
 
+_MAP_NOTES = {
+    "map/path": "the sensor's path (world frame)",
+    "map/sensor": "the sensor's pose at the current scan (a transform); the scan and its features under it",
+    "map/accumulated/*": f"what the scans saw so far, in the world frame: every {MAP_EVERY}th scan's points, one "
+                         f"per {MAP_CELL_M * 100:g} cm cell, and its features (hover: which scan)",
+}
+
+
 def describe(title: str, *, source: str = "", config: Config | None = None, truth: bool = False,
-             compare: dict[str, Config] | None = None) -> str:
+             compare: dict[str, Config] | None = None, world_map: bool = False) -> str:
     """The Markdown note logged with a recording: what each entity shows, and the config;
     with ``compare`` (``{name: config}`` of features logged with ``log_features(...,
     name=name)``) the named layers and every config."""
@@ -444,6 +602,10 @@ def describe(title: str, *, source: str = "", config: Config | None = None, trut
                 "metrics/valid_beams")):
             continue
         lines.append(f"| `{entity}` | {note} |")
+    if world_map:
+        lines += [f"| `{entity}` | {note} |" for entity, note in _MAP_NOTES.items()]
+        if truth:
+            lines.append("| `map/truth/walls` | the simulator's walls, grey |")
     for name in compare or {}:
         lines.append(f"| `world/{name}/*`, `metrics/{name}/*` | the features, counts and stage times of config "
                      f"`{name}` |")
@@ -467,8 +629,16 @@ def record_scans(
     description: str | None = None,
     overwrite: bool = False,
     inputs: Iterable[str | Path] = (),
+    with_map: bool | None = None,
+    map_every: int = MAP_EVERY,
+    map_cell_m: float = MAP_CELL_M,
 ) -> RecordSummary:
     """Write scans to an ``.rrd`` file with the default blueprint.
+
+    When the scans carry poses (``with_map=None``: when one of the first 256 does), the map view
+    is logged beside the scan view: the path, the sensor's pose per scan, the scan and its
+    features in the world frame, and the accumulated map (``map_every``, ``map_cell_m``: see the
+    module docstring). ``with_map=False`` leaves it out.
 
     Features are logged when given (``features``, one per scan) or computed here with
     ``config`` (a :class:`labkit.Config`); otherwise only the scans and their range
@@ -482,16 +652,33 @@ def record_scans(
     :mod:`labkit._safe`). Interrupted (Ctrl-C), the recording so far is closed and kept as
     ``<name>.partial.rrd``.
     """
+    scans = iter(scans)
+    if with_map is None:  # look at the first batch: does the recording have poses?
+        first: list[Scan] = []
+        damage = None
+        try:
+            first.extend(itertools.islice(scans, _BATCH))
+        except CorruptFileError as exc:  # logged, as any damage, after the scans before it
+            damage = exc
+        with_map = any(s.pose is not None for s in first)
+        scans = itertools.chain(first, scans if damage is None else _raise(damage))
     with safe_output(out, RRD_FILE, overwrite=overwrite, inputs=inputs) as tmp:
         return _record_scans(scans, tmp, Path(out), name=name, truth=truth, labels=labels, features=features,
-                             config=config, segment_threshold_m=segment_threshold_m, description=description)
+                             config=config, segment_threshold_m=segment_threshold_m, description=description,
+                             world_map=(map_every, map_cell_m) if with_map else None)
+
+
+def _raise(exc: Exception):
+    raise exc
+    yield  # a generator that raises when first iterated
 
 
 def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features, config, segment_threshold_m,
-                  description) -> RecordSummary:
+                  description, world_map=None) -> RecordSummary:
     rec = new_recording(name)
-    rec.save(tmp, default_blueprint=blueprint())
+    rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None))
     log_static(rec, description)
+    the_map = _Map(rec, *world_map) if world_map is not None else None
     stamps: list[int] = []
     counts: dict[str, int] = {}
     seconds: dict[str, float] = {}
@@ -519,7 +706,7 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
 
     error: Exception | None = None
     try:
-        n = _log_frames(rec, frames(), 0, True)
+        n = _log_frames(rec, frames(), 0, True, the_map)
     except CorruptFileError as exc:
         error, n = exc, len(stamps)
         rec.set_time(SEQUENCE, sequence=max(n - 1, 0))
@@ -529,6 +716,8 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
         rec.disconnect()
         raise
     n_truth = log_truth(rec, truth, {s: k for k, s in enumerate(stamps)}) if truth is not None else 0
+    if the_map is not None:
+        the_map.finish(truth)
     rec.set_time(SEQUENCE, sequence=0)
     log_text(rec, f"{n} scans from {name}" + (f", ground truth for {n_truth}" if n_truth else ""))
     rec.flush()
@@ -552,29 +741,32 @@ def record(
     description: str | None = None,
     overwrite: bool = False,
     strict: bool = False,
+    poses: str | bool | None = None,
 ) -> RecordSummary:
     """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
     ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
     (``config``, default :class:`labkit.Config` (); ``features=False``: scans and range
     segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it. See
     :func:`record_scans` for damaged inputs and for ``overwrite``; ``strict`` stops reading
-    at the first bad record.
+    at the first bad record. When the recording has poses (``poses`` as in :func:`labkit.read_scans`),
+    the map view is logged too (module docstring).
     """
     from ..io import read_scans
     from ..sim import read_truth, truth_path_for
 
     check_output(out, RRD_FILE, overwrite=overwrite, inputs=[source])  # before any reading
-    stream = read_scans(source, topic=topic, strict=strict)
+    stream = read_scans(source, topic=topic, strict=strict, poses=poses)
     name = Path(source).name
     if features and config is None:
         config = Config()
     truth_file = truth_path_for(source)
     truth = read_truth(truth_file) if truth_file.exists() else None
     if description is None:
-        origin = f"Format: `{stream.format}`, topic: `{stream.topic}`."
+        origin = f"Format: `{stream.format}`, topic: `{stream.topic}`, poses: {stream.poses or 'none'}."
         if not features:
             origin += f" Range segments: adaptive breakpoints, {segment_threshold_m} m floor."
-        description = describe(name, source=origin, config=config if features else None, truth=truth is not None)
+        description = describe(name, source=origin, config=config if features else None, truth=truth is not None,
+                               world_map=stream.poses is not None)
     scans = iter(stream)
     if progress:
         from tqdm.auto import tqdm
@@ -583,7 +775,7 @@ def record(
     inputs = [source, truth_file] if truth is not None else [source]
     return record_scans(scans, out, name=name, truth=truth, config=config if features else None,
                         segment_threshold_m=segment_threshold_m, description=description, overwrite=overwrite,
-                        inputs=inputs)
+                        inputs=inputs, with_map=None if stream.poses is not None else False)
 
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=()) -> None:
