@@ -141,10 +141,11 @@ def main() -> None:
             rate = len(handed_in) / seconds * 60
             timed = [r for r in handed_in if r.timing]
             parts = {part: statistics.mean(r.timing[part] for r in timed)
-                     for part in ("total_s", "start_s", "load_s", "calls_s", "trusted_s")}
+                     for part in ("total_s", "start_s", "load_s", "calls_s", "trusted_s", "cpu_s")}
             class_minutes = 300 * 6 / rate
             rates.append([str(jobs), str(len(handed_in)), f"{seconds:.1f}", f"{rate:.0f}",
-                          *(f"{parts[p] * 1000:.0f}" for p in ("total_s", "start_s", "load_s", "calls_s", "trusted_s")),
+                          *(f"{parts[p] * 1000:.0f}" for p in ("total_s", "start_s", "load_s", "calls_s", "trusted_s",
+                                                               "cpu_s")),
                           f"{class_minutes:.1f}"])
             per_exercise = {}
             for result in timed:
@@ -155,11 +156,16 @@ def main() -> None:
     print(f"# labkit grade: {students} students x {len(summaries[0][2])} exercises\n")
     print("kinds of submission: " + ", ".join(f"{k} {v}" for k, v in sorted(summaries[0][1].items())) + "\n")
     print(table(["jobs", "submissions", "seconds", "per minute", "ms per submission", "start worker", "run cells",
-                 "student's calls", "trusted tests", "300 x 6 (min)"], rates))
-    print("\nThe millisecond columns are means per submission within one job: starting the sandboxed worker "
-          "(bwrap, Python, numpy), running the notebook's cells, waiting for the student's functions (with the "
-          "channel), and the trusted side's own work (references, comparisons). 'seconds' includes the run's "
-          "fixed costs (importing nbgrader, creating the gradebook, starting the grading processes).\n")
+                 "student's calls", "trusted tests", "CPU ms", "300 x 6 (min)"], rates))
+    print("\nThe millisecond columns are means per submission within one job: its wall time, split into starting "
+          "the sandboxed worker (bwrap, Python, numpy), running the notebook's cells, waiting for the student's "
+          "functions (with the channel) and the trusted side's own work (references, comparisons); 'CPU ms' is the "
+          "CPU time the submission cost (grading process and its workers), which does not depend on what else the "
+          "machine runs. 'seconds' includes the run's fixed costs (importing nbgrader, creating the gradebook, "
+          "starting the grading processes).\n")
+    cpu = statistics.mean(r.timing["cpu_s"] for s in summaries for r in s[3].results if r.timing)
+    print(f"CPU per submission {cpu * 1000:.0f} ms: on 2 free cores a 300 x 6 class needs at least "
+          f"{300 * 6 * cpu / 2 / 60:.1f} min of grading (plus the fixed costs).\n")
     rows = []
     for name in sorted(summaries[0][2]):
         rows.append([name, *(f"{statistics.mean(s[2][name]) * 1000:.0f}" for s in summaries)])

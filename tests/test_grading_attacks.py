@@ -20,18 +20,24 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
 
 from labkit.grading import grade
+from labkit.grading.course import Course
+from labkit.grading.protocol import clean_text
+from labkit.grading.records import Records
 from labkit.grading.sandbox import worker_uid
 from tests.grading_course import (
     REPO,
+    cell_source,
     copy_course,
     grade_id,
     notebook_with,
     once_per_session,
+    read_notebook,
     release_notebook,
     solutions,
     submit,
@@ -372,6 +378,24 @@ CONTAINED = {
         while True:
             pass
     """], 0.0, "timed out"),
+    # honest habits from Jupyter: display(), an unused import of labkit, a process pool, odd characters
+    "display_in_function": (EX1, solution(EX1).replace(
+        "    return labels", "    display(labels)  # left over from debugging\n    return labels"), [], FULL, "graded"),
+    "unused_labkit_import": (EX1, "import labkit  # to compare in a cell below\n\n" + solution(EX1), [], FULL,
+                             "graded"),
+    "process_pool": (EX1, wrapped_segment('''
+        import multiprocessing
+        with multiprocessing.get_context("fork").Pool(2) as pool:
+            assert pool.map(abs, [-1, -2]) == [1, 2]
+    '''), [], FULL, "graded"),
+    "surrogates": (EX1, wrapped_segment('''
+        if threshold_m > 1e8:
+            raise ValueError("half an emoji: \\ud800")
+    '''), ["# half an emoji in a comment: \ud83d"], FULL - 2, "graded"),
+    "code_in_imports_cell": (EX1, '''
+        def segment(ranges, angles, threshold_m, min_points):
+            return _segment(ranges, angles, threshold_m, min_points)
+    ''', [], FULL, "graded"),
     "segfault": (EX1, '''
         import ctypes
 
@@ -380,6 +404,11 @@ CONTAINED = {
     ''', [], 0.0, "crashed"),
 }
 STUDENTS = {**CHEATS, **CONTAINED}
+MARKDOWN_SCRIPT = "<script>alert('the feedback runs my code')</script>\n\n<img src=x onerror=\"alert('img')\">"
+CSV_ID = '=HYPERLINK("evil.example","grades")'
+UNRECORDED = ["../source", os.fsdecode(b"m\xfcller")]  # ids that name no file: a row in grades.csv only
+ODD = ["pasted_test_cell", "deleted_test_cells", "renamed_file", "not_json", "nbformat_3", "symlink", "empty_folder",
+       "markdown_script", "big_plots", CSV_ID, "../source", os.fsdecode(b"m\xfcller")]
 
 
 def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]:
@@ -412,6 +441,28 @@ def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]
                         if not (grade_id(c) or "").startswith("test_")]
     submit(course, "deleted_test_cells", EX1, deleted)
     submit(course, "renamed_file", EX1, honest, file="my_segmentation.ipynb")
+    # the code a student put in the locked imports cell runs, and the autograded notebook shows it
+    notebook = read_notebook(course / "submitted" / "code_in_imports_cell" / EX1 / f"{EX1}.ipynb")
+    imports = next(c for c in notebook["cells"] if grade_id(c) == "imports")
+    imports["source"] = cell_source(imports) + "\n\n" + solution(EX1).replace("def segment(", "def _segment(")
+    submit(course, "code_in_imports_cell", EX1, notebook)
+    # a student's markdown with HTML in it; an honest notebook with 40 MB of plots
+    scripted = notebook_with(EX1, solutions(EX1))
+    scripted["cells"].append({"cell_type": "markdown", "metadata": {}, "source": MARKDOWN_SCRIPT})
+    submit(course, "markdown_script", EX1, scripted)
+    plotted = notebook_with(EX1, solutions(EX1))
+    plotted["cells"].append({"cell_type": "code", "metadata": {}, "execution_count": 3, "source": "plt.imshow(x)",
+                             "outputs": [{"output_type": "display_data", "metadata": {},
+                                          "data": {"image/png": "iVBORw0KGgo" + "A" * (40 << 20)}}]})
+    submit(course, "big_plots", EX1, plotted)
+    # student ids that are a spreadsheet formula, a path (an LMS import into the roster), not UTF-8
+    submit(course, CSV_ID, EX1, '{"cells": [')
+    with Records(Course(course)) as records:
+        records.gradebook.add_student("../source")
+    latin1 = os.path.join(os.fsencode(course / "submitted"), b"m\xfcller", os.fsencode(EX1))
+    os.makedirs(latin1)
+    with open(os.path.join(latin1, os.fsencode(f"{EX1}.ipynb")), "w", encoding="utf-8") as f:
+        json.dump(honest, f)
     submit(course, "not_json", EX1, '{"cells": [')
     submit(course, "nbformat_3", EX1, json.dumps({"nbformat": 3, "worksheets": []}))
     (course / "submitted" / "symlink" / EX1).mkdir(parents=True)
@@ -422,7 +473,9 @@ def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]
         (EX1, "pasted_test_cell"): (FULL, "graded"), (EX1, "deleted_test_cells"): (FULL, "graded"),
         (EX1, "renamed_file"): (FULL, "graded"), (EX1, "not_json"): (0.0, "invalid notebook"),
         (EX1, "nbformat_3"): (0.0, "invalid notebook"), (EX1, "symlink"): (0.0, "invalid notebook"),
-        (EX1, "empty_folder"): (0.0, "not submitted"),
+        (EX1, "empty_folder"): (0.0, "not submitted"), (EX1, "markdown_script"): (FULL, "graded"),
+        (EX1, "big_plots"): (FULL, "graded"), (EX1, CSV_ID): (0.0, "invalid notebook"),
+        (EX1, "../source"): (0.0, "invalid notebook"), (EX1, os.fsdecode(b"m\xfcller")): (0.0, "invalid notebook"),
     })
     return expected
 
@@ -450,8 +503,7 @@ def graded(tmp_path_factory):
 
 
 # ---------------------------------------------------------------------------- verdicts
-@pytest.mark.parametrize("student", sorted(STUDENTS) + ["pasted_test_cell", "deleted_test_cells", "renamed_file",
-                                                        "not_json", "nbformat_3", "symlink", "empty_folder"])
+@pytest.mark.parametrize("student", sorted(STUDENTS) + ODD)
 def test_every_student_scores_what_their_own_code_earns(graded, student):
     _, expected, results, _ = graded
     (key,) = [key for key in expected if key[1] == student]
@@ -486,10 +538,10 @@ def test_partial_points_name_the_lost_test(graded):
 
 def test_delegating_fails_with_a_message_that_says_why(graded):
     _, _, results, _ = graded
-    errors = results[EX1, "delegate"].cell_errors
-    assert any("labkit is not available when your notebook is graded" in e["message"] for e in errors), errors
-    errors = results[EX4, "sklearn_delegate"].cell_errors
-    assert any(e["error"] == "ModuleNotFoundError" and "sklearn" in e["message"] for e in errors), errors
+    verdicts = [cell.verdict for cell in results[EX1, "delegate"].cells]
+    assert all("labkit is not available when your notebook is graded" in v for v in verdicts), verdicts
+    errors = results[EX4, "sklearn_delegate"].cell_errors  # from sklearn.cluster import DBSCAN: at once
+    assert any(e["error"] == "ModuleNotFoundError" and "sklearn is not available" in e["message"] for e in errors)
 
 
 def test_the_gradebook_holds_the_scores_and_nothing_the_students_wrote(graded):
@@ -498,20 +550,27 @@ def test_the_gradebook_holds_the_scores_and_nothing_the_students_wrote(graded):
     course, expected, _, _ = graded
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", "labkit") as gradebook:
         for (name, student), (score, status) in expected.items():
-            if status == "not submitted" and student != "empty_folder":
+            if status == "not submitted" and student != "empty_folder" or student in UNRECORDED:
                 continue
             submission = gradebook.find_submission(name, student)
             assert submission.score == score, (name, student)
             assert all(grade.manual_score is None for nb in submission.notebooks for grade in nb.grades)
         ids = {s.id for s in gradebook.students}
-    assert {student for _, student in expected} <= ids
+    assert {student for _, student in expected} - set(UNRECORDED) <= ids
+
+
+def as_in_csv(student: str) -> str:
+    """A student id as grades.csv shows it: odd characters as ?, a formula as text."""
+    shown = clean_text(student)
+    return "'" + shown if shown.startswith(("=", "+", "-", "@")) else shown
 
 
 def test_grades_csv_tells_the_statuses_apart(graded):
     course, expected, _, _ = graded
     with open(course / "grades.csv", newline="", encoding="utf-8") as f:
         rows = {(row["assignment"], row["student_id"]): row for row in csv.DictReader(f)}
-    for key, (score, status) in expected.items():
+    for (name, student), (score, status) in expected.items():
+        key = (name, as_in_csv(student))
         assert float(rows[key]["score"]) == score, key
         if status is not None:
             assert rows[key]["status"] == status, key
@@ -530,8 +589,9 @@ def test_nbgrader_export_and_feedback_work_on_the_gradebook(graded):
         assert proc.returncode == 0, proc.stdout + proc.stderr
     with open(course / "export.csv", newline="", encoding="utf-8") as f:
         exported = {(row["assignment"], row["student_id"]): float(row["score"]) for row in csv.DictReader(f)}
-    for key, (score, _) in expected.items():
-        assert exported[key] == score, key
+    for (name, student), (score, _) in expected.items():
+        if student not in (*UNRECORDED, CSV_ID):  # nbgrader export does not quote: CSV_ID's commas split it
+            assert exported[name, student] == score, (name, student)
     html = (course / "feedback" / "crashes_on_one_input" / EX1 / f"{EX1}.html").read_text(encoding="utf-8")
     assert "test_hidden_edges" in html and "exited with status 3" in html
 
@@ -560,6 +620,32 @@ def test_submissions_are_left_as_they_were(graded):
 
 def test_no_student_process_outlives_the_run(graded):
     uids = {str(worker_uid(SLOT)), str(worker_uid(SLOT + 1))}
-    survivors = subprocess.run(["ps", "-e", "-o", "uid=,pid=,comm="], capture_output=True, text=True).stdout
-    left = [line for line in survivors.splitlines() if line.split()[0] in uids]
-    assert not left, left
+
+    def left() -> list[str]:
+        listing = subprocess.run(["ps", "-e", "-o", "uid=,pid=,comm="], capture_output=True, text=True).stdout
+        return [line for line in listing.splitlines() if line.split()[0] in uids]
+
+    deadline = time.monotonic() + 10  # a killed sandbox's pid namespace empties soon, not at once
+    while left() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not left(), left()
+
+
+def test_what_instructors_open_is_safe_text(graded):
+    """Students' ids, messages and markdown reach grades.csv and the feedback HTML as text only."""
+    from nbconvert import HTMLExporter
+
+    course, _, results, _ = graded
+    with open(course / "grades.csv", newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert any("HYPERLINK" in row["student_id"] for row in rows)
+    assert not [row for row in rows for value in row.values() if value.startswith(("=", "+", "-", "@"))]
+    assert any(row["student_id"] == "m?ller" and row["status"] == "invalid notebook" for row in rows)
+    assert not (course / "records" / EX1 / "m?ller.json").exists()
+    assert "### BEGIN SOLUTION" in (course / "source" / EX1 / f"{EX1}.ipynb").read_text(encoding="utf-8")
+    assert "cannot be graded: it is not a plain folder name" in results[EX1, "../source"].detail
+    html, _ = HTMLExporter().from_filename(str(course / "autograded" / "markdown_script" / EX1 / f"{EX1}.ipynb"))
+    assert "&lt;script&gt;alert(" in html and "&lt;img src=x" in html  # shown as text ...
+    assert "<script>alert(" not in html and "<img src=x" not in html  # ... never as HTML
+    shown = (course / "autograded" / "code_in_imports_cell" / EX1 / f"{EX1}.ipynb").read_text(encoding="utf-8")
+    assert "def _segment(" in shown  # the code that ran and earned the points is there to review

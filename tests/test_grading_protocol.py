@@ -17,10 +17,12 @@ import pytest
 
 from labkit.grading.protocol import (
     HEADER,
+    MAX_CONTAINERS,
     MAX_DEPTH,
     MAX_FRAME_BYTES,
     NUMERIC_DTYPES,
     ProtocolError,
+    clean_text,
     decode,
     encode,
     exception_names,
@@ -184,3 +186,23 @@ def test_exception_messages_are_cut_and_unknown_names_are_runtime_errors():
     rebuilt = rebuild_exception(["NoSuchError", "Exception"], "x" * 10_000)
     assert type(rebuilt) is Exception and len(str(rebuilt)) == 4000
     assert type(rebuild_exception(["BaseExceptionGroup"], "m")) is RuntimeError
+
+
+def test_a_frame_of_countless_containers_is_refused_before_it_is_parsed():
+    body = b'{"id":1,"value":[' + b"{}," * (MAX_CONTAINERS + 1) + b"{}]}"
+    assert len(body) < MAX_FRAME_BYTES  # it fits a frame, but would cost json.loads a lot of memory
+    with pytest.raises(ProtocolError, match="lists and objects"):
+        unpack(body)
+
+
+@pytest.mark.parametrize("shape", [[0, 10**30], [0, 2**62, 2**62], [0] + [1 << 24] * 5, [0] * 40])
+def test_absurd_shapes_are_protocol_errors(shape):
+    with pytest.raises(ProtocolError):
+        decode({"A": "<f8", "s": shape, "b": ""})
+
+
+def test_text_that_no_file_can_hold_is_cleaned():
+    """A lone surrogate is valid JSON and a valid Python str, but no UTF-8 file, CSV or database takes it."""
+    assert decode(["ok", "half an emoji: \ud83d"]) == ["ok", "half an emoji: ?"]
+    assert str(rebuild_exception(["ValueError"], "bad \udcff")) == "bad ?"
+    assert clean_text("müller ✓") == "müller ✓"

@@ -30,10 +30,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .course import Course, Exercise, find_course
-from .notebook import read_notebook
-from .records import Records
+from .notebook import grade_id, read_notebook
+from .protocol import clean_text
+from .records import Records, student_id_problem
 from .runner import (
     GRADER_ERROR,
+    INVALID,
     NOT_SUBMITTED,
     STATUSES,
     Job,
@@ -241,11 +243,18 @@ def grade(
             if unknown:
                 raise ValueError(f"no student {', '.join(unknown)} in {course.submitted} or the gradebook")
             roster = [s for s in roster if s in students]
-        todo, folders = [], {}
+        todo, folders, unrecorded = [], {}, []
         for name in names:
             for student in roster:
+                problem = student_id_problem(student)
+                if problem is not None:  # no file may be named after it: a row in grades.csv only
+                    unrecorded.append(_fill(SubmissionResult(name, student, INVALID, [], detail=(
+                        f"student id {clean_text(student)!r} cannot be graded: {problem}; rename the folder")),
+                        exercises[name]))
+                    continue
                 notebook, folders[name, student] = _handed_in(course, student, name)
                 todo.append(Job(str(course.root), name, student, str(notebook) if notebook else None, secret, isolate))
+        run.results += unrecorded
         bar = _progress(len(todo), progress)
         try:
             for result in _grade_jobs(todo, min(jobs, max(len(todo), 1)), first_slot):
@@ -255,7 +264,7 @@ def grade(
                 bar.set_postfix_str(f"{result.student}: {result.status}", refresh=False)
         finally:  # also when interrupted: the CSV of what is graded so far
             bar.close()
-            records.write_csv(run.csv)
+            records.write_csv(run.csv, unrecorded)
     run.seconds = time.perf_counter() - started
     return run
 
@@ -275,10 +284,11 @@ def _exercise_of(course: Course, notebook: Path, wanted: str | None) -> str:
     matches = [n for n in names if stem == n or stem.startswith(n) or n.startswith(stem)]
     if len(matches) == 1:
         return matches[0]
-    ids = {cell.get("metadata", {}).get("nbgrader", {}).get("grade_id") for cell in read_notebook(notebook)["cells"]}
+    cells = read_notebook(notebook)["cells"]
+    ids = {grade_id(cell) for cell in cells}
+    code = "\n".join(cell["source"] for cell in cells)
     matches = [n for n in names if course.exercise(n).test_cells.keys() <= ids
-               and all(f"def {f}(" in "".join(c["source"] for c in read_notebook(notebook)["cells"])
-                       for f in course.exercise(n).functions)]
+               and all(f"def {f}(" in code for f in course.exercise(n).functions)]
     if len(matches) != 1:
         raise ValueError(f"cannot tell which exercise {notebook.name} is: pass --exercise (one of {', '.join(names)})")
     return matches[0]
@@ -307,7 +317,8 @@ def _check_report(exercise: Exercise, result: SubmissionResult) -> tuple[str, bo
     if result.detail and result.status == "invalid notebook":
         return "\n".join([*lines, f"  invalid notebook: {result.detail}"]), False
     for error in result.cell_errors:
-        lines.append(f"  note: code cell {error['cell'] + 1} raised {error['error']}: {error['message'][:300]}")
+        raised = f"{error['error']}: {error['message'][:300]}"
+        lines.append(f"  note: the cell that starts `{error['starts']}` raised {raised}")
     width = max(len(c.grade_id) for c in exercise.cells)
     passed = True
     for cell, verdict in zip(exercise.cells, result.cells, strict=True):

@@ -18,6 +18,8 @@ import re
 from pathlib import Path
 from typing import Any
 
+from .protocol import clean_text
+
 __all__ = [
     "MAX_NOTEBOOK_BYTES",
     "InvalidNotebook",
@@ -29,8 +31,8 @@ __all__ = [
     "autograded_notebook",
 ]
 
-#: Larger submissions are refused as invalid notebooks (images in outputs count).
-MAX_NOTEBOOK_BYTES = 32 << 20
+#: Larger submissions are refused as invalid notebooks (outputs count: a notebook full of plots is big).
+MAX_NOTEBOOK_BYTES = 256 << 20
 #: More student code than this (all code cells together) is refused.
 MAX_CODE_CHARS = 2 << 20
 _CELL_ID = re.compile(r"^[a-zA-Z0-9_-]{1,64}$")
@@ -78,11 +80,15 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
         if type(source) is not str:
             raise InvalidNotebook(f"cell {index} has a source that is not text")
         metadata = cell.get("metadata", {})
-        cells.append({**cell, "source": source, "metadata": metadata if type(metadata) is dict else {}})
+        cell_id = cell.get("id")
+        cells.append({"cell_type": cell["cell_type"], "source": clean_text(source),
+                      "metadata": metadata if type(metadata) is dict else {},
+                      **({"id": clean_text(cell_id)} if type(cell_id) is str else {})})
     if sum(len(c["source"]) for c in cells if c["cell_type"] == "code") > MAX_CODE_CHARS:
         raise InvalidNotebook(f"the notebook holds more than {MAX_CODE_CHARS} characters of code")
-    metadata = data.get("metadata")
-    return {**data, "cells": cells, "metadata": metadata if type(metadata) is dict else {}}
+    metadata, minor = data.get("metadata"), data.get("nbformat_minor")
+    return {"nbformat": 4, "nbformat_minor": minor if type(minor) is int else 5, "cells": cells,
+            "metadata": metadata if type(metadata) is dict else {}}
 
 
 def cell_source(cell: dict) -> str:
@@ -151,19 +157,23 @@ def autograded_notebook(
         Grade id -> the nbformat outputs to show under that graded cell.
     """
     release_cells = {grade_id(c): c for c in release["cells"] if grade_id(c) is not None}
-    solutions = {gid for gid, c in release_cells.items() if nbgrader_metadata(c).get("solution")}
     cells, seen = [], set()
     for cell in (submission or release)["cells"]:
-        gid = _test_cell_of(cell, test_cells) or grade_id(cell)
-        if gid in release_cells and gid not in solutions:  # a test or locked cell: the instructor's copy, once
+        test = _test_cell_of(cell, test_cells)
+        if test is not None or (cell["cell_type"] == "markdown" and grade_id(cell) in release_cells
+                                and release_cells[grade_id(cell)]["cell_type"] == "markdown"):
+            gid = test or grade_id(cell)  # a test cell or the instructor's text: the instructor's copy, once
             if gid not in seen:
                 cells.append(copy.deepcopy(release_cells[gid]))
             seen.add(gid)
             continue
+        gid = grade_id(cell)
         kept = {"cell_type": cell["cell_type"], "metadata": {}, "source": cell["source"]}
-        if gid in solutions and gid not in seen:
-            kept["metadata"] = copy.deepcopy(release_cells[gid]["metadata"])
-            seen.add(gid)
+        if cell["cell_type"] != "code":  # the student's text, shown as text: no HTML of theirs reaches a browser
+            kept = {"cell_type": "markdown", "metadata": {}, "source": _as_text(cell["source"])}
+        elif gid in release_cells and release_cells[gid]["cell_type"] == "code" and gid not in seen:
+            kept["metadata"] = copy.deepcopy(release_cells[gid]["metadata"])  # an answer, or a locked cell the
+            seen.add(gid)  # student changed: shown as it ran
         if "id" in cell:
             kept["id"] = cell["id"]
         cells.append(kept)
@@ -185,6 +195,13 @@ def autograded_notebook(
             cell.pop("attachments", None)
     return {"cells": cells, "metadata": copy.deepcopy(release["metadata"]), "nbformat": 4,
             "nbformat_minor": release.get("nbformat_minor", 5)}
+
+
+def _as_text(source: str) -> str:
+    """Markdown that shows ``source`` verbatim, as a fenced block (so any HTML in it is only text)."""
+    longest = max((len(run) for run in re.findall(r"`+", source)), default=0)
+    fence = "`" * max(3, longest + 1)
+    return f"{fence}text\n{source}\n{fence}"
 
 
 def write_notebook_text(notebook: dict) -> str:

@@ -48,14 +48,19 @@ __all__ = [
     "unpack",
     "exception_names",
     "rebuild_exception",
+    "clean_text",
 ]
 
-#: The largest frame either side accepts (bytes of JSON after the 4-byte header).
-MAX_FRAME_BYTES = 64 << 20
+#: The largest frame either side accepts (bytes of JSON after the 4-byte header): the largest
+#: answer an exercise needs (200 000 labels) is 2 MB.
+MAX_FRAME_BYTES = 16 << 20
 #: How deeply lists, tuples and dicts may nest.
 MAX_DEPTH = 32
 #: How many values (array elements count as one) a decoded message may hold.
 MAX_ITEMS = 1 << 21
+#: How many lists and objects a frame may hold, counted before it is parsed (so that a hostile
+#: frame of ``[{},{},...]`` costs the trusted side no memory).
+MAX_CONTAINERS = 1 << 18
 #: Exception messages are cut to this many characters.
 MAX_MESSAGE_CHARS = 4000
 HEADER = struct.Struct(">I")
@@ -163,7 +168,9 @@ def _decode(data: Any, depth: int, budget: list[int]) -> Any:
     if depth > MAX_DEPTH:
         raise ProtocolError(f"values nest more than {MAX_DEPTH} levels deep")
     kind = type(data)
-    if data is None or kind in (bool, int, float, str):
+    if kind is str:
+        return clean_text(data)
+    if data is None or kind in (bool, int, float):
         return data
     if kind is list:
         return [_decode(item, depth + 1, budget) for item in data]
@@ -199,6 +206,8 @@ def _buffer(dtype_name: Any, text: Any, shape: list[int]) -> np.ndarray:
     dtype = NUMERIC_DTYPES[dtype_name]
     count = 1
     for n in shape:
+        if n > MAX_FRAME_BYTES:
+            raise ProtocolError(f"an array dimension of {n} is larger than any frame")
         count *= n
     if count * dtype.itemsize != (len(text) // 4) * 3 - text[-2:].count("="):
         raise ProtocolError(f"array data does not hold {count} values of {dtype}")
@@ -206,7 +215,10 @@ def _buffer(dtype_name: Any, text: Any, shape: list[int]) -> np.ndarray:
         raw = base64.b64decode(text, validate=True)
     except ValueError as error:
         raise ProtocolError(f"bad base64 array data: {error}") from None
-    return np.frombuffer(raw, dtype=dtype).reshape(shape).copy()
+    try:
+        return np.frombuffer(raw, dtype=dtype).reshape(shape).copy()
+    except ValueError as error:  # numpy refuses the shape (too many dimensions, too big)
+        raise ProtocolError(f"bad array shape {shape!r}: {error}") from None
 
 
 # ---------------------------------------------------------------------------- frames
@@ -228,6 +240,8 @@ def frame_length(header: bytes) -> int:
 
 def unpack(body: bytes) -> dict:
     """The JSON object of a frame's body; ProtocolError for anything that is not one."""
+    if body.count(b"[") + body.count(b"{") > MAX_CONTAINERS:
+        raise ProtocolError(f"a frame with more than {MAX_CONTAINERS} lists and objects")
     try:
         message = json.loads(body.decode("utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as error:
@@ -235,6 +249,22 @@ def unpack(body: bytes) -> dict:
     if type(message) is not dict:
         raise ProtocolError("a frame must hold a JSON object")
     return message
+
+
+def clean_text(text: str) -> str:
+    """``text`` with every character UTF-8 cannot hold (a lone surrogate such as ``"\\ud800"``) as ``?``.
+
+    JSON can carry them and Python strings can hold them, but no file, CSV or database the grader
+    writes can: one such string must not stop the class.
+
+    Examples
+    --------
+    >>> clean_text("half an emoji: \\ud83d")
+    'half an emoji: ?'
+    """
+    if text.isascii():
+        return text
+    return text.encode("utf-8", "replace").decode("utf-8")
 
 
 # ---------------------------------------------------------------------------- exceptions
@@ -273,7 +303,7 @@ def rebuild_exception(names: Any, message: Any) -> Exception:
         raise ProtocolError("exception names must be a list of str")
     if type(message) is not str:
         raise ProtocolError("an exception message must be a str")
-    message = message[:MAX_MESSAGE_CHARS]
+    message = clean_text(message[:MAX_MESSAGE_CHARS])
     for name in names[:16]:
         cls = BUILTIN_EXCEPTIONS.get(name)
         if cls is not None:

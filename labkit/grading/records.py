@@ -32,11 +32,34 @@ from pathlib import Path
 
 from .course import Course, Exercise
 from .notebook import grade_id, nbgrader_metadata, write_notebook_text
+from .protocol import clean_text
 from .runner import GRADED, GRADER_ERROR, MANUAL, NOT_SUBMITTED, SubmissionResult
 
-__all__ = ["Records", "write_atomic", "CSV_COLUMNS"]
+__all__ = ["Records", "write_atomic", "student_id_problem", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("assignment", "student_id", "status", "score", "max_score", "detail")
+_FORMULA = ("=", "+", "-", "@", "\t", "\r")
+
+
+def student_id_problem(student: str) -> str | None:
+    """Why ``student`` cannot name the files the grader writes for them (a folder name, a record), or None.
+
+    Student ids come from folder names under ``submitted/`` and from the gradebook's roster (an
+    LMS import): one such as ``../source`` would write outside the student's folders.
+    """
+    if student in ("", ".", "..") or student.startswith(".") or any(c in student for c in "/\\\0"):
+        return "it is not a plain folder name"
+    if student != student.strip():
+        return "it starts or ends with white space"
+    if clean_text(student) != student:
+        return "it is not valid UTF-8"
+    return None
+
+
+def _csv_text(text: str) -> str:
+    """A CSV field a spreadsheet shows as text: a leading ``'`` where it would start a formula."""
+    text = clean_text(text)
+    return "'" + text if text.startswith(_FORMULA) else text
 
 
 @contextlib.contextmanager
@@ -57,7 +80,7 @@ def _beside(path: Path) -> Iterator[str]:
 
 def write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
-    with _beside(path) as temporary, open(temporary, "w", encoding="utf-8", newline="") as f:
+    with _beside(path) as temporary, open(temporary, "w", encoding="utf-8", errors="replace", newline="") as f:
         f.write(text)
 
 
@@ -243,10 +266,12 @@ class Records:
                 found[assignment.name, submission.student.id] = (submission.score, submission.max_score)
         return found
 
-    def write_csv(self, path: Path) -> int:
-        """``grades.csv`` from every record: one row per student and exercise. Returns the number of rows."""
+    def write_csv(self, path: Path, unrecorded: list[SubmissionResult] = ()) -> int:
+        """``grades.csv`` from every record, and ``unrecorded`` results (students whose id names no file):
+        one row per student and exercise. Returns the number of rows."""
         scores = self.scores()
-        rows = []
+        rows = [{"assignment": r.exercise, "student_id": r.student, "status": r.status, "score": "0",
+                 "max_score": f"{r.max_score:g}", "detail": r.detail} for r in unrecorded]
         for record_path in sorted(self.course.records.glob("*/*.json")):
             record = json.loads(record_path.read_text(encoding="utf-8"))
             key = (record["exercise"], record["student"])
@@ -256,6 +281,6 @@ class Records:
         text = io.StringIO()
         writer = csv.DictWriter(text, fieldnames=CSV_COLUMNS, lineterminator="\n")
         writer.writeheader()
-        writer.writerows(rows)
+        writer.writerows({key: _csv_text(value) for key, value in row.items()} for row in rows)
         write_atomic(Path(path), text.getvalue())
         return len(rows)

@@ -15,6 +15,7 @@ import contextlib
 import hashlib
 import hmac
 import io
+import resource
 import time
 import traceback
 import warnings
@@ -222,6 +223,17 @@ def _blank(exercise: Exercise, verdict: str, output: dict | None = None) -> list
             for c in exercise.cells]
 
 
+def _first_line(source: str) -> str:
+    lines = [line.strip() for line in source.splitlines() if line.strip() and not line.strip().startswith("#")]
+    return (lines[0] if lines else "")[:80]
+
+
+def _cpu_seconds() -> float:
+    """CPU seconds of this process and of its children that have ended (the submission's workers)."""
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
 _COURSES: dict[str, Course] = {}
 _SLOT = [0]
 
@@ -258,19 +270,21 @@ def grade_submission(job: Job) -> SubmissionResult:
     seeds = None
     if not job.visible_only:
         seeds = {c.grade_id: seed_for(job.secret, exercise.name, job.student, c.grade_id) for c in exercise.cells}
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), _cpu_seconds()
     with Session(sandbox, code, load_timeout_s=exercise.load_timeout_s,
                  call_timeout_s=exercise.call_timeout_s) as session:
         result.cells = run_cells(exercise, session, seeds=seeds)
     result.seeds = seeds or {}
     result.status = _status(session, result.cells)
-    result.cell_errors = session.cell_errors or []
+    result.cell_errors = [{**error, "starts": _first_line(code[error["cell"]]) if error["cell"] < len(code) else ""}
+                          for error in session.cell_errors or []]
     result.detail = "; ".join(f"{c.grade_id} {c.verdict}" for c in result.cells if c.verdict != "passed")
     total = time.perf_counter() - started
     result.timing = {
         "total_s": total, "start_s": session.timing.start_s, "load_s": session.timing.load_s,
         "calls_s": session.timing.calls_s, "workers": session.timing.workers,
         "trusted_s": total - session.timing.start_s - session.timing.load_s - session.timing.calls_s,
+        "cpu_s": _cpu_seconds() - cpu,
     }
     released = {grade_id(c): c["source"] for c in exercise.release["cells"] if grade_id(c) is not None}
     answers = {grade_id(c): c["source"] for c in submission["cells"] if grade_id(c) is not None}

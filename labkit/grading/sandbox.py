@@ -23,7 +23,9 @@ student byte runs, so ``RLIMIT_NPROC`` holds (the kernel does not enforce it for
 student owns nothing. As another user bwrap makes a user namespace and the worker runs as uid
 65534 inside it (your own uid outside), with ``RLIMIT_NPROC`` counting your processes too. The
 worker also sets CPU seconds, address space, file size, open files and processes limits
-(:class:`Limits`). There is no seccomp filter.
+(:class:`Limits`). On x86_64 a seccomp filter (:func:`seccomp_filter`) refuses the system calls
+that would outlive the sandbox (keyrings), escape the memory limit (``memfd_create``) or widen the
+kernel's attack surface (new namespaces, ``ptrace``, ``bpf``, ``io_uring``, ...).
 
 :class:`Worker` is one running worker; :class:`Session` grades one submission with as many
 workers as it takes (a fresh one after a call that timed out or killed its worker).
@@ -39,6 +41,7 @@ import select
 import shutil
 import signal
 import site
+import struct
 import subprocess
 import sys
 import sysconfig
@@ -105,6 +108,8 @@ class Limits:
         Processes and threads of the worker's uid (``RLIMIT_NPROC``): a fork bomb stops there.
     tmp_bytes : int
         Size of the tmpfs mounted on ``/tmp``, the working directory.
+    shm_bytes : int
+        Size of the tmpfs mounted on ``/dev/shm`` (for ``multiprocessing``).
     """
 
     cpu_s: int = 120
@@ -113,6 +118,7 @@ class Limits:
     open_files: int = 128
     processes: int = 32
     tmp_bytes: int = 128 << 20
+    shm_bytes: int = 64 << 20
 
     def rlimits(self) -> dict[str, int]:
         return {
@@ -249,8 +255,9 @@ class Sandbox:
             "masked": list(self.masked),
         })
 
-    def command(self) -> tuple[list[str], dict[str, str] | None, str | None]:
-        """(argv, environment, working directory) of a new worker."""
+    def command(self, seccomp_fd: int | None = None) -> tuple[list[str], dict[str, str] | None, str | None]:
+        """(argv, environment, working directory) of a new worker; ``seccomp_fd`` is a file descriptor
+        bwrap reads the seccomp filter from (see :func:`seccomp_filter`)."""
         python, prefix, shown, hidden = _runtime()
         if not self.isolate:
             return self._plain_command(python, shown)
@@ -302,7 +309,10 @@ class Sandbox:
         for name in WORKER_FILES:
             args += ["--ro-bind", str(HERE / name), f"/grader/{name}"]
         args += ["--proc", "/proc", "--dev", "/dev", "--size", str(self.limits.tmp_bytes), "--perms", "1777",
-                 "--tmpfs", "/tmp", "--chdir", "/tmp"]
+                 "--tmpfs", "/tmp", "--size", str(self.limits.shm_bytes), "--perms", "1777", "--tmpfs", "/dev/shm",
+                 "--chdir", "/tmp"]
+        if seccomp_fd is not None:
+            args += ["--seccomp", str(seccomp_fd)]
         config = self._config(site_dirs, drop=not self.user_namespace)
         return [*args, "--", python, "-I", "-S", "-B", "/grader/worker.py", config], None, None
 
@@ -340,6 +350,70 @@ _ENVIRONMENT = {
 }
 
 
+# ---------------------------------------------------------------------------- seccomp
+#: System calls the student's code may not make (x86_64 numbers), and why:
+DENIED_SYSCALLS = {
+    # the kernel's keyrings belong to a uid, not to a sandbox: a channel to the next submission
+    "add_key": 248, "request_key": 249, "keyctl": 250,
+    # memory that RLIMIT_AS does not count
+    "memfd_create": 319, "memfd_secret": 447,
+    # other processes' memory
+    "ptrace": 101, "process_vm_readv": 310, "process_vm_writev": 311,
+    # new namespaces (unprivileged user namespaces are a large attack surface), mounts
+    "unshare": 272, "setns": 308, "mount": 165, "umount2": 166, "pivot_root": 155, "chroot": 161,
+    # kernel interfaces no exercise needs, each a known source of privilege escalations
+    "userfaultfd": 323, "perf_event_open": 298, "bpf": 321, "io_uring_setup": 425, "io_uring_enter": 426,
+    "io_uring_register": 427, "kexec_load": 246, "kexec_file_load": 320, "init_module": 175,
+    "finit_module": 313, "delete_module": 176, "open_by_handle_at": 304,
+}
+_CLONE, _CLONE3 = 56, 435
+_CLONE_NEW_NAMESPACES = 0x7E020000  # CLONE_NEWNS | NEWCGROUP | NEWUTS | NEWIPC | NEWUSER | NEWPID | NEWNET
+
+
+@functools.cache
+def seccomp_filter() -> bytes | None:
+    """The classic BPF program bwrap loads with ``--seccomp`` (x86_64; None elsewhere).
+
+    It refuses :data:`DENIED_SYSCALLS` with EPERM, ``clone`` with a new-namespace flag with EPERM,
+    ``clone3`` with ENOSYS (its flags are behind a pointer; glibc then falls back to ``clone``),
+    any other architecture's or the x32 ABI's system calls, and allows the rest.
+    """
+    if os.uname().machine != "x86_64":
+        return None
+    load, jump_eq, jump_ge, jump_set, ret = 0x20, 0x15, 0x35, 0x45, 0x06
+    allow, eperm, enosys = 0x7FFF0000, 0x00050000 | 1, 0x00050000 | 38
+    program: list[tuple[int, int | str, int | str, int]] = [
+        (load, 0, 0, 4),  # seccomp_data.arch
+        (jump_eq, 0, "deny", 0xC000003E),  # AUDIT_ARCH_X86_64
+        (load, 0, 0, 0),  # seccomp_data.nr
+        (jump_ge, "deny", 0, 0x40000000),  # the x32 ABI
+        (jump_eq, "no clone3", 0, _CLONE3),
+        (jump_eq, "clone", 0, _CLONE),
+        *[(jump_eq, "deny", 0, number) for number in sorted(DENIED_SYSCALLS.values())],
+        (ret, 0, 0, allow),
+        ("clone", 0, 0, 0),
+        (load, 0, 0, 16),  # the low half of args[0]: clone's flags
+        (jump_set, "deny", 0, _CLONE_NEW_NAMESPACES),
+        (ret, 0, 0, allow),
+        ("deny", 0, 0, 0),
+        (ret, 0, 0, eperm),
+        ("no clone3", 0, 0, 0),
+        (ret, 0, 0, enosys),
+    ]
+    labels, code = {}, []
+    for instruction in program:
+        if isinstance(instruction[0], str):
+            labels[instruction[0]] = len(code)
+        else:
+            code.append(instruction)
+
+    def offset(target: int | str, here: int) -> int:
+        return target if isinstance(target, int) else labels[target] - here - 1
+
+    return b"".join(struct.pack("=HBBI", op, offset(true, i), offset(false, i), k)
+                    for i, (op, true, false, k) in enumerate(code))
+
+
 def _describe_exit(code: int | None) -> str:
     if code is None:
         return "stopped answering"
@@ -363,14 +437,24 @@ class Worker:
     """One running worker process and its channel (stdin/stdout pipes of length-prefixed JSON frames)."""
 
     def __init__(self, sandbox: Sandbox) -> None:
-        argv, environment, workdir = sandbox.command()
+        program = seccomp_filter() if sandbox.isolate else None
+        seccomp_fd = None
+        if program is not None:  # bwrap reads the filter from a pipe (a few hundred bytes: it fits)
+            seccomp_fd, write_end = os.pipe()
+            os.write(write_end, program)
+            os.close(write_end)
+        argv, environment, workdir = sandbox.command(seccomp_fd)
         self.workdir = workdir
         self.errors = tempfile.TemporaryFile()
         started = time.perf_counter()
-        self.process = subprocess.Popen(
-            argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, env=environment or {},
-            cwd=workdir, start_new_session=True, close_fds=True,
-        )
+        try:
+            self.process = subprocess.Popen(
+                argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, env=environment or {},
+                cwd=workdir, start_new_session=True, close_fds=True, pass_fds=[fd for fd in [seccomp_fd] if fd],
+            )
+        finally:
+            if seccomp_fd is not None:
+                os.close(seccomp_fd)
         self._out = self.process.stdin.fileno()
         self._in = self.process.stdout.fileno()
         os.set_blocking(self._out, False)

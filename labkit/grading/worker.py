@@ -68,24 +68,42 @@ def _drop_privileges(uid: int | None, gid: int | None) -> None:
 
 
 class _Unavailable:
-    """A meta path finder that turns ``import <masked>`` into a clear ModuleNotFoundError.
+    """A meta path finder that gives every masked package (and its submodules) as a stub module.
 
-    Only a message: the masked packages are not in the sandbox at all, so removing this finder
-    gives the plain "No module named ..." instead.
+    ``import labkit`` works, so that an unused import costs nothing; using anything from it
+    raises ModuleNotFoundError saying why. Only a message: the masked packages are not in the
+    sandbox at all, so removing this finder gives the plain "No module named ..." instead.
     """
 
     def __init__(self, names: list[str]) -> None:
         self.names = frozenset(names)
 
     def find_spec(self, fullname, path=None, target=None):
-        top = fullname.partition(".")[0]
-        if top in self.names:
-            raise ModuleNotFoundError(
-                f"{top} is not available when your notebook is graded: this exercise asks you to write"
-                " the computation yourself (numpy is fine)",
-                name=fullname,
-            )
-        return None
+        if fullname.partition(".")[0] not in self.names:
+            return None
+        import importlib.machinery
+
+        return importlib.machinery.ModuleSpec(fullname, self, is_package=True)
+
+    def create_module(self, spec):
+        return _Missing(spec.name)
+
+    def exec_module(self, module) -> None:
+        pass
+
+
+class _Missing(types.ModuleType):
+    """A masked package: any attribute raises ModuleNotFoundError with the reason."""
+
+    def __getattr__(self, name: str):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        top = self.__name__.partition(".")[0]
+        raise ModuleNotFoundError(
+            f"{top} is not available when your notebook is graded ({self.__name__}.{name}): this exercise asks"
+            " you to write the computation yourself (numpy is fine)",
+            name=f"{self.__name__}.{name}",
+        )
 
 
 class _Shell:
@@ -191,6 +209,7 @@ def serve(config: dict) -> None:
     send({"hello": os.getpid(), "uid": os.getuid()})
     main = types.ModuleType("__main__")
     main.__dict__["get_ipython"] = lambda: shell
+    main.__dict__["display"] = lambda *objects, **options: None  # Jupyter's builtin: nothing to show here
     shell = _Shell(main.__dict__)
     sys.modules["__main__"] = main
     while True:
