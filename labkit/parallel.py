@@ -30,6 +30,7 @@ A single very long recording is one task: it runs on one core. Split it first if
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import resource
 import shutil
@@ -323,7 +324,8 @@ def _client(workers: int | None, scheduler: str | None, n_tasks: int):
         return
     n = workers if workers else max(1, min(n_tasks, os.cpu_count() or 1))
     with _sigint_ignored():  # the worker processes inherit it: Ctrl-C reaches this process only
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.ERROR)
     try:
         client = Client(cluster)
         try:

@@ -80,6 +80,7 @@ __all__ = [
     "log_scans",
     "log_features",
     "log_truth",
+    "log_map",
     "log_text",
     "record",
     "record_scans",
@@ -513,6 +514,21 @@ def log_features(
     return _batched(features, send)
 
 
+def log_map(rec: rr.RecordingStream, scans: Iterable[Scan], features: Iterable[Features] | None = None, *,
+            start_index: int = 0, truth=None, map_every: int = MAP_EVERY, map_cell_m: float = MAP_CELL_M) -> int:
+    """Log the world frame of scans with poses (module docstring, "Map"): the sensor's transform
+    per scan, the scan and its ``features`` (one per scan, optional) under it, the accumulated
+    map, the path, and the world's walls from ``truth`` (a :class:`labkit.sim.GroundTruth`).
+    Use it beside :func:`log_scans` and show it with ``show_inline(rec, with_map=True)``;
+    returns how many scans were logged."""
+    the_map = _Map(rec, map_every, map_cell_m)
+    side = features if features is not None else _forever(None)
+    n = _batched(((scan, None, f) for scan, f in zip(scans, side, strict=False)),
+                 lambda batch, k: the_map.send(batch, start_index + k))
+    the_map.finish(truth)
+    return n
+
+
 def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int]) -> int:
     """Log simulator ground truth (:class:`labkit.sim.ScanTruth`) under ``world/truth``, in
     grey so that the detected features (in colour) stand out against it.
@@ -778,7 +794,8 @@ def record(
                         inputs=inputs, with_map=None if stream.poses is not None else False)
 
 
-def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=()) -> None:
-    """Show a recording in the notebook with the default blueprint (or the side-by-side
-    one for ``compare``); works offline."""
-    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare))
+def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=(),
+                with_map: bool = False) -> None:
+    """Show a recording in the notebook with the default blueprint (``with_map``: and the map
+    view), or the side-by-side one for ``compare``; works offline."""
+    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map))
