@@ -186,6 +186,12 @@ if os.fork() == 0:
 os.wait()
 '''
 
+SLOW_DEMO = '''
+import time
+
+time.sleep(4)  # a demo: plotting a few scans, or timing an O(N^2) version against the answer
+'''
+
 # student -> (exercise, answers by grade id, cells before, cells after, expected score, expected status, mark)
 MAIN_CLASS = {
     "honest": (EX1, {"segment": SEGMENT}, [], [], FULL, "graded", None),
@@ -211,6 +217,10 @@ MAIN_CLASS = {
                                                    + SEGMENT}, [], [], FULL, "graded",
                                   redteam("an unused `import labkit` above an own solution in the same cell"
                                           " stops the cell before the def: 0 points (documented, all-or-nothing)")),
+    "slow_demo_cells": (EX1, {"segment": SEGMENT}, [], [SLOW_DEMO] * 3, FULL, "graded",
+                        redteam("the 10 s load budget covers all of a notebook's cells together (nbgrader: 10 s per"
+                                " cell, and the students' instructions name only 5 s per call): three 4-second"
+                                " demo cells after an honest answer cost every test, 0 points")),
     # (h) what the instructor reads afterwards
     "code_behind_imports_cell": (EX1, {"imports": IMPL_BEHIND_IMPORTS, "segment": '''
         def segment(ranges, angles, threshold_m, min_points):
@@ -332,9 +342,9 @@ else:
 PERSISTENCE_CLASS = {
     "a_donor": (DONOR, FULL),
     "b_keyring_taker": (_taker(f"_key_read({KEY.encode()!r})"), 0.0),
-    "c_tmp_taker": (_taker('_tmp_read("/tmp/.answer.py")'), 0.0),
-    "d_shm_taker": (_taker(f"_shm_read({SHM_KEY})"), 0.0),
-    "e_dev_shm_taker": (_taker('_tmp_read("/dev/shm/.answer.py")'), 0.0),
+    # /tmp, SysV shared memory, /dev/shm: each sandbox has its own
+    "c_other_channels_taker": (_taker(f'_tmp_read("/tmp/.answer.py") or _shm_read({SHM_KEY})'
+                                      ' or _tmp_read("/dev/shm/.answer.py")'), 0.0),
 }
 
 
@@ -640,9 +650,7 @@ def test_the_student_cannot_trace_signal_or_write_outside():
     pytest.param("b_keyring_taker", marks=redteam(
         "the kernel's user keyring (add_key/keyctl, no seccomp) outlives the sandbox: a submission without a"
         " solution runs the code a previous submission on the same worker uid stored there, and scores 10")),
-    "c_tmp_taker",
-    "d_shm_taker",
-    "e_dev_shm_taker",
+    "c_other_channels_taker",
 ])
 def test_nothing_persists_into_the_next_submission(persistence_class, student):
     assert not persistence_class.crash, persistence_class.crash
@@ -785,6 +793,32 @@ def test_the_autograded_notebook_shows_the_code_that_ran(main_class):
     assert main_class.result("code_behind_imports_cell").score == FULL  # the code is right, and it ran ...
     text = (main_class.course / "autograded" / "code_behind_imports_cell" / EX1 / f"{EX1}.ipynb").read_text()
     assert "def _impl(" in text  # ... so a reviewer must be able to see it
+
+
+NOTEBOOK_MEMORY = """
+import resource, sys
+sys.path.insert(0, sys.argv[1])
+from labkit.grading.notebook import read_notebook
+
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+read_notebook(sys.argv[2])
+print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) // 1024)
+"""
+
+
+@redteam("a submitted notebook is parsed whole by json.loads in the trusted process: 31 MB of '{},' in its"
+         " metadata cost ~750 MB there (and the notebook is accepted); at a 256 MB cap, ~6 GB per job")
+def test_a_hostile_notebook_costs_the_trusted_side_little_memory(tmp_path):
+    from labkit.grading.notebook import MAX_NOTEBOOK_BYTES
+
+    size = min(MAX_NOTEBOOK_BYTES, 32 << 20) - (1 << 20)
+    head, tail = b'{"nbformat": 4, "nbformat_minor": 5, "cells": [], "metadata": {"x": [', b"{}]}}"
+    path = tmp_path / "hostile.ipynb"
+    path.write_bytes(head + b"{}," * ((size - len(head) - len(tail)) // 3) + tail)
+    proc = subprocess.run([sys.executable, "-c", NOTEBOOK_MEMORY, str(REPO), str(path)], capture_output=True,
+                          text=True, timeout=600)
+    grown_mb = int(proc.stdout.split()[-1]) if proc.returncode == 0 else 0  # refused (InvalidNotebook): held
+    assert grown_mb < 400, f"reading a {size >> 20} MB notebook grew the trusted process by {grown_mb} MB"
 
 
 @pytest.mark.parametrize("shape", [[0, 10**30], [0, 2**62, 2**62]])
