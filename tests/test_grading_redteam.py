@@ -391,6 +391,12 @@ def _build_files_class(folder: Path) -> Graded:
     big["cells"].append({**_code_cell("plt.imshow(image)"), "execution_count": 3, "outputs": [
         {"output_type": "display_data", "metadata": {}, "data": {"image/png": "iVBORw0KGgo" + "A" * (40 << 20)}}]})
     submit(course, "big_outputs", EX0, big)
+    # (f) an honest notebook that printed the points of a long recording (the output of print(points.tolist()))
+    printed = notebook_with(EX0, {"beams_to_points": BEAMS})
+    text = str([[round(0.001 * i, 3), 1.5] for i in range(250_000)])
+    printed["cells"].append({**_code_cell("print(points.tolist())"), "execution_count": 4, "outputs": [
+        {"output_type": "stream", "name": "stdout", "text": text}]})
+    submit(course, "printed_many_points", EX0, printed)
     # (h) a student id that is a spreadsheet formula (an unreadable notebook: no worker needed)
     submit(course, CSV_ID, EX0, '{"cells": [')
     # (h) symbolic links and odd shapes in submitted/
@@ -707,6 +713,12 @@ def test_links_and_odd_folders_score_nothing(files_class, student, status):
          " and the code is an honest full solution")
 def test_an_honest_notebook_with_big_plots_is_graded(files_class):
     result = files_class.result("big_outputs", EX0)
+    assert (result.score, result.status) == (FULL, "graded"), result.detail
+
+
+def test_an_honest_notebook_that_printed_a_lot_is_graded(files_class):
+    """Outputs are not graded: 250 000 printed [x, y] pairs (6 MB of text) must not make a notebook invalid."""
+    result = files_class.result("printed_many_points", EX0)
     assert (result.score, result.status) == (FULL, "graded"), result.detail
 
 
