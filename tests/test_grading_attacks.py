@@ -234,6 +234,15 @@ CHEATS = {
 
         threading.Thread(target=forge, daemon=True).start()
     """], 0.0, None),
+    "forged_load_reply": (EX1, WRONG_SEGMENT, ["""
+        import json, os, struct
+        body = json.dumps({"errors": [{"cell": 0, "types": 5, "message": None}]}).encode()
+        for fd in range(3, 40):
+            try:
+                os.write(fd, struct.pack(">I", len(body)) + body)
+            except OSError:
+                pass
+    """], 0.0, "crashed"),
     "huge_and_recursive_returns": (EX1, '''
         def segment(ranges, angles, threshold_m, min_points):
             if min_points == 2:
@@ -374,10 +383,11 @@ CONTAINED = {
             while True:
                 pass
     ''', [], 0.0, "timed out"),
+    # a cell that never ends is stopped, as Jupyter's interrupt would, and the cells after it still run
     "loops_while_loading": (EX1, solution(EX1), ["""
         while True:
             pass
-    """], 0.0, "timed out"),
+    """], FULL, "timed out"),
     # honest habits from Jupyter: display(), an unused import of labkit, a process pool, odd characters
     "display_in_function": (EX1, solution(EX1).replace(
         "    return labels", "    display(labels)  # left over from debugging\n    return labels"), [], FULL, "graded"),
@@ -396,6 +406,7 @@ CONTAINED = {
         def segment(ranges, angles, threshold_m, min_points):
             return _segment(ranges, angles, threshold_m, min_points)
     ''', [], FULL, "graded"),
+    "slow_demo_cells": (EX1, solution(EX1), [], FULL, "graded"),
     "segfault": (EX1, '''
         import ctypes
 
@@ -408,7 +419,7 @@ MARKDOWN_SCRIPT = "<script>alert('the feedback runs my code')</script>\n\n<img s
 CSV_ID = '=HYPERLINK("evil.example","grades")'
 UNRECORDED = ["../source", os.fsdecode(b"m\xfcller")]  # ids that name no file: a row in grades.csv only
 ODD = ["pasted_test_cell", "deleted_test_cells", "renamed_file", "not_json", "nbformat_3", "symlink", "empty_folder",
-       "markdown_script", "big_plots", CSV_ID, "../source", os.fsdecode(b"m\xfcller")]
+       "markdown_script", "big_plots", "container_bomb", CSV_ID, "../source", os.fsdecode(b"m\xfcller")]
 
 
 def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]:
@@ -441,6 +452,13 @@ def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]
                         if not (grade_id(c) or "").startswith("test_")]
     submit(course, "deleted_test_cells", EX1, deleted)
     submit(course, "renamed_file", EX1, honest, file="my_segmentation.ipynb")
+    # three demo cells of 4 s each after the answer: each cell has its own time, as in Jupyter
+    demo = "import time\ntime.sleep(4)  # a demo that takes a while"
+    submit(course, "slow_demo_cells", EX1, notebook_with(EX1, solutions(EX1), extra=[demo] * 3))
+    # a notebook of countless empty objects: refused before it costs the grader memory to parse
+    bomb = json.loads(json.dumps(honest))
+    bomb["metadata"]["padding"] = [{}] * 300_000
+    submit(course, "container_bomb", EX1, bomb)
     # the code a student put in the locked imports cell runs, and the autograded notebook shows it
     notebook = read_notebook(course / "submitted" / "code_in_imports_cell" / EX1 / f"{EX1}.ipynb")
     imports = next(c for c in notebook["cells"] if grade_id(c) == "imports")
@@ -474,6 +492,7 @@ def build_class(course: Path) -> dict[tuple[str, str], tuple[float, str | None]]
         (EX1, "renamed_file"): (FULL, "graded"), (EX1, "not_json"): (0.0, "invalid notebook"),
         (EX1, "nbformat_3"): (0.0, "invalid notebook"), (EX1, "symlink"): (0.0, "invalid notebook"),
         (EX1, "empty_folder"): (0.0, "not submitted"), (EX1, "markdown_script"): (FULL, "graded"),
+        (EX1, "container_bomb"): (0.0, "invalid notebook"),
         (EX1, "big_plots"): (FULL, "graded"), (EX1, CSV_ID): (0.0, "invalid notebook"),
         (EX1, "../source"): (0.0, "invalid notebook"), (EX1, os.fsdecode(b"m\xfcller")): (0.0, "invalid notebook"),
     })
@@ -534,6 +553,8 @@ def test_partial_points_name_the_lost_test(graded):
     assert "did not return within" in lost["test_hidden_edges"], lost
     crash = {c.grade_id: c.verdict for c in results[EX1, "crashes_on_one_input"].cells}
     assert "exited with status 3" in crash["test_hidden_edges"], crash
+    stopped = results[EX1, "loops_while_loading"].cell_errors
+    assert [e["error"] for e in stopped] == ["TimeoutError"] and "was stopped" in stopped[0]["message"], stopped
 
 
 def test_delegating_fails_with_a_message_that_says_why(graded):

@@ -398,16 +398,17 @@ def test_without_the_sandbox_nothing_is_isolated():
 
 
 def test_seccomp_refuses_what_crosses_submissions_or_escapes_limits():
-    """Keyrings outlive the sandbox (a channel to the next submission on the same uid), memfd pages escape
-    RLIMIT_AS, new namespaces widen the kernel's attack surface: refused. Threads, fork and a process pool
-    (with its /dev/shm semaphores) still work."""
+    """Keyrings outlive the sandbox (a channel to the next submission on the same uid), memfd pages and
+    SysV shared memory escape RLIMIT_AS, new namespaces widen the kernel's attack surface: refused.
+    Threads, fork and a process pool (with its /dev/shm semaphores) still work."""
     outcome = probe("""
         import ctypes, multiprocessing, os, threading
         def probe():
             libc = ctypes.CDLL(None, use_errno=True)
             outcome = {}
             for name, number, args in [("add_key", 248, (b"user", b"k", b"v", 1, -4)), ("keyctl", 250, (0, -4, 0)),
-                                       ("unshare", 272, (0x10000000,)), ("clone newuser", 56, (0x10000000 | 17, 0))]:
+                                       ("unshare", 272, (0x10000000,)), ("clone newuser", 56, (0x10000000 | 17, 0)),
+                                       ("shmget", 29, (0x1AB5EC, 65536, 0o1666))]:
                 result = libc.syscall(number, *args)
                 outcome[name] = os.strerror(ctypes.get_errno()) if result < 0 else "allowed"
             try:

@@ -69,6 +69,8 @@ HERE = Path(__file__).resolve().parent
 WORKER_FILES = ("worker.py", "protocol.py")
 INSTALL_HINT = "install bubblewrap (Debian/Ubuntu: `sudo apt-get install bubblewrap`)"
 STARTUP_TIMEOUT_S = 60.0  # bwrap + python + numpy; generous, as a loaded machine can be slow
+#: All of a notebook's cells together may take this many times the time one cell may.
+LOAD_BUDGET = 6
 
 
 class WorkerLost(BaseException):
@@ -355,8 +357,8 @@ _ENVIRONMENT = {
 DENIED_SYSCALLS = {
     # the kernel's keyrings belong to a uid, not to a sandbox: a channel to the next submission
     "add_key": 248, "request_key": 249, "keyctl": 250,
-    # memory that RLIMIT_AS does not count
-    "memfd_create": 319, "memfd_secret": 447,
+    # memory that RLIMIT_AS does not count (POSIX shared memory is the 64 MB /dev/shm)
+    "memfd_create": 319, "memfd_secret": 447, "shmget": 29, "shmat": 30,
     # other processes' memory
     "ptrace": 101, "process_vm_readv": 310, "process_vm_writev": 311,
     # new namespaces (unprivileged user namespaces are a large attack surface), mounts
@@ -526,14 +528,18 @@ class Worker:
         return _describe_exit(code)
 
     # ------------------------------------------------------------------ requests
-    def load(self, cells: list[str], deadline: float) -> list[dict]:
-        """Run the student's code cells; the cells that raised, as ``{"cell", "types", "message"}``."""
-        self._send({"op": "load", "cells": cells}, deadline)
+    def load(self, cells: list[str], deadline: float, first: int = 0) -> list[dict]:
+        """Run the student's code cells (numbered from ``first``); the cells that raised, as
+        ``{"cell", "error", "message"}``."""
+        self._send({"op": "load", "cells": cells, "first": first}, deadline)
         reply = self._receive(deadline)
         errors = reply.get("errors")
-        if type(errors) is not list:
-            raise WorkerCrashed("answered the notebook with something that is not the protocol")
-        return [_cell_error(error) for error in errors[:100]]
+        try:
+            if type(errors) is not list:
+                raise protocol.ProtocolError("not a list of errors")
+            return [_cell_error(error) for error in errors[:100]]
+        except protocol.ProtocolError as problem:
+            raise WorkerCrashed(f"answered the notebook with something that is not the protocol ({problem})") from None
 
     def call(self, name: str, args: tuple, kwargs: dict, deadline: float) -> Any:
         """``name(*args, **kwargs)`` in the worker: its result decoded, or the exception it raised rebuilt."""
@@ -574,7 +580,7 @@ class Worker:
 
 def _cell_error(error: Any) -> dict:
     if type(error) is not dict or type(error.get("cell")) is not int:
-        raise WorkerCrashed("answered the notebook with something that is not the protocol")
+        raise protocol.ProtocolError("an error entry without its cell")
     exception = protocol.rebuild_exception(error.get("types"), error.get("message"))
     return {"cell": error["cell"], "error": type(exception).__name__, "message": str(exception)}
 
@@ -607,6 +613,7 @@ class Session:
         self.worker: Worker | None = None
         self.cell_errors: list[dict] | None = None
         self.load_failure: WorkerLost | None = None
+        self.stopped_cells: set[int] = set()
         self.test_failure: WorkerLost | None = None
         self.test_deadline = float("inf")
         self.timed_out = False
@@ -628,21 +635,38 @@ class Session:
         return lost
 
     def _ready_worker(self) -> Worker:
+        """The worker with the notebook's cells run: each cell with ``load_timeout_s``, all of them with
+        :data:`LOAD_BUDGET` times that. A cell that runs too long is stopped and left out (the worker
+        is started again without it; the cells after it still run), as Jupyter's interrupt would."""
         if self.load_failure is not None:
             raise type(self.load_failure)(*self.load_failure.args)
         if self.worker is not None:
             return self.worker
-        worker = Worker(self.sandbox)
-        self.worker = worker
-        self.timing.workers += 1
-        self.timing.start_s += worker.start_s
         started = time.perf_counter()
+        budget = time.monotonic() + self.load_timeout_s * LOAD_BUDGET
         try:
-            errors = worker.load(self.cells, time.monotonic() + self.load_timeout_s)
+            while True:
+                worker = self._start()
+                errors = []
+                for index, source in enumerate(self.cells):
+                    if index in self.stopped_cells:
+                        continue
+                    deadline = min(time.monotonic() + self.load_timeout_s, budget)
+                    try:
+                        errors += worker.load([source], deadline, index)
+                    except CallTimedOut:
+                        if time.monotonic() >= budget or len(self.stopped_cells) >= 3:
+                            raise
+                        self._lose(CallTimedOut("a cell ran too long"))
+                        self.stopped_cells.add(index)
+                        break
+                else:
+                    break
         except CallTimedOut:
             self.load_failure = self._lose(CallTimedOut(
-                f"running your notebook's cells took more than {self.load_timeout_s:g} s, so none of its"
-                " functions could be called (an endless loop or a long computation outside a function?)"))
+                f"running your notebook's cells took too long ({self.load_timeout_s:g} s per cell,"
+                f" {self.load_timeout_s * LOAD_BUDGET:g} s for all), so none of its functions could be called"
+                " (an endless loop or a long computation outside a function?)"))
             raise type(self.load_failure)(*self.load_failure.args) from None
         except WorkerCrashed as crash:
             self.load_failure = self._lose(WorkerCrashed(
@@ -652,7 +676,17 @@ class Session:
         finally:
             self.timing.load_s += time.perf_counter() - started
         if self.cell_errors is None:
-            self.cell_errors = errors
+            stopped = [{"cell": index, "error": "TimeoutError", "message": f"this cell ran longer than"
+                        f" {self.load_timeout_s:g} s and was stopped; the cells after it still ran"}
+                       for index in sorted(self.stopped_cells)]
+            self.cell_errors = sorted(errors + stopped, key=lambda error: error["cell"])
+        return worker
+
+    def _start(self) -> Worker:
+        worker = Worker(self.sandbox)
+        self.worker = worker
+        self.timing.workers += 1
+        self.timing.start_s += worker.start_s
         return worker
 
     def call(self, name: str, args: tuple, kwargs: dict) -> Any:

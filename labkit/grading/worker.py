@@ -7,7 +7,8 @@ stdout (the student's prints go to ``/dev/null``), set the resource limits, drop
 unprivileged user the grader chose and make the masked packages unimportable with a clear
 message. Only then does it read the student's code:
 
-1. ``{"op": "load", "cells": [source, ...]}``: every code cell is run in order in one namespace, as
+1. ``{"op": "load", "cells": [source, ...], "first": n}``: the code cells (numbered from ``n``; the
+   grader sends one at a time, each with its own time limit) run in order in one namespace, as
    Jupyter's *Run All* would (IPython magics and ``!`` lines do nothing; a cell that raises is
    recorded and the next one runs). The answer lists the cells that raised.
 2. ``{"op": "call", "id": n, "name": f, "args": [...], "kwargs": {...}}``: the answer is
@@ -155,9 +156,9 @@ def _raised(error: BaseException) -> dict:
     return {"types": protocol.exception_names(error), "message": message[: protocol.MAX_MESSAGE_CHARS]}
 
 
-def _load(cells: list[str], namespace: dict) -> dict:
+def _load(cells: list[str], namespace: dict, first: int = 0) -> dict:
     errors = []
-    for index, source in enumerate(cells):
+    for index, source in enumerate(cells, first):
         try:
             code = compile(python_source(source), f"<cell {index}>", "exec")
             exec(code, namespace)
@@ -219,7 +220,7 @@ def serve(config: dict) -> None:
             return
         if message.get("op") == "load":
             os.dup2(devnull, 2)  # from here on only the student writes to stderr
-            send(_load(message["cells"], main.__dict__))
+            send(_load(message["cells"], main.__dict__, message.get("first", 0)))
         elif message.get("op") == "call":
             _write_all(channel_out, _call(message, main.__dict__))
 
