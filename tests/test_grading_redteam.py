@@ -186,6 +186,18 @@ if os.fork() == 0:
 os.wait()
 '''
 
+GUARDED_IMPORT = ('''
+try:
+    import labkit  # to cross-check my answers while developing, where labkit is installed
+except ImportError:
+    labkit = None
+
+
+''' + SEGMENT.replace("    return labels", """    if labkit is not None:
+        expected = labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m, min_points=min_points)
+        assert np.array_equal(labels, expected), "differs from labkit"
+    return labels"""))
+
 SLOW_DEMO = '''
 import time
 
@@ -221,6 +233,12 @@ MAIN_CLASS = {
                         redteam("the 10 s load budget covers all of a notebook's cells together (nbgrader: 10 s per"
                                 " cell, and the students' instructions name only 5 s per call): three 4-second"
                                 " demo cells after an honest answer cost every test, 0 points")),
+    "guards_labkit_import": (EX1, {"segment": GUARDED_IMPORT}, [], [], FULL, "graded", None),
+    "slow_solution_cell": (EX1, {"segment": SEGMENT + "\n\n\nimport time\n\ntime.sleep(12)  # a demo below the answer"},
+                           [], [], FULL, None,
+                           redteam("a solution cell that defines the function and then runs past the per-cell limit"
+                                   " loses the function (HEAD: the whole load times out; nbgrader interrupts the"
+                                   " cell and keeps what it defined): 0 points")),
     # (h) what the instructor reads afterwards
     "code_behind_imports_cell": (EX1, {"imports": IMPL_BEHIND_IMPORTS, "segment": '''
         def segment(ranges, angles, threshold_m, min_points):
