@@ -81,20 +81,24 @@ def test_a_damaged_bag_still_gives_an_rrd_with_every_readable_scan(tmp_path):
     assert 10 < summary.n_scans < 40
 
 
-def _views(path):
-    """(kind, origin) of every view in the file's blueprint."""
+def _blueprint(path, *columns):
+    """The first value of each of ``columns`` in every blueprint row that has them all."""
     from rerun.chunk import RrdReader
 
     reader = RrdReader(path)
     (store,) = reader.blueprints()
-    views = set()
+    rows = []
     for chunk in reader.store(store=store).stream():
         batch = chunk.to_record_batch()
-        if "ViewBlueprint:class_identifier" in batch.schema.names:
-            kind = batch.column("ViewBlueprint:class_identifier").to_pylist()[0][0]
-            origin = batch.column("ViewBlueprint:space_origin").to_pylist()[0][0]
-            views.add((kind, origin.strip("/")))
-    return views
+        if all(c in batch.schema.names for c in columns):
+            rows.append(tuple((batch.column(c).to_pylist()[0] or [None])[0] for c in columns))
+    return rows
+
+
+def _views(path):
+    """(kind, origin) of every view in the file's blueprint."""
+    return {(kind, origin.strip("/")) for kind, origin in _blueprint(
+        path, "ViewBlueprint:class_identifier", "ViewBlueprint:space_origin")}
 
 
 def test_the_rrd_carries_the_default_layout(tmp_path):
@@ -228,16 +232,7 @@ def test_a_recording_with_poses_gets_the_map_view(tmp_path):
 
 
 def _view_names(path):
-    from rerun.chunk import RrdReader
-
-    reader = RrdReader(path)
-    (store,) = reader.blueprints()
-    names = set()
-    for chunk in reader.store(store=store).stream():
-        batch = chunk.to_record_batch()
-        if "ViewBlueprint:display_name" in batch.schema.names:
-            names |= {v[0] for v in batch.column("ViewBlueprint:display_name").to_pylist() if v}
-    return names
+    return {name for (name,) in _blueprint(path, "ViewBlueprint:display_name")}
 
 
 def test_without_poses_the_layout_is_as_before(tmp_path):
