@@ -229,7 +229,8 @@ def _first_line(source: str) -> str:
 
 
 def _cpu_seconds() -> float:
-    """CPU seconds of this process and of its children that have ended (the submission's workers)."""
+    """CPU seconds of this process and of its children that it waited for (bwrap itself; the workers'
+    own time comes from :meth:`~labkit.grading.sandbox.Worker.cpu_seconds`)."""
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
@@ -284,7 +285,7 @@ def grade_submission(job: Job) -> SubmissionResult:
         "total_s": total, "start_s": session.timing.start_s, "load_s": session.timing.load_s,
         "calls_s": session.timing.calls_s, "workers": session.timing.workers,
         "trusted_s": total - session.timing.start_s - session.timing.load_s - session.timing.calls_s,
-        "cpu_s": _cpu_seconds() - cpu,
+        "cpu_s": _cpu_seconds() - cpu + session.timing.worker_cpu_s,
     }
     released = {grade_id(c): c["source"] for c in exercise.release["cells"] if grade_id(c) is not None}
     answers = {grade_id(c): c["source"] for c in submission["cells"] if grade_id(c) is not None}

@@ -33,6 +33,7 @@ workers as it takes (a fresh one after a call that timed out or killed its worke
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -561,12 +562,29 @@ class Worker:
             raise WorkerCrashed(f"sent something that is not the grader's protocol ({problem})") from None
         raise error
 
+    def cpu_seconds(self) -> float:
+        """The CPU seconds the worker says it used (a number for timings, nothing is decided on it)."""
+        try:
+            self._send({"op": "usage"}, time.monotonic() + 1)
+            seconds = self._receive(time.monotonic() + 1).get("cpu")
+        except WorkerLost:
+            return 0.0
+        return float(seconds) if type(seconds) in (int, float) and 0 <= seconds < 1e6 else 0.0
+
+    def close(self) -> None:
+        """End the worker by closing its channel (it returns, bwrap ends its sandbox), else kill it."""
+        try:
+            self.process.stdin.close()
+            self.process.wait(timeout=2)
+        except (OSError, subprocess.TimeoutExpired):
+            pass
+        self.kill()
+
     def kill(self) -> None:
         """Kill the worker and everything in its sandbox; wait for it."""
-        try:
-            os.killpg(self.process.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
+        if self.process.poll() is None:  # not reaped yet: its pid (the group's id) is not anyone else's
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(self.process.pid, signal.SIGKILL)
         self.process.wait()
         for stream in (self.process.stdin, self.process.stdout, self.errors):
             try:
@@ -590,6 +608,7 @@ class Timing:
     """Where one submission's time went (seconds)."""
 
     start_s: float = 0.0  # starting workers (bwrap, python, numpy)
+    worker_cpu_s: float = 0.0  # CPU the workers that ended normally reported
     load_s: float = 0.0  # running the student's cells
     calls_s: float = 0.0  # waiting for the student's functions (including the channel)
     workers: int = 0
@@ -642,7 +661,6 @@ class Session:
             raise type(self.load_failure)(*self.load_failure.args)
         if self.worker is not None:
             return self.worker
-        started = time.perf_counter()
         budget = time.monotonic() + self.load_timeout_s * LOAD_BUDGET
         try:
             while True:
@@ -652,6 +670,7 @@ class Session:
                     if index in self.stopped_cells:
                         continue
                     deadline = min(time.monotonic() + self.load_timeout_s, budget)
+                    started = time.perf_counter()
                     try:
                         errors += worker.load([source], deadline, index)
                     except CallTimedOut:
@@ -660,6 +679,8 @@ class Session:
                         self._lose(CallTimedOut("a cell ran too long"))
                         self.stopped_cells.add(index)
                         break
+                    finally:
+                        self.timing.load_s += time.perf_counter() - started
                 else:
                     break
         except CallTimedOut:
@@ -673,8 +694,6 @@ class Session:
                 f"the process running your notebook {crash.args[0]} while running its cells, so none of"
                 " its functions could be called"))
             raise type(self.load_failure)(*self.load_failure.args) from None
-        finally:
-            self.timing.load_s += time.perf_counter() - started
         if self.cell_errors is None:
             stopped = [{"cell": index, "error": "TimeoutError", "message": f"this cell ran longer than"
                         f" {self.load_timeout_s:g} s and was stopped; the cells after it still ran"}
@@ -715,7 +734,8 @@ class Session:
 
     def close(self) -> None:
         if self.worker is not None:
-            self.worker.kill()
+            self.timing.worker_cpu_s += self.worker.cpu_seconds()
+            self.worker.close()
             self.worker = None
 
     def __enter__(self) -> Session:

@@ -223,6 +223,11 @@ def serve(config: dict) -> None:
             send(_load(message["cells"], main.__dict__, message.get("first", 0)))
         elif message.get("op") == "call":
             _write_all(channel_out, _call(message, main.__dict__))
+        elif message.get("op") == "usage":  # CPU seconds, for the grader's timings only
+            import resource
+
+            usage = [resource.getrusage(who) for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)]
+            send({"cpu": sum(u.ru_utime + u.ru_stime for u in usage)})
 
 
 if __name__ == "__main__":
