@@ -5,8 +5,9 @@ asserts the grader *holds*: the attack earns exactly what its own code earns (0 
 honest answer wrapped in it earns full marks, and nothing reaches another student, the course or
 the machine. Where the grader does not hold, the test is marked
 ``xfail(strict=True, reason="red team: ...")``: the suite stays green, the hole stays on record,
-and the test fails loudly (XPASS) once the hole is fixed -- then remove the mark. The findings,
-with reproductions and suggested fixes, are written up outside the repository
+and the test fails loudly (XPASS) once the hole is fixed -- then remove the mark. Holes found on
+eb62b65 and closed since (93b3a13, 23f5f7d) keep their tests, unmarked, with a comment saying what
+broke. The findings, with reproductions and suggested fixes, are written up outside the repository
 (``../redteam_findings.md``).
 
 The submissions are graded in a few class runs shared by the tests (also between pytest-xdist
@@ -221,23 +222,23 @@ MAIN_CLASS = {
             return np.zeros(len(ranges), dtype=np.int64)
     ''', "test_visible": 'print("visible tests passed")'}, [], [], 0.0, "graded", None),
     # (f) honest answers the grader must not punish
+    # holes on eb62b65, closed in 93b3a13/23f5f7d: display() is a builtin in Jupyter, not in the worker (0 points);
+    # an unused `import labkit` above an own solution stopped the cell before the def (0); the 10 s load budget
+    # covered all cells together, so three 4-second demo cells after an honest answer cost every test (0)
     "display_in_function": (EX1, {"segment": SEGMENT.replace(
         "    return labels", "    display(labels)  # left over from debugging in Jupyter\n    return labels")},
-        [], [], FULL, "graded",
-        redteam("display() is a builtin in Jupyter, not in the worker: an honest function that calls it gets 0")),
+        [], [], FULL, "graded", None),
     "imports_labkit_to_compare": (EX1, {"segment": "import labkit  # to compare my answers in the cells below\n\n"
-                                                   + SEGMENT}, [], [], FULL, "graded",
-                                  redteam("an unused `import labkit` above an own solution in the same cell"
-                                          " stops the cell before the def: 0 points (documented, all-or-nothing)")),
-    "slow_demo_cells": (EX1, {"segment": SEGMENT}, [], [SLOW_DEMO] * 3, FULL, "graded",
-                        redteam("the 10 s load budget covers all of a notebook's cells together (nbgrader: 10 s per"
-                                " cell, and the students' instructions name only 5 s per call): three 4-second"
-                                " demo cells after an honest answer cost every test, 0 points")),
-    "guards_labkit_import": (EX1, {"segment": GUARDED_IMPORT}, [], [], FULL, "graded", None),
+                                                   + SEGMENT}, [], [], FULL, "graded", None),
+    "slow_demo_cells": (EX1, {"segment": SEGMENT}, [], [SLOW_DEMO] * 3, FULL, "graded", None),
+    "guards_labkit_import": (EX1, {"segment": GUARDED_IMPORT}, [], [], FULL, "graded",
+                             redteam("the stub module that lets an unused `import labkit` pass (93b3a13) breaks"
+                                     " `try: import labkit / except ImportError: labkit = None` guards: an honest"
+                                     " answer with a cross-check under `if labkit is not None` now gets 0")),
     "slow_solution_cell": (EX1, {"segment": SEGMENT + "\n\n\nimport time\n\ntime.sleep(12)  # a demo below the answer"},
                            [], [], FULL, None,
                            redteam("a solution cell that defines the function and then runs past the per-cell limit"
-                                   " loses the function (HEAD: the whole load times out; nbgrader interrupts the"
+                                   " loses the function (the cell is stopped and left out; nbgrader interrupts the"
                                    " cell and keeps what it defined): 0 points")),
     # (h) what the instructor reads afterwards
     "code_behind_imports_cell": (EX1, {"imports": IMPL_BEHIND_IMPORTS, "segment": '''
@@ -571,13 +572,16 @@ def test_the_main_run_finished_with_the_honest_student_at_full_marks(main_class)
 
 
 @pytest.mark.parametrize("kind", [
-    pytest.param("exception_surrogate", marks=redteam(
-        "an exception message with a lone surrogate ('\\ud800') crashes records.save (UnicodeEncodeError"
-        " writing the autograded notebook): the class run stops, later students are not graded, no grades.csv")),
-    pytest.param("markdown_surrogate", marks=redteam(
-        "a notebook cell with a lone surrogate (JSON '\\ud83d') crashes records.save: the class run stops")),
-    pytest.param("latin1_folder", marks=redteam(
-        "a folder name that is not UTF-8 under submitted/ crashes the gradebook insert: the class run stops")),
+    # was a hole on eb62b65, closed in 93b3a13/23f5f7d: an exception message with a lone surrogate ('\ud800')
+    # crashes records.save (UnicodeEncodeError writing the autograded notebook): the class run stops, later students
+    # are not graded, no grades.csv
+    "exception_surrogate",
+    # was a hole on eb62b65, closed in 93b3a13/23f5f7d: a notebook cell with a lone surrogate (JSON '\ud83d')
+    # crashes records.save: the class run stops
+    "markdown_surrogate",
+    # was a hole on eb62b65, closed in 93b3a13/23f5f7d: a folder name that is not UTF-8 under submitted/ crashes the
+    # gradebook insert: the class run stops
+    "latin1_folder",
 ])
 def test_one_submission_cannot_stop_the_class(tmp_path, kind):
     course = copy_course(tmp_path / "course")
@@ -590,8 +594,9 @@ def test_one_submission_cannot_stop_the_class(tmp_path, kind):
     assert (course / "grades.csv").is_file()
 
 
-@redteam("no seccomp filter: student code can unshare a user namespace, be root in it, make a mount namespace"
-         " and mount (the kernel attack surface most local privilege escalations need)")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): no seccomp filter: student code can
+# unshare a user namespace, be root in it, make a mount namespace and mount (the kernel attack surface most
+# local privilege escalations need)
 def test_the_student_cannot_make_namespaces():
     outcome = _probe('''
         import ctypes, os
@@ -612,12 +617,14 @@ def test_the_student_cannot_make_namespaces():
 
 
 @pytest.mark.parametrize("how", [
-    pytest.param("memfd", marks=redteam(
-        "memfd_create pages are not address space: a worker under a 256 MB RLIMIT_AS holds 768 MB (the real 2 GB"
-        " limit allows 128 open files x 64 MB = 8 GB per worker, charged to the grader's memory)")),
-    pytest.param("sysv_shm", marks=redteam(
-        "SysV shared memory segments, written and detached, stay allocated without counting as address space:"
-        " 768 MB under a 256 MB limit, and no bound but the machine (kernel.shmall)")),
+    # was a hole on eb62b65, closed in 93b3a13/23f5f7d: memfd_create pages are not address space: a worker under a
+    # 256 MB RLIMIT_AS holds 768 MB (the real 2 GB limit allows 128 open files x 64 MB = 8 GB per worker, charged to
+    # the grader's memory)
+    "memfd",
+    # was a hole on eb62b65, closed in 93b3a13/23f5f7d: SysV shared memory segments, written and detached, stay
+    # allocated without counting as address space: 768 MB under a 256 MB limit, and no bound but the machine
+    # (kernel.shmall)
+    "sysv_shm",
     pytest.param("fork", marks=redteam(
         "RLIMIT_AS is per process: six forked children hold 128 MB each under a 256 MB limit; with the real limits"
         " a worker's 32 processes may hold 32 x 2 GB (and burn 32 x 120 CPU seconds)")),
@@ -631,8 +638,9 @@ def test_memory_held_stays_within_the_memory_limit(how):
     assert held <= limit, f"the worker held {held >> 20} MB under a {limit >> 20} MB limit"
 
 
-@redteam("multiprocessing (Pool, ProcessPoolExecutor, joblib) fails in the worker: /dev/shm is read-only, so"
-         " an honest answer that parallelises raises PermissionError", raises=PermissionError)
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): multiprocessing (Pool,
+# ProcessPoolExecutor, joblib) fails in the worker: /dev/shm is read-only, so an honest answer that parallelises
+# raises PermissionError
 def test_an_honest_answer_may_use_multiprocessing():
     assert _probe('''
         import multiprocessing
@@ -671,9 +679,10 @@ def test_the_student_cannot_trace_signal_or_write_outside():
 
 @pytest.mark.parametrize("student", [
     "a_donor",
-    pytest.param("b_keyring_taker", marks=redteam(
-        "the kernel's user keyring (add_key/keyctl, no seccomp) outlives the sandbox: a submission without a"
-        " solution runs the code a previous submission on the same worker uid stored there, and scores 10")),
+    # was a hole on eb62b65, closed in 93b3a13/23f5f7d: the kernel's user keyring (add_key/keyctl, no seccomp)
+    # outlives the sandbox: a submission without a solution runs the code a previous submission on the same worker
+    # uid stored there, and scores 10
+    "b_keyring_taker",
     "c_other_channels_taker",
 ])
 def test_nothing_persists_into_the_next_submission(persistence_class, student):
@@ -688,8 +697,9 @@ def test_the_files_run_finished_with_the_honest_student_at_full_marks(files_clas
     assert files_class.result("honest", EX0).score == FULL
 
 
-@redteam("a student's markdown reaches the feedback HTML as raw HTML: <script> and onerror handlers run"
-         " in the browser of whoever opens it (as with stock nbgrader)")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a student's markdown reaches the feedback
+# HTML as raw HTML: <script> and onerror handlers run in the browser of whoever opens it (as with stock
+# nbgrader)
 def test_feedback_html_carries_no_script_from_the_student(feedback):
     html = feedback["feedback_markdown_script"]
     assert "My notes." in html
@@ -703,10 +713,10 @@ def test_feedback_html_escapes_exception_messages(feedback):
     assert "HYPERLINK" in html and "<script>alert(1)" not in html
 
 
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): the largest reply frame the protocol
+# accepts (64 MB), filled with '{},' or '"ab",', grows the trusted grading process by 0.7 to 1.7 GB (and seconds
+# of CPU past the call's deadline) before decode() refuses it: N jobs, N times that, on every call
 @pytest.mark.parametrize("item", ["{}", '"ab"'])
-@redteam("the largest reply frame the protocol accepts (64 MB), filled with '{},' or '\"ab\",', grows the"
-         " trusted grading process by 0.7 to 1.7 GB (and seconds of CPU past the call's deadline) before"
-         " decode() refuses it: N jobs, N times that, on every call")
 def test_a_hostile_reply_costs_the_trusted_side_little_memory(item):
     slot = SLOT_TRUSTED + (item == "{}")
     proc = subprocess.run([sys.executable, "-c", TRUSTED_MEMORY, str(REPO), str(slot), HOSTILE_REPLY, item],
@@ -727,21 +737,24 @@ def test_links_and_odd_folders_score_nothing(files_class, student, status):
     assert (EX0, "a_file_not_a_folder") not in files_class.results
 
 
-@redteam("a notebook over 32 MB is refused as invalid and scores 0, even when the size is outputs (plots)"
-         " and the code is an honest full solution")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a notebook over 32 MB is refused as
+# invalid and scores 0, even when the size is outputs (plots) and the code is an honest full solution
 def test_an_honest_notebook_with_big_plots_is_graded(files_class):
     result = files_class.result("big_outputs", EX0)
     assert (result.score, result.status) == (FULL, "graded"), result.detail
 
 
+@redteam("the notebook container count (23f5f7d) counts outputs too: an honest notebook that printed 250 000"
+         " [x, y] pairs is refused as invalid, 0 points")
 def test_an_honest_notebook_that_printed_a_lot_is_graded(files_class):
     """Outputs are not graded: 250 000 printed [x, y] pairs (6 MB of text) must not make a notebook invalid."""
     result = files_class.result("printed_many_points", EX0)
     assert (result.score, result.status) == (FULL, "graded"), result.detail
 
 
-@redteam("a student id (folder name or roster entry) is written to grades.csv as is: =HYPERLINK(...) is a live"
-         " formula when the instructor opens the file in a spreadsheet")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a student id (folder name or roster
+# entry) is written to grades.csv as is: =HYPERLINK(...) is a live formula when the instructor opens the file in
+# a spreadsheet
 def test_grades_csv_student_ids_cannot_start_a_formula(files_class):
     with open(files_class.course / "grades.csv", newline="", encoding="utf-8") as f:
         ids = [row["student_id"] for row in csv.DictReader(f)]
@@ -749,14 +762,16 @@ def test_grades_csv_student_ids_cannot_start_a_formula(files_class):
     assert not [i for i in ids if i.startswith(("=", "+", "-", "@"))]
 
 
-@redteam("a roster id '../source' makes the grader write its autograded notebook over"
-         " source/<exercise>/<exercise>.ipynb: the instructor's solutions are silently replaced by the release")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a roster id '../source' makes the grader
+# write its autograded notebook over source/<exercise>/<exercise>.ipynb: the instructor's solutions are silently
+# replaced by the release
 def test_a_roster_id_cannot_overwrite_the_course(files_class):
     text = (files_class.course / "source" / EX0 / f"{EX0}.ipynb").read_text(encoding="utf-8")
     assert "### BEGIN SOLUTION" in text
 
 
-@redteam("a roster id '../../../x' writes records/<ex>/../../../x.json outside the course folder (as root)")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a roster id '../../../x' writes
+# records/<ex>/../../../x.json outside the course folder (as root)
 def test_a_roster_id_cannot_write_outside_the_course(files_class):
     course, escape = files_class.course, files_class.extra["escape"]
     assert (EX0, f"../../../{escape}") in files_class.results
@@ -779,9 +794,10 @@ def test_each_student_earns_what_their_own_code_earns(main_class, student):
         assert result.status == status, f"{student}: {result.status} ({result.detail[:500]})"
 
 
-@redteam("a load reply whose error entry is not the protocol raises ProtocolError out of Worker.load (not"
-         " WorkerCrashed): the worker is kept, and the verdict blames the student's function for the grader's"
-         " own exception ('ProtocolError ... (raised by your segment(...))')")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a load reply whose error entry is not the
+# protocol raises ProtocolError out of Worker.load (not WorkerCrashed): the worker is kept, and the verdict
+# blames the student's function for the grader's own exception ('ProtocolError ... (raised by your
+# segment(...))')
 def test_a_forged_load_reply_counts_as_a_broken_worker(main_class):
     result = main_class.result("forged_load_reply")
     verdicts = [cell.verdict for cell in result.cells]
@@ -817,8 +833,9 @@ def test_grades_csv_details_cannot_start_a_formula(main_class):
             assert not row[column].startswith(("=", "+", "-", "@", "\t", "\r")), (row["student_id"], column)
 
 
-@redteam("a cell carrying a locked grade id (imports) runs in the worker, but autograded/ shows the release's"
-         " copy: the code that earned the points is invisible to whoever reviews the graded notebook")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a cell carrying a locked grade id
+# (imports) runs in the worker, but autograded/ shows the release's copy: the code that earned the points is
+# invisible to whoever reviews the graded notebook
 def test_the_autograded_notebook_shows_the_code_that_ran(main_class):
     assert main_class.result("code_behind_imports_cell").score == FULL  # the code is right, and it ran ...
     text = (main_class.course / "autograded" / "code_behind_imports_cell" / EX1 / f"{EX1}.ipynb").read_text()
@@ -836,8 +853,9 @@ print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) // 1024)
 """
 
 
-@redteam("a submitted notebook is parsed whole by json.loads in the trusted process: 31 MB of '{},' in its"
-         " metadata cost ~750 MB there (and the notebook is accepted); at a 256 MB cap, ~6 GB per job")
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): a submitted notebook is parsed whole by
+# json.loads in the trusted process: 31 MB of '{},' in its metadata cost ~750 MB there (and the notebook is
+# accepted); at a 256 MB cap, ~6 GB per job
 def test_a_hostile_notebook_costs_the_trusted_side_little_memory(tmp_path):
     from labkit.grading.notebook import MAX_NOTEBOOK_BYTES
 
@@ -851,9 +869,10 @@ def test_a_hostile_notebook_costs_the_trusted_side_little_memory(tmp_path):
     assert grown_mb < 400, f"reading a {size >> 20} MB notebook grew the trusted process by {grown_mb} MB"
 
 
+# was a hole on eb62b65, closed in 93b3a13/23f5f7d (see the findings): decode() lets numpy's ValueError out for
+# absurd shapes (size 0): the trusted side takes a protocol violation for an exception the student's function
+# raised, instead of a crashed worker
 @pytest.mark.parametrize("shape", [[0, 10**30], [0, 2**62, 2**62]])
-@redteam("decode() lets numpy's ValueError out for absurd shapes (size 0): the trusted side takes a protocol"
-         " violation for an exception the student's function raised, instead of a crashed worker", raises=ValueError)
 def test_decode_refuses_absurd_shapes_as_protocol_errors(shape):
     with pytest.raises(protocol.ProtocolError):
         protocol.decode({"A": "<f8", "s": shape, "b": ""})
