@@ -33,9 +33,11 @@ __all__ = [
 
 #: Larger submissions are refused as invalid notebooks (outputs count: a notebook full of plots is big).
 MAX_NOTEBOOK_BYTES = 100 << 20
-#: More lists and objects than this (counted before parsing, as ``{`` and ``[``) make a notebook invalid:
-#: a real notebook has a few per cell, and millions would cost the grader gigabytes to parse.
+#: More JSON lists and objects than this (counted before parsing, outside strings) make a notebook
+#: invalid: a real notebook has a few per cell and output, and millions would cost the grader
+#: gigabytes to parse.
 MAX_NOTEBOOK_CONTAINERS = 200_000
+_JSON_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')
 #: More student code than this (all code cells together) is refused.
 MAX_CODE_CHARS = 2 << 20
 _CELL_ID = re.compile(r"^[a-zA-Z0-9_-]{1,64}$")
@@ -67,7 +69,8 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
             raise InvalidNotebook(f"the notebook is {size / 1e6:.0f} MB, more than the "
                                   f"{MAX_NOTEBOOK_BYTES / 1e6:.0f} MB allowed (clear its outputs)")
         raw = path.read_bytes()
-        if raw.count(b"{") + raw.count(b"[") > MAX_NOTEBOOK_CONTAINERS:
+        skeleton = _JSON_STRING.sub(b'""', raw)  # what printed text holds is not structure
+        if skeleton.count(b"{") + skeleton.count(b"[") > MAX_NOTEBOOK_CONTAINERS:
             raise InvalidNotebook(f"the notebook holds more than {MAX_NOTEBOOK_CONTAINERS} JSON lists and objects")
         data = json.loads(raw.decode("utf-8"))
     except InvalidNotebook:

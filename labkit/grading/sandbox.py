@@ -72,6 +72,8 @@ INSTALL_HINT = "install bubblewrap (Debian/Ubuntu: `sudo apt-get install bubblew
 STARTUP_TIMEOUT_S = 60.0  # bwrap + python + numpy; generous, as a loaded machine can be slow
 #: All of a notebook's cells together may take this many times the time one cell may.
 LOAD_BUDGET = 6
+#: After SIGINT, how long a cell past its time has to stop before its worker is killed.
+INTERRUPT_GRACE_S = 2.0
 
 
 class WorkerLost(BaseException):
@@ -258,9 +260,11 @@ class Sandbox:
             "masked": list(self.masked),
         })
 
-    def command(self, seccomp_fd: int | None = None) -> tuple[list[str], dict[str, str] | None, str | None]:
+    def command(self, seccomp_fd: int | None = None, info_fd: int | None = None
+                ) -> tuple[list[str], dict[str, str] | None, str | None]:
         """(argv, environment, working directory) of a new worker; ``seccomp_fd`` is a file descriptor
-        bwrap reads the seccomp filter from (see :func:`seccomp_filter`)."""
+        bwrap reads the seccomp filter from (see :func:`seccomp_filter`), ``info_fd`` one it writes the
+        sandbox's pids to."""
         python, prefix, shown, hidden = _runtime()
         if not self.isolate:
             return self._plain_command(python, shown)
@@ -316,6 +320,8 @@ class Sandbox:
                  "--chdir", "/tmp"]
         if seccomp_fd is not None:
             args += ["--seccomp", str(seccomp_fd)]
+        if info_fd is not None:
+            args += ["--info-fd", str(info_fd)]
         config = self._config(site_dirs, drop=not self.user_namespace)
         return [*args, "--", python, "-I", "-S", "-B", "/grader/worker.py", config], None, None
 
@@ -446,18 +452,23 @@ class Worker:
             seccomp_fd, write_end = os.pipe()
             os.write(write_end, program)
             os.close(write_end)
-        argv, environment, workdir = sandbox.command(seccomp_fd)
+        self._info, info_fd = os.pipe() if sandbox.isolate else (None, None)
+        if self._info is not None:
+            os.set_blocking(self._info, False)
+        argv, environment, workdir = sandbox.command(seccomp_fd, info_fd)
         self.workdir = workdir
         self.errors = tempfile.TemporaryFile()
         started = time.perf_counter()
         try:
             self.process = subprocess.Popen(
                 argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, env=environment or {},
-                cwd=workdir, start_new_session=True, close_fds=True, pass_fds=[fd for fd in [seccomp_fd] if fd],
+                cwd=workdir, start_new_session=True, close_fds=True,
+                pass_fds=[fd for fd in [seccomp_fd, info_fd] if fd is not None],
             )
         finally:
-            if seccomp_fd is not None:
-                os.close(seccomp_fd)
+            for fd in (seccomp_fd, info_fd):
+                if fd is not None:
+                    os.close(fd)
         self._out = self.process.stdin.fileno()
         self._in = self.process.stdout.fileno()
         os.set_blocking(self._out, False)
@@ -466,6 +477,7 @@ class Worker:
         self._readable.register(self._in, select.POLLIN)
         self._writable.register(self._out, select.POLLOUT)
         self._pending = bytearray()  # bytes read beyond the last frame
+        self._init_pid: int | None = None
         self._next_id = 1
         try:
             hello = self._receive(time.monotonic() + STARTUP_TIMEOUT_S)
@@ -533,6 +545,10 @@ class Worker:
         """Run the student's code cells (numbered from ``first``); the cells that raised, as
         ``{"cell", "error", "message"}``."""
         self._send({"op": "load", "cells": cells, "first": first}, deadline)
+        return self.receive_load(deadline)
+
+    def receive_load(self, deadline: float) -> list[dict]:
+        """The answer to a ``load`` (also after :meth:`interrupt`)."""
         reply = self._receive(deadline)
         errors = reply.get("errors")
         try:
@@ -561,6 +577,18 @@ class Worker:
         except protocol.ProtocolError as problem:
             raise WorkerCrashed(f"sent something that is not the grader's protocol ({problem})") from None
         raise error
+
+    def interrupt(self) -> None:
+        """Send the worker SIGINT (a KeyboardInterrupt in the cell it runs), as Jupyter's interrupt would."""
+        pid = self.process.pid
+        if self._info is not None:  # the worker is the child of bwrap's init, whose pid bwrap told
+            with contextlib.suppress(OSError, ValueError, KeyError):
+                if self._init_pid is None:
+                    self._init_pid = json.loads(os.read(self._info, 4096))["child-pid"]
+                with open(f"/proc/{self._init_pid}/task/{self._init_pid}/children", encoding="ascii") as f:
+                    pid = int(f.read().split()[0])
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signal.SIGINT)
 
     def cpu_seconds(self) -> float:
         """The CPU seconds the worker says it used (a number for timings, nothing is decided on it)."""
@@ -591,6 +619,9 @@ class Worker:
                 stream.close()
             except OSError:
                 pass
+        if self._info is not None:
+            os.close(self._info)
+            self._info = None
         if self.workdir:
             shutil.rmtree(self.workdir, ignore_errors=True)
             self.workdir = None
@@ -674,6 +705,8 @@ class Session:
                     try:
                         errors += worker.load([source], deadline, index)
                     except CallTimedOut:
+                        if self._interrupted(worker, index, errors):
+                            continue
                         if time.monotonic() >= budget or len(self.stopped_cells) >= 3:
                             raise
                         self._lose(CallTimedOut("a cell ran too long"))
@@ -700,6 +733,19 @@ class Session:
                        for index in sorted(self.stopped_cells)]
             self.cell_errors = sorted(errors + stopped, key=lambda error: error["cell"])
         return worker
+
+    def _interrupted(self, worker: Worker, index: int, errors: list[dict]) -> bool:
+        """Interrupt the cell ``index`` that ran past its time; True when the worker then went on."""
+        worker.interrupt()
+        try:
+            reply = worker.receive_load(time.monotonic() + INTERRUPT_GRACE_S)
+        except CallTimedOut:
+            return False  # it ignores KeyboardInterrupt: it is stopped for good
+        self.timed_out = True
+        errors += [{**error, "error": "TimeoutError", "message": f"this cell ran longer than {self.load_timeout_s:g} s"
+                    " and was interrupted; the cells after it still ran"} if error["cell"] == index else error
+                   for error in reply]
+        return True
 
     def _start(self) -> Worker:
         worker = Worker(self.sandbox)

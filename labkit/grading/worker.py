@@ -20,9 +20,11 @@ trusted grader therefore believes only what :func:`protocol.decode` builds from 
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import re
+import signal
 import sys
 import types
 
@@ -68,43 +70,79 @@ def _drop_privileges(uid: int | None, gid: int | None) -> None:
         raise SystemExit("worker: still root after dropping privileges")
 
 
-class _Unavailable:
-    """A meta path finder that gives every masked package (and its submodules) as a stub module.
+def _unavailable(name: str) -> ModuleNotFoundError:
+    top = name.partition(".")[0]
+    return ModuleNotFoundError(
+        f"{top} is not available when your notebook is graded ({name}): this exercise asks you to write the"
+        " computation yourself (numpy is fine)",
+        name=name,
+    )
 
-    ``import labkit`` works, so that an unused import costs nothing; using anything from it
-    raises ModuleNotFoundError saying why. Only a message: the masked packages are not in the
-    sandbox at all, so removing this finder gives the plain "No module named ..." instead.
+
+class _Unavailable:
+    """A meta path finder that turns ``import <masked>`` into a ModuleNotFoundError saying why.
+
+    Only a message: the masked packages are not in the sandbox at all, so removing this finder
+    gives the plain "No module named ..." instead.
     """
 
     def __init__(self, names: list[str]) -> None:
         self.names = frozenset(names)
 
     def find_spec(self, fullname, path=None, target=None):
-        if fullname.partition(".")[0] not in self.names:
-            return None
-        import importlib.machinery
-
-        return importlib.machinery.ModuleSpec(fullname, self, is_package=True)
-
-    def create_module(self, spec):
-        return _Missing(spec.name)
-
-    def exec_module(self, module) -> None:
-        pass
+        if fullname.partition(".")[0] in self.names:
+            raise _unavailable(fullname)
+        return None
 
 
-class _Missing(types.ModuleType):
-    """A masked package: any attribute raises ModuleNotFoundError with the reason."""
+class _Missing:
+    """What an unguarded top-level ``import labkit`` (or ``from labkit import x``) binds in a cell: the
+    import costs nothing, any use of the name raises ModuleNotFoundError saying why."""
 
-    def __getattr__(self, name: str):
-        if name.startswith("__"):
-            raise AttributeError(name)
-        top = self.__name__.partition(".")[0]
-        raise ModuleNotFoundError(
-            f"{top} is not available when your notebook is graded ({self.__name__}.{name}): this exercise asks"
-            " you to write the computation yourself (numpy is fine)",
-            name=f"{self.__name__}.{name}",
-        )
+    def __init__(self, name: str) -> None:
+        object.__setattr__(self, "_name", name)
+
+    def __getattr__(self, attribute: str):
+        if attribute.startswith("__"):
+            raise AttributeError(attribute)
+        raise _unavailable(f"{self._name}.{attribute}")
+
+    def __call__(self, *args, **kwargs):
+        raise _unavailable(self._name)
+
+    def __repr__(self) -> str:
+        return f"<{self._name}: not available when graded>"
+
+
+_MISSING = "__labkit_grading_missing__"
+
+
+def without_masked_imports(tree: ast.Module, masked: frozenset[str]) -> ast.Module:
+    """``tree`` with its top-level imports of masked packages turned into :class:`_Missing` names.
+
+    Only imports directly in the cell's body: one inside ``try`` (a student's fallback), a function
+    or a class still raises ImportError, so ``except ImportError:`` takes its other road.
+    """
+    body = []
+    for node in tree.body:
+        bound: list[tuple[str, str]] = []  # (name bound, what it stands for)
+        if isinstance(node, ast.Import):
+            kept = [alias for alias in node.names if alias.name.partition(".")[0] not in masked]
+            bound = [(alias.asname or alias.name.partition(".")[0], alias.name if alias.asname
+                      else alias.name.partition(".")[0]) for alias in node.names if alias not in kept]
+            if kept:
+                body.append(ast.copy_location(ast.Import(names=kept), node))
+        elif isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").partition(".")[0] in masked:
+            bound = [(alias.asname or alias.name, f"{node.module}.{alias.name}") for alias in node.names
+                     if alias.name != "*"]
+        else:
+            body.append(node)
+            continue
+        for name, standing_for in bound:
+            call = ast.Call(ast.Name(_MISSING, ast.Load()), [ast.Constant(standing_for)], [])
+            body.append(ast.copy_location(ast.Assign([ast.Name(name, ast.Store())], call), node))
+    tree.body = body
+    return ast.fix_missing_locations(tree)
 
 
 class _Shell:
@@ -156,12 +194,20 @@ def _raised(error: BaseException) -> dict:
     return {"types": protocol.exception_names(error), "message": message[: protocol.MAX_MESSAGE_CHARS]}
 
 
-def _load(cells: list[str], namespace: dict, first: int = 0) -> dict:
+def _load(cells: list[str], namespace: dict, masked: frozenset[str], first: int = 0) -> dict:
+    """Run cells in ``namespace``; a SIGINT from the grader (a cell past its time) interrupts only them."""
     errors = []
     for index, source in enumerate(cells, first):
         try:
-            code = compile(python_source(source), f"<cell {index}>", "exec")
-            exec(code, namespace)
+            tree = without_masked_imports(ast.parse(python_source(source), f"<cell {index}>"), masked)
+            code = compile(tree, f"<cell {index}>", "exec")
+            while signal.sigtimedwait([signal.SIGINT], 0) is not None:
+                pass  # an interrupt meant for an earlier cell
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
+            try:
+                exec(code, namespace)
+            finally:
+                signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])
         except BaseException as error:  # noqa: BLE001 -- as in Jupyter: record it, run the next cell
             errors.append({"cell": index, **_raised(error)})
     return {"errors": errors}
@@ -207,8 +253,11 @@ def serve(config: dict) -> None:
     def receive() -> dict:
         return protocol.unpack(_read_exact(channel_in, protocol.frame_length(_read_exact(channel_in, 4))))
 
+    signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])  # only while a cell runs (see _load)
     send({"hello": os.getpid(), "uid": os.getuid()})
+    masked = frozenset(config["masked"])
     main = types.ModuleType("__main__")
+    main.__dict__[_MISSING] = _Missing
     main.__dict__["get_ipython"] = lambda: shell
     main.__dict__["display"] = lambda *objects, **options: None  # Jupyter's builtin: nothing to show here
     shell = _Shell(main.__dict__)
@@ -220,7 +269,7 @@ def serve(config: dict) -> None:
             return
         if message.get("op") == "load":
             os.dup2(devnull, 2)  # from here on only the student writes to stderr
-            send(_load(message["cells"], main.__dict__, message.get("first", 0)))
+            send(_load(message["cells"], main.__dict__, masked, message.get("first", 0)))
         elif message.get("op") == "call":
             _write_all(channel_out, _call(message, main.__dict__))
         elif message.get("op") == "usage":  # CPU seconds, for the grader's timings only
