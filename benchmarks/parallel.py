@@ -75,6 +75,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scans", type=int, default=300, help="scans per simulated bag")
     args = ap.parse_args()
+    logging.getLogger("distributed").setLevel(logging.ERROR)  # the scheduler runs in this process: no INFO lines
     tmp = Path(tempfile.mkdtemp(prefix="labkit-bench-parallel-"))
     sets = {"simulated": simulated_set(tmp / "sim", args.scans)}
     logs = sorted((SHARED / "carmen").glob("*.log.gz"))
