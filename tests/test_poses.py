@@ -385,3 +385,17 @@ def test_mapping1_poses_are_its_ground_truth_odometry(shared_datasets):
     on_stamp = [s for s in scans if s.stamp_ns in truth]
     assert len(on_stamp) > 0.9 * len(scans)
     np.testing.assert_allclose([s.pose for s in on_stamp], [truth[s.stamp_ns] for s in on_stamp], atol=1e-12)
+
+
+def test_one_pose_at_a_time_gives_the_same_numbers_as_many():
+    """PoseTrack.at (plain floats, once per scan) against interpolate_poses (arrays), bit for bit:
+    random times, every stamp, and one nanosecond either side of it."""
+    rng = np.random.default_rng(1)
+    stamps = np.sort(rng.choice(10 * S, 400, replace=False))
+    poses = np.column_stack([rng.normal(size=400), rng.normal(size=400), rng.uniform(-math.pi, math.pi, 400)])
+    track = PoseTrack.from_samples(stamps, poses)
+    times = np.concatenate([rng.integers(-S, 11 * S, 5000), stamps, stamps + 1, stamps - 1])
+    many = track.at_many(times)
+    for t, want in zip(times, many, strict=True):
+        got = track.at(int(t))
+        assert (got is None and np.isnan(want).all()) or got == tuple(want), (t, got, want)
