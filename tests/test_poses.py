@@ -9,6 +9,7 @@ sensor poses, and bags written here with rosbags alone.
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +47,7 @@ def test_poses_is_an_algorithm_module():
     from .test_layering import ALGORITHMS
 
     names = imports_of(LABKIT / "poses.py")
-    assert all(n == "numpy" or n in ("__future__", "dataclasses") or
+    assert all(n.split(".")[0] in sys.stdlib_module_names or n == "numpy" or
                (n.startswith("labkit.") and n.split(".")[1] in ALGORITHMS) for n in names), names
 
 
