@@ -1,4 +1,4 @@
-"""The ``labkit`` command line: simulate, extract features, view, convert, evaluate, benchmark and inspect recordings.
+"""The ``labkit`` command line: simulate, extract features, view, convert, evaluate, benchmark, inspect recordings and grade exercises.
 
 Run ``labkit --help`` or ``labkit COMMAND --help``. Every expected problem prints one line
 ``labkit: error: ...`` and exits with a documented status (README, "When things go wrong"):
@@ -37,6 +37,7 @@ from pathlib import Path
 from . import __version__, sim
 from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with, starts_with
 from .errors import CorruptFileError, RefusedError
+from .grading import add_grade_parser
 from .io import FORMATS, convert, detect_format, read_scans
 
 EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
@@ -595,6 +596,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("-o", "--output", default="out", help="output folder (default out/); demo.rrd and demo.png "
                    "there are replaced")
     d.set_defaults(func=cmd_demo)
+
+    add_grade_parser(sub)  # labkit grade: the instructor's grader (labkit.grading)
     return p
 
 
