@@ -1,4 +1,4 @@
-"""The ``labkit`` command line: simulate, extract features, view, convert, evaluate, benchmark, inspect recordings and grade exercises.
+"""The ``labkit`` command line: simulate, extract, view, convert, evaluate, benchmark, inspect, grade.
 
 Run ``labkit --help`` or ``labkit COMMAND --help``. Every expected problem prints one line
 ``labkit: error: ...`` and exits with a documented status (README, "When things go wrong"):
