@@ -15,7 +15,7 @@ LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 ALGORITHMS = ["_checks", "_safe", "errors", "scan", "geometry", "segmentation", "fitting", "features",
               "split_merge", "dbscan1d",
               "angular", "iav", "legs", "sim", "pipeline", "evaluation",
-              "incremental", "line_regression", "ransac", "hough"]
+              "incremental", "line_regression", "ransac", "hough", "poses"]
 
 
 def imports_of(path: Path) -> set[str]:
