@@ -231,15 +231,15 @@ MAIN_CLASS = {
     "imports_labkit_to_compare": (EX1, {"segment": "import labkit  # to compare my answers in the cells below\n\n"
                                                    + SEGMENT}, [], [], FULL, "graded", None),
     "slow_demo_cells": (EX1, {"segment": SEGMENT}, [], [SLOW_DEMO] * 3, FULL, "graded", None),
-    "guards_labkit_import": (EX1, {"segment": GUARDED_IMPORT}, [], [], FULL, "graded",
-                             redteam("the stub module that lets an unused `import labkit` pass (93b3a13) breaks"
-                                     " `try: import labkit / except ImportError: labkit = None` guards: an honest"
-                                     " answer with a cross-check under `if labkit is not None` now gets 0")),
+    # regression of 93b3a13, fixed in 34285ee: the stub module that let an unused `import labkit` pass broke
+    # `try: import labkit / except ImportError: labkit = None` guards (an honest cross-check under
+    # `if labkit is not None` got 0); only an unguarded top-level import is stubbed now
+    "guards_labkit_import": (EX1, {"segment": GUARDED_IMPORT}, [], [], FULL, "graded", None),
+    # open on eb62b65 and 23f5f7d, fixed in 34285ee: a solution cell that defines the function and then runs past
+    # the per-cell limit lost the function (the cell was stopped and left out, 0 points); it is interrupted now
+    # (SIGINT, as nbgrader does) and keeps what it defined
     "slow_solution_cell": (EX1, {"segment": SEGMENT + "\n\n\nimport time\n\ntime.sleep(12)  # a demo below the answer"},
-                           [], [], FULL, None,
-                           redteam("a solution cell that defines the function and then runs past the per-cell limit"
-                                   " loses the function (the cell is stopped and left out; nbgrader interrupts the"
-                                   " cell and keeps what it defined): 0 points")),
+                           [], [], FULL, None, None),
     # (h) what the instructor reads afterwards
     "code_behind_imports_cell": (EX1, {"imports": IMPL_BEHIND_IMPORTS, "segment": '''
         def segment(ranges, angles, threshold_m, min_points):
@@ -744,8 +744,8 @@ def test_an_honest_notebook_with_big_plots_is_graded(files_class):
     assert (result.score, result.status) == (FULL, "graded"), result.detail
 
 
-@redteam("the notebook container count (23f5f7d) counts outputs too: an honest notebook that printed 250 000"
-         " [x, y] pairs is refused as invalid, 0 points")
+# regression of 23f5f7d, fixed in 34285ee: the notebook container count counted outputs too: an honest notebook
+# that printed 250 000 [x, y] pairs was refused as invalid, 0 points (it skips JSON strings now)
 def test_an_honest_notebook_that_printed_a_lot_is_graded(files_class):
     """Outputs are not graded: 250 000 printed [x, y] pairs (6 MB of text) must not make a notebook invalid."""
     result = files_class.result("printed_many_points", EX0)
