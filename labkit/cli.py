@@ -41,7 +41,6 @@ from .grading import add_grade_parser
 from .io import FORMATS, convert, detect_format, read_scans
 
 EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
-EXIT_ERROR = EXIT_DAMAGED  # the name earlier versions used
 
 #: What ``labkit evaluate --json`` and ``labkit demo`` write (see labkit._safe).
 REPORT_FILE = OutputKind("a labkit evaluate report (.json)", (".json",),
