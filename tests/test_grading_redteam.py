@@ -33,7 +33,7 @@ from pathlib import Path
 
 import pytest
 
-from labkit.grading import grade, protocol
+from labkit.grading import cgroups, grade, protocol
 from labkit.grading.sandbox import Limits, Sandbox, Worker, WorkerLost, worker_uid
 from tests.grading_course import (
     REPO,
@@ -60,6 +60,8 @@ SLOT_FILES = 66  # the class of file and roster tricks
 SLOT_PROBE = 67  # sandbox probes
 SLOT_TRUSTED = 68  # the trusted side's memory (68 and 69)
 SLOT_MEMORY = 70  # memory holders (70 and 71)
+SLOT_CPU = 72  # a CPU hog beside honest students (72 and 73)
+GROUPED = cgroups.detect()
 
 
 def solution(name: str) -> str:
@@ -522,21 +524,27 @@ _libc.shmdt.argtypes = [ctypes.c_void_p]
 def probe(how, limit):
     \"\"\"Bytes of memory held at once by the sandbox's processes, by a way of its choosing.\"\"\"
     held, chunk, keep = 0, 64 << 20, []
-    if how == "fork":  # children, each within its own limit
-        ready, report = os.pipe()
+    if how == "fork":  # children, each within its own limit; those still holding it answer a roll call at the end
+        go, roll_call = os.pipe()
+        children = []
         for _ in range(6):
+            answers, report = os.pipe()
             if os.fork() == 0:
+                os.close(roll_call)
                 try:
-                    blob = bytearray(limit // 2)
+                    blob = bytearray(limit // 2)  # zero-filled: every page is touched
                     os.write(report, b"1")
                 except MemoryError:
                     os.write(report, b"0")
+                os.read(go, 1)  # until the roll call: the parent closes its end
+                os.write(report, b"2")
                 time.sleep(60)
                 os._exit(0)
-        answers = b""
-        while len(answers) < 6:
-            answers += os.read(ready, 6)
-        return answers.count(b"1") * (limit // 2)
+            os.close(report)
+            children.append((answers, os.read(answers, 1)))  # b"" (end of file): it died before answering
+        os.close(roll_call)
+        present = [os.read(answers, 1) for answers, allocated in children if allocated == b"1"]
+        return present.count(b"2") * (limit // 2)  # a process the kernel killed at the limit cannot answer
     try:
         while held < 3 * limit:
             if how == "memfd":  # files without a file system
@@ -556,6 +564,55 @@ def probe(how, limit):
         pass
     return held
 """
+
+
+# ---------------------------------------------------------------------------- one student's CPU load
+EX4 = "ex04_dbscan1d"
+CPU_HOG = """
+import os, time
+
+_loops = []
+for _ in range(40):  # busy loops, each in a session of its own (without a cgroup: a scheduling group each)
+    try:
+        pid = os.fork()
+    except OSError:  # the sandbox's process limit
+        break
+    if pid == 0:
+        os.setsid()
+        while True:
+            pass
+    _loops.append(pid)
+
+
+def neighbourhood_bounds(x, eps):
+    time.sleep(2.5)  # within the call limit: the loops keep running while the students next door are graded
+    raise ValueError(f"no answer: {len(_loops)} busy loops ran beside the other students")
+
+
+def dbscan_sorted(x, eps, min_pts):
+    raise ValueError("no answer")
+"""
+#: Small limits, so that a short run shows starvation: 3 s per call, 4 s per graded cell, the 200 000 points in 2 s
+#: instead of 6. The instructor's solution takes 0.6 to 0.9 s per cell beside the hog with cgroups (also with the other
+#: xdist process grading); on 1f2d56c, where the hog's 29-31 loops each counted as a process of their own, its first
+#: hidden cells took 9 to 11 s (with the spec's own limits it still passed: 12 s for the notebook instead of 1.5 s),
+#: and with these limits it scored 4 ("timed out").
+CPU_LIMITS = {"\nFUNCTIONS = ": "\nCALL_TIMEOUT_S = 3.0\nTEST_TIMEOUT_S = 4.0\nFUNCTIONS = ",
+              "assert seconds < 6.0": "assert seconds < 2.0"}
+
+
+def _build_cpu_class(folder: Path) -> Graded:
+    course = copy_course(folder / "course")
+    spec = course / "grading" / f"{EX4}.py"
+    text = spec.read_text(encoding="utf-8")
+    for old, new in CPU_LIMITS.items():
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    spec.write_text(text, encoding="utf-8")
+    submit(course, "a_cpu_hog", EX4, notebook_with(EX4, {"dbscan": CPU_HOG}))
+    for student in ("b_honest", "c_honest"):  # graded one after the other by the second job, beside the hog
+        submit(course, student, EX4, notebook_with(EX4, solutions(EX4)))
+    return _grade(course, EX4, jobs=2, first_slot=SLOT_CPU)
 
 
 # ---------------------------------------------------------------------------- the tests
@@ -625,9 +682,13 @@ def test_the_student_cannot_make_namespaces():
     # allocated without counting as address space: 768 MB under a 256 MB limit, and no bound but the machine
     # (kernel.shmall)
     "sysv_shm",
-    pytest.param("fork", marks=redteam(
-        "RLIMIT_AS is per process: six forked children hold 128 MB each under a 256 MB limit; with the real limits"
-        " a worker's 32 processes may hold 32 x 2 GB (and burn 32 x 120 CPU seconds)")),
+    # open on eb62b65 and 8980e1c, closed where the grader may make cgroups: RLIMIT_AS is per process, so six forked
+    # children held 128 MB each under a 256 MB limit (with the real limits a worker's 32 processes could hold
+    # 32 x 2 GB); the worker's cgroup now limits the sandbox as a whole. Without cgroups (not root, no writable
+    # hierarchy) it is still open, with 8 processes instead of 32
+    pytest.param("fork", marks=[] if GROUPED.usable else redteam(
+        f"no cgroups here ({GROUPED.problem}): RLIMIT_AS is per process, six forked children hold 128 MB each"
+        " under a 256 MB limit")),
 ])
 def test_memory_held_stays_within_the_memory_limit(how):
     limit = 256 << 20
@@ -900,3 +961,19 @@ def test_the_release_notebook_is_the_base_of_every_submission():
     """A guard for this file's own helpers: the grade ids the attacks rewrite exist in the release."""
     ids = {grade_id(cell) for cell in release_notebook(EX1)["cells"]}
     assert {"imports", "segment", "test_visible"} <= ids
+
+
+# open on eb62b65 and 8980e1c (reproduced by hand, see the findings), closed by the workers' cgroups (a sandbox is one
+# entity for the scheduler, at most one CPU) or, without cgroups, by a CPU per parallel job: a submission that forked
+# ~31 busy loops, each in a session (scheduling group) of its own, made the instructor's own ex04 solution graded
+# next to it with --jobs 2 fail its 200 000-point speed test ("8.1 s") or time out (5 s per call)
+def test_one_students_cpu_load_costs_the_students_graded_beside_it_nothing(tmp_path):
+    graded = _build_cpu_class(tmp_path)
+    assert not graded.crash, graded.crash
+    hog = graded.result("a_cpu_hog", EX4)
+    loops = re.search(r"(\d+) busy loops ran", hog.detail)
+    assert hog.score == 0.0 and loops and int(loops.group(1)) >= 20, hog.detail  # the bomb did go off
+    for student in ("b_honest", "c_honest"):
+        result = graded.result(student, EX4)
+        assert (result.score, result.status) == (FULL, "graded"), f"{student}: {result.detail}"
+    assert graded.ok

@@ -20,7 +20,7 @@ import time
 
 import pytest
 
-from labkit.grading import sandbox
+from labkit.grading import cgroups, sandbox
 from labkit.grading.sandbox import CallTimedOut, Limits, Sandbox, Session, Worker, WorkerCrashed, worker_uid
 from tests.grading_course import EXERCISES, REPO
 
@@ -404,8 +404,9 @@ def test_without_the_sandbox_nothing_is_isolated():
 
 def test_seccomp_refuses_what_crosses_submissions_or_escapes_limits():
     """Keyrings outlive the sandbox (a channel to the next submission on the same uid), memfd pages and
-    SysV shared memory escape RLIMIT_AS, new namespaces widen the kernel's attack surface: refused.
-    Threads, fork and a process pool (with its /dev/shm semaphores) still work."""
+    SysV shared memory escape RLIMIT_AS, new namespaces widen the kernel's attack surface, a wider CPU
+    affinity would take a neighbour's CPU: refused. Threads, fork and a process pool (with its /dev/shm
+    semaphores) still work."""
     outcome = probe("""
         import ctypes, multiprocessing, os, threading
         def probe():
@@ -413,7 +414,8 @@ def test_seccomp_refuses_what_crosses_submissions_or_escapes_limits():
             outcome = {}
             for name, number, args in [("add_key", 248, (b"user", b"k", b"v", 1, -4)), ("keyctl", 250, (0, -4, 0)),
                                        ("unshare", 272, (0x10000000,)), ("clone newuser", 56, (0x10000000 | 17, 0)),
-                                       ("shmget", 29, (0x1AB5EC, 65536, 0o1666))]:
+                                       ("shmget", 29, (0x1AB5EC, 65536, 0o1666)),
+                                       ("sched_setaffinity", 203, (0, 0, 0))]:
                 result = libc.syscall(number, *args)
                 outcome[name] = os.strerror(ctypes.get_errno()) if result < 0 else "allowed"
             try:
@@ -456,3 +458,157 @@ def test_a_hostile_reply_costs_the_trusted_side_little_memory():
     finally:
         worker.kill()
     assert grown_mb < 100, f"the trusted process grew by {grown_mb:.0f} MB"
+
+
+# ---------------------------------------------------------------------------- cgroups: the sandbox as a whole
+GROUPED = cgroups.detect()
+needs_cgroups = pytest.mark.skipif(not GROUPED.usable, reason=f"no cgroups for the workers here: {GROUPED.problem}")
+
+
+@needs_cgroups
+def test_every_process_of_a_sandbox_is_in_its_cgroup_with_the_sandbox_limits():
+    """A worker and the children it forks (each in a session of its own) are in one cgroup, which holds the
+    memory, process and CPU limits of the whole sandbox; it is gone once the worker is."""
+    limits = Limits(memory_bytes=512 << 20, processes=20, cpus=1)
+    worker = Worker(Sandbox(slot=SLOT, limits=limits))
+    try:
+        worker.load([textwrap.dedent("""
+            import os, time
+            def probe():
+                for _ in range(3):
+                    if os.fork() == 0:
+                        os.setsid()
+                        time.sleep(600)
+                return os.getpid()
+        """)], time.monotonic() + 60)
+        worker.call("probe", (), {}, time.monotonic() + 60)
+        group = worker.cgroup
+        members = group.pids()
+        assert worker.process.pid in members and len(members) >= 6  # bwrap, its init, the worker, 3 children
+
+        def read(controller: str, name: str) -> list[str]:
+            with open(os.path.join(group.folders[controller], name)) as f:
+                return f.read().split()
+
+        if group.version == 1:
+            assert read("memory", "memory.limit_in_bytes") == [str(512 << 20)]
+            assert read("pids", "pids.max") == ["20"]
+            if "cpu" in group.folders:
+                assert int(read("cpu", "cpu.cfs_quota_us")[0]) == int(read("cpu", "cpu.cfs_period_us")[0])
+        else:
+            assert read("memory", "memory.max") == [str(512 << 20)] and read("pids", "pids.max") == ["20"]
+            if "cpu" in group.folders:
+                quota, period = read("cpu", "cpu.max")
+                assert quota == period
+        folders = list(group.folders.values())
+    finally:
+        worker.kill()
+    assert not [folder for folder in folders if os.path.exists(folder)], "the worker's cgroup was left behind"
+
+
+@needs_cgroups
+def test_a_worker_killed_at_the_sandbox_memory_limit_is_that_calls_crash():
+    """Children each within RLIMIT_AS, together over the cgroup's limit: the kernel kills the largest process
+    of *that* sandbox (here the worker), the call ends as a crash that says why, the next test gets a fresh
+    worker. (Without the cgroup the same code holds 6 x 128 MB: tests/test_grading_redteam.py.)"""
+    code = """
+        import os, time
+        def hold():
+            if os.fork() == 0:
+                blob = bytearray(150 << 20)
+                time.sleep(600)
+            time.sleep(0.5)
+            blob = bytearray(250 << 20)
+            return len(blob)
+        def fine():
+            return 1
+    """
+    limits = Limits(memory_bytes=384 << 20)
+    with Session(Sandbox(slot=SLOT, limits=limits), [textwrap.dedent(code)], load_timeout_s=30,
+                 call_timeout_s=30) as session:
+        session.begin_test(60)
+        with pytest.raises(WorkerCrashed, match="memory limit"):
+            session.call("hold", (), {})
+        assert session.crashed and not session.timed_out
+        session.begin_test(60)
+        assert session.call("fine", (), {}) == 1
+
+
+def test_without_cgroups_fewer_processes_and_a_cpu_of_its_own():
+    """The fallback: RLIMIT_NPROC at UNGROUPED_PROCESSES (each process may hold the whole address-space limit,
+    so fewer of them), and the job's CPU, which the student cannot widen."""
+    uid = worker_uid(SLOT + 1)
+    job = Sandbox(slot=SLOT + 1, cgroups=False)
+    assert job.cgroups is None and job.cpu is not None
+    outcome = probe("""
+        import os, time
+        def probe():
+            outcome = {"cpus": sorted(os.sched_getaffinity(0))}
+            try:
+                os.sched_setaffinity(0, range(os.cpu_count()))
+                outcome["widened"] = sorted(os.sched_getaffinity(0))
+            except OSError as error:
+                outcome["widened"] = error.strerror
+            count = 0
+            while count < 100:
+                try:
+                    if os.fork() == 0:
+                        time.sleep(600)
+                except OSError:
+                    break
+                count += 1
+            outcome["forks"] = count
+            return outcome
+    """, slot=SLOT + 1, cgroups=False)
+    assert outcome["cpus"] == [job.cpu]
+    assert outcome["widened"] == "Operation not permitted"
+    assert 0 < outcome["forks"] < sandbox.UNGROUPED_PROCESSES
+    assert left_after(uid) == []
+
+
+@needs_cgroups
+def test_the_cgroups_of_a_grader_that_died_are_removed_at_the_next_start():
+    """A cgroup named after a process that no longer runs (a grader killed with SIGKILL) is emptied and
+    removed by the next detect(); one of a running grader is left alone."""
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead_pid = int(gone.stdout)
+    parent = GROUPED.parents["pids"]
+    stale = os.path.join(parent, f"{cgroups.PREFIX}{dead_pid}-1-w1")
+    ours = cgroups.Cgroups(GROUPED.version, GROUPED.parents).create(64 << 20, 4, 1)
+    os.mkdir(stale)
+    sleeper = subprocess.Popen(["sleep", "600"])  # a process left behind in the dead grader's cgroup
+    try:
+        with open(os.path.join(stale, "cgroup.procs"), "w") as f:
+            f.write(str(sleeper.pid))
+        cgroups.detect.cache_clear()
+        cgroups.detect()
+        assert sleeper.wait(timeout=10) == -signal.SIGKILL
+        assert not os.path.exists(stale)
+        assert all(os.path.isdir(folder) for folder in ours.folders.values())
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+        ours.remove()
+        if os.path.exists(stale):
+            os.rmdir(stale)
+
+
+def test_cgroup_v2_files_and_mounts_are_read_and_written_as_the_kernel_has_them(tmp_path):
+    """cgroup v2 cannot run beside this machine's v1 controllers; its files are checked on a stand-in folder."""
+    folder = tmp_path / "w1"
+    folder.mkdir()
+    for name in ("memory.max", "memory.swap.max", "pids.max", "cpu.max"):
+        (folder / name).write_text("max\n")
+    (folder / "cpu.stat").write_text("usage_usec 2500000\nuser_usec 2000000\n")
+    (folder / "memory.events").write_text("low 0\nhigh 0\nmax 3\noom 1\noom_kill 1\n")
+    group = cgroups.WorkerCgroup(2, {c: str(folder) for c in ("memory", "pids", "cpu")})
+    group.limit(256 << 20, 16, 1)
+    assert [(folder / n).read_text().strip() for n in ("memory.max", "memory.swap.max", "pids.max", "cpu.max")] == [
+        str(256 << 20), "0", "16", "100000 100000"]
+    assert group.cpu_seconds() == 2.5 and group.oom_kills() == 1
+    assert group.procs_files == [str(folder / "cgroup.procs")]
+    mounts = cgroups._mounts("41 31 0:38 /grading /sys/fs/cgroup rw,relatime - cgroup2 cgroup2 rw,nsdelegate\n"
+                             "35 31 0:32 / /sys/fs/cgroup/memory rw,relatime - cgroup cgroup rw,memory\n")
+    assert mounts[0][:3] == ("cgroup2", "/grading", "/sys/fs/cgroup") and "memory" in mounts[1][3]
+    assert cgroups._inside("/grading", "/sys/fs/cgroup", "/grading/job/x") == "/sys/fs/cgroup/job/x"
+    assert cgroups._inside("/grading", "/sys/fs/cgroup", "/other") is None

@@ -25,7 +25,17 @@ student owns nothing. As another user bwrap makes a user namespace and the worke
 worker also sets CPU seconds, address space, file size, open files and processes limits
 (:class:`Limits`). On x86_64 a seccomp filter (:func:`seccomp_filter`) refuses the system calls
 that would outlive the sandbox (keyrings), escape the memory limit (``memfd_create``) or widen the
-kernel's attack surface (new namespaces, ``ptrace``, ``bpf``, ``io_uring``, ...).
+kernel's attack surface (new namespaces, ``ptrace``, ``bpf``, ``io_uring``, ...) or leave the CPUs it was given
+(``sched_setaffinity``).
+
+Where the grader may make cgroups (root, cgroup v1 or v2: :mod:`labkit.grading.cgroups`), every
+worker's whole sandbox is in a cgroup of its own: its processes together hold at most the memory
+limit (swap and its tmpfs files included; beyond it the kernel kills one of *them*), make at most
+``processes`` processes and threads, and use at most ``cpus`` CPUs, as one entity for the
+scheduler (31 forked busy loops get the share of one process, not 31). Elsewhere only the
+per-process rlimits hold, with fewer processes (:data:`UNGROUPED_PROCESSES`), and each parallel
+job's workers are pinned to a CPU of their own (inherited from the trusted process at ``fork``;
+the seccomp filter keeps the student from widening it).
 
 :class:`Worker` is one running worker; :class:`Session` grades one submission with as many
 workers as it takes (a fresh one after a call that timed out or killed its worker).
@@ -53,6 +63,8 @@ from pathlib import Path
 from typing import Any
 
 from . import protocol
+from .cgroups import WorkerCgroup
+from .cgroups import detect as cgroup_support
 
 __all__ = [
     "Limits",
@@ -74,6 +86,9 @@ STARTUP_TIMEOUT_S = 60.0  # bwrap + python + numpy; generous, as a loaded machin
 LOAD_BUDGET = 6
 #: After SIGINT, how long a cell past its time has to stop before its worker is killed.
 INTERRUPT_GRACE_S = 2.0
+#: Processes and threads of a worker where there is no cgroup (RLIMIT_NPROC): each may hold the whole
+#: address-space limit, so together they may hold this many times it.
+UNGROUPED_PROCESSES = 8
 
 
 class WorkerLost(BaseException):
@@ -104,17 +119,22 @@ class Limits:
     cpu_s : int
         CPU seconds of the worker process (``RLIMIT_CPU``; it is killed by SIGXCPU beyond).
     memory_bytes : int
-        Address space (``RLIMIT_AS``): a larger allocation raises ``MemoryError`` in the student's code.
+        Address space of each process (``RLIMIT_AS``: a larger allocation raises ``MemoryError`` in the
+        student's code) and, in a cgroup, the memory of all the sandbox's processes and its ``/tmp`` and
+        ``/dev/shm`` files together (beyond it the kernel kills one of its processes).
     file_bytes : int
         Largest file the student may write (``RLIMIT_FSIZE``).
     open_files : int
         ``RLIMIT_NOFILE``.
     processes : int
-        Processes and threads of the worker's uid (``RLIMIT_NPROC``): a fork bomb stops there.
+        Processes and threads of the sandbox (cgroup ``pids``) and of the worker's uid (``RLIMIT_NPROC``;
+        at most :data:`UNGROUPED_PROCESSES` where there is no cgroup): a fork bomb stops there.
     tmp_bytes : int
         Size of the tmpfs mounted on ``/tmp``, the working directory.
     shm_bytes : int
         Size of the tmpfs mounted on ``/dev/shm`` (for ``multiprocessing``).
+    cpus : int
+        CPUs all the sandbox's processes together may use at once (a cgroup CPU quota).
     """
 
     cpu_s: int = 120
@@ -124,15 +144,17 @@ class Limits:
     processes: int = 32
     tmp_bytes: int = 128 << 20
     shm_bytes: int = 64 << 20
+    cpus: int = 1
 
-    def rlimits(self) -> dict[str, int]:
+    def rlimits(self, *, grouped: bool = True) -> dict[str, int]:
+        """The worker's ``setrlimit`` values; ``grouped``: whether its sandbox is in a cgroup of its own."""
         return {
             "RLIMIT_CORE": 0,
             "RLIMIT_CPU": self.cpu_s,
             "RLIMIT_AS": self.memory_bytes,
             "RLIMIT_FSIZE": self.file_bytes,
             "RLIMIT_NOFILE": self.open_files,
-            "RLIMIT_NPROC": self.processes,
+            "RLIMIT_NPROC": self.processes if grouped else min(self.processes, UNGROUPED_PROCESSES),
         }
 
 
@@ -231,6 +253,9 @@ class Sandbox:
     user_namespace : bool or None
         Use a user namespace instead of dropping root (the only way as another user; None picks
         by the current uid).
+    cgroups : bool
+        Put each worker in a cgroup of its own where the machine allows it (see
+        :func:`labkit.grading.cgroups.detect`); False never does (for tests of the fallback).
     """
 
     def __init__(
@@ -241,6 +266,7 @@ class Sandbox:
         slot: int = 0,
         isolate: bool = True,
         user_namespace: bool | None = None,
+        cgroups: bool = True,
     ) -> None:
         self.masked = tuple(dict.fromkeys(("labkit", *masked)))
         self.limits = limits
@@ -250,10 +276,14 @@ class Sandbox:
         self.gid = 65534
         self.bwrap = check_bwrap() if isolate else None
         self._plain_dir: str | None = None
+        found = cgroup_support() if cgroups else None
+        self.cgroups = found if found is not None and found.usable else None
+        #: Without a cgroup CPU quota, the CPU this job's workers are pinned to (one per parallel job).
+        self.cpu = None if self.cgroups is not None and "cpu" in self.cgroups.controllers else _slot_cpu(slot)
 
     def _config(self, site_dirs: list[str], *, drop: bool) -> str:
         return json.dumps({
-            "limits": self.limits.rlimits(),
+            "limits": self.limits.rlimits(grouped=self.cgroups is not None),
             "uid": self.uid if drop else None,
             "gid": self.gid if drop else None,
             "site": site_dirs,
@@ -340,6 +370,15 @@ class Sandbox:
         return [python, "-I", "-S", "-B", os.path.join(self._plain_dir, "worker.py"), config], environment, workdir
 
 
+def _slot_cpu(slot: int) -> int | None:
+    """The CPU of parallel job ``slot``: this process's CPUs in turn."""
+    try:
+        cpus = sorted(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return None
+    return cpus[slot % len(cpus)] if cpus else None
+
+
 def _world_readable(path: str) -> bool:
     """True when every folder down to ``path`` lets other users through (an unprivileged uid can import from it)."""
     real = Path(os.path.realpath(path))
@@ -370,6 +409,9 @@ DENIED_SYSCALLS = {
     "ptrace": 101, "process_vm_readv": 310, "process_vm_writev": 311,
     # new namespaces (unprivileged user namespaces are a large attack surface), mounts
     "unshare": 272, "setns": 308, "mount": 165, "umount2": 166, "pivot_root": 155, "chroot": 161,
+    # the CPUs a job's workers are pinned to where there is no cgroup CPU quota (widening them would take
+    # the neighbours' CPUs)
+    "sched_setaffinity": 203,
     # kernel interfaces no exercise needs, each a known source of privilege escalations
     "userfaultfd": 323, "perf_event_open": 298, "bpf": 321, "io_uring_setup": 425, "io_uring_enter": 426,
     "io_uring_register": 427, "kexec_load": 246, "kexec_file_load": 320, "init_module": 175,
@@ -442,6 +484,20 @@ def _describe_exit(code: int | None) -> str:
     return f"exited with status {code}"
 
 
+@contextlib.contextmanager
+def _pinned(cpu: int | None):
+    """Run the block (a fork) on ``cpu`` only, so that the child inherits it; this thread's CPUs after."""
+    if cpu is None:
+        yield
+        return
+    previous = os.sched_getaffinity(0)
+    os.sched_setaffinity(0, {cpu})
+    try:
+        yield
+    finally:
+        os.sched_setaffinity(0, previous)
+
+
 class Worker:
     """One running worker process and its channel (stdin/stdout pipes of length-prefixed JSON frames)."""
 
@@ -458,13 +514,25 @@ class Worker:
         argv, environment, workdir = sandbox.command(seccomp_fd, info_fd)
         self.workdir = workdir
         self.errors = tempfile.TemporaryFile()
+        self.memory_bytes = sandbox.limits.memory_bytes
+        self.cpu_s: float | None = None  # the CPU seconds its sandbox used, once it ended (where known)
+        self.cgroup: WorkerCgroup | None = None
         started = time.perf_counter()
         try:
-            self.process = subprocess.Popen(
-                argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, env=environment or {},
-                cwd=workdir, start_new_session=True, close_fds=True,
-                pass_fds=[fd for fd in [seccomp_fd, info_fd] if fd is not None],
-            )
+            if sandbox.cgroups is not None:
+                limits = sandbox.limits
+                self.cgroup = sandbox.cgroups.create(limits.memory_bytes, limits.processes, limits.cpus)
+                argv = self.cgroup.command(argv)
+            with _pinned(sandbox.cpu):
+                self.process = subprocess.Popen(
+                    argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.errors, env=environment or {},
+                    cwd=workdir, start_new_session=True, close_fds=True,
+                    pass_fds=[fd for fd in [seccomp_fd, info_fd] if fd is not None],
+                )
+        except OSError as error:  # no cgroup, no process: the machine's problem, not the student's
+            self.errors.close()
+            self._release()
+            raise SandboxBroken(f"the sandbox could not start a worker: {error}") from None
         finally:
             for fd in (seccomp_fd, info_fd):
                 if fd is not None:
@@ -538,6 +606,10 @@ class Worker:
             code = self.process.wait(timeout=2)
         except subprocess.TimeoutExpired:
             code = None
+        killed = self.cgroup.oom_kills() if self.cgroup is not None else 0
+        if killed:
+            return (f"was killed at its memory limit ({self.memory_bytes >> 20} MB for all the processes of its"
+                    f" sandbox together; {killed} of them killed)")
         return _describe_exit(code)
 
     # ------------------------------------------------------------------ requests
@@ -590,7 +662,7 @@ class Worker:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.kill(pid, signal.SIGINT)
 
-    def cpu_seconds(self) -> float:
+    def _reported_cpu_seconds(self) -> float:
         """The CPU seconds the worker says it used (a number for timings, nothing is decided on it)."""
         try:
             self._send({"op": "usage"}, time.monotonic() + 1)
@@ -601,6 +673,8 @@ class Worker:
 
     def close(self) -> None:
         """End the worker by closing its channel (it returns, bwrap ends its sandbox), else kill it."""
+        if self.cgroup is None:  # no CPU accounting of the sandbox: the worker's own word
+            self.cpu_s = self._reported_cpu_seconds()
         try:
             self.process.stdin.close()
             self.process.wait(timeout=2)
@@ -609,16 +683,26 @@ class Worker:
         self.kill()
 
     def kill(self) -> None:
-        """Kill the worker and everything in its sandbox; wait for it."""
+        """Kill the worker and everything in its sandbox (its whole cgroup, where it has one); wait for it."""
         if self.process.poll() is None:  # not reaped yet: its pid (the group's id) is not anyone else's
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(self.process.pid, signal.SIGKILL)
+        if self.cgroup is not None:
+            self.cgroup.kill()
         self.process.wait()
         for stream in (self.process.stdin, self.process.stdout, self.errors):
             try:
                 stream.close()
             except OSError:
                 pass
+        self._release()
+
+    def _release(self) -> None:
+        """Remove what the worker leaves behind: its cgroup (after reading its CPU time), pipe and folder."""
+        if self.cgroup is not None:
+            self.cpu_s = self.cgroup.cpu_seconds()
+            self.cgroup.remove()
+            self.cgroup = None
         if self._info is not None:
             os.close(self._info)
             self._info = None
@@ -639,7 +723,8 @@ class Timing:
     """Where one submission's time went (seconds)."""
 
     start_s: float = 0.0  # starting workers (bwrap, python, numpy)
-    worker_cpu_s: float = 0.0  # CPU the workers that ended normally reported
+    worker_cpu_s: float = 0.0  # CPU of the workers' sandboxes (their cgroups; without, what the workers that ended
+    # normally reported)
     load_s: float = 0.0  # running the student's cells
     calls_s: float = 0.0  # waiting for the student's functions (including the channel)
     workers: int = 0
@@ -681,6 +766,7 @@ class Session:
             self.crashed = True
         if self.worker is not None:
             self.worker.kill()
+            self.timing.worker_cpu_s += self.worker.cpu_s or 0.0
             self.worker = None
         return lost
 
@@ -780,8 +866,8 @@ class Session:
 
     def close(self) -> None:
         if self.worker is not None:
-            self.timing.worker_cpu_s += self.worker.cpu_seconds()
             self.worker.close()
+            self.timing.worker_cpu_s += self.worker.cpu_s or 0.0
             self.worker = None
 
     def __enter__(self) -> Session:
