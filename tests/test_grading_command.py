@@ -277,3 +277,21 @@ def test_a_grader_failure_is_one_submissions_status_and_exit_1(course, monkeypat
     with gradebook(course) as gb:
         assert gb.find_submission(EX0, "bob").score == 10.0  # the earlier verdict stays
         assert gb.find_submission(EX0, "alice").score == 10.0
+
+
+def test_a_sandbox_that_cannot_start_is_a_grader_error_not_the_students_zero(course, capsys):
+    """A worker that cannot start once the run's probe passed (here: the exercise's limits leave no room for
+    Python; elsewhere a full process table, a broken bwrap, a cgroup the kernel refuses) is the grader's failure:
+    no verdict, the earlier grade stays, exit status 1 -- not a 0 with status "graded"."""
+    submit(course, "bob", EX0, notebook_with(EX0, solutions(EX0)))
+    grade("ex00", course=course, first_slot=SLOT)  # alice and bob have 10 from before
+    with open(course / "grading" / f"{EX0}.py", "a", encoding="utf-8") as f:
+        f.write("\n\nfrom labkit.grading.sandbox import Limits\n\nLIMITS = Limits(memory_bytes=16 << 20)\n")
+    args = argparse.Namespace(check=None, exercise="ex00", course=str(course), jobs=1, student=None, output=None,
+                              no_sandbox=False, check_exercise=None, quiet=True)
+    assert run_grade(args) == 1
+    assert "the sandbox could not start a worker" in capsys.readouterr().err
+    table = rows(course / "grades.csv")
+    assert (table[EX0, "alice"]["status"], table[EX0, "bob"]["status"]) == ("grader error", "grader error")
+    with gradebook(course) as gb:
+        assert gb.find_submission(EX0, "alice").score == gb.find_submission(EX0, "bob").score == 10.0

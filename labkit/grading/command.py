@@ -40,6 +40,7 @@ from .runner import (
     STATUSES,
     Job,
     SubmissionResult,
+    forget_courses,
     grade_submission,
     set_slot,
 )
@@ -134,10 +135,10 @@ def _handed_in(course: Course, student: str, exercise: str) -> tuple[Path | None
     return (others[0] if len(others) == 1 else None), True
 
 
-def _probe(isolate: bool) -> None:
+def _probe(isolate: bool, slot: int) -> None:
     """Start one worker, so that a broken sandbox stops the run before any student is graded."""
     try:
-        Worker(Sandbox(isolate=isolate)).kill()
+        Worker(Sandbox(isolate=isolate, slot=slot)).kill()
     except SandboxBroken as broken:
         raise PermissionError(f"labkit grade cannot start its sandbox: {broken}") from None
 
@@ -146,6 +147,7 @@ def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
     """Yield a result per job as it completes (in this process, or in ``workers`` trusted children)."""
     if workers <= 1:
         set_slot(first_slot)
+        forget_courses()  # the exercises as the run checked them, not as an earlier run in this process read them
         for job in jobs:
             yield _guarded(job)
         return
@@ -233,7 +235,7 @@ def grade(
     started = time.perf_counter()
     run = GradingRun(jobs=jobs, csv=Path(output) if output else course.root / "grades.csv")
     with _locked(course), Records(course) as records:
-        _probe(isolate)
+        _probe(isolate, first_slot)
         secret = _secret(course)
         for exercise in exercises.values():
             records.ensure_assignment(exercise)

@@ -36,7 +36,7 @@ from .notebook import (
     stream,
     student_cells,
 )
-from .sandbox import CallTimedOut, Sandbox, Session, WorkerLost
+from .sandbox import CallTimedOut, Sandbox, SandboxBroken, Session, WorkerLost
 
 __all__ = [
     "STATUSES",
@@ -124,6 +124,8 @@ class StudentFunction:
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
         try:
             return self._session.call(self.__name__, args, kwargs)
+        except SandboxBroken:
+            raise  # the grader's problem, not something the student's function raised
         except Exception as raised:
             raised.add_note(f"(raised by your {self.__name__}(...))")
             raise
@@ -195,6 +197,8 @@ def run_cells(
                     part = "hidden"
                     rng = np.random.default_rng(seeds[cell.grade_id])
                     cell.hidden(**{name: proxies.get(name, rng) for name in cell.parameters})
+        except SandboxBroken:
+            raise  # no worker could start: no verdict on the student (the run calls it a grader error)
         except (Exception, WorkerLost) as raised:  # noqa: BLE001 -- a failing test is a verdict
             failure = _failure(cell, raised, part)
         outputs = [stream(_shown(out.getvalue()))] if out.getvalue() else []
@@ -242,6 +246,11 @@ _SLOT = [0]
 def set_slot(slot: Any) -> None:
     """This process's job number, which picks its workers' uid; a pool initializer passes a queue to take it from."""
     _SLOT[0] = slot if isinstance(slot, int) else slot.get()
+
+
+def forget_courses() -> None:
+    """Read the courses' exercises again on the next submission (a run in this process after a spec changed)."""
+    _COURSES.clear()
 
 
 def _exercise(job: Job) -> Exercise:
