@@ -8,14 +8,16 @@ import csv
 import json
 import os
 import stat
+import signal
 import subprocess
 import sys
+import time
 from functools import partial
 from pathlib import Path
 
 import pytest
 
-from labkit.grading import add_grade_parser, check, grade, run_grade
+from labkit.grading import add_grade_parser, cgroups, check, grade, run_grade
 from labkit.grading.command import _check_report
 from tests.grading_course import copy_course, notebook_with, release_notebook, solutions, submit
 
@@ -295,3 +297,60 @@ def test_a_sandbox_that_cannot_start_is_a_grader_error_not_the_students_zero(cou
     assert (table[EX0, "alice"]["status"], table[EX0, "bob"]["status"]) == ("grader error", "grader error")
     with gradebook(course) as gb:
         assert gb.find_submission(EX0, "alice").score == gb.find_submission(EX0, "bob").score == 10.0
+
+
+def _family(pid: int) -> set[int]:
+    """``pid`` and its children (the grading processes of a run)."""
+    found = {pid}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    if int(f.read().rpartition(")")[2].split()[1]) == pid:
+                        found.add(int(entry))
+            except (OSError, ValueError, IndexError):
+                pass
+    return found
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` is a process that has not ended (a zombie has)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rpartition(")")[2].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not cgroups.detect().usable, reason=f"no cgroups for the workers: {cgroups.detect().problem}")
+def test_ctrl_c_leaves_no_worker_cgroup_behind(course):
+    """Ctrl-C (SIGINT to the run's process group, as a terminal sends it) while two jobs have workers: the run
+    exits with 130 at once (not after its queue: 97 s here before the grading processes ignored SIGINT and
+    were stopped by the run), saying what was saved, and no worker or cgroup of the run is left."""
+    slow = solutions(EX0)["beams_to_points"].replace("):\n", "):\n    __import__('time').sleep(3)\n", 1)
+    for student in ("carol", "dave"):
+        submit(course, student, EX0, notebook_with(EX0, {"beams_to_points": slow}))
+    parent = cgroups.detect().parents["pids"]
+    run = subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2", "-q"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    theirs, seen, deadline = set(), set(), time.monotonic() + 120
+    try:
+        while len(theirs) < 2 and time.monotonic() < deadline and run.poll() is None:
+            family = _family(run.pid)
+            seen |= family - {run.pid}
+            theirs |= {name for name in os.listdir(parent) if name.startswith(cgroups.PREFIX)
+                       and name.split("-")[2].isdigit() and int(name.split("-")[2]) in family}
+            time.sleep(0.05)
+        assert len(theirs) >= 2, "the run's workers never started"
+        os.killpg(run.pid, signal.SIGINT)
+        _, stderr = run.communicate(timeout=30)
+        assert run.returncode == 130 and "interrupted:" in stderr and "Traceback" not in stderr, stderr
+    finally:
+        if run.poll() is None:
+            os.killpg(run.pid, signal.SIGKILL)
+            run.wait()
+    assert [name for name in theirs if os.path.exists(os.path.join(parent, name))] == []
+    deadline = time.monotonic() + 5  # multiprocessing's resource tracker ends when it reads the run's end
+    while [pid for pid in seen if _running(pid)] and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert seen and not [pid for pid in seen if _running(pid)], "grading processes outlived the run"

@@ -612,3 +612,24 @@ def test_cgroup_v2_files_and_mounts_are_read_and_written_as_the_kernel_has_them(
     assert mounts[0][:3] == ("cgroup2", "/grading", "/sys/fs/cgroup") and "memory" in mounts[1][3]
     assert cgroups._inside("/grading", "/sys/fs/cgroup", "/grading/job/x") == "/sys/fs/cgroup/job/x"
     assert cgroups._inside("/grading", "/sys/fs/cgroup", "/other") is None
+
+
+def test_a_cell_is_interrupted_even_when_the_grader_runs_with_sigint_ignored():
+    """``labkit grade all &`` in a script starts the grader with SIGINT ignored, and an ignored signal stays
+    ignored across exec: the worker must still turn SIGINT into a KeyboardInterrupt in the running cell."""
+    import threading
+
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        worker = Worker(Sandbox(slot=SLOT))
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    try:
+        timer = threading.Timer(1.0, worker.interrupt)
+        timer.start()
+        errors = worker.load(["while True:\n    pass", "def after():\n    return 1"], time.monotonic() + 30)
+        timer.join()
+        assert [(e["cell"], e["message"]) for e in errors] == [(0, "KeyboardInterrupt: ")], errors
+        assert worker.call("after", (), {}, time.monotonic() + 10) == 1  # the next cell still ran
+    finally:
+        worker.kill()

@@ -23,6 +23,7 @@ import fcntl
 import multiprocessing
 import os
 import secrets
+import signal
 import sys
 import time
 from collections import Counter
@@ -44,7 +45,7 @@ from .runner import (
     grade_submission,
     set_slot,
 )
-from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap
+from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap, kill_all_workers
 
 __all__ = ["grade", "check", "add_grade_parser", "run_grade", "main", "GradingRun"]
 
@@ -155,7 +156,7 @@ def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
     slots = context.Queue()
     for slot in range(first_slot, first_slot + workers):
         slots.put(slot)
-    with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context, initializer=set_slot,
+    with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context, initializer=_grading_process,
                                                 initargs=(slots,)) as pool:
         futures = {pool.submit(_guarded, job): job for job in jobs}
         try:
@@ -164,9 +165,31 @@ def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
                     yield future.result()
                 except Exception as problem:  # noqa: BLE001 -- a dead grading process: that job's verdict
                     yield _grader_error(futures[future], problem)
-        except BaseException:
+        except BaseException:  # Ctrl-C (or a failure here): stop the grading processes now, not after their queue
+            for child in multiprocessing.active_children():
+                child.terminate()
             pool.shutdown(cancel_futures=True)
             raise
+
+
+def _grading_process(slots) -> None:
+    """Set up a trusted grading process of a parallel run: its job number, and signals. Ctrl-C is the run's
+    to handle (the terminal sends it to the whole group), so this process ignores SIGINT; the run sends
+    SIGTERM instead, on which it kills its workers (sandbox, cgroup, folder) and exits at once, the
+    submission it was grading left without a verdict."""
+    set_slot(slots)
+    signal.signal(signal.SIGINT, _ignore)  # not SIG_IGN: the workers would inherit that, and cells need SIGINT
+    signal.signal(signal.SIGTERM, _stop_grading_process)
+
+
+def _ignore(signum, frame) -> None:  # noqa: ARG001 -- a signal handler's signature
+    pass
+
+
+def _stop_grading_process(signum, frame) -> None:  # noqa: ARG001 -- a signal handler's signature
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the pool sends it again when it sees this process gone
+    kill_all_workers()
+    os._exit(128 + signum)
 
 
 def _grader_error(job: Job, problem: BaseException) -> SubmissionResult:
@@ -264,6 +287,9 @@ def grade(
                                                 has_folder=folders[result.exercise, result.student]))
                 bar.update(1)
                 bar.set_postfix_str(f"{result.student}: {result.status}", refresh=False)
+        except KeyboardInterrupt as interrupted:  # what the report says: how many were saved of how many
+            interrupted.graded, interrupted.total = len(run.results) - len(unrecorded), len(todo)
+            raise
         finally:  # also when interrupted: the CSV of what is graded so far
             bar.close()
             records.write_csv(run.csv, unrecorded)
@@ -375,8 +401,17 @@ def run_grade(args: argparse.Namespace) -> int:
         return 0 if passed else 1
     if not args.exercise:
         raise ValueError("say what to grade: an exercise (e.g. ex01) or all; or --check NOTEBOOK")
-    run = grade(args.exercise, course=args.course, jobs=args.jobs, students=args.student, output=args.output,
-                isolate=not args.no_sandbox, progress=not quiet)
+    try:
+        run = grade(args.exercise, course=args.course, jobs=args.jobs, students=args.student, output=args.output,
+                    isolate=not args.no_sandbox, progress=not quiet)
+    except KeyboardInterrupt as interrupted:
+        if hasattr(interrupted, "graded"):
+            print(f"labkit grade: interrupted: {interrupted.graded} of {interrupted.total} submissions were graded "
+                  "and saved (gradebook, grades.csv); the others are as they were. Run the same command "
+                  "again to grade them.", file=sys.stderr)
+        else:
+            print("labkit grade: interrupted before grading started: nothing was changed", file=sys.stderr)
+        return 130
     print(run.summary())
     for result in run.results:
         if result.status == GRADER_ERROR:

@@ -498,6 +498,17 @@ def _pinned(cpu: int | None):
         os.sched_setaffinity(0, previous)
 
 
+_LIVE: set[Worker] = set()  # the workers this process started and has not killed yet
+
+
+def kill_all_workers() -> None:
+    """Kill every worker this process still has (their sandboxes, cgroups and folders): a grading process
+    told to stop (SIGTERM from the run, on Ctrl-C) calls it before it exits."""
+    for worker in list(_LIVE):
+        with contextlib.suppress(Exception):
+            worker.kill()
+
+
 class Worker:
     """One running worker process and its channel (stdin/stdout pipes of length-prefixed JSON frames)."""
 
@@ -529,14 +540,17 @@ class Worker:
                     cwd=workdir, start_new_session=True, close_fds=True,
                     pass_fds=[fd for fd in [seccomp_fd, info_fd] if fd is not None],
                 )
-        except OSError as error:  # no cgroup, no process: the machine's problem, not the student's
+        except BaseException as error:  # no cgroup, no process (or Ctrl-C): leave nothing behind
             self.errors.close()
             self._release()
-            raise SandboxBroken(f"the sandbox could not start a worker: {error}") from None
+            if isinstance(error, OSError):  # the machine's problem, not the student's
+                raise SandboxBroken(f"the sandbox could not start a worker: {error}") from None
+            raise
         finally:
             for fd in (seccomp_fd, info_fd):
                 if fd is not None:
                     os.close(fd)
+        _LIVE.add(self)
         self._out = self.process.stdin.fileno()
         self._in = self.process.stdout.fileno()
         os.set_blocking(self._out, False)
@@ -553,6 +567,9 @@ class Worker:
             message = self.stderr() or "no message"
             self.kill()
             raise SandboxBroken(f"the sandbox could not start a worker: {message}") from None
+        except BaseException:  # Ctrl-C while it starts
+            self.kill()
+            raise
         if "hello" not in hello:
             self.kill()
             raise SandboxBroken(f"the worker said {str(hello)[:200]} instead of hello")
@@ -699,6 +716,7 @@ class Worker:
 
     def _release(self) -> None:
         """Remove what the worker leaves behind: its cgroup (after reading its CPU time), pipe and folder."""
+        _LIVE.discard(self)
         if self.cgroup is not None:
             self.cpu_s = self.cgroup.cpu_seconds()
             self.cgroup.remove()

@@ -253,6 +253,9 @@ def serve(config: dict) -> None:
     def receive() -> dict:
         return protocol.unpack(_read_exact(channel_in, protocol.frame_length(_read_exact(channel_in, 4))))
 
+    # KeyboardInterrupt on SIGINT even when the grader was started with SIGINT ignored (`labkit grade &` in a
+    # script: a shell starts background commands so, and Python keeps an ignored SIGINT ignored)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])  # only while a cell runs (see _load)
     send({"hello": os.getpid(), "uid": os.getuid()})
     masked = frozenset(config["masked"])
