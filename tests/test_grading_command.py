@@ -7,8 +7,8 @@ import argparse
 import csv
 import json
 import os
-import stat
 import signal
+import stat
 import subprocess
 import sys
 import time
