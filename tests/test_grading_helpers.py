@@ -8,6 +8,7 @@ import pytest
 
 import labkit
 from labkit.grading import (
+    Moved,
     assert_beams_result,
     assert_labels_result,
     assert_line_result,
@@ -187,3 +188,24 @@ def test_assert_line_result_says_what_is_wrong(result, match):
     assert_line_result((1.0, np.pi), 1.0, -np.pi + 1e-9)  # close across the wrap
     with pytest.raises(AssertionError, match=match):
         assert_line_result(result, 2.0, 0.0)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_moved_keeps_distances_in_scale_and_lines_through_their_points(seed):
+    """Closed-form checks of the similarity: distances scale by ``scale``, the angle between two
+    directions stays, and points of a line land on the moved line (r >= 0, alpha in (-pi, pi])."""
+    rng = np.random.default_rng(seed)
+    moved = Moved(rng)
+    assert moved.scale in (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
+    a, b = rng.uniform(-3, 3, (2, 2))
+    (a2, b2) = moved.points([a, b])
+    assert np.isclose(np.linalg.norm(a2 - b2), moved.scale * np.linalg.norm(a - b))
+    r, alpha = float(rng.uniform(0, 4)), float(rng.uniform(-np.pi, np.pi))
+    normal, along = np.array([np.cos(alpha), np.sin(alpha)]), np.array([-np.sin(alpha), np.cos(alpha)])
+    on_line = r * normal + rng.uniform(-5, 5, (6, 1)) * along
+    r2, alpha2 = moved.line(r, alpha)
+    assert r2 >= 0 and -np.pi < alpha2 <= np.pi
+    np.testing.assert_allclose(moved.points(on_line) @ [np.cos(alpha2), np.sin(alpha2)], r2, atol=1e-9)
+    bearing = float(moved.bearing(alpha))
+    assert -np.pi < bearing <= np.pi and np.isclose(np.cos(bearing - alpha), np.cos(moved.angle))
+    assert not Moved(np.random.default_rng(seed), shift=False).shift.any()

@@ -138,6 +138,28 @@ def segment(ranges, angles, threshold_m, min_points):
     return np.array(_TABLE.get(key, [-1] * len(ranges)), dtype=np.int64)
 '''
 
+# The attack on the guard above: the moved examples change every number but keep the shapes, so a table keyed on
+# what moving does not change (ranges over the first range, the threshold over it, min_points) finds them again.
+SCALE_FREE_LOOKUP = '''
+_TABLE = {
+    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 2): [0, 0, 0, 1, 1, -1, -1],
+    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 1): [0, 0, 0, 1, 1, -1, 2],
+    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 3): [0, 0, 0, -1, -1, -1, -1],
+    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.04, 2): [0, 0, 0, -1, -1, -1, -1],
+    ((1.0, 1.0, 0.0, 1.0, 1.0, float("inf"), 1.0, -1.0, 1.0, 1.0), 0.08, 2): [0, 0, -1, 1, 1, -1, -1, -1, 2, 2],
+}
+
+
+def segment(ranges, angles, threshold_m, min_points):
+    """No segmentation at all: the visible answers, found again after any scaling."""
+    if len(ranges) != len(angles):
+        raise ValueError("ranges and angles differ in length")
+    unit = float(ranges[0]) if len(ranges) and float(ranges[0]) > 0 else 1.0
+    key = (tuple(None if r != r else round(float(r) / unit, 9) for r in ranges), round(threshold_m / unit, 9),
+           min_points)
+    return np.array(_TABLE.get(key, [-1] * len(ranges)), dtype=np.int64)
+'''
+
 IMPL_BEHIND_IMPORTS = "import numpy as np\n\n\n" + SEGMENT.replace("def segment(", "def _impl(")
 
 LYING_EXCEPTION = '''
@@ -211,9 +233,11 @@ time.sleep(4)  # a demo: plotting a few scans, or timing an O(N^2) version again
 MAIN_CLASS = {
     "honest": (EX1, {"segment": SEGMENT}, [], [], FULL, "graded", None),
     # (a) points without a solution
-    "visible_lookup": (EX1, {"segment": VISIBLE_LOOKUP}, [], [], 0.0, "graded",
-                       redteam("a lookup table of the visible tests' inputs earns test_visible's 2 points:"
-                               " test_visible has no hidden part")),
+    # open until the specs gave test_visible a hidden part (the visible examples moved: exercises/grading/*.py)
+    "visible_lookup": (EX1, {"segment": VISIBLE_LOOKUP}, [], [], 0.0, "graded", None),
+    "visible_lookup_scale_free": (EX1, {"segment": SCALE_FREE_LOOKUP}, [], [], 0.0, "graded",
+                                  redteam("a table of the visible examples keyed on scale-free numbers finds the moved"
+                                          " examples again: test_visible's 2 points (the 8 others need a function)")),
     "raises_stop_iteration": (EX1, {"segment": '''
         def segment(ranges, angles, threshold_m, min_points):
             raise StopIteration("ranges and angles")

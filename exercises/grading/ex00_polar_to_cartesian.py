@@ -9,9 +9,33 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
-from labkit.grading import assert_beams_result, random_beams
+from labkit.grading import Moved, assert_beams_result, random_beams
 
 FUNCTIONS = ("beams_to_points",)
+
+
+def test_visible(beams_to_points, rng):
+    """The visible examples again, turned and scaled (range_min and range_max with them): the same beams
+    are valid, and the points turn and scale with the plane. Earned by a function, not by the answers."""
+    moved = Moved(rng, shift=False)
+    half = np.sqrt(0.5)
+    examples = [
+        ([1.0, 2.0], [0.0, np.pi / 2], 0.0, 10.0, [[1.0, 0.0], [0.0, 2.0]], [0, 1]),
+        ([np.sqrt(2.0), 3.0], [np.pi / 4, np.pi], 0.0, 10.0, [[1.0, 1.0], [-3.0, 0.0]], [0, 1]),
+        ([np.nan, 1.0, np.inf, 0.0, -1.0, 5.0, 0.05, 2.0], np.radians([-90, -45, 0, 30, 45, 90, 135, 180]), 0.1, 5.0,
+         [[half, -half], [-2.0, 0.0]], [1, 7]),
+        ([0.1, 5.0], [0.0, 1.0], 0.1, 5.0, [[0.1, 0.0]], [0]),
+        ([np.nan, 0.0], [0.0, 1.0], 0.1, 5.0, np.zeros((0, 2)), []),
+    ]
+    for k, (ranges, angles, range_min, range_max, points, indices) in enumerate(examples):
+        s = moved.scale
+        result = beams_to_points(s * np.asarray(ranges), np.asarray(angles, dtype=float) + moved.angle,
+                                 s * range_min, s * range_max)
+        try:
+            assert_beams_result(result, moved.points(points), np.asarray(indices, dtype=np.int64))
+        except AssertionError as error:
+            raise AssertionError(f"visible example {k + 1}, turned by {moved.angle:.3f} rad and scaled by {s}: "
+                                 f"{error}") from None
 
 
 def test_hidden_random(beams_to_points, rng):

@@ -9,9 +9,32 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
-from labkit.grading import assert_labels_result, random_wall_beams
+from labkit.grading import Moved, assert_labels_result, random_wall_beams
 
 FUNCTIONS = ("segment",)
+
+
+def test_visible(segment, rng):
+    """The visible examples again, turned and scaled (the threshold with them): every gap scales as the
+    threshold does, so the labels stay. Earned by a function, not by a table of the visible answers."""
+    moved = Moved(rng, shift=False)
+    walls, degrees = [1.0, 1.0, 1.0, 3.0, 3.0, np.nan, 2.0], np.radians(np.arange(7.0))
+    holes = [1.0, 1.0, 0.0, 1.0, 1.0, np.inf, 1.0, -1.0, 1.0, 1.0]
+    examples = [
+        (walls, degrees, 0.08, 2, [0, 0, 0, 1, 1, -1, -1]),
+        (walls, degrees, 0.08, 1, [0, 0, 0, 1, 1, -1, 2]),
+        (walls, degrees, 0.08, 3, [0, 0, 0, -1, -1, -1, -1]),
+        (walls, degrees, 0.04, 2, [0, 0, 0, -1, -1, -1, -1]),
+        (holes, np.radians(np.arange(10.0)), 0.08, 2, [0, 0, -1, 1, 1, -1, -1, -1, 2, 2]),
+    ]
+    for k, (ranges, angles, threshold_m, min_points, labels) in enumerate(examples):
+        s = moved.scale
+        result = segment(s * np.asarray(ranges), angles + moved.angle, s * threshold_m, min_points)
+        try:
+            assert_labels_result(result, np.asarray(labels, dtype=np.int64))
+        except AssertionError as error:
+            raise AssertionError(f"visible example {k + 1}, turned by {moved.angle:.3f} rad and scaled by {s}: "
+                                 f"{error}") from None
 
 
 def test_hidden_random(segment, rng):

@@ -9,9 +9,33 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
-from labkit.grading import assert_line_result
+from labkit.grading import Moved, assert_line_result
 
 FUNCTIONS = ("fit_line",)
+
+
+def test_visible(fit_line, rng):
+    """The visible walls again, turned and scaled: the fitted line turns and scales with them (the
+    weights 1/rho all scale alike, so the minimum of S moves with the plane). Earned by a function,
+    not by a table of the visible answers."""
+    moved = Moved(rng, shift=False)
+    theta = np.radians([-20.0, 0.0, 20.0])
+    walls = [
+        (2.0 / np.cos(theta), theta, 2.0, 0.0),
+        (3.0 / np.cos(np.radians([-60.0, -90.0, -120.0]) + np.pi / 2), np.radians([-60.0, -90.0, -120.0]), 3.0,
+         -np.pi / 2),
+        (-1.0 / np.cos(np.radians([160.0, 180.0, 200.0])), np.radians([160.0, 180.0, 200.0]), 1.0, np.pi),
+        (np.array([1.3354, 1.0442, 1.01, 1.0842, 1.2654]), np.radians([-40.0, -20.0, 0.0, 20.0, 40.0]),
+         1.0003793158236751, 0.016346680066035013),
+    ]
+    for k, (rho, theta, r, alpha) in enumerate(walls):
+        s = moved.scale
+        result = fit_line(s * rho, moved.bearing(theta))
+        try:
+            assert_line_result(result, *moved.line(r, alpha), atol=1e-7 * s)
+        except AssertionError as error:
+            raise AssertionError(f"visible wall {k + 1}, turned by {moved.angle:.3f} rad and scaled by {s}: "
+                                 f"{error}") from None
 
 
 def test_hidden_random(fit_line, rng):

@@ -10,7 +10,7 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
-from labkit.grading import random_wall_beams
+from labkit.grading import Moved, random_wall_beams
 
 FUNCTIONS = ("split_index", "similar")
 #: Packages the student's code cannot import when graded (labkit never can): a Ramer-Douglas-Peucker.
@@ -62,6 +62,34 @@ def _check_similar(similar, r1, alpha1, r2, alpha2, dr_max, dalpha_max):
         f"similar({r1:.4f}, {alpha1:.4f}, {r2:.4f}, {alpha2:.4f}, dr_max={dr_max:.3f}, dalpha_max={dalpha_max:.4f})"
         f" should be {expected}, got {result}"
     )
+
+
+def test_visible(split_index, similar, rng):
+    """The visible examples again, moved: runs of points turned, scaled and shifted (the threshold
+    scaled), lines turned and scaled (dr_max scaled). Distances scale alike, so every answer stays.
+    Earned by functions, not by a table of the visible answers."""
+    moved = Moved(rng)
+    s = moved.scale
+    roof = [[0.0, 0.0], [1.0, 0.5], [2.0, 0.0]]
+    steps = [[0.0, 0.0], [1.0, 1.0], [2.0, 0.2], [3.0, 0.1], [4.0, 0.0]]
+    runs = [(roof, 0.1, 2, 1), (roof, 0.6, 2, None), ([[0.0, 1.0], [1.0, 2.0], [2.0, 3.0], [3.0, 4.0]], 0.01, 2, None),
+            ([[1.0, -1.0], [0.9375, -0.5], [1.25, 0.0], [1.0, 1.0], [1.0, 3.0]], 0.1, 2, 2),
+            (steps, 0.1, 2, 1), (steps, 0.1, 4, 2), (steps, 0.3, 4, None)]
+    for k, (run, threshold_m, min_points, expected) in enumerate(runs):
+        _check_split(split_index, moved.points(run), s * threshold_m, min_points, expected,
+                     f"visible run {k + 1}, moved (turned by {moved.angle:.3f} rad, scaled by {s})")
+    dr_max, dalpha_max = 0.05, np.radians(5.0)
+    pairs = [((2.0, 10.0), (2.03, 12.0), True), ((2.0, 10.0), (2.1, 10.0), False),
+             ((2.0, 10.0), (2.0, 20.0), False), ((3.0, 178.0), (3.01, -179.0), True),
+             ((0.02, 10.0), (0.01, -170.0), True), ((2.0, 0.0), (2.0, 180.0), False)]
+    for k, ((r1, a1), (r2, a2), expected) in enumerate(pairs):
+        alpha1, alpha2 = (float(moved.bearing(np.radians(a))) for a in (a1, a2))
+        result = similar(s * r1, alpha1, s * r2, alpha2, s * dr_max, dalpha_max)
+        assert isinstance(result, (bool, np.bool_)), f"similar must return True or False, got {result!r}"
+        assert result == expected, (
+            f"visible pair {k + 1}, turned by {moved.angle:.3f} rad and scaled by {s}: similar({s * r1:.4f}, "
+            f"{alpha1:.4f}, {s * r2:.4f}, {alpha2:.4f}, dr_max={s * dr_max:.3f}, dalpha_max={dalpha_max:.4f}) "
+            f"should be {expected}, got {result}")
 
 
 def test_hidden_random(split_index, similar, rng):

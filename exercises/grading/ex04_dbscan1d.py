@@ -12,7 +12,7 @@ import numpy as np
 from sklearn.cluster import DBSCAN
 
 from labkit.dbscan1d import dbscan1d
-from labkit.grading import assert_labels_result
+from labkit.grading import Moved, assert_labels_result
 
 FUNCTIONS = ("neighbourhood_bounds", "dbscan_sorted")
 #: Packages the student's code cannot import when graded (labkit never can): the DBSCANs of PyPI.
@@ -27,6 +27,35 @@ def _expected(x, eps, min_pts):
     gap = np.abs(x[:, None] - x[None, :]) <= eps
     labels = DBSCAN(eps=eps, min_samples=min_pts).fit(x[:, None]).labels_
     return gap.argmax(axis=1), x.size - 1 - gap[:, ::-1].argmax(axis=1), labels
+
+
+def test_visible(neighbourhood_bounds, dbscan_sorted, rng):
+    """The visible examples again, scaled by a power of two and shifted by a whole multiple of it (eps
+    scaled too): differences scale exactly, so ties at exactly eps stay ties and the bounds and labels
+    stay. Earned by functions, not by a table of the visible answers."""
+    s = Moved(rng).scale
+    shift = float(rng.integers(-50, 51))
+    first = [0.0, 1.0, 1.0, 2.0, 4.0, 6.0, 7.0, 7.0, 8.0]
+    two = [0.0, 0.1, 0.2, 0.3, 5.0, 9.0, 9.1, 9.2]
+    examples = [(first, 2.0, 4, [0, 0, 0, 0, 0, 1, 1, 1, 1]), (two, 0.15, 3, [0, 0, 0, 0, -1, 1, 1, 1]),
+                (two, 0.15, 5, [-1] * 8), ([0.0, 2.0, 2.5, 3.0], 0.5, 3, [-1, 0, 0, 0]),
+                ([0.0, 0.5, 3.0], 1.0, 1, [0, 0, 1])]
+    where = f"scaled by {s} and shifted by {s * shift:g}"
+    bounds = neighbourhood_bounds(s * (np.array(first) + shift), s * 2.0)
+    assert isinstance(bounds, tuple) and len(bounds) == 2, f"visible example 1, {where}: return a tuple (L, U)"
+    wanted = [("L", bounds[0], [0, 0, 0, 0, 3, 4, 5, 5, 5]), ("U", bounds[1], [3, 3, 3, 4, 5, 8, 8, 8, 8])]
+    for name, value, want in wanted:
+        try:
+            assert_labels_result(value, np.array(want, dtype=np.int64), name=name, item="point")
+        except AssertionError as error:
+            raise AssertionError(f"visible example 1, {where}: {error}") from None
+    for k, (x, eps, min_pts, labels) in enumerate(examples):
+        try:
+            assert_labels_result(dbscan_sorted(s * (np.array(x) + shift), s * eps, min_pts),
+                                 np.array(labels, dtype=np.int64), item="point")
+        except AssertionError as error:
+            raise AssertionError(f"visible example {k + 1}, {where}, eps={s * eps:g}, min_pts={min_pts}: "
+                                 f"{error}") from None
 
 
 def test_hidden_random(neighbourhood_bounds, dbscan_sorted, rng):

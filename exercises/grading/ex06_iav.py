@@ -9,6 +9,7 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
+from labkit.grading import Moved
 
 FUNCTIONS = ("inscribed_angles", "is_circle")
 
@@ -36,6 +37,37 @@ def _random_shape(rng, kind, n):
         noise = float(rng.choice([0.0, 0.005]))
     p = p + noise * rng.standard_normal(p.shape) + rng.uniform(-5.0, 5.0, 2)
     return p
+
+
+def test_visible(inscribed_angles, is_circle, rng):
+    """The visible shapes again, turned, scaled and shifted: inscribed angles do not change under a
+    similarity, so the angles and the verdicts stay. Earned by functions, not by a table of the
+    visible answers."""
+    moved = Moved(rng)
+    t = np.radians([-90.0, -45.0, 0.0, 30.0, 90.0])
+    away = np.pi / 2 + np.arctan(0.5)
+    shapes = [  # points, angles, tolerance, is_circle with the defaults (None: the half circle's mean is exactly
+        # pi/2, the edge of the default range, where rounding in the moved points decides)
+        (np.column_stack([np.cos(t), np.sin(t)]), [np.pi / 2] * 3, 1e-9, None),
+        ([[0.0, 0.0], [0.1, 0.3], [0.2, 0.6], [0.3, 0.9]], [np.pi, np.pi], 1e-6, False),
+        ([[0.0, 1.0], [0.0, 0.5], [0.0, 0.0], [0.5, 0.0], [1.0, 0.0]], [away, np.pi / 2, away], 1e-9, False),
+    ]
+    where = f"turned by {moved.angle:.3f} rad, scaled by {moved.scale} and shifted"
+    for k, (points, angles, atol, circle) in enumerate(shapes):
+        points = moved.points(points)
+        got = inscribed_angles(points)
+        assert isinstance(got, np.ndarray) and got.shape == (len(angles),), (
+            f"visible shape {k + 1}, {where}: one angle per interior point, shape ({len(angles)},), got {got!r}")
+        assert np.allclose(got, angles, atol=atol, rtol=0), f"visible shape {k + 1}, {where}: angles {got}, " \
+            f"expected {np.round(angles, 6)}"
+        if circle is None:
+            continue
+        verdict = is_circle(points)
+        assert isinstance(verdict, (bool, np.bool_)), f"is_circle must return a bool, got {type(verdict).__name__}"
+        assert verdict == circle, f"visible shape {k + 1}, {where}: is_circle should be {circle}, got {verdict}"
+    line = moved.points([[0.0, 0.0], [0.1, 0.3], [0.2, 0.6], [0.3, 0.9]])
+    assert is_circle(line, std_max=0.05, mean_range=(3.0, np.pi)), \
+        f"visible line, {where}: it passes a test with a line's thresholds (std_max=0.05, mean_range=(3.0, pi))"
 
 
 def test_hidden_random(inscribed_angles, is_circle, rng):

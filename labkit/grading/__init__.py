@@ -21,7 +21,7 @@ draw inputs, :func:`assert_beams_result`, :func:`assert_labels_result` and
 :func:`assert_line_result` compare answers in words a student can act on.
 """
 
-from .checks import assert_beams_result, assert_labels_result, assert_line_result
+from .checks import Moved, assert_beams_result, assert_labels_result, assert_line_result
 from .command import add_grade_parser, check, grade, main, run_grade
 from .inputs import random_beams, random_wall_beams
 
@@ -31,6 +31,7 @@ __all__ = [
     "assert_beams_result",
     "assert_labels_result",
     "assert_line_result",
+    "Moved",
     "grade",
     "check",
     "add_grade_parser",

@@ -2,7 +2,9 @@
 
 :func:`assert_beams_result` compares a ``(points, indices)`` answer with the reference,
 :func:`assert_labels_result` a per-item label array and :func:`assert_line_result` a line
-``(r, alpha)`` in normal form. They run on the grader's trusted side, on the plain values the
+``(r, alpha)`` in normal form; :class:`Moved` moves a test's inputs (and its answers) to a random
+place, so that a visible example is graded again on numbers the student has not seen. They run on
+the grader's trusted side, on the plain values the
 worker sent back (numbers, strings, lists, tuples, exact numpy arrays of numeric dtype): nothing
 the student's code built reaches them.
 """
@@ -15,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["assert_beams_result", "assert_labels_result", "assert_line_result"]
+__all__ = ["Moved", "assert_beams_result", "assert_labels_result", "assert_line_result"]
 
 
 def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float = 1e-9) -> None:
@@ -168,3 +170,47 @@ def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-
             f"alpha is wrong: should be {alpha:.9f} rad ({math.degrees(alpha):.4f} deg),"
             f" got {got_alpha:.9f} rad ({math.degrees(got_alpha):.4f} deg)"
         )
+
+
+class Moved:
+    """A random similarity of the plane: scale by ``scale``, turn by ``angle``, then shift by ``shift``.
+
+    The spec of an exercise grades its visible examples a second time, moved: every number changes,
+    the answer changes as geometry says (labels and indices stay, points and lines move with the
+    plane), so a table of the visible answers earns nothing while a working function passes.
+    ``scale`` is a power of two, so scaled readings keep exact ties (a gap of exactly ``eps``,
+    a reading exactly at ``range_min``).
+
+    Examples
+    --------
+    >>> moved = Moved(np.random.default_rng(0))
+    >>> r, alpha = moved.line(2.0, 0.0)
+    >>> bool(np.isclose(r, moved.scale * 2.0 + moved.shift @ [np.cos(alpha), np.sin(alpha)]))
+    True
+    """
+
+    def __init__(self, rng: np.random.Generator, *, shift: bool = True) -> None:
+        self.scale = float(2.0 ** rng.integers(-2, 4))
+        self.angle = float(rng.uniform(-np.pi, np.pi))
+        self.shift = rng.uniform(-5.0, 5.0, 2) if shift else np.zeros(2)
+
+    def points(self, points: Any) -> np.ndarray:
+        """``points`` (N x 2) moved."""
+        c, s = np.cos(self.angle), np.sin(self.angle)
+        xy = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        return self.scale * xy @ np.array([[c, s], [-s, c]]) + self.shift
+
+    def bearing(self, angles: Any) -> np.ndarray:
+        """Directions (radians) turned with the plane, wrapped into (-pi, pi]."""
+        return wrap(np.asarray(angles, dtype=np.float64) + self.angle)
+
+    def line(self, r: float, alpha: float) -> tuple[float, float]:
+        """The line ``x cos(alpha) + y sin(alpha) = r`` moved, in normal form again (r >= 0)."""
+        alpha = float(self.bearing(alpha))
+        r = self.scale * r + float(self.shift @ [np.cos(alpha), np.sin(alpha)])
+        return (r, alpha) if r >= 0 else (-r, float(wrap(alpha + np.pi)))
+
+
+def wrap(angles: Any) -> Any:
+    """Angles (radians) into (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(angles, dtype=np.float64), 2 * np.pi)
