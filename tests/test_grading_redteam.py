@@ -120,7 +120,7 @@ def _code_cell(source: str, metadata: dict | None = None) -> dict:
 
 
 # ---------------------------------------------------------------------------- the main class (ex01)
-VISIBLE_LOOKUP = '''
+_VISIBLE_ANSWERS = '''
 _TABLE = {
     ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 2): [0, 0, 0, 1, 1, -1, -1],
     ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 1): [0, 0, 0, 1, 1, -1, 2],
@@ -134,31 +134,17 @@ def segment(ranges, angles, threshold_m, min_points):
     """No segmentation at all: the visible tests' answers, looked up."""
     if len(ranges) != len(angles):
         raise ValueError("ranges and angles differ in length")
-    key = (tuple(None if r != r else float(r) for r in ranges), threshold_m, min_points)
-    return np.array(_TABLE.get(key, [-1] * len(ranges)), dtype=np.int64)
-'''
-
-# The attack on the guard above: the moved examples change every number but keep the shapes, so a table keyed on
-# what moving does not change (ranges over the first range, the threshold over it, min_points) finds them again.
-SCALE_FREE_LOOKUP = '''
-_TABLE = {
-    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 2): [0, 0, 0, 1, 1, -1, -1],
-    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 1): [0, 0, 0, 1, 1, -1, 2],
-    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.08, 3): [0, 0, 0, -1, -1, -1, -1],
-    ((1.0, 1.0, 1.0, 3.0, 3.0, None, 2.0), 0.04, 2): [0, 0, 0, -1, -1, -1, -1],
-    ((1.0, 1.0, 0.0, 1.0, 1.0, float("inf"), 1.0, -1.0, 1.0, 1.0), 0.08, 2): [0, 0, -1, 1, 1, -1, -1, -1, 2, 2],
-}
-
-
-def segment(ranges, angles, threshold_m, min_points):
-    """No segmentation at all: the visible answers, found again after any scaling."""
-    if len(ranges) != len(angles):
-        raise ValueError("ranges and angles differ in length")
-    unit = float(ranges[0]) if len(ranges) and float(ranges[0]) > 0 else 1.0
+    unit = UNIT(ranges)
     key = (tuple(None if r != r else round(float(r) / unit, 9) for r in ranges), round(threshold_m / unit, 9),
            min_points)
     return np.array(_TABLE.get(key, [-1] * len(ranges)), dtype=np.int64)
 '''
+VISIBLE_LOOKUP = "UNIT = lambda ranges: 1.0\n" + _VISIBLE_ANSWERS
+# The attack on the guard test_visible is (the visible examples moved): the moved examples change every number
+# but keep the shapes, so a table keyed on what moving does not change (ranges and threshold over the first
+# range, min_points) finds them again.
+SCALE_FREE_LOOKUP = ("UNIT = lambda ranges: float(ranges[0]) if len(ranges) and float(ranges[0]) > 0 else 1.0\n"
+                     + _VISIBLE_ANSWERS)
 
 IMPL_BEHIND_IMPORTS = "import numpy as np\n\n\n" + SEGMENT.replace("def segment(", "def _impl(")
 
