@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from ..geometry import normalize_line, transform_points, wrap_angle
+
 __all__ = ["Moved", "assert_beams_result", "assert_labels_result", "assert_line_result"]
 
 
@@ -196,21 +198,14 @@ class Moved:
 
     def points(self, points: Any) -> np.ndarray:
         """``points`` (N x 2) moved."""
-        c, s = np.cos(self.angle), np.sin(self.angle)
         xy = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        return self.scale * xy @ np.array([[c, s], [-s, c]]) + self.shift
+        return transform_points(self.scale * xy, (*self.shift, self.angle))
 
-    def bearing(self, angles: Any) -> np.ndarray:
+    def bearing(self, angles: Any) -> Any:
         """Directions (radians) turned with the plane, wrapped into (-pi, pi]."""
-        return wrap(np.asarray(angles, dtype=np.float64) + self.angle)
+        return wrap_angle(np.asarray(angles, dtype=np.float64) + self.angle)
 
     def line(self, r: float, alpha: float) -> tuple[float, float]:
         """The line ``x cos(alpha) + y sin(alpha) = r`` moved, in normal form again (r >= 0)."""
         alpha = float(self.bearing(alpha))
-        r = self.scale * r + float(self.shift @ [np.cos(alpha), np.sin(alpha)])
-        return (r, alpha) if r >= 0 else (-r, float(wrap(alpha + np.pi)))
-
-
-def wrap(angles: Any) -> Any:
-    """Angles (radians) into (-pi, pi]."""
-    return np.pi - np.mod(np.pi - np.asarray(angles, dtype=np.float64), 2 * np.pi)
+        return normalize_line(self.scale * r + float(self.shift @ [np.cos(alpha), np.sin(alpha)]), alpha)
