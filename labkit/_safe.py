@@ -201,17 +201,26 @@ def check_output(target: str | Path, kind: OutputKind, *, overwrite: bool = Fals
 
 # ---------------------------------------------------------------------------- writing
 def _make_parents(folder: Path) -> list[Path]:
-    """Create ``folder`` and its missing parents; return the ones created, innermost first."""
-    created = []
+    """Create ``folder`` and its missing parents; return the ones this call created, innermost first.
+    Another writer may create the same folder at the same moment (parallel tasks writing into one new
+    output folder): that folder is then theirs, not an error."""
+    missing = []
     p = folder
     while not p.exists():
-        created.append(p)
+        missing.append(p)
         if p.parent == p:
             break
         p = p.parent
-    for p in reversed(created):
-        p.mkdir()
-    return created
+    created = []
+    for p in reversed(missing):
+        try:
+            p.mkdir()
+        except FileExistsError:
+            if not p.is_dir():
+                raise
+            continue
+        created.append(p)
+    return created[::-1]
 
 
 def _remove_empty(folders: list[Path]) -> None:

@@ -255,6 +255,36 @@ def test_folders_created_for_a_failed_write_are_removed(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_folder_another_writer_creates_at_the_same_moment_is_theirs(tmp_path, monkeypatch):
+    """Parallel tasks writing into one new output folder (extract --workers): each sees it missing, one
+    creates it first. The other's write must succeed (it failed with 'File exists' once, in the CI of
+    test_parallel), and its clean-up after a failure must leave the other writer's folder alone."""
+    import pathlib
+
+    from labkit._safe import safe_output
+    from labkit.io.jsonscan import JSON_LINES
+
+    shared = tmp_path / "new" / "out"
+    real_mkdir = pathlib.Path.mkdir
+
+    def racing_mkdir(self, *args, **kwargs):
+        if self == shared and not self.exists():
+            real_mkdir(self)  # the other writer, between our exists() and our mkdir()
+            (self / "theirs.jsonl").write_text("{}\n")
+        return real_mkdir(self, *args, **kwargs)
+
+    monkeypatch.setattr(pathlib.Path, "mkdir", racing_mkdir)
+    with safe_output(shared / "mine.jsonl", JSON_LINES) as tmp:
+        tmp.write_text('{"ranges": []}\n')
+    assert sorted(p.name for p in shared.iterdir()) == ["mine.jsonl", "theirs.jsonl"]
+
+    shutil.rmtree(tmp_path / "new")
+    with pytest.raises(RuntimeError), safe_output(shared / "mine.jsonl", JSON_LINES) as tmp:
+        (shared / "theirs.jsonl").unlink()  # the other writer is not done yet: its folder is empty for now
+        raise RuntimeError("the writer failed")
+    assert (tmp_path / "new").is_dir() and shared.is_dir()  # "new" was ours, but holds their folder
+
+
 # -- as an unprivileged user: root reads and writes everything, so these run as `nobody`
 def _as_nobody():
     """(python command, preexec) that run labkit as the user nobody, or skip."""
