@@ -1,7 +1,7 @@
 """Nguyen-style comparison of the line extractors, circles and legs, and ray-axis RMSE on real logs.
 
 Four parts, every number computed here by :mod:`labkit.experiments` (the same code as
-``labkit evaluate`` and notebook 08):
+``labkit evaluate`` and notebook 10):
 
 (a) every line extractor on ``--scans`` simulated scans of 722 beams per noise level (5 mm and
     2 cm), a third each from the office, corridor and random-polygon worlds: TruePos, FalsePos,

@@ -1,4 +1,4 @@
-"""The evaluation experiments of ``labkit evaluate``, ``benchmarks/evaluation.py`` and notebook 08.
+"""The evaluation experiments of ``labkit evaluate``, ``benchmarks/evaluation.py`` and notebook 10.
 
 Each experiment is a function that builds its data, runs the extractors and scores them with
 :mod:`labkit.evaluation`; the CLI, the benchmark script and the notebook all call these, so
@@ -293,7 +293,7 @@ def false_positive_reasons(data: Sequence[SimScan], noise_std_m: float, extract:
             for k, v in sorted(found.items(), key=lambda kv: -len(kv[1]))]
 
 
-#: Columns of the tables (row key -> ``header:format``), shared by the CLI, the benchmark and notebook 08.
+#: Columns of the tables (row key -> ``header:format``), shared by the CLI, the benchmark and notebook 10.
 LINE_COLUMNS = {"noise_std_m": "noise (m)", "method": "method", "tp_rate": "TruePos:.3f", "fp_rate": "FalsePos:.3f",
                 "sigma_dr_m": "sigma dr (mm):", "sigma_dalpha_deg": "sigma dalpha (deg):.2f",
                 "lines_per_scan": "lines/scan:.1f", "scans_per_s": "scans/s:,.0f"}

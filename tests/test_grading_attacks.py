@@ -45,7 +45,7 @@ from tests.grading_course import (
 
 pytestmark = pytest.mark.slow
 
-EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02_weighted_line_fit", "ex04_dbscan1d"
+EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02_weighted_line_fit", "ex06_dbscan1d"
 FULL = 10.0
 SLOT = 10  # this run's students are uids worker_uid(10) and worker_uid(11): no other test uses them
 

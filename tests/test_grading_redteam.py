@@ -577,7 +577,7 @@ def probe(how, limit):
 
 
 # ---------------------------------------------------------------------------- one student's CPU load
-EX4 = "ex04_dbscan1d"
+EX4 = "ex06_dbscan1d"
 CPU_HOG = """
 import os, time
 
@@ -975,7 +975,7 @@ def test_the_release_notebook_is_the_base_of_every_submission():
 
 # open on eb62b65 and 8980e1c (reproduced by hand, see the findings), closed by the workers' cgroups (a sandbox is one
 # entity for the scheduler, at most one CPU) or, without cgroups, by a CPU per parallel job: a submission that forked
-# ~31 busy loops, each in a session (scheduling group) of its own, made the instructor's own ex04 solution graded
+# ~31 busy loops, each in a session (scheduling group) of its own, made the instructor's own ex06 solution graded
 # next to it with --jobs 2 fail its 200 000-point speed test ("8.1 s") or time out (5 s per call)
 def test_one_students_cpu_load_costs_the_students_graded_beside_it_nothing(tmp_path):
     graded = _build_cpu_class(tmp_path)
