@@ -12,6 +12,7 @@ with no outputs (STYLE.md item 11) and no ``sys.path`` manipulation (STYLE.md it
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import re
@@ -96,22 +97,121 @@ def test_kernel_runs_this_interpreter(this_python_kernel, tmp_path):
 
 
 # ---------------------------------------------------------------------------- notebooks run
+YOUR_TURN, YOUR_TURN_CHECK = "your-turn", "your-turn-check"
+
+
+def _tags(cell) -> list[str]:
+    return list(cell.get("metadata", {}).get("tags", []))
+
+
+def your_turn_pairs(nb) -> list[tuple[int, int]]:
+    """(stub index, check index) for every cell tagged ``your-turn``: its check is the next
+    code cell tagged ``your-turn-check``."""
+    pairs = []
+    for i, cell in enumerate(nb.cells):
+        if YOUR_TURN in _tags(cell):
+            j = next((k for k in range(i + 1, len(nb.cells)) if YOUR_TURN_CHECK in _tags(nb.cells[k])), None)
+            assert j is not None, f"your-turn cell {i} ({cell.get('id')}) has no your-turn-check cell after it"
+            pairs.append((i, j))
+    return pairs
+
+
+def _fills(path: Path) -> dict:
+    """The ``FILLS`` of ``tests/your_turn/nbNN.py`` for ``NN_*.ipynb`` ({} when there is none)."""
+    module_path = REPO / "tests" / "your_turn" / f"nb{path.name[:2]}.py"
+    if not module_path.exists():
+        return {}
+    module = importlib.import_module(f"tests.your_turn.nb{path.name[:2]}")
+    return module.FILLS
+
+
+def _output_text(cell) -> str:
+    return "".join(o.get("text", "") for o in cell.get("outputs", []) if o.get("output_type") == "stream")
+
+
+def _run_your_turn(client, nb, stub: int, check: int, fill) -> None:
+    """Mistake (check fails with the hint), correct fill (check passes), then the stub as shipped."""
+    shipped = nb.cells[stub].source
+    cid = nb.cells[stub].get("id")
+    try:
+        nb.cells[stub].source = fill.mistake
+        client.execute_cell(nb.cells[stub], stub)
+        try:
+            client.execute_cell(nb.cells[check], check)
+        except CellExecutionError as exc:
+            message = _ANSI.sub("", str(exc))
+            assert "YourTurnError" in message and fill.hint in message, (
+                f"cell {cid}: the planted mistake failed the check, but not with YourTurnError and the hint "
+                f"{fill.hint!r}:\n{message[-1500:]}")
+        else:
+            raise AssertionError(f"cell {cid}: the check passed the planted mistake:\n{fill.mistake}")
+        nb.cells[stub].source = fill.correct
+        client.execute_cell(nb.cells[stub], stub)
+        client.execute_cell(nb.cells[check], check)
+        assert "well done" in _output_text(nb.cells[check]), (
+            f"cell {cid}: the correct fill-in did not pass the check: {_output_text(nb.cells[check])!r}")
+    finally:
+        nb.cells[stub].source = shipped
+    client.execute_cell(nb.cells[stub], stub)
+    client.execute_cell(nb.cells[check], check)
+    assert "not done yet" in _output_text(nb.cells[check]), (
+        f"cell {cid}: with the stub as shipped the check should go on with labkit's version; "
+        f"it printed {_output_text(nb.cells[check])!r}")
+
+
+def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict) -> None:
+    """Run ``nb`` top to bottom, cell by cell; every "your turn" pair is tried three ways
+    (:func:`_run_your_turn`) before the notebook goes on as shipped."""
+    pairs = dict(your_turn_pairs(nb))
+    checks = set(pairs.values())
+    missing = [nb.cells[i].get("id") for i in pairs if nb.cells[i].get("id") not in fills]
+    assert not missing, f"your-turn cells without a fill-in in tests/your_turn/: {missing}"
+    client = NotebookClient(nb, timeout=CELL_TIMEOUT_S, kernel_name=kernel_name,
+                            resources={"metadata": {"path": str(workdir)}})
+    with client.setup_kernel():
+        for i, cell in enumerate(nb.cells):
+            if i in checks:
+                continue  # run with its stub
+            if i in pairs:
+                _run_your_turn(client, nb, i, pairs[i], fills[cell.get("id")])
+                continue
+            client.execute_cell(cell, i)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path, monkeypatch):
+    """Every notebook runs as shipped; on the way, every "your turn" check fails a planted
+    mistake with its hint and passes a correct fill-in (tests/your_turn/)."""
     if SHARED_DATASETS.is_dir():  # the notebooks' real-data sections run too (they skip without it)
         monkeypatch.setenv("LABKIT_SHARED_DATASETS", str(SHARED_DATASETS.resolve()))
     nb = nbformat.read(path, as_version=4)
     workdir = tmp_path / "cwd"
     workdir.mkdir()
     try:
-        _execute(nb, workdir, this_python_kernel)
+        run_notebook(nb, workdir, this_python_kernel, _fills(path))
         return
-    except (CellExecutionError, CellTimeoutError, DeadKernelError) as exc:
+    except (CellExecutionError, CellTimeoutError, DeadKernelError, AssertionError) as exc:
         error = f"{type(exc).__name__}: {_ANSI.sub('', str(exc))}"
     executed = tmp_path / path.name  # outside the except block: the report shows the error once
     nbformat.write(nb, executed)
     pytest.fail(f"{_rel(path)} failed; executed copy in {executed}\n\n{error}", pytrace=False)
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_your_turn_cells(path):
+    """Every lesson after the tour has at least two "your turn" cells, each with its check and a
+    fill-in (a correct one and a planted mistake) in tests/your_turn/."""
+    nb = nbformat.read(path, as_version=4)
+    pairs = your_turn_pairs(nb)
+    if path.name.startswith("00_"):
+        return
+    assert len(pairs) >= 2, f"{_rel(path)} has {len(pairs)} your-turn cells; every notebook 01-11 needs two"
+    fills = _fills(path)
+    for stub, _ in pairs:
+        cell = nb.cells[stub]
+        assert "NotImplementedError" in cell.source, f"{_rel(path)} cell {cell.get('id')}: the stub must raise it"
+        assert cell.get("id") in fills, f"{_rel(path)} cell {cell.get('id')} has no fill-in in tests/your_turn/"
 
 
 # ---------------------------------------------------------------------------- stored clean

@@ -1,0 +1,134 @@
+"""Checks for the course notebooks' "your turn" cells.
+
+A "your turn" cell gives the student a function to complete; the stub as shipped raises
+``NotImplementedError``. The check cell after it calls :func:`check` with cases whose
+expected answers come from independent truth (closed-form geometry, a brute-force count,
+labkit's own function) and a hint for each:
+
+- the stub is not done yet: one line says so and the notebook goes on with labkit's
+  version (``fallback``), so it still runs top to bottom untouched;
+- a case fails: :class:`YourTurnError` says which input, what was expected, what came
+  back, and the case's hint;
+- every case passes: one line says so and the student's own function is used from then on.
+
+>>> def double(x):
+...     raise NotImplementedError
+>>> f = check(double, [Case((2,), 4, hint="twice x")], fallback=lambda x: 2 * x)
+not done yet: double still raises NotImplementedError; the notebook goes on with labkit's version
+>>> f(3)
+6
+>>> def double(x):
+...     return x + 2
+>>> check(double, [Case((2,), 4, "twice x"), Case((5,), 10, "twice x, not x + 2")], fallback=None)
+Traceback (most recent call last):
+...
+labkit.course.YourTurnError: double(5) returned 7, expected 10. Hint: twice x, not x + 2
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Case", "YourTurnError", "check"]
+
+
+class YourTurnError(AssertionError):
+    """A "your turn" function gave a wrong answer; the message says where and gives a hint."""
+
+
+@dataclass(frozen=True)
+class Case:
+    """One input of a check, what it should give, and a hint for when it does not.
+
+    ``expected`` is compared with :func:`numpy.allclose` (``atol``, ``rtol``, NaN equal to
+    NaN) for numbers and arrays, by ``==`` otherwise, or by ``compare(got, expected)``
+    when given. ``raises`` instead names the exception type the call must raise (types
+    are checked, never message wording).
+    """
+
+    args: tuple
+    expected: Any = None
+    hint: str = ""
+    kwargs: dict = field(default_factory=dict)
+    raises: type[BaseException] | None = None
+    atol: float = 1e-9
+    rtol: float = 1e-9
+    compare: Callable[[Any, Any], bool] | None = None
+    label: str = ""
+
+
+def _show(value: Any, limit: int = 160) -> str:
+    if isinstance(value, np.ndarray):
+        text = np.array2string(value, precision=4, threshold=12)
+    else:
+        text = repr(value)
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _call_text(name: str, case: Case) -> str:
+    if case.label:
+        return f"{name}({case.label})"
+    parts = [_show(a, 60) for a in case.args] + [f"{k}={_show(v, 60)}" for k, v in case.kwargs.items()]
+    return f"{name}({', '.join(parts)})"
+
+
+def _equal(got: Any, expected: Any, case: Case) -> bool:
+    if case.compare is not None:
+        return bool(case.compare(got, expected))
+    if isinstance(expected, (bool, np.bool_)):
+        return isinstance(got, (bool, np.bool_)) and bool(got) == bool(expected)
+    if isinstance(expected, str) or expected is None:
+        return got == expected
+    if isinstance(expected, (tuple, list)) and not all(isinstance(e, (int, float, np.number)) for e in expected):
+        if not isinstance(got, (tuple, list)) or len(got) != len(expected):
+            return False
+        return all(_equal(g, e, case) for g, e in zip(got, expected, strict=True))
+    try:
+        g = np.asarray(got, dtype=float)
+        e = np.asarray(expected, dtype=float)
+    except (TypeError, ValueError):
+        return got == expected
+    if g.shape != e.shape:
+        return False
+    return bool(np.allclose(g, e, atol=case.atol, rtol=case.rtol, equal_nan=True))
+
+
+def check(student: Callable, cases: Sequence[Case], *, fallback: Callable | None, name: str | None = None,
+          quiet: bool = False) -> Callable:
+    """Check a "your turn" function on ``cases``; return the function to go on with.
+
+    Returns ``student`` when every case passes, ``fallback`` (labkit's version) when the
+    stub still raises ``NotImplementedError``; raises :class:`YourTurnError` on the
+    first case that fails, naming the input, the expected and the returned value and the hint.
+    """
+    name = name or getattr(student, "__name__", "your function")
+    if not cases:
+        raise ValueError("check needs at least one case")
+    for case in cases:
+        call = _call_text(name, case)
+        try:
+            got = student(*case.args, **case.kwargs)
+        except NotImplementedError:
+            if fallback is None:
+                raise YourTurnError(f"{name} still raises NotImplementedError: complete it above") from None
+            print(f"not done yet: {name} still raises NotImplementedError; the notebook goes on with labkit's version")
+            return fallback
+        except Exception as exc:  # the student's error, reported in words
+            if case.raises is not None and isinstance(exc, case.raises):
+                continue
+            expected = f"{case.raises.__name__}" if case.raises else _show(case.expected)
+            raise YourTurnError(f"{call} raised {type(exc).__name__}: {exc}; expected {expected}. "
+                                f"Hint: {case.hint}") from None
+        if case.raises is not None:
+            raise YourTurnError(f"{call} returned {_show(got)}, expected it to raise {case.raises.__name__}. "
+                                f"Hint: {case.hint}")
+        if not _equal(got, case.expected, case):
+            raise YourTurnError(f"{call} returned {_show(got)}, expected {_show(case.expected)}. Hint: {case.hint}")
+    if not quiet:
+        print(f"well done: {name} passes all {len(cases)} checks; the notebook goes on with your version")
+    return student
