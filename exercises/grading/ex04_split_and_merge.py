@@ -1,4 +1,4 @@
-"""Hidden tests of exercise 3, ``split_index(points, threshold_m, min_points)`` and
+"""Hidden tests of exercise 4, ``split_index(points, threshold_m, min_points)`` and
 ``similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max)``.
 
 Trusted: the grader runs this file in its own process, never where the student's code runs, and
