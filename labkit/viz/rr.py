@@ -172,7 +172,6 @@ def log_static(rec: rr.RecordingStream, description: str | None = None) -> None:
     rec.log("world", rr.Transform3D(mat3x3=_Y_UP), static=True)
     rec.log("world/sensor", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[COLORS["sensor"]],
                                         labels=["sensor"]), static=True)
-    _hide_labels(rec, "world")
     if description:
         rec.log("description", rr.TextDocument(description, media_type=rr.MediaType.MARKDOWN), static=True)
 
@@ -279,7 +278,6 @@ class _Map:
                                                  labels=["sensor"], show_labels=False), static=True)
         rec.log("map/sensor/heading", rr.Arrows2D(vectors=[[0.6, 0.0]], colors=[_MAP_COLORS["pose"]],
                                                   radii=[-1.5]), static=True)
-        _hide_labels(rec, "map/sensor")
         for layer, archetype in (("points", rr.Points2D), ("lines", rr.LineStrips2D), ("corners", rr.Points2D),
                                  ("circles", rr.Points2D), ("legs", rr.Points2D)):
             rec.log(f"map/accumulated/{layer}", archetype.from_fields(show_labels=False, draw_order=10.0 + len(layer)),
@@ -452,6 +450,10 @@ def _send_features(rec, times, feats: list[Features], world: str, metrics: str |
     """Every feature layer of a batch of scans, as one ``send_columns`` call per layer (and,
     under ``metrics``, their counts and stage times)."""
 
+    # the layers' draw order and labels, only where features are logged: an entity that names an archetype
+    # without its required component (Ellipses2D without half_sizes) shows an error badge in the viewer
+    _hide_labels(rec, world)
+
     def send(layer: str, archetype, colour: str, size_ui: float, **columns) -> None:
         per_scan = [getattr(f, layer) for f in feats]
         counts = [len(xs) for xs in per_scan]
@@ -504,7 +506,6 @@ def log_features(
     configurations can be compared side by side (``blueprint(compare=[...])``).
     """
     world, metrics = ("world", "metrics") if not name else (f"world/{name}", f"metrics/{name}")
-    _hide_labels(rec, world)
 
     def send(batch: list[Features], k: int) -> None:
         k0 = start_index + k
