@@ -1,4 +1,5 @@
-"""Hidden tests of exercise 6, ``inscribed_angles(points)`` and ``is_circle(points, std_max, mean_range)``.
+"""Hidden tests of exercise 8, ``inscribed_angles(points)``, ``is_circle(points, std_max, mean_range)`` and
+``circle_from_angle(p_first, p_last, mean_angle, side)`` (the centre and radius, with the paper's erratum).
 
 Trusted: the grader runs this file in its own process, never where the student's code runs, and
 nbgrader never copies it into the release. Each ``test_<cell>`` function holds the hidden tests of
@@ -11,7 +12,7 @@ import numpy as np
 import labkit
 from labkit.grading import Moved
 
-FUNCTIONS = ("inscribed_angles", "is_circle")
+FUNCTIONS = ("inscribed_angles", "is_circle", "circle_from_angle")
 
 
 def _random_shape(rng, kind, n):
@@ -39,7 +40,34 @@ def _random_shape(rng, kind, n):
     return p
 
 
-def test_visible(inscribed_angles, is_circle, rng):
+def _random_arc(rng):
+    """The extremes, mean inscribed angle and side of a random arc of a known circle, and the circle:
+    closed-form truth (the points of an arc walked counter-clockwise lie right of its chord)."""
+    center = rng.uniform(-5.0, 5.0, 2)
+    radius = float(rng.uniform(0.05, 3.0))
+    start = float(rng.uniform(-np.pi, np.pi))
+    span = np.radians(float(rng.uniform(10.0, 350.0)))
+    p1 = center + radius * np.array([np.cos(start), np.sin(start)])
+    pn = center + radius * np.array([np.cos(start + span), np.sin(start + span)])
+    args = (p1, pn, float(np.pi - span / 2), -float(rng.uniform(0.1, 5.0)))
+    if rng.random() < 0.5:  # walked the other way: the points lie left
+        args = (pn, p1, args[2], -args[3])
+    return args, center, radius
+
+
+def _check_circle(circle_from_angle, args, center, radius, setting, atol=1e-6):
+    got = circle_from_angle(*args)
+    assert isinstance(got, tuple) and len(got) == 2, f"{setting}: return (center, radius), got {got!r}"
+    c, r = got
+    assert isinstance(c, np.ndarray) and c.shape == (2,), f"{setting}: center must be an array of shape (2,), got {c!r}"
+    scale = max(1.0, radius)
+    assert np.allclose(c, center, rtol=0.0, atol=atol * scale) and abs(float(r) - radius) <= atol * scale, (
+        f"{setting}: p_first {np.round(args[0], 4)}, p_last {np.round(args[1], 4)}, mean_angle {args[2]:.4f} rad, "
+        f"side {args[3]:+.2f}: expected center {np.round(center, 6)} and radius {radius:.6f}, got {np.round(c, 6)} "
+        f"and {float(r):.6f}")
+
+
+def test_visible(inscribed_angles, is_circle, circle_from_angle, rng):
     """The visible shapes again, turned, scaled and shifted: inscribed angles do not change under a
     similarity, so the angles and the verdicts stay. Earned by functions, not by a table of the
     visible answers."""
@@ -68,10 +96,21 @@ def test_visible(inscribed_angles, is_circle, rng):
     line = moved.points([[0.0, 0.0], [0.1, 0.3], [0.2, 0.6], [0.3, 0.9]])
     assert is_circle(line, std_max=0.05, mean_range=(3.0, np.pi)), \
         f"visible line, {where}: it passes a test with a line's thresholds (std_max=0.05, mean_range=(3.0, pi))"
+    for k, (p1, pn, alpha, side, center, radius) in enumerate([
+            ([1.0, 0.0], [0.0, 1.0], np.radians(135.0), -1, [0.0, 0.0], 1.0),
+            ([0.0, 1.0], [1.0, 0.0], np.radians(135.0), 1, [0.0, 0.0], 1.0),
+            ([3.0, 1.0], [1.0, -1.0], np.radians(45.0), -1, [1.0, 1.0], 2.0)]):
+        moved_ends = moved.points([p1, pn])
+        _check_circle(circle_from_angle, (moved_ends[0], moved_ends[1], alpha, side), moved.points([center])[0],
+                      moved.scale * radius, f"visible circle {k + 1}, {where}", atol=1e-9)
 
 
-def test_hidden_random(inscribed_angles, is_circle, rng):
-    """200 random noisy arcs, lines and V-corners: angles and verdicts against ``labkit``'s IAV."""
+def test_hidden_random(inscribed_angles, is_circle, circle_from_angle, rng):
+    """200 random noisy arcs, lines and V-corners: angles and verdicts against ``labkit``'s IAV; 100
+    random arcs: the circle from their ends and inscribed angle against the circle they come from."""
+    for trial in range(100):
+        args, center, radius = _random_arc(rng)
+        _check_circle(circle_from_angle, args, center, radius, f"random circle {trial}")
     checked = 0
     for trial in range(200):
         kind = ("arc", "arc", "line", "corner")[trial % 4]
@@ -110,8 +149,18 @@ def test_hidden_random(inscribed_angles, is_circle, rng):
     assert checked > 150, "the hidden test skipped too many cases"
 
 
-def test_hidden_edges(inscribed_angles, is_circle, rng):
-    """0 to 3 points, identical ends, an interior point on an end, lists of integers, other thresholds."""
+def test_hidden_edges(inscribed_angles, is_circle, circle_from_angle, rng):
+    """0 to 3 points, identical ends, an interior point on an end, lists of integers, other thresholds;
+    circles from integer lists, a half circle, and the undefined ones (no chord, angle 0 or pi, side 0)."""
+    _check_circle(circle_from_angle, ([1, 0], [-1, 0], np.pi / 2, -1), np.zeros(2), 1.0, "a half circle, integers")
+    _check_circle(circle_from_angle, ((0, 2), (2, 0), 3 * np.pi / 4, 2), np.zeros(2), 2.0, "a quarter, tuples")
+    for case, args in enumerate([([1.0, 1.0], [1.0, 1.0], 2.0, 1), ([0, 0], [1, 0], 0.0, 1), ([0, 0], [1, 0], np.pi, 1),
+                                 ([0, 0], [1, 0], -1.0, 1), ([0, 0], [1, 0], 2.0, 0), ([0, 0], [1, 0], 2.0, np.nan)]):
+        try:
+            circle_from_angle(*args)
+        except ValueError:
+            continue
+        raise AssertionError(f"undefined circle {case} (p_first, p_last, mean_angle, side = {args}): raise ValueError")
     undefined = [[], [[1.0, 2.0]], [[0.0, 0.0], [1.0, 1.0]], [[0, 0], [0, 0], [2, 0]], [[0, 0], [1, 1], [2, 0], [2, 0]]]
     for case, points in enumerate(undefined):
         try:
@@ -152,8 +201,11 @@ def test_hidden_edges(inscribed_angles, is_circle, rng):
         assert verdict == want, f"edge case {case} ({kwargs}): mean {mean:.4f}, std {std:.4f}: should be {want}"
 
 
-def test_own_work(inscribed_angles, is_circle, rng):
+def test_own_work(inscribed_angles, is_circle, circle_from_angle, rng):
     """Six more random arcs: right answers where labkit cannot be imported."""
+    for trial in range(6):
+        args, center, radius = _random_arc(rng)
+        _check_circle(circle_from_angle, args, center, radius, f"own-work circle {trial}")
     for _ in range(6):
         t = float(rng.uniform(-np.pi, np.pi)) + np.sort(rng.uniform(0.0, np.radians(200.0), int(rng.integers(4, 40))))
         points = float(rng.uniform(0.1, 1.0)) * np.column_stack([np.cos(t), np.sin(t)])
@@ -179,6 +231,12 @@ def is_circle(points, std_max=0.15, mean_range=(np.pi / 2, 3 * np.pi / 4)):
     except ValueError:
         return False
     return bool(std < std_max and mean_range[0] <= mean <= mean_range[1])
+''', "circle": '''
+import labkit
+
+
+def circle_from_angle(p_first, p_last, mean_angle, side):
+    return labkit.circle_from_iav(p_first, p_last, mean_angle, side)
 '''}
 
 #: Plausible wrong answers, as (text in the solution, replacement): a hidden test must catch each.
@@ -192,4 +250,9 @@ MISTAKES = {
         "mean, std = angles.mean(), angles.std()", "std, mean = angles.mean(), angles.std()"
     ),
     "sample standard deviation (ddof=1) instead of the population one": ("angles.std()", "angles.std(ddof=1)"),
+    "the paper's slip: height d tan(theta), the whole chord": ("0.5 * chord * np.tan(theta)", "chord * np.tan(theta)"),
+    "the paper's slip: arc at the centre 360 - IAV, so theta = IAV / 2 - 90": (
+        "theta = mean_angle - np.pi / 2", "theta = mean_angle / 2 - np.pi / 2"),
+    "the centre on the points' side of the chord": ("- np.sign(side) * 0.5", "+ np.sign(side) * 0.5"),
+    "no ValueError for a mean angle of 0 or pi": ("if not 0.0 < mean_angle < np.pi:", "if mean_angle != mean_angle:"),
 }
