@@ -39,3 +39,21 @@ FILLS = {
         hint="half the chord",
     ),
 }
+
+_V_SHAPED = '''
+def is_v_shaped(angles, n_neighbours=4, stride=1):
+    a = np.asarray(angles, dtype=float)
+    m = int(np.argmin(a))
+    k = n_neighbours // 2
+    step = {step}
+    if m < k * step or m + k * step >= len(a):
+        return False
+    left, right = a[m - k * step:m + 1:step], a[m:m + k * step + 1:step]
+    return bool(np.all(np.diff(left) < 0) and np.all(np.diff(right) > 0))
+'''
+
+FILLS["9de4f9a5"] = Fill(
+    correct=_V_SHAPED.format(step="stride"),
+    mistake=_V_SHAPED.format(step="1"),  # the neighbours taken next to each other, whatever the stride
+    hint="stride angles apart",
+)
