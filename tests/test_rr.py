@@ -346,3 +346,24 @@ def test_blueprint_gaps_finds_points_where_ellipses_are_expected(tmp_path):
     assert "view 'Milliseconds per stage' (/metrics/time_ms) has no data" in gaps
     assert "view 'Log' (/log) has no data" in gaps
     assert len(gaps) == 3, gaps
+
+
+def test_a_recording_without_features_has_no_empty_panel(tmp_path):
+    """``record(..., features=False)``: scans and segments only, with and without poses. No stage-time
+    panel without stage times, no accumulated feature layer declared without features to fill it."""
+    write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "o.bag", pose_topic=None)
+    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False)
+    assert blueprint_gaps(tmp_path / "o.rrd") == []
+    assert "Milliseconds per stage" not in _view_names(tmp_path / "o.rrd")
+    write_bag([s for s, _ in sim.simulate("corridor", seed=0, n_scans=12)], tmp_path / "c.bag")
+    lkrr.record(tmp_path / "c.bag", tmp_path / "c.rrd", features=False)
+    assert blueprint_gaps(tmp_path / "c.rrd") == []
+    rows, _ = rrd_rows(tmp_path / "c.rrd")
+    assert rows["/map/accumulated/points"] == 2  # scans 0 and 10
+    assert not any(e.startswith("/map/accumulated/") and e != "/map/accumulated/points" for e in rows)
+    assert {"Scan (sensor frame)", "Map (world frame)"} <= _view_names(tmp_path / "c.rrd")
+    # with features, every panel stays, the map's feature layers too
+    lkrr.record(tmp_path / "c.bag", tmp_path / "f.rrd")
+    assert blueprint_gaps(tmp_path / "f.rrd") == []
+    assert "Milliseconds per stage" in _view_names(tmp_path / "f.rrd")
+    assert "/map/accumulated/legs" in rrd_rows(tmp_path / "f.rrd")[0]
