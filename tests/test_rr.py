@@ -258,3 +258,112 @@ def test_a_scan_without_a_pose_shows_nothing_in_the_map(tmp_path):
     assert sorted(_transforms(tmp_path / "g.rrd")) == [k for k in range(12) if k != 5]
     lines = _batches(tmp_path / "g.rrd", "/map/sensor/lines")
     assert lines[5]["LineStrips2D:strips"] in (None, [])
+
+
+# ---------------------------------------------------------------------------- what the viewer needs
+#: The component without which rerun cannot draw an archetype (its error badge: "Component
+#: 'Ellipses2D:half_sizes' does not exist on the entity"); None: nothing required.
+REQUIRED = {"Points2D": "positions", "Ellipses2D": "half_sizes", "LineStrips2D": "strips", "Arrows2D": "vectors",
+            "Scalars": "scalars", "TextLog": "text", "TextDocument": "text", "Transform3D": None,
+            "RecordingInfo": None}
+
+
+def _matches(entity: str, query: str, origin: str) -> bool:
+    """Whether ``entity`` matches one entity-path expression of a view's contents (``+``/``-`` stripped)."""
+    path = "/" + query.replace("$origin", origin).strip("/ ")
+    path = path.replace("//", "/")
+    if path.endswith("/**"):
+        root = path[:-3].rstrip("/") or ""
+        return root == "" or entity == root or entity.startswith(root + "/")
+    return entity == path
+
+
+def blueprint_gaps(path) -> list[str]:
+    """What the viewer would not draw in an .rrd: entities that name an archetype without its
+    required component, and views of its blueprint that no entity with data falls into."""
+    from rerun.chunk import RrdReader
+
+    reader = RrdReader(path)
+    columns, rows = defaultdict(set), defaultdict(int)
+    for chunk in reader.store().stream():
+        names = [c for c in chunk.to_record_batch().schema.names if ":" in c]
+        columns[chunk.entity_path] |= set(names)
+        rows[chunk.entity_path] += chunk.num_rows
+    gaps = []
+    for entity, cols in sorted(columns.items()):
+        for archetype in sorted({c.split(":")[0] for c in cols}):
+            if archetype not in REQUIRED:
+                gaps.append(f"{entity}: archetype {archetype} not in REQUIRED (add what it needs)")
+            elif REQUIRED[archetype] and f"{archetype}:{REQUIRED[archetype]}" not in cols:
+                gaps.append(f"{entity}: {archetype} without {archetype}:{REQUIRED[archetype]}")
+    (store,) = reader.blueprints()
+    views, queries = {}, {}
+    for chunk in reader.store(store=store).stream():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:space_origin" in batch.schema.names:
+            views[chunk.entity_path] = (batch.column("ViewBlueprint:display_name").to_pylist()[0][0],
+                                        "/" + batch.column("ViewBlueprint:space_origin").to_pylist()[0][0].strip("/"))
+        if "ViewContents:query" in batch.schema.names:
+            queries[chunk.entity_path.rsplit("/", 1)[0]] = batch.column("ViewContents:query").to_pylist()[0]
+    assert views, "no views in the blueprint"
+    for view, (name, origin) in views.items():
+        shown = set()
+        for query in queries.get(view, ["$origin/**"]):
+            for line in query.splitlines():
+                line = line.strip()
+                hits = {e for e in columns if _matches(e, line.lstrip("+- "), origin.rstrip("/"))}
+                shown = shown - hits if line.startswith("-") else shown | hits
+        if not any(rows[e] and columns[e] - {"RecordingInfo:name", "RecordingInfo:start_time"} for e in shown):
+            gaps.append(f"view {name!r} ({origin}) has no data")
+    return gaps
+
+
+def test_every_entity_and_panel_of_a_recording_can_be_drawn(tmp_path):
+    """A recording with features: every entity carries the component its archetype needs, and every
+    panel of the default layout has data (no error badge, no empty panel)."""
+    bag, _, _ = write_simulation("hall", tmp_path / "h.bag", n_scans=5)
+    lkrr.record(bag, tmp_path / "h.rrd")
+    assert blueprint_gaps(tmp_path / "h.rrd") == []
+
+
+def test_blueprint_gaps_finds_points_where_ellipses_are_expected(tmp_path):
+    """The checker itself: legs logged as points under features' ellipse layer, and a layout whose
+    stage-time and log panels stay empty, are both reported."""
+    import rerun as rr
+
+    scans = [s for s, _ in sim.simulate("hall", seed=0, n_scans=3)]
+    rec = lkrr.new_recording("gaps")
+    rec.save(tmp_path / "g.rrd", default_blueprint=lkrr.blueprint())
+    lkrr.log_static(rec, "notes")
+    lkrr.log_scans(rec, scans)
+    rec.log("world/legs", rr.Ellipses2D.from_fields(draw_order=42.0), static=True)
+    rec.set_time(lkrr.SEQUENCE, sequence=0)
+    rec.log("world/legs", rr.Points2D([[1.0, 2.0]]))
+    rec.flush()
+    rec.disconnect()
+    gaps = blueprint_gaps(tmp_path / "g.rrd")
+    assert "/world/legs: Ellipses2D without Ellipses2D:half_sizes" in gaps
+    assert "view 'Milliseconds per stage' (/metrics/time_ms) has no data" in gaps
+    assert "view 'Log' (/log) has no data" in gaps
+    assert len(gaps) == 3, gaps
+
+
+def test_a_recording_without_features_has_no_empty_panel(tmp_path):
+    """``record(..., features=False)``: scans and segments only, with and without poses. No stage-time
+    panel without stage times, no accumulated feature layer declared without features to fill it."""
+    write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "o.bag", pose_topic=None)
+    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False)
+    assert blueprint_gaps(tmp_path / "o.rrd") == []
+    assert "Milliseconds per stage" not in _view_names(tmp_path / "o.rrd")
+    write_bag([s for s, _ in sim.simulate("corridor", seed=0, n_scans=12)], tmp_path / "c.bag")
+    lkrr.record(tmp_path / "c.bag", tmp_path / "c.rrd", features=False)
+    assert blueprint_gaps(tmp_path / "c.rrd") == []
+    rows, _ = rrd_rows(tmp_path / "c.rrd")
+    assert rows["/map/accumulated/points"] == 2  # scans 0 and 10
+    assert not any(e.startswith("/map/accumulated/") and e != "/map/accumulated/points" for e in rows)
+    assert {"Scan (sensor frame)", "Map (world frame)"} <= _view_names(tmp_path / "c.rrd")
+    # with features, every panel stays, the map's feature layers too
+    lkrr.record(tmp_path / "c.bag", tmp_path / "f.rrd")
+    assert blueprint_gaps(tmp_path / "f.rrd") == []
+    assert "Milliseconds per stage" in _view_names(tmp_path / "f.rrd")
+    assert "/map/accumulated/legs" in rrd_rows(tmp_path / "f.rrd")[0]

@@ -120,9 +120,11 @@ def map_view() -> rrb.Spatial2DView:
                              overrides={f"/map/accumulated/{layer}": grow for layer in _ACCUMULATED})
 
 
-def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False) -> rrb.Blueprint:
+def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False,
+              with_times: bool = True) -> rrb.Blueprint:
     """The default layout: the scan view on the left; counts, stage times, log and notes on
-    the right. ``with_map``: the map view (world frame) beside the scan view. With
+    the right. ``with_map``: the map view (world frame) beside the scan view; ``with_times=False``
+    leaves out the stage-time panel (a recording without features has no stage times). With
     ``compare=("A", "B")`` there is one scan view per named configuration
     (features logged with ``log_features(..., name="A")``), side by side, each showing the
     scan, the ground truth and that configuration's features."""
@@ -138,16 +140,16 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
     views = [rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)")]
     if with_map:
         views.append(map_view())
+    panels = [(rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts"), 2),
+              (rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage"), 2),
+              (rrb.TextLogView(origin="log", name="Log"), 1),
+              (rrb.TextDocumentView(origin="description", name="About"), 2)]
+    if not with_times:
+        del panels[1]
     return rrb.Blueprint(
         rrb.Horizontal(
             *views,
-            rrb.Vertical(
-                rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts"),
-                rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage"),
-                rrb.TextLogView(origin="log", name="Log"),
-                rrb.TextDocumentView(origin="description", name="About"),
-                row_shares=[2, 2, 1, 2],
-            ),
+            rrb.Vertical(*[view for view, _ in panels], row_shares=[share for _, share in panels]),
             column_shares=[3, 3, 2] if with_map else [3, 2],
         ),
         collapse_panels=False,
@@ -172,7 +174,6 @@ def log_static(rec: rr.RecordingStream, description: str | None = None) -> None:
     rec.log("world", rr.Transform3D(mat3x3=_Y_UP), static=True)
     rec.log("world/sensor", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[COLORS["sensor"]],
                                         labels=["sensor"]), static=True)
-    _hide_labels(rec, "world")
     if description:
         rec.log("description", rr.TextDocument(description, media_type=rr.MediaType.MARKDOWN), static=True)
 
@@ -268,7 +269,8 @@ class _Map:
     """Logs the world frame (module docstring, "Map"): the sensor's transform per scan, the
     scan and its features under it, and the decimated accumulated map; the path at the end."""
 
-    def __init__(self, rec: rr.RecordingStream, every: int = MAP_EVERY, cell_m: float = MAP_CELL_M) -> None:
+    def __init__(self, rec: rr.RecordingStream, every: int = MAP_EVERY, cell_m: float = MAP_CELL_M,
+                 features: bool = True) -> None:
         if every < 1:
             raise ValueError(f"map_every must be >= 1, got {every}")
         self.rec, self.every, self.thin = rec, int(every), GridThinning(cell_m)
@@ -279,9 +281,9 @@ class _Map:
                                                  labels=["sensor"], show_labels=False), static=True)
         rec.log("map/sensor/heading", rr.Arrows2D(vectors=[[0.6, 0.0]], colors=[_MAP_COLORS["pose"]],
                                                   radii=[-1.5]), static=True)
-        _hide_labels(rec, "map/sensor")
-        for layer, archetype in (("points", rr.Points2D), ("lines", rr.LineStrips2D), ("corners", rr.Points2D),
-                                 ("circles", rr.Points2D), ("legs", rr.Points2D)):
+        layers = (("points", rr.Points2D), ("lines", rr.LineStrips2D), ("corners", rr.Points2D),
+                  ("circles", rr.Points2D), ("legs", rr.Points2D))
+        for layer, archetype in layers if features else layers[:1]:  # (a layer declared without data: a badge)
             rec.log(f"map/accumulated/{layer}", archetype.from_fields(show_labels=False, draw_order=10.0 + len(layer)),
                     static=True)
 
@@ -452,6 +454,10 @@ def _send_features(rec, times, feats: list[Features], world: str, metrics: str |
     """Every feature layer of a batch of scans, as one ``send_columns`` call per layer (and,
     under ``metrics``, their counts and stage times)."""
 
+    # the layers' draw order and labels, only where features are logged: an entity that names an archetype
+    # without its required component (Ellipses2D without half_sizes) shows an error badge in the viewer
+    _hide_labels(rec, world)
+
     def send(layer: str, archetype, colour: str, size_ui: float, **columns) -> None:
         per_scan = [getattr(f, layer) for f in feats]
         counts = [len(xs) for xs in per_scan]
@@ -504,7 +510,6 @@ def log_features(
     configurations can be compared side by side (``blueprint(compare=[...])``).
     """
     world, metrics = ("world", "metrics") if not name else (f"world/{name}", f"metrics/{name}")
-    _hide_labels(rec, world)
 
     def send(batch: list[Features], k: int) -> None:
         k0 = start_index + k
@@ -692,9 +697,10 @@ def _raise(exc: Exception):
 def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features, config, segment_threshold_m,
                   description, world_map=None) -> RecordSummary:
     rec = new_recording(name)
-    rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None))
+    with_features = features is not None or config is not None
+    rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features))
     log_static(rec, description)
-    the_map = _Map(rec, *world_map) if world_map is not None else None
+    the_map = _Map(rec, *world_map, features=with_features) if world_map is not None else None
     stamps: list[int] = []
     counts: dict[str, int] = {}
     seconds: dict[str, float] = {}

@@ -1,0 +1,59 @@
+"""Fill-ins for notebooks/08_iav_circles_and_legs.ipynb (see tests/your_turn/__init__.py)."""
+
+from tests.your_turn import Fill
+
+_MIDDLE_RATIO = '''
+def middle_ratio(points, viewpoint=(0.0, 0.0)):
+    p = np.asarray(points, dtype=float)
+    v = np.asarray(viewpoint, dtype=float)
+    d = p[-1] - p[0]
+    m = p[len(p) // 2] - p[0]
+    w = v - p[0]
+    chord = np.hypot(*d)
+    offset = (d[0] * m[1] - d[1] * m[0]) / chord          # > 0: left of the chord
+    towards = np.sign(d[0] * w[1] - d[1] * w[0])           # +1: the viewpoint is left of the chord
+    return float(offset * towards / {divide})
+'''
+
+_CIRCLE = '''
+def circle_from_angle(p_first, p_last, mean_angle, side):
+    p1 = np.asarray(p_first, dtype=float)
+    pn = np.asarray(p_last, dtype=float)
+    d = pn - p1
+    chord = np.hypot(*d)
+    theta = mean_angle - np.pi / 2
+    normal = np.array([-d[1], d[0]]) / chord              # left of p1 -> pn
+    centre = (p1 + pn) / 2 - np.sign(side) * {height} * np.tan(theta) * normal
+    return centre, chord / 2 / np.cos(theta)
+'''
+
+FILLS = {
+    "231fb21f": Fill(
+        correct=_MIDDLE_RATIO.format(divide="chord"),
+        mistake=_MIDDLE_RATIO.format(divide="1.0"),  # the offset in metres, not over the chord
+        hint="chord length",
+    ),
+    "091e6ab3": Fill(
+        correct=_CIRCLE.format(height="chord / 2"),
+        mistake=_CIRCLE.format(height="chord"),  # the paper's slip: the whole chord times tan(theta)
+        hint="half the chord",
+    ),
+}
+
+_V_SHAPED = '''
+def is_v_shaped(angles, n_neighbours=4, stride=1):
+    a = np.asarray(angles, dtype=float)
+    m = int(np.argmin(a))
+    k = n_neighbours // 2
+    step = {step}
+    if m < k * step or m + k * step >= len(a):
+        return False
+    left, right = a[m - k * step:m + 1:step], a[m:m + k * step + 1:step]
+    return bool(np.all(np.diff(left) < 0) and np.all(np.diff(right) > 0))
+'''
+
+FILLS["9de4f9a5"] = Fill(
+    correct=_V_SHAPED.format(step="stride"),
+    mistake=_V_SHAPED.format(step="1"),  # the neighbours taken next to each other, whatever the stride
+    hint="stride angles apart",
+)
