@@ -8,7 +8,7 @@ PIP     = $(BIN)/python -m pip
 # pytest workers: the notebook and grading tests are independent and slow; use both cores
 JOBS   ?= 2
 
-.PHONY: demo test lab data release grade lint clean help sandbox
+.PHONY: demo test lab data release grade lint clean help sandbox chromium
 
 help:
 	@echo "make demo     set up .venv and run the demo on the bundled hall bag (out/demo.rrd, out/demo.png)"
@@ -44,12 +44,27 @@ sandbox:
 	    echo "note: bubblewrap is missing: 'sudo apt-get install bubblewrap' (labkit grade and its tests need it)"; \
 	  fi; }
 
-test: $(VENV)/.installed-dev sandbox
+# Debian's chromium, the browser tests/test_browser.py drives headless (through the playwright package
+# of the dev extra, no browser download): installed here when missing and this is root with apt-get
+chromium:
+	@command -v chromium >/dev/null || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    apt-get update -qq && apt-get install -y -qq chromium >/dev/null; \
+	  else \
+	    echo "note: chromium is missing: 'sudo apt-get install chromium' (the browser test needs it)"; \
+	  fi; }
+
+test: $(VENV)/.installed-dev sandbox chromium
 	$(BIN)/python -m pytest -n $(JOBS)
 
-# nbgrader 0.9 runs `alembic` from PATH when it creates a gradebook: put the venv first
+# The students' JupyterLab: jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
+# hides nbgrader's instructor tools and keeps Validate for exercises; the rerun viewer loads its code
+# from the installed package, not the internet. nbgrader 0.9 runs `alembic` from PATH: venv first.
+LAB_ROOT = $(if $(filter 0,$(shell id -u)),--allow-root)
 lab: $(VENV)/.installed
-	PATH="$(abspath $(BIN)):$$PATH" $(BIN)/jupyter lab --notebook-dir=. notebooks/00_tour.ipynb
+	JUPYTER_CONFIG_PATH="$(abspath jupyter)$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))" \
+	RERUN_NOTEBOOK_ASSET=serve-local PATH="$(abspath $(BIN)):$$PATH" \
+	  $(BIN)/jupyter lab --notebook-dir=. $(LAB_ROOT) notebooks/00_tour.ipynb
 
 data: $(VENV)/.installed
 	$(BIN)/labkit simulate --bundled -o data -f
