@@ -1,4 +1,4 @@
-"""Hidden tests of exercise 4, ``neighbourhood_bounds(x, eps)`` and ``dbscan_sorted(x, eps, min_pts)``.
+"""Hidden tests of exercise 6, ``neighbourhood_bounds(x, eps)`` and ``dbscan_sorted(x, eps, min_pts)``.
 
 Trusted: the grader runs this file in its own process, never where the student's code runs, and
 nbgrader never copies it into the release. Each ``test_<cell>`` function holds the hidden tests of
