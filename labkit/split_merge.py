@@ -157,13 +157,17 @@ class _Line:
 def _similar(r1, a1, c1, r2, a2, c2, merge, merge_dr_m, merge_dalpha, merge_chi2) -> tuple[bool, float]:
     da = math.remainder(a2 - a1, 2 * math.pi)
     dr = r2 - r1
-    if abs(da) > math.pi / 2:  # the same line with its normal turned around (both near the origin)
+    flipped = abs(da) > math.pi / 2
+    if flipped:  # the same line with its normal turned around (both near the origin)
         da = math.remainder(da - math.pi, 2 * math.pi)
         dr = -r2 - r1
     if merge == "thresholds":
         stat = max(abs(dr) / merge_dr_m, abs(da) / merge_dalpha)
         return stat < 1.0, stat
-    cov = np.asarray(c1) + np.asarray(c2)
+    c2 = np.asarray(c2)
+    if flipped:  # (r, alpha) -> (-r, alpha + pi) has Jacobian diag(-1, 1): the r-alpha cross term changes sign
+        c2 = c2 * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    cov = np.asarray(c1) + c2
     d = np.array([dr, da])
     try:
         stat = float(d @ np.linalg.solve(cov, d))
