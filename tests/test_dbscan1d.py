@@ -84,7 +84,7 @@ def run_path(path, fn, *args, **kwargs):
 
 
 # ------------------------------------------------------------------ sorted input: three implementations agree
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=400)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, path=paths)
 @example(values=[], eps=0.25, min_pts=1, path="shifts")
 @example(values=[1.0], eps=0.25, min_pts=1, path="shifts")
@@ -107,7 +107,7 @@ def test_fast_equals_reference_equals_sklearn_on_sorted_grid_data(values, eps, m
         assert c.lower <= inside.min() and inside.max() <= c.upper
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=st.lists(st.floats(-1e3, 1e3, allow_nan=False), max_size=50),
        eps=st.floats(1e-6, 50.0), min_pts=min_pts_st, path=paths)
 def test_fast_equals_reference_on_arbitrary_floats(values, eps, min_pts, path):
@@ -151,7 +151,7 @@ def test_min_pts_one_makes_every_point_a_cluster_of_its_own_or_shared():
 
 
 # ------------------------------------------------------------------ unsorted input
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, path=paths, data=st.data())
 def test_unsorted_input_gives_sklearn_labels_in_callers_order(values, eps, min_pts, path, data):
     """scikit-learn numbers clusters by their first core point in input order and gives a
@@ -218,7 +218,7 @@ def test_caller_order_numbering():
 
 
 # ------------------------------------------------------------------ border policies
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, border=st.sampled_from(["noise", "all"]),
        shuffle=st.booleans(), path=paths)
 def test_border_noise_and_all_against_brute_force(values, eps, min_pts, border, shuffle, path):
@@ -253,7 +253,7 @@ def test_border_point_between_two_clusters():
 periods = st.integers(4, 48).map(lambda k: QUARTER * k)
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=400)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, period=periods, shuffle=st.booleans(),
        border=st.sampled_from(["first", "noise", "all"]), path=paths)
 @example(values=[0.0, 1.0, 2.0, 3.0], eps=1.0, min_pts=3, period=4.0, shuffle=False, border="first",
@@ -269,7 +269,7 @@ def test_circular_against_brute_force(values, eps, min_pts, period, shuffle, bor
     np.testing.assert_array_equal(got, want)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, period=periods)
 def test_circular_matches_sklearn_on_the_modular_distance_matrix(values, eps, min_pts, period):
     x = np.array(values, dtype=float)
@@ -313,7 +313,7 @@ def test_wrapping_cluster_numbered_by_its_first_core_in_callers_order(path):
     np.testing.assert_array_equal(got, brute_labels(x, 0.25, 2, period=10.0))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, period=st.one_of(st.none(), periods), path=paths)
 @example(values=[3.75, 0.0], eps=0.25, min_pts=2, period=4.0, path="shifts")  # a neighbour across the wrap
 def test_core_points_against_brute_force(values, eps, min_pts, period, path):

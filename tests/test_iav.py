@@ -63,7 +63,7 @@ def _reference_angles(points):
     return np.array(out)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(cx=st.floats(-5, 5), cy=st.floats(-5, 5), radius=st.floats(0.05, 10.0), start=st.floats(-math.pi, math.pi),
        span=st.floats(5 * DEG, 355 * DEG), n=st.integers(3, 40), seed=st.integers(0, 2**16))
 def test_points_on_a_circle_see_the_chord_under_one_angle(cx, cy, radius, start, span, n, seed):
@@ -81,7 +81,7 @@ def test_points_on_a_circle_see_the_chord_under_one_angle(cx, cy, radius, start,
     np.testing.assert_allclose(inscribed_angles(p[::-1], signed=True), expected, atol=1e-6)
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100)
 @given(x0=st.floats(-10, 10), y0=st.floats(-10, 10), heading=st.floats(-math.pi, math.pi),
        steps=st.lists(st.floats(0.01, 1.0), min_size=2, max_size=30))
 def test_a_straight_line_gives_pi(x0, y0, heading, steps):
@@ -92,7 +92,7 @@ def test_a_straight_line_gives_pi(x0, y0, heading, steps):
     np.testing.assert_allclose(np.minimum(signed, 2 * math.pi - signed), math.pi, atol=1e-6)
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100)
 @given(pts=st.lists(st.tuples(st.floats(-10, 10), st.floats(-10, 10)), min_size=3, max_size=20),
        angle=st.floats(-math.pi, math.pi), dx=st.floats(-100, 100), dy=st.floats(-100, 100),
        scale=st.floats(0.01, 100.0))
@@ -171,7 +171,7 @@ def test_middle_point_offset_rejects_a_zero_chord_and_a_bad_viewpoint():
 
 
 # ============================================================================ circle construction
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(cx=st.floats(-5, 5), cy=st.floats(-5, 5), radius=st.floats(0.05, 5.0), start=st.floats(-math.pi, math.pi),
        span=st.floats(10 * DEG, 350 * DEG), ccw=st.booleans())
 def test_circle_from_iav_recovers_the_circle(cx, cy, radius, start, span, ccw):
@@ -239,7 +239,7 @@ def test_v_corner_arguments_are_checked():
         is_v_corner(np.zeros((2, 2)))
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(n=st.integers(1, 200), mean=st.floats(90 * DEG, 135 * DEG), std=st.floats(0.0, 0.15))
 def test_confidence_grows_with_points_tightness_and_a_half_circle(n, mean, std):
     c = circle_confidence(n, mean, std)
@@ -459,7 +459,7 @@ def _reference_circles(scan, *, arc_like=False, min_points=4, min_chord_m=0.15, 
     return out
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(objects=st.lists(st.tuples(st.floats(-4, 4), st.floats(0.5, 6), st.floats(0.05, 0.6)), min_size=1, max_size=5),
        walls=st.lists(st.tuples(st.floats(-6, 6), st.floats(0.5, 8), st.floats(-6, 6), st.floats(0.5, 8)), max_size=3),
        full=st.booleans(), seed=st.integers(0, 1000), arc_like=st.booleans())

@@ -295,7 +295,7 @@ def test_pairing_respects_the_distance_limit():
     assert pair_legs([]) == [] and pair_legs([_leg(0.0, 0.0)]) == []
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100)
 @given(xy=st.lists(st.tuples(st.floats(-5, 5), st.floats(-5, 5)), max_size=12), limit=st.floats(0.05, 2.0))
 def test_pairing_invariants(xy, limit):
     """Each leg is used at most once, every pair is within the limit, and no two

@@ -274,7 +274,7 @@ DRAWN_KWARGS = [
 
 
 @pytest.mark.parametrize("extract, drawn", list(zip(EXTRACTORS, DRAWN_KWARGS, strict=True)), ids=IDS)
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(values=st.lists(st.one_of(st.floats(0.01, 40.0), st.sampled_from([0.0, np.nan, np.inf, 30.0])),
                        max_size=200),
        full=st.booleans(), data=st.data())

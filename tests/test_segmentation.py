@@ -50,7 +50,7 @@ ranges_strategy = st.lists(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(ranges=ranges_strategy, threshold=st.floats(0.01, 1.0), min_points=st.integers(1, 5),
        full=st.booleans())
 def test_matches_the_loop_reference(ranges, threshold, min_points, full):

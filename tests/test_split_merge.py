@@ -246,7 +246,7 @@ def test_invalid_beams_are_masked():
     assert len(lines) == 1 and lines[0].first == 0 and lines[0].last == scan.n_beams - 1  # merged over gaps
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=80)
 @given(st.lists(st.one_of(st.floats(0.01, 40.0), st.sampled_from([0.0, np.nan, np.inf, 30.0])), max_size=200),
        st.booleans())
 def test_any_ranges_run_without_error(values, full):
