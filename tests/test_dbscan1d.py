@@ -14,6 +14,7 @@ from sklearn.cluster import DBSCAN
 from labkit.dbscan import DBSCAN1D, Cluster, dbscan1d, dbscan1d_reference
 
 d1 = importlib.import_module("labkit.dbscan")  # the module: `labkit.dbscan1d` itself is the function
+from labkit import _dbscan_fast as fast  # noqa: E402 -- the private speed module, tested against the reference
 
 QUARTER = 0.25  # grid step: sums and differences of grid values are exact, so "exactly eps" is exact
 
@@ -79,7 +80,7 @@ paths = st.sampled_from(["shifts", "bounds"])
 def run_path(path, fn, *args, **kwargs):
     """Run with neighbours counted by shifted comparisons or by searchsorted bounds."""
     limit = 10**9 if path == "shifts" else 0
-    with mock.patch.object(d1, "_SHIFT_MAX_MIN_PTS", limit):
+    with mock.patch.object(fast, "_SHIFT_MAX_MIN_PTS", limit):
         return fn(*args, **kwargs)
 
 
@@ -172,7 +173,7 @@ def test_large_unsorted_input_with_near_ties():
     tiny = 1.0 + rng.integers(0, 1 << 12, 2000) * 2.0**-52  # differ in the last 12 bits only
     x = np.concatenate([base * QUARTER, tiny, rng.integers(0, 4000, 500) * QUARTER])
     rng.shuffle(x)
-    order, s = d1._argsort(x)
+    order, s = fast.argsort_values(x)
     assert np.all(np.diff(s) >= 0) and np.array_equal(np.sort(order), np.arange(x.size))
     np.testing.assert_array_equal(s, x[order])
     for eps, min_pts in [(0.25, 5), (1.0, 30)]:
@@ -181,7 +182,7 @@ def test_large_unsorted_input_with_near_ties():
     # negative numbers and -0.0 (whose bit pattern is the largest of all)
     y = np.concatenate([-x[:3000], [-0.0] * 50, [0.0] * 50, x[3000:]])
     rng.shuffle(y)
-    order, s = d1._argsort(y)
+    order, s = fast.argsort_values(y)
     assert np.all(np.diff(s) >= 0) and np.array_equal(np.sort(order), np.arange(y.size))
     np.testing.assert_array_equal(dbscan1d(y, 0.25, 5), sklearn_labels(y, 0.25, 5))
 
@@ -197,7 +198,7 @@ def test_large_unsorted_input_with_near_ties():
 )
 def test_packed_argsort_edge_cases(values):
     x = np.random.default_rng(0).permutation(values)
-    order, s = d1._argsort(x)
+    order, s = fast.argsort_values(x)
     assert np.array_equal(np.sort(order), np.arange(x.size))
     np.testing.assert_array_equal(s, x[order])
     np.testing.assert_array_equal(s, np.sort(x))
@@ -205,7 +206,7 @@ def test_packed_argsort_edge_cases(values):
 
 def test_sorted_input_is_not_sorted_again():
     x = np.arange(10.0)
-    with mock.patch.object(d1, "_argsort", side_effect=AssertionError("sorted input was sorted")):
+    with mock.patch.object(d1, "argsort_values", side_effect=AssertionError("sorted input was sorted")):
         assert dbscan1d(x, 1.0, 3).tolist() == [0] * 10
         assert dbscan1d(x, 1.0, 3, period=20.0).tolist() == [0] * 10
 
