@@ -34,10 +34,10 @@ from labkit import (
     detect_legs,
     extract_features,
     find_corners,
-    read_scans,
     split_and_merge,
     write_bag,
 )
+from labkit.bench import time_recording
 from labkit.viz import rr as lkrr
 
 BEAMS = (361, 722, 1441, 2881)
@@ -87,22 +87,14 @@ def end_to_end(n_scans: int) -> None:
             t0 = time.perf_counter()
             summary = lkrr.record(bag, Path(tmp) / "out.rrd", overwrite=True, **kwargs)
             rows.append((label, summary.n_scans / (time.perf_counter() - t0)))
-        t0 = time.perf_counter()
-        read = list(read_scans(bag))
-        t_read = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        feats = [extract_features(s) for s in read]
-        t_extract = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        lkrr.record_scans(read, Path(tmp) / "out2.rrd", name="bench", features=feats)
-        t_log = time.perf_counter() - t0
+        phases = time_recording(bag, warmup=0)
     print(f"{'recording':28s} {'scans/s':>8s}")
     for label, rate in rows:
         print(f"{label:28s} {rate:8.0f}")
-    n = len(read)
-    total = t_read + t_extract + t_log
-    print(f"phases: read {n / t_read:,.0f} scans/s ({t_read / total:.0%}), extract {n / t_extract:,.0f} scans/s "
-          f"({t_extract / total:.0%}), log .rrd {n / t_log:,.0f} scans/s ({t_log / total:.0%})")
+    r, total = phases.rates(), phases.total_s
+    print(f"phases (labkit.bench.time_recording, as `labkit bench`): read {r['read']:,.0f} scans/s "
+          f"({phases.read_s / total:.0%}), extract {r['extract']:,.0f} scans/s ({phases.extract_s / total:.0%}), "
+          f"log .rrd {r['log']:,.0f} scans/s ({phases.log_s / total:.0%})")
 
 
 def main() -> None:

@@ -35,7 +35,7 @@ from functools import partial
 from pathlib import Path
 
 from . import __version__, sim
-from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with, starts_with
+from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with
 from .errors import CorruptFileError, RefusedError
 from .grading import add_grade_parser
 from .io import FORMATS, convert, detect_format, read_scans
@@ -45,7 +45,6 @@ EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EX
 #: What ``labkit evaluate --json`` and ``labkit demo`` write (see labkit._safe).
 REPORT_FILE = OutputKind("a labkit evaluate report (.json)", (".json",),
                          json_object_with(allowed=("lines", "sweep", "round_objects", "recordings")))
-PNG_FILE = OutputKind("a PNG image (.png)", (".png",), starts_with(b"\x89PNG\r\n\x1a\n"))
 
 
 def _progress(total: int | None, desc: str):
@@ -252,67 +251,14 @@ def cmd_config(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    import itertools
-    import tempfile
-
-    import numpy as np
-
+    from .bench import time_recording
     from .data import bundled_data
-    from .pipeline import extract_features
-    from .viz import rr as lkrr
 
-    config = _config(args)
     source = Path(args.input) if args.input else bundled_data("hall.bag")
-    stream = read_scans(source, topic=args.topic, strict=args.strict)
-    scans = iter(stream)
-    if args.scans is not None:
-        scans = itertools.islice(scans, args.scans)
-    spent = {"read": 0.0, "extract": 0.0}
-    stages: dict[str, list[float]] = {}
-    shape: list[int] = []
-
-    def timed():  # one streaming pass: read a scan, extract its features, hand both to the logger
-        warm = 0
-        while True:
-            t0 = time.perf_counter()
-            scan = next(scans, None)
-            t1 = time.perf_counter()
-            if scan is None:
-                return
-            if warm < 20:  # warm up caches and lazy imports (not timed)
-                extract_features(scan, config)
-                warm += 1
-            t2 = time.perf_counter()
-            f = extract_features(scan, config)
-            t3 = time.perf_counter()
-            spent["read"] += t1 - t0
-            spent["extract"] += t3 - t2
-            for k, v in f.timings.items():
-                stages.setdefault(k, []).append(v)
-            shape[:] = [scan.n_beams]
-            yield scan, f
-
-    with tempfile.TemporaryDirectory() as tmp:
-        for_scans, for_features = itertools.tee(timed())  # zipped in step: tee holds one pair at a time
-        t0 = time.perf_counter()
-        summary = lkrr.record_scans((scan for scan, _ in for_scans), Path(tmp) / "bench.rrd", name=source.name,
-                                    features=(f for _, f in for_features))
-        t_all = time.perf_counter() - t0
-    n = summary.n_scans
-    if not n:
-        raise RefusedError(f"{source} holds no scans" + (f" ({summary.error})" if summary.error else ""))
-    t_rrd = max(t_all - spent["read"] - spent["extract"], 1e-9)
-    print(f"labkit bench: {n} scans of {shape[0]} beams from {source}, lines by {config.lines.method}")
-    print(f"{'stage':14s} {'median us':>10s} {'mean us':>10s} {'p99 us':>10s} {'share':>7s}")
-    total = float(np.sum(stages["total"]))
-    for k, v in stages.items():
-        v = np.asarray(v) * 1e6
-        print(f"{k:14s} {np.median(v):10.0f} {v.mean():10.0f} {np.percentile(v, 99):10.0f} "
-              f"{v.sum() / 1e6 / total:7.1%}")
-    print(f"read {n / spent['read']:,.0f} scans/s | extract {n / spent['extract']:,.0f} scans/s | "
-          f"log .rrd {n / t_rrd:,.0f} scans/s | bag -> features -> .rrd {n / t_all:,.0f} scans/s")
-    if summary.error is not None:
-        raise summary.error
+    result = time_recording(source, _config(args), topic=args.topic, strict=args.strict, n_scans=args.scans)
+    print(result.report())
+    if result.error is not None:
+        raise result.error
     return 0
 
 
@@ -336,70 +282,15 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from ._safe import safe_output
     from .data import bundled_data
-    from .pipeline import extract_features
-    from .viz import plot
-    from .viz import rr as lkrr
+    from .demo import run_demo
 
-    config = _config(args)
     source = Path(args.input) if args.input else bundled_data("hall.bag")
-    out = Path(args.output)
-    # make demo runs again and again: its own two files are replaced, nothing else ever is
-    check_output(out / "demo.rrd", lkrr.RRD_FILE, overwrite=True, inputs=[source])
-    check_output(out / "demo.png", PNG_FILE, overwrite=True, inputs=[source])
-    t0 = time.perf_counter()
-    scans, damage = [], None
-    try:
-        scans.extend(read_scans(source, topic=args.topic, strict=args.strict))
-    except CorruptFileError as exc:  # show what could be read, then report the damage
-        damage = exc
-    t_read = time.perf_counter() - t0
-    if not scans:
-        raise RefusedError(f"{source} holds no scans" + (f" ({damage})" if damage else ""))
-    t0 = time.perf_counter()
-    feats = [extract_features(s, config) for s in scans]
-    t_extract = time.perf_counter() - t0
-    truth_file = sim.truth_path_for(source)
-    truth = sim.read_truth(truth_file) if truth_file.exists() else None
-    t0 = time.perf_counter()
-    summary = lkrr.record_scans(
-        scans, out / "demo.rrd", name=source.name, truth=truth, features=feats, overwrite=True,
-        inputs=[source, truth_file],
-        description=lkrr.describe(f"labkit demo: {source.name}", config=config, truth=truth is not None,
-                                  source="Every scan through `labkit.extract_features` with the default config."))
-    t_rrd = time.perf_counter() - t0
-    # the figure: the scan with the most kinds of feature (ties: the middle one)
-    kinds = np.array([sum(bool(getattr(f, k)) for k in f.LAYERS) for f in feats])
-    k = int(np.flatnonzero(kinds == kinds.max())[len(np.flatnonzero(kinds == kinds.max())) // 2])
-    f = feats[k]
-    fig, ax = plt.subplots(figsize=(10, 8))
-    plot.plot_features(scans[k], features=f, truth=truth.scans.get(scans[k].stamp_ns) if truth else None, ax=ax,
-                       title=f"{source.name}, scan {k}: " + ", ".join(f"{v} {n}" for n, v in f.counts().items()))
-    fig.tight_layout()
-    with safe_output(out / "demo.png", PNG_FILE, overwrite=True, inputs=[source]) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    n = len(scans)
-    per_scan = {name: sum(x.counts()[name] for x in feats) / n for name in feats[0].counts()}
-    stage_us = {name: 1e6 * float(np.median([x.timings[name] for x in feats])) for name in feats[0].timings}
-    print(f"labkit demo on {source}")
-    print(f"  {n} scans of {scans[0].n_beams} beams; lines by {config.lines.method}")
-    print("  features per scan: " + ", ".join(f"{name} {v:.1f}" for name, v in per_scan.items()))
-    print("  median us per scan: " + ", ".join(f"{name} {v:.0f}" for name, v in stage_us.items()))
-    print(f"  read {n / t_read:,.0f} scans/s, extracted {n / t_extract:,.0f} scans/s, "
-          f"wrote .rrd at {n / t_rrd:,.0f} scans/s; bag -> features -> .rrd {n / (t_read + t_extract + t_rrd):,.0f}"
-          " scans/s")
-    print(f"  wrote {out / 'demo.rrd'} ({summary.n_scans} scans, ground truth for {summary.n_truth})"
-          f" and {out / 'demo.png'} (scan {k})")
-    print(f"next: '{_rerun_command()} {out / 'demo.rrd'}' to scrub through it, 'make lab' for the notebooks")
-    if damage is not None:
-        raise damage
+    result = run_demo(source, args.output, _config(args), topic=args.topic, strict=args.strict)
+    print("\n".join(result.report()))
+    print(f"next: '{_rerun_command()} {result.rrd}' to scrub through it, 'make lab' for the notebooks")
+    if result.damage is not None:
+        raise result.damage
     return 0
 
 

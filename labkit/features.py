@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._plainfloat import intersect1, wrap1
+from ._records import fast_init
 from .fitting import fit_line_polar
 from .geometry import project_onto_line
 
@@ -30,13 +32,10 @@ def _frozen(a) -> np.ndarray:
     return a
 
 
-# The records below are frozen dataclasses with their own ``__init__``: the generated one sets
-# each field through ``object.__setattr__`` (the frozen class's own ``__setattr__`` refuses),
-# one call per field; writing the fields straight into the instance's ``__dict__`` in one
-# update does the same in a third of the time, and extractors build thousands of records a
-# second. The class stays frozen: assigning to a field afterwards still raises.
+# ``@fast_init`` (labkit._records) only makes building these frozen records faster.
 
 
+@fast_init
 @dataclass(frozen=True, eq=False, init=False)
 class LineSegment:
     """A line fitted to a run of beams.
@@ -71,10 +70,6 @@ class LineSegment:
     error: float
     indices: np.ndarray = field(repr=False)
 
-    def __init__(self, r: float, alpha: float, covariance: np.ndarray, start: np.ndarray, end: np.ndarray,
-                 first: int, last: int, n_points: int, error: float, indices: np.ndarray):
-        self.__dict__.update(r=r, alpha=alpha, covariance=covariance, start=start, end=end, first=first, last=last,
-                             n_points=n_points, error=error, indices=indices)
 
     @property
     def length(self) -> float:
@@ -123,6 +118,7 @@ def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None)
                        int(idx[0]), int(idx[-1]), len(p), fit.rms, idx)
 
 
+@fast_init
 @dataclass(frozen=True, eq=False, init=False)
 class Corner:
     """Where two consecutive line segments meet.
@@ -155,10 +151,6 @@ class Corner:
     first: int
     last: int
 
-    def __init__(self, point: np.ndarray, angle: float, kind: str, extrapolated: bool, lines: tuple[int, int],
-                 first: int, last: int):
-        self.__dict__.update(point=point, angle=angle, kind=kind, extrapolated=extrapolated, lines=lines, first=first,
-                             last=last)
 
     def as_dict(self) -> dict:
         return {"type": "corner", "first": self.first, "last": self.last, "point": self.point.tolist(),
@@ -168,26 +160,6 @@ class Corner:
 def _side(a, b, p) -> float:
     """Twice the signed area of the triangle ``a, b, p``: > 0 when ``p`` lies left of ``a -> b``."""
     return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
-
-
-def _wrap(angle: float) -> float:
-    """:func:`labkit.geometry.wrap_angle` of one float, in plain Python (the same arithmetic)."""
-    return math.pi - (math.pi - angle) % (2 * math.pi)
-
-
-def _intersect(r1: float, alpha1: float, r2: float, alpha2: float) -> tuple[float, float] | None:
-    """:func:`labkit.geometry.intersect_lines` in plain floats: the 2x2 system
-    ``[cos a1, sin a1; cos a2, sin a2] p = [r1, r2]`` solved by Gaussian elimination with
-    partial pivoting, as ``np.linalg.solve`` does; ``None`` for (nearly) parallel lines."""
-    c1, s1, c2, s2 = math.cos(alpha1), math.sin(alpha1), math.cos(alpha2), math.sin(alpha2)
-    if abs(c2) > abs(c1):  # pivot: the row with the larger first coefficient goes first
-        c1, s1, r1, c2, s2, r2 = c2, s2, r2, c1, s1, r1
-    f = c2 * (1.0 / c1)  # eliminate the first unknown from the second row
-    u = s2 - f * s1
-    if abs(c1 * u) < 1e-12:  # the determinant
-        return None
-    y = (r2 - f * r1) / u
-    return (r1 - s1 * y) / c1, y
 
 
 def find_corners(
@@ -233,7 +205,7 @@ def find_corners(
     alphas = [float(ln.alpha) for ln in lines]
     for i, j in pairs:
         # angle between undirected lines, in [0, pi/2]
-        d = abs(_wrap(alphas[i] - alphas[j]))
+        d = abs(wrap1(alphas[i] - alphas[j]))
         angle = min(d, math.pi - d)
         if angle < min_angle:
             continue
@@ -243,7 +215,7 @@ def find_corners(
         gap = math.hypot(b_start[0] - a_end[0], b_start[1] - a_end[1])
         if gap > max_gap_m:
             continue
-        p = _intersect(float(a.r), alphas[i], float(b.r), alphas[j])
+        p = intersect1(float(a.r), alphas[i], float(b.r), alphas[j])
         if p is None:
             continue
         extension = max(math.hypot(p[0] - a_end[0], p[1] - a_end[1]), math.hypot(p[0] - b_start[0], p[1] - b_start[1]))
@@ -257,6 +229,7 @@ def find_corners(
     return out
 
 
+@fast_init
 @dataclass(frozen=True, eq=False, init=False)
 class Circle:
     """A circle (or arc) found in a scan.
@@ -276,10 +249,6 @@ class Circle:
     n_points: int
     kind: str = "circle"
 
-    def __init__(self, center: np.ndarray, radius: float, iav_mean: float, iav_std: float, confidence: float,
-                 first: int, last: int, n_points: int, kind: str = "circle"):
-        self.__dict__.update(center=center, radius=radius, iav_mean=iav_mean, iav_std=iav_std, confidence=confidence,
-                             first=first, last=last, n_points=n_points, kind=kind)
 
     def as_dict(self) -> dict:
         return {"type": self.kind, "first": self.first, "last": self.last, "center": self.center.tolist(),
@@ -287,6 +256,7 @@ class Circle:
                 "confidence": self.confidence, "n_points": self.n_points}
 
 
+@fast_init
 @dataclass(frozen=True, eq=False, init=False)
 class Leg:
     """A leg candidate: ``center`` (2,) and ``diameter`` in metres, ``middle`` the segment's
@@ -301,10 +271,6 @@ class Leg:
     iav_mean: float
     iav_std: float
 
-    def __init__(self, center: np.ndarray, diameter: float, middle: np.ndarray, first: int, last: int, n_points: int,
-                 iav_mean: float, iav_std: float):
-        self.__dict__.update(center=center, diameter=diameter, middle=middle, first=first, last=last,
-                             n_points=n_points, iav_mean=iav_mean, iav_std=iav_std)
 
     def as_dict(self) -> dict:
         return {"type": "leg", "first": self.first, "last": self.last, "center": self.center.tolist(),

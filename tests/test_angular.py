@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, read_scans, sim
-from labkit.angular import EPS_DIST, EPS_THETA, MIN_PTS, AngularSteps, angular_segmentation, local_directions
 from labkit.geometry import angle_difference
+from labkit.lines.angular import EPS_DIST, EPS_THETA, MIN_PTS, AngularSteps, angular_segmentation, local_directions
 
 DR_TOL = 0.05  # metres
 DA_TOL = math.radians(3.0)
@@ -204,7 +204,7 @@ def test_a_wall_across_the_seam_of_a_full_circle_scan():
 
 
 # ------------------------------------------------------------------ local directions
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(r=st.floats(0.3, 8.0), alpha=st.floats(-math.pi, math.pi), span=st.floats(0.1, 1.2),
        offset=st.floats(-0.3, 0.3), n=st.integers(3, 40))
 def test_local_directions_of_a_noise_free_line(r, alpha, span, offset, n):

@@ -11,9 +11,10 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from sklearn.cluster import DBSCAN
 
-from labkit.dbscan1d import DBSCAN1D, Cluster, dbscan1d, dbscan1d_reference
+from labkit.dbscan import DBSCAN1D, Cluster, dbscan1d, dbscan1d_reference
 
-d1 = importlib.import_module("labkit.dbscan1d")  # the module: `labkit.dbscan1d` itself is the function
+d1 = importlib.import_module("labkit.dbscan")  # the module: `labkit.dbscan1d` itself is the function
+from labkit import _dbscan_fast as fast  # noqa: E402 -- the private speed module, tested against the reference
 
 QUARTER = 0.25  # grid step: sums and differences of grid values are exact, so "exactly eps" is exact
 
@@ -79,12 +80,12 @@ paths = st.sampled_from(["shifts", "bounds"])
 def run_path(path, fn, *args, **kwargs):
     """Run with neighbours counted by shifted comparisons or by searchsorted bounds."""
     limit = 10**9 if path == "shifts" else 0
-    with mock.patch.object(d1, "_SHIFT_MAX_MIN_PTS", limit):
+    with mock.patch.object(fast, "_SHIFT_MAX_MIN_PTS", limit):
         return fn(*args, **kwargs)
 
 
 # ------------------------------------------------------------------ sorted input: three implementations agree
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=400)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, path=paths)
 @example(values=[], eps=0.25, min_pts=1, path="shifts")
 @example(values=[1.0], eps=0.25, min_pts=1, path="shifts")
@@ -107,7 +108,7 @@ def test_fast_equals_reference_equals_sklearn_on_sorted_grid_data(values, eps, m
         assert c.lower <= inside.min() and inside.max() <= c.upper
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=st.lists(st.floats(-1e3, 1e3, allow_nan=False), max_size=50),
        eps=st.floats(1e-6, 50.0), min_pts=min_pts_st, path=paths)
 def test_fast_equals_reference_on_arbitrary_floats(values, eps, min_pts, path):
@@ -151,7 +152,7 @@ def test_min_pts_one_makes_every_point_a_cluster_of_its_own_or_shared():
 
 
 # ------------------------------------------------------------------ unsorted input
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, path=paths, data=st.data())
 def test_unsorted_input_gives_sklearn_labels_in_callers_order(values, eps, min_pts, path, data):
     """scikit-learn numbers clusters by their first core point in input order and gives a
@@ -172,7 +173,7 @@ def test_large_unsorted_input_with_near_ties():
     tiny = 1.0 + rng.integers(0, 1 << 12, 2000) * 2.0**-52  # differ in the last 12 bits only
     x = np.concatenate([base * QUARTER, tiny, rng.integers(0, 4000, 500) * QUARTER])
     rng.shuffle(x)
-    order, s = d1._argsort(x)
+    order, s = fast.argsort_values(x)
     assert np.all(np.diff(s) >= 0) and np.array_equal(np.sort(order), np.arange(x.size))
     np.testing.assert_array_equal(s, x[order])
     for eps, min_pts in [(0.25, 5), (1.0, 30)]:
@@ -181,7 +182,7 @@ def test_large_unsorted_input_with_near_ties():
     # negative numbers and -0.0 (whose bit pattern is the largest of all)
     y = np.concatenate([-x[:3000], [-0.0] * 50, [0.0] * 50, x[3000:]])
     rng.shuffle(y)
-    order, s = d1._argsort(y)
+    order, s = fast.argsort_values(y)
     assert np.all(np.diff(s) >= 0) and np.array_equal(np.sort(order), np.arange(y.size))
     np.testing.assert_array_equal(dbscan1d(y, 0.25, 5), sklearn_labels(y, 0.25, 5))
 
@@ -197,7 +198,7 @@ def test_large_unsorted_input_with_near_ties():
 )
 def test_packed_argsort_edge_cases(values):
     x = np.random.default_rng(0).permutation(values)
-    order, s = d1._argsort(x)
+    order, s = fast.argsort_values(x)
     assert np.array_equal(np.sort(order), np.arange(x.size))
     np.testing.assert_array_equal(s, x[order])
     np.testing.assert_array_equal(s, np.sort(x))
@@ -205,7 +206,7 @@ def test_packed_argsort_edge_cases(values):
 
 def test_sorted_input_is_not_sorted_again():
     x = np.arange(10.0)
-    with mock.patch.object(d1, "_argsort", side_effect=AssertionError("sorted input was sorted")):
+    with mock.patch.object(d1, "argsort_values", side_effect=AssertionError("sorted input was sorted")):
         assert dbscan1d(x, 1.0, 3).tolist() == [0] * 10
         assert dbscan1d(x, 1.0, 3, period=20.0).tolist() == [0] * 10
 
@@ -218,7 +219,7 @@ def test_caller_order_numbering():
 
 
 # ------------------------------------------------------------------ border policies
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, border=st.sampled_from(["noise", "all"]),
        shuffle=st.booleans(), path=paths)
 def test_border_noise_and_all_against_brute_force(values, eps, min_pts, border, shuffle, path):
@@ -253,7 +254,7 @@ def test_border_point_between_two_clusters():
 periods = st.integers(4, 48).map(lambda k: QUARTER * k)
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=400)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, period=periods, shuffle=st.booleans(),
        border=st.sampled_from(["first", "noise", "all"]), path=paths)
 @example(values=[0.0, 1.0, 2.0, 3.0], eps=1.0, min_pts=3, period=4.0, shuffle=False, border="first",
@@ -269,7 +270,7 @@ def test_circular_against_brute_force(values, eps, min_pts, period, shuffle, bor
     np.testing.assert_array_equal(got, want)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, period=periods)
 def test_circular_matches_sklearn_on_the_modular_distance_matrix(values, eps, min_pts, period):
     x = np.array(values, dtype=float)
@@ -313,7 +314,7 @@ def test_wrapping_cluster_numbered_by_its_first_core_in_callers_order(path):
     np.testing.assert_array_equal(got, brute_labels(x, 0.25, 2, period=10.0))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(values=grid_values, eps=grid_eps, min_pts=min_pts_st, period=st.one_of(st.none(), periods), path=paths)
 @example(values=[3.75, 0.0], eps=0.25, min_pts=2, period=4.0, path="shifts")  # a neighbour across the wrap
 def test_core_points_against_brute_force(values, eps, min_pts, period, path):

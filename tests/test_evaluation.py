@@ -133,7 +133,7 @@ segments = st.tuples(*[st.floats(-5, 5, allow_nan=False)] * 4).filter(
     lambda t: math.hypot(t[2] - t[0], t[3] - t[1]) > 0.3)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.lists(segments, max_size=6), st.lists(segments, max_size=6), st.floats(0, 0.06))
 def test_matching_is_one_to_one_within_the_rule_and_maximal(walls_xy, lines_xy, jitter):
     """Brute force over every (line, wall) pair: matched pairs obey the rule, nothing is

@@ -45,7 +45,7 @@ def test_line_through_the_origin_has_r_zero_and_a_wrapped_alpha():
     assert -math.pi < fit.alpha <= math.pi
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(r=st.floats(0.2, 20.0), alpha=st.floats(-math.pi, math.pi), seed=st.integers(0, 2**32 - 1))
 def test_r_is_non_negative_and_alpha_wrapped(r, alpha, seed):
     rng = np.random.default_rng(seed)
@@ -57,7 +57,7 @@ def test_r_is_non_negative_and_alpha_wrapped(r, alpha, seed):
     assert abs(float(angle_difference(fit.alpha, alpha))) < 6 * math.sqrt(fit.covariance[1, 1])
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(phi=st.floats(-math.pi, math.pi), tx=st.floats(-5, 5), ty=st.floats(-5, 5),
        seed=st.integers(0, 2**32 - 1))
 def test_fits_are_invariant_under_rotation_and_translation(phi, tx, ty, seed):

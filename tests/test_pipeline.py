@@ -288,7 +288,7 @@ def _scans(draw):
 _ALL_ON = Config().updated({"arcs.enabled": True, "circles.arc_like": True})
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(scan=_scans(), method=st.sampled_from(["iepf", "split_and_merge", "angular"]))
 @example(scan=Scan(ranges=[], angles=[]), method="iepf")
 @example(scan=Scan(ranges=[np.nan] * 10, angles=np.linspace(-1, 1, 10), range_max=30.0), method="angular")

@@ -204,7 +204,7 @@ def build_or_reject(make, well_formed: bool):
     return s
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(
     ranges=st.lists(weird_floats, max_size=40),
     start=st.floats(-10, 10),
@@ -218,7 +218,7 @@ def test_fuzz_constructor(ranges, start, step, range_min, range_max):
                     _limits_ok(range_min, range_max) and _angles_ok(start, step, len(ranges)))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(ranges=st.lists(weird_floats, max_size=40), angle_min=weird_floats, increment=weird_floats)
 @example(ranges=[0.0, 0.0], angle_min=3.602879701896397e16, increment=5.0)  # rounding: 5 rad steps become 8
 @example(ranges=[0.0, 0.0], angle_min=3.602879701896397e16, increment=-5.0)
@@ -227,7 +227,7 @@ def test_fuzz_from_angle_increment(ranges, angle_min, increment):
                     _angles_ok(angle_min, increment, len(ranges)))
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(
     ranges=st.lists(weird_floats, max_size=30),
     angle_min=st.floats(-4, 4),

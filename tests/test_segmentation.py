@@ -50,7 +50,7 @@ ranges_strategy = st.lists(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(ranges=ranges_strategy, threshold=st.floats(0.01, 1.0), min_points=st.integers(1, 5),
        full=st.booleans())
 def test_matches_the_loop_reference(ranges, threshold, min_points, full):
@@ -104,7 +104,7 @@ def test_degenerate_scans():
 def test_separate_objects_in_the_simulator_are_separate_segments():
     """Beams on different objects at different depths never share a segment (a column in
     front of a wall), and one object seen in one piece is one segment."""
-    world = sim.World("t", walls=(sim.Wall((6.0, -20.0), (6.0, 20.0)),), circles=(sim.Circle((3.0, 0.0), 0.3),))
+    world = sim.World("t", walls=(sim.Wall((6.0, -20.0), (6.0, 20.0)),), circles=(sim.Column((3.0, 0.0), 0.3),))
     lidar = sim.LIDARS["lms200"]
     scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0))
     labels = segment_labels(scan, 0.08)

@@ -38,11 +38,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from .fitting import _line_covariances, line_from_sums
-from .scan import Scan
-from .segmentation import _remembered, labels_from, segment_labels, segment_order
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
+from ..fitting import _line_covariances, line_from_sums
+from ..scan import Scan
+from ..segmentation import labels_from, segment_labels, segment_order
 
 __all__ = ["split_and_merge", "Step", "lines_similar"]
 
@@ -157,13 +158,17 @@ class _Line:
 def _similar(r1, a1, c1, r2, a2, c2, merge, merge_dr_m, merge_dalpha, merge_chi2) -> tuple[bool, float]:
     da = math.remainder(a2 - a1, 2 * math.pi)
     dr = r2 - r1
-    if abs(da) > math.pi / 2:  # the same line with its normal turned around (both near the origin)
+    flipped = abs(da) > math.pi / 2
+    if flipped:  # the same line with its normal turned around (both near the origin)
         da = math.remainder(da - math.pi, 2 * math.pi)
         dr = -r2 - r1
     if merge == "thresholds":
         stat = max(abs(dr) / merge_dr_m, abs(da) / merge_dalpha)
         return stat < 1.0, stat
-    cov = np.asarray(c1) + np.asarray(c2)
+    c2 = np.asarray(c2)
+    if flipped:  # (r, alpha) -> (-r, alpha + pi) has Jacobian diag(-1, 1): the r-alpha cross term changes sign
+        c2 = c2 * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    cov = np.asarray(c1) + c2
     d = np.array([dr, da])
     try:
         stat = float(d @ np.linalg.solve(cov, d))
@@ -459,7 +464,7 @@ def split_and_merge(
     return (out, steps) if trace else out
 
 
-@_remembered
+@remembered
 def _params(method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
             merge_chi2, range_sigma_m) -> tuple:
     """The parameters of :func:`split_and_merge` checked, in its order; returns those it uses converted."""
