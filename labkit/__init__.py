@@ -64,7 +64,8 @@ from .pipeline import Config, extract_all, extract_features
 from .ransac import ransac_lines
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
-from .split_merge import Step, lines_similar, split_and_merge
+from .split_merge import lines_similar, split_and_merge
+from .steps import Step
 from .tables import features_table, read_table
 
 __version__ = "0.1.0"
