@@ -37,7 +37,6 @@ from .geometry import angle_difference, circular_mean, line_through_points, wrap
 from .hough import hough_lines
 from .iav import (
     IAVStats,
-    SegmentCheck,
     circle_from_iav,
     detect_arcs,
     detect_circles,
@@ -117,7 +116,6 @@ __all__ = [
     "inscribed_angles",
     "iav_stats",
     "IAVStats",
-    "SegmentCheck",
     "circle_from_iav",
     "middle_point_offset",
     "detect_circles",

@@ -48,7 +48,6 @@ Table II (the defaults here).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from types import MappingProxyType
 from typing import NamedTuple
 
@@ -59,10 +58,10 @@ from .features import Circle, LineSegment, line_segment
 from .fitting import fit_circle
 from .scan import Scan
 from .segmentation import RangeSegment, _remembered, labels_from, segment_labels, segment_order
+from .steps import Step
 
 __all__ = [
     "IAVStats",
-    "SegmentCheck",
     "inscribed_angles",
     "iav_stats",
     "middle_point_offset",
@@ -98,41 +97,6 @@ class IAVStats(NamedTuple):
     mean: float
     std: float
     n_angles: int
-
-
-@dataclass(frozen=True)
-class SegmentCheck:
-    """What a detector decided about one run of points (one trace entry).
-
-    Attributes
-    ----------
-    first, last : int
-        First and last beam of the run.
-    n_points : int
-        Points in the run.
-    chord_m : float
-        Distance between the run's extreme points, metres.
-    middle_ratio : float
-        Signed offset of the middle point from the chord over the chord length (see
-        :func:`middle_point_offset`); NaN when not computed.
-    iav_mean, iav_std : float
-        Inscribed angle statistics, radians (NaN when not computed).
-    verdict : str
-        ``"accepted"`` or the first test the run failed, in the order the detectors
-        apply them: ``"too few points"``, ``"chord too short"``, ``"chord too long"``,
-        ``"degenerate"`` (non-finite points, a zero chord), ``"prerequisite"``,
-        ``"degenerate"`` (an interior point on an extreme), ``"iav mean"``,
-        ``"iav std"``, ``"v-corner"``, ``"occluded"`` (legs), ``"fit failed"``.
-    """
-
-    first: int
-    last: int
-    n_points: int
-    chord_m: float = math.nan
-    middle_ratio: float = math.nan
-    iav_mean: float = math.nan
-    iav_std: float = math.nan
-    verdict: str = "accepted"
 
 
 # ============================================================================ validation
@@ -603,24 +567,64 @@ def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None, 
     return _Angles(ang, offsets, counts, mean, np.sqrt(var), side, degenerate)
 
 
-def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel,
-           ang: _Angles | None) -> list[SegmentCheck]:
-    """One :class:`SegmentCheck` per run, with the values known when it was decided
-    (``chord``, ``ratio``: as tested; ``verdict`` per run; ``ang``: the inscribed angles of
-    the runs ``sel``, or None)."""
+def _nearest(value: float, bounds) -> float:
+    """The bound of ``bounds`` (a number or a (low, high) pair) that ``value`` is compared with."""
+    if not isinstance(bounds, tuple):
+        return float(bounds)
+    lo, hi = bounds
+    return float(lo) if abs(value - lo) <= abs(value - hi) else float(hi)
+
+
+def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel, ang: _Angles | None,
+           algorithm: str, limits: dict, found: list) -> list[Step]:
+    """One :class:`labkit.Step` per run, ``"accept"`` or ``"reject"``, with the values known when
+    it was decided (``chord``, ``ratio``: as tested; ``verdict`` per run; ``ang``: the inscribed
+    angles of the runs ``sel``, or None). ``limits``: the threshold (or (low, high) range) of
+    each verdict's test; ``found``: the features, in the order of the accepted runs."""
     mean, std = np.full(len(verdict), np.nan), np.full(len(verdict), np.nan)
     if ang is not None:
         mean[sel], std[sel] = ang.mean, ang.std
     out = []
     first, last = runs.idx[runs.starts], runs.idx[runs.ends - 1]
+    features = iter(found)
     for k in range(len(verdict)):
         v = int(verdict[k])
+        n = int(geo.n[k])
         c = float(chord[k]) if v != _FEW else math.nan
         r = float(ratio[k]) if v not in (_FEW, _SHORT, _LONG) else math.nan
-        iav = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED) else (
+        m, sd = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED) else (
             math.nan, math.nan)
-        out.append(SegmentCheck(int(first[k]), int(last[k]), int(geo.n[k]), c, r, *iav, _VERDICTS[v]))
+        value = {_FEW: n, _SHORT: c, _LONG: c, _PREREQ: abs(r) if limits.get("hollow") else r, _MEAN: m}.get(v, sd)
+        if v == _MEAN and "mean_from" in limits:
+            value = abs(m - limits["mean_from"])
+        if v in (_DEGENERATE, _FIT, _OCCLUDED):
+            value = math.nan
+        threshold = _nearest(value, limits[v]) if v in limits and not math.isnan(value) else math.nan
+        known = [f"{n} points"] + [text for ok, text in (
+            (not math.isnan(c), f"chord {c:.3f} m"), (not math.isnan(r), f"middle ratio {r:.2f}"),
+            (not math.isnan(m), f"iav mean {math.degrees(m):.1f} deg, std {math.degrees(sd):.1f} deg")) if ok]
+        fields = dict(value=value, threshold=threshold, test=_VERDICTS[v],
+                      reason=f"{_VERDICTS[v]}: " + ", ".join(known))
+        if v == _ACCEPTED:
+            feature = next(features)
+            if hasattr(feature, "radius"):  # a circle or an arc
+                fields.update(center=tuple(float(x) for x in feature.center), radius=float(feature.radius))
+            elif hasattr(feature, "diameter"):  # a leg
+                fields.update(center=tuple(float(x) for x in feature.center), radius=float(feature.diameter) / 2)
+            else:  # a line
+                fields.update(r=float(feature.r), alpha=float(feature.alpha))
+        out.append(Step(algorithm, "accept" if v == _ACCEPTED else "reject", int(first[k]), int(last[k]), **fields))
     return out
+
+
+def _circle_limits(t: _CircleTest) -> dict:
+    """The thresholds of the circle test by verdict, for the trace."""
+    limits = {_FEW: max(t.min_points, 3), _SHORT: t.chord_range[0], _LONG: t.chord_range[1],
+              _PREREQ: t.middle_range, _MEAN: t.mean_range, _STD: t.std_max, _ACCEPTED: t.std_max,
+              "hollow": t.hollow}
+    if t.arc_like_std_max is not None:
+        limits[_STD] = limits[_VCORNER] = t.arc_like_std_max
+    return limits
 
 
 class _CircleTest(NamedTuple):
@@ -639,7 +643,8 @@ class _CircleTest(NamedTuple):
     kind: str
 
 
-def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool) -> tuple[list[Circle], list[SegmentCheck]]:
+def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool,
+               algorithm: str = "iav_circles") -> tuple[list[Circle], list[Step]]:
     """The circle test of :func:`detect_circles` on every run."""
     s = runs.starts.size
     if s == 0:
@@ -656,7 +661,9 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool) -> tuple[list[Circ
             verdict[k] = v
             if circle is not None:
                 circles.append(circle)
-    return circles, (_trace(runs, geo, geo.chord, ratio, verdict, sel, ang) if want_trace else [])
+    if not want_trace:
+        return circles, []
+    return circles, _trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, _circle_limits(t), circles)
 
 
 def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
@@ -734,8 +741,8 @@ def detect_circles(
     v_corner_neighbours: int = 4,
     v_corner_stride: int | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[Circle] | tuple[list[Circle], list[Step]]:
     """Circles in a scan by the Inscribed Angle Variance (Xavier et al. 2005, Sec. II-B to II-D).
 
     Each range segment is tested in order, cheapest test first:
@@ -791,13 +798,21 @@ def detect_circles(
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments (e.g. from an adaptive threshold, shared with other
         detectors) instead of ``range_segments(scan, seg_threshold_m)``.
-    return_trace : bool
-        Also return one :class:`SegmentCheck` per segment, saying why it was rejected.
+    trace : bool
+        Also return one :class:`labkit.Step` per segment (``algorithm="iav_circles"``),
+        in scan order: ``"accept"`` with the circle's ``center`` and ``radius`` (``value``
+        the inscribed angles' standard deviation, ``threshold`` ``std_max``), or
+        ``"reject"``; ``test`` is the first test the segment failed (``"too few points"``,
+        ``"chord too short"``, ``"chord too long"``, ``"prerequisite"``, ``"degenerate"``,
+        ``"iav mean"``, ``"iav std"``, ``"v-corner"``, ``"fit failed"``; ``"accepted"``),
+        ``value`` and ``threshold`` what it compared (points, chord, middle ratio, mean or
+        standard deviation of the inscribed angles), ``reason`` every statistic computed.
+        Replay: the ``accept`` steps are the returned circles, one for one.
 
     Returns
     -------
     list of Circle (``kind="circle"`` or ``"arc-like"``), in scan order; with
-    ``return_trace``, ``(circles, trace)``.
+    ``trace``, ``(circles, steps)``.
 
     Examples
     --------
@@ -815,8 +830,8 @@ def detect_circles(
                         middle_range=middle_range, mean_range=mean_range, std_max=std_max, arc_like=arc_like,
                         arc_like_std_max=arc_like_std_max, v_corner_neighbours=v_corner_neighbours,
                         v_corner_stride=v_corner_stride, hollow=False, center_method=center_method, kind="circle")
-    circles, trace = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, return_trace)
-    return (circles, trace) if return_trace else circles
+    circles, steps = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, trace)
+    return (circles, steps) if trace else circles
 
 
 def detect_lines_iav(
@@ -828,8 +843,8 @@ def detect_lines_iav(
     mean_tolerance: float = math.radians(5.0),
     std_max: float = CIRCLE_STD_MAX,
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[LineSegment] | tuple[list[LineSegment], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Lines as range segments whose inscribed angles are all near 180 deg (Sec. II-B.1).
 
     A whole segment is a line when it has at least ``min_points`` points (Table II
@@ -858,12 +873,14 @@ def detect_lines_iav(
         0.15 rad (8.6 deg), as for circles.
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments.
-    return_trace : bool
-        Also return one :class:`SegmentCheck` per segment.
+    trace : bool
+        Also return one :class:`labkit.Step` per segment (``algorithm="iav_lines"``), as
+        :func:`detect_circles` does; an ``"accept"`` step carries the line ``r, alpha``, and
+        the ``"iav mean"`` test compares ``value = |mean - pi|`` with ``mean_tolerance``.
 
     Returns
     -------
-    list of LineSegment in scan order; with ``return_trace``, ``(lines, trace)``.
+    list of LineSegment in scan order; with ``trace``, ``(lines, steps)``.
 
     Examples
     --------
@@ -882,7 +899,7 @@ def detect_lines_iav(
     runs = _scan_runs(scan, segments, seg_threshold_m)
     s = runs.starts.size
     if s == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     geo = _geometry(runs)
     verdict = np.full(s, _ACCEPTED, dtype=np.int64)
     if geo.finite is not None:
@@ -900,9 +917,11 @@ def detect_lines_iav(
         for k in sel[verdict[sel] == _ACCEPTED]:
             a, b = runs.starts[k], runs.ends[k]
             lines.append(line_segment(runs.pts[a:b], runs.idx[a:b]))
-    if not return_trace:
+    if not trace:
         return lines
-    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang)
+    limits = {_FEW: min_points, _SHORT: min_length_m, _MEAN: mean_tolerance, _STD: std_max, _ACCEPTED: std_max,
+              "mean_from": math.pi}  # the mean test compares |mean - pi| with the tolerance
+    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang, "iav_lines", limits, lines)
 
 
 def detect_arcs(
@@ -919,8 +938,8 @@ def detect_arcs(
     center_method: str = "geometric",
     line_params: dict | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[Circle] | tuple[list[Circle], list[Step]]:
     """Arcs embedded in lines, such as rounded wall corners (Xavier et al. Sec. II-B.2, Fig. 3).
 
     Lines are found first; their points are excluded, and each remaining run of
@@ -966,7 +985,8 @@ def detect_arcs(
 
     Returns
     -------
-    list of Circle in scan order; with ``return_trace``, ``(arcs, trace)``.
+    list of Circle in scan order; with ``trace``, ``(arcs, steps)``: one :class:`labkit.Step`
+    per run tested (``algorithm="iav_arcs"``), as :func:`detect_circles`.
 
     Examples
     --------
@@ -1006,7 +1026,7 @@ def detect_arcs(
         excluded[idx] = True
     runs = _scan_runs(scan, segments, seg_threshold_m)
     if runs.starts.size == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     # keep the points of segments that hold a line, minus the lines' points, cut into runs
     out = excluded[runs.idx]
     seg_of = np.repeat(np.arange(runs.starts.size), runs.sizes)
@@ -1015,9 +1035,9 @@ def detect_arcs(
     continues = np.concatenate([[False], keep[:-1] & (seg_of[1:] == seg_of[:-1])])
     kept = np.flatnonzero(keep)
     if kept.size == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     starts = np.flatnonzero(~continues[kept])
     sub = _Runs(runs.idx[kept], runs.pts.take(kept, axis=0), starts, np.concatenate([starts[1:], [kept.size]]),
                 runs.check_finite)
-    arcs, trace = _test_runs(sub, test, return_trace)
-    return (arcs, trace) if return_trace else arcs
+    arcs, steps = _test_runs(sub, test, trace, "iav_arcs")
+    return (arcs, steps) if trace else arcs

@@ -127,7 +127,8 @@ def test_log_steps_puts_every_step_on_the_step_timeline(wall, tmp_path):
     # every row holds its archetype's required component (else the viewer shows an error badge)
     required = {"/world/steps/beams": "Points2D:positions", "/world/steps/at": "Points2D:positions",
                 "/world/steps/line": "LineStrips2D:strips", "/world/steps/accepted": "LineStrips2D:strips",
-                "/world/steps/circle": "Ellipses2D:half_sizes", "/world/steps/accepted_circles": "Ellipses2D:half_sizes",
+                "/world/steps/circle": "Ellipses2D:half_sizes",
+                "/world/steps/accepted_circles": "Ellipses2D:half_sizes",
                 "/steps/log": "TextLog:text", "/steps/compared/value": "Scalars:scalars"}
     for entity, column in required.items():
         values = [v for b in batches[entity] for v in b.column(column).to_pylist()]
