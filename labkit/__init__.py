@@ -27,7 +27,7 @@ The library's public names are re-exported here; modules:
 """
 
 from . import evaluation, geometry, iav, legs, poses, sim
-from .angular import AngularSteps, angular_segmentation, local_directions
+from .angular import AngularSteps, angular_arrays, angular_segmentation, local_directions
 from .data import bundled_data
 from .dbscan1d import DBSCAN1D, dbscan1d, dbscan1d_reference
 from .evaluation import match_circles, match_legs, match_lines, ray_errors, score_detections, score_lines
@@ -109,6 +109,7 @@ __all__ = [
     "dbscan1d_reference",
     "DBSCAN1D",
     "angular_segmentation",
+    "angular_arrays",
     "AngularSteps",
     "local_directions",
     "iav",
