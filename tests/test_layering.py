@@ -12,7 +12,7 @@ import pytest
 LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 
 #: the model and the algorithms: each may import the others, numpy and the standard library
-ALGORITHMS = ["_checks", "_safe", "errors", "scan", "geometry", "segmentation", "fitting", "features",
+ALGORITHMS = ["_checks", "_safe", "errors", "scan", "steps", "geometry", "segmentation", "fitting", "features",
               "split_merge", "dbscan1d",
               "angular", "iav", "legs", "sim", "pipeline", "evaluation",
               "incremental", "line_regression", "ransac", "hough", "poses"]
