@@ -7,11 +7,11 @@ over the scenario's 60 s:
 
 * ``segment``: the detectors' range segmentation, :func:`labkit.segment_labels` at 0.08 m
   (``range_segments``, which also builds a record per segment, costs about 200 us more)
-* ``circles``: :func:`labkit.iav.detect_circles` (segmentation included)
+* ``circles``: :func:`labkit.circles.iav.detect_circles` (segmentation included)
 * ``arc-like``: the same with ``arc_like=True``
-* ``legs``: :func:`labkit.legs.detect_legs` (segmentation included)
-* ``legs+people``: legs and :func:`labkit.legs.pair_legs`
-* ``s&m``: :func:`labkit.split_and_merge` with its defaults, when ``labkit.split_merge`` exists
+* ``legs``: :func:`labkit.circles.legs.detect_legs` (segmentation included)
+* ``legs+people``: legs and :func:`labkit.circles.legs.pair_legs`
+* ``s&m``: :func:`labkit.split_and_merge` with its defaults, when ``labkit.lines.split_merge`` exists
 
 Times are the median and the largest per-scan time over the scans, each scan timed at its
 best of ``--repeat`` passes.
@@ -30,12 +30,12 @@ import platform
 import numpy as np
 from common import per_scan, world_scans
 
-from labkit.iav import detect_circles
-from labkit.legs import detect_legs, pair_legs
+from labkit.circles.iav import detect_circles
+from labkit.circles.legs import detect_legs, pair_legs
 from labkit.segmentation import segment_labels
 
 try:
-    from labkit.split_merge import split_and_merge
+    from labkit.lines.split_merge import split_and_merge
 except ImportError:  # the line extractor is optional here
     split_and_merge = None
 

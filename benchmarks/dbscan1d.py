@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.cluster import DBSCAN
 
-from labkit.dbscan1d import dbscan1d
+from labkit.dbscan import dbscan1d
 
 MIN_PTS = 5
 EPS = 1.0

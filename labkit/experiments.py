@@ -29,7 +29,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .angular import angular_segmentation
 from .evaluation import (
     LineScores,
     RayErrors,
@@ -41,15 +40,16 @@ from .evaluation import (
     score_lines,
 )
 from .geometry import angle_difference
-from .hough import hough_lines
-from .iav import detect_lines_iav
-from .incremental import incremental_lines
-from .line_regression import regression_lines
+from .lines.angular import angular_segmentation
+from .lines.hough import hough_lines
+from .lines.iav import detect_lines_iav
+from .lines.incremental import incremental_lines
+from .lines.ransac import ransac_lines
+from .lines.regression import regression_lines
+from .lines.split_merge import split_and_merge
 from .pipeline import Config, extract_features
-from .ransac import ransac_lines
 from .scan import Scan
 from .sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenario, simulate
-from .split_merge import split_and_merge
 
 __all__ = [
     "LINE_EXTRACTORS",

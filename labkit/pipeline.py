@@ -19,7 +19,7 @@ al.'s 80 mm as its floor) and run in this order:
 5. **corners** -- where consecutive lines meet (:func:`labkit.find_corners`);
 6. **arcs** -- arcs embedded in walls, such as rounded corners (:func:`labkit.detect_arcs`).
    Off by default: the arc test needs walls extracted with a tight split threshold and
-   long lines (:data:`labkit.iav.ARC_LINE_PARAMS`), a second line pass that doubles the
+   long lines (:data:`labkit.circles.iav.ARC_LINE_PARAMS`), a second line pass that doubles the
    cost of a scan.
 
 Angles in a :class:`Config` are in degrees (names end in ``_deg``) so that a TOML file
@@ -49,13 +49,13 @@ from time import perf_counter
 import numpy as np
 
 from ._safe import OutputKind, safe_output
-from .angular import angular_segmentation
+from .circles.iav import detect_arcs, detect_circles
+from .circles.legs import detect_legs, pair_legs
 from .features import Features, find_corners
-from .iav import detect_arcs, detect_circles
-from .legs import detect_legs, pair_legs
+from .lines.angular import angular_segmentation
+from .lines.split_merge import split_and_merge
 from .scan import Scan
 from .segmentation import segment_labels
-from .split_merge import split_and_merge
 
 __all__ = [
     "Config",

@@ -23,12 +23,12 @@ Labels follow the scikit-learn convention: an int per beam, -1 for "no segment".
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ._cache import remembered
 from ._checks import check_int, check_positive
 from .scan import Scan
 
@@ -70,25 +70,7 @@ class RangeSegment:
         return f"RangeSegment(beams {self.first}..{self.last}, {self.n_points} points)"
 
 
-def _remembered(check):
-    """``check``, a pure function that validates parameters (and returns them converted),
-    remembered for each distinct set of arguments: the detectors run by a pipeline get the
-    same parameters with every scan, and checking them anew costs tens of microseconds a
-    scan. Unhashable arguments (lists, arrays) are checked every time; ``typed`` keeps
-    ``1``, ``1.0`` and ``True`` apart, as the checks do. A failed check is never remembered."""
-    remembered = functools.lru_cache(maxsize=32, typed=True)(check)
-
-    @functools.wraps(check)
-    def checked(*args, **kwargs):
-        try:
-            return remembered(*args, **kwargs)
-        except TypeError:  # an unhashable argument
-            return check(*args, **kwargs)
-
-    return checked
-
-
-@_remembered
+@remembered
 def _validate(threshold_m: float, min_points: int) -> None:
     check_positive("threshold_m", threshold_m)
     check_int("min_points", min_points, 1)
@@ -116,7 +98,7 @@ def breakpoint_thresholds(
     return _thresholds(r_a, r_b, np.abs(np.asarray(dphi, dtype=float)), threshold_m, incidence_deg, range_sigma_m)
 
 
-@_remembered
+@remembered
 def _check_adaptive(incidence_deg: float, range_sigma_m: float) -> None:
     if not (0 < incidence_deg < 90):
         raise ValueError(f"incidence_deg must be in (0, 90) degrees, got {incidence_deg}")

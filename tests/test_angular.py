@@ -11,7 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, read_scans, sim
-from labkit.angular import (
+from labkit.geometry import angle_difference
+from labkit.lines.angular import (
     EPS_DIST,
     EPS_THETA,
     MIN_PTS,
@@ -20,7 +21,6 @@ from labkit.angular import (
     angular_segmentation,
     local_directions,
 )
-from labkit.geometry import angle_difference
 
 DR_TOL = 0.05  # metres
 DA_TOL = math.radians(3.0)

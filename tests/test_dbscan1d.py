@@ -11,9 +11,9 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from sklearn.cluster import DBSCAN
 
-from labkit.dbscan1d import DBSCAN1D, Cluster, dbscan1d, dbscan1d_reference
+from labkit.dbscan import DBSCAN1D, Cluster, dbscan1d, dbscan1d_reference
 
-d1 = importlib.import_module("labkit.dbscan1d")  # the module: `labkit.dbscan1d` itself is the function
+d1 = importlib.import_module("labkit.dbscan")  # the module: `labkit.dbscan1d` itself is the function
 
 QUARTER = 0.25  # grid step: sums and differences of grid values are exact, so "exactly eps" is exact
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from labkit.hough import hough_lines
+from labkit.lines.hough import hough_lines
 from tests.line_scans import HEXAGON_ROOM, SQUARE_ROOM, check_room, key, polygon_scan, wall_rates, wall_scan
 
 

@@ -11,24 +11,24 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, sim
-from labkit.features import Circle, line_segment
-from labkit.fitting import fit_circle
-from labkit.geometry import signed_distance_to_line
-from labkit.iav import (
+from labkit.circles.iav import (
     ARC_LINE_PARAMS,
     IAVStats,
     circle_confidence,
     circle_from_iav,
     detect_arcs,
     detect_circles,
-    detect_lines_iav,
     iav_stats,
     inscribed_angles,
     is_v_corner,
     middle_point_offset,
 )
+from labkit.features import Circle, line_segment
+from labkit.fitting import fit_circle
+from labkit.geometry import signed_distance_to_line
+from labkit.lines.iav import detect_lines_iav
+from labkit.lines.split_merge import split_and_merge
 from labkit.segmentation import RangeSegment, range_segments
-from labkit.split_merge import split_and_merge
 
 DEG = math.pi / 180
 
@@ -261,7 +261,7 @@ def test_columns_are_found_with_their_radius_and_centre(radius, distance):
     found = 0
     for _ in range(10):
         bearing = rng.uniform(-1.0, 1.0)
-        world = sim.World("column", circles=(sim.Circle((distance * math.cos(bearing),
+        world = sim.World("column", circles=(sim.Column((distance * math.cos(bearing),
                                                          distance * math.sin(bearing)), radius),))
         scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0), rng=rng)
         circles = detect_circles(scan)
@@ -377,7 +377,7 @@ def test_arc_like_mode_finds_irregular_trunks():
 
 @pytest.mark.parametrize("method", ["iav", "algebraic", "geometric"])
 def test_center_methods_agree_on_a_clean_column(method):
-    world = sim.World("column", circles=(sim.Circle((2.5, -0.4), 0.3),))
+    world = sim.World("column", circles=(sim.Column((2.5, -0.4), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     (c,) = detect_circles(scan, center_method=method)
     np.testing.assert_allclose(c.center, (2.5, -0.4), atol=2e-3)
@@ -468,7 +468,7 @@ def test_batch_detector_matches_the_plain_loop(objects, walls, full, seed, arc_l
     on random worlds of columns and walls, for 180 and 360 deg lidars."""
     world = sim.World("random", walls=tuple(sim.Wall((x0, y0), (x1, y1)) for x0, y0, x1, y1 in walls
                                              if math.hypot(x1 - x0, y1 - y0) > 0.1),
-                      circles=tuple(sim.Circle((x, y), r) for y, x, r in objects))
+                      circles=tuple(sim.Column((x, y), r) for y, x, r in objects))
     lidar = (sim.Lidar.from_fov("ring", 360.0, 1.0, full_circle=True, noise_std_m=0.01) if full
              else sim.Lidar.from_fov("half", 180.0, 0.5, noise_std_m=0.005))
     scan, _ = sim.scan_at(world, lidar, (0.0, 0.0, 0.3), rng=np.random.default_rng(seed))
@@ -484,7 +484,7 @@ def test_batch_detector_matches_the_plain_loop(objects, walls, full, seed, arc_l
 
 
 def test_invalid_beams_are_masked_not_raised():
-    world = sim.World("column", circles=(sim.Circle((2.0, 0.0), 0.3),))
+    world = sim.World("column", circles=(sim.Column((2.0, 0.0), 0.3),))
     scan, truth = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     (c,) = truth.circles
     ranges = scan.ranges.copy()
@@ -519,7 +519,7 @@ def test_degenerate_segments_are_skipped_with_a_reason(points, verdict):
 
 def test_a_column_across_the_seam_of_a_full_circle_scan():
     lidar = sim.Lidar.from_fov("ring", 360.0, 0.5, full_circle=True, noise_std_m=0.0)
-    world = sim.World("seam", circles=(sim.Circle((-2.0, 0.0), 0.3),))  # behind: beams -180 deg and 179.5 deg
+    world = sim.World("seam", circles=(sim.Column((-2.0, 0.0), 0.3),))  # behind: beams -180 deg and 179.5 deg
     scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0))
     (c,) = detect_circles(scan)
     assert c.first > c.last
@@ -527,7 +527,7 @@ def test_a_column_across_the_seam_of_a_full_circle_scan():
 
 
 def test_trace_has_one_record_per_segment():
-    world = sim.World("mixed", walls=(sim.Wall((4.0, -3.0), (4.0, 3.0)),), circles=(sim.Circle((2.0, 0.5), 0.3),))
+    world = sim.World("mixed", walls=(sim.Wall((4.0, -3.0), (4.0, 3.0)),), circles=(sim.Column((2.0, 0.5), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     circles, trace = detect_circles(scan, trace=True)
     assert len(trace) == len(range_segments(scan))
@@ -596,7 +596,7 @@ def test_lines_by_iav_match_the_walls():
 
 
 def test_columns_and_corners_are_not_iav_lines():
-    world = sim.World("x", walls=_v_corner((3.0, 0.0), 90, 1.0), circles=(sim.Circle((2.0, 1.5), 0.4),))
+    world = sim.World("x", walls=_v_corner((3.0, 0.0), 90, 1.0), circles=(sim.Column((2.0, 1.5), 0.4),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0), rng=np.random.default_rng(0))
     lines, trace = detect_lines_iav(scan, trace=True)
     assert lines == []
@@ -683,7 +683,7 @@ def test_no_arcs_in_a_room_with_sharp_corners():
 
 
 def test_a_segment_without_lines_is_left_to_detect_circles():
-    world = sim.World("column", circles=(sim.Circle((2.0, 0.0), 0.3),))
+    world = sim.World("column", circles=(sim.Column((2.0, 0.0), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     assert detect_arcs(scan, []) == []
     assert len(detect_circles(scan)) == 1
@@ -691,7 +691,7 @@ def test_a_segment_without_lines_is_left_to_detect_circles():
 
 @pytest.mark.parametrize("radius", [0.8, 1.2])
 def test_rounded_corners_with_split_and_merge_lines(radius):
-    """The default path: lines from labkit.split_merge with ARC_LINE_PARAMS (0.02 m peak
+    """The default path: lines from labkit.lines.split_merge with ARC_LINE_PARAMS (0.02 m peak
     error, 0.5 m shortest line). Measured: 20/20 corners for both radii, radius within
     6 %; split_and_merge's own defaults cut the arcs into short lines and leave none
     (0/20). Asserted: 17/20, 10 %, and 0."""
@@ -725,7 +725,7 @@ def test_detect_arcs_validates_its_arguments(lines, kwargs, match):
 
 
 def test_records_are_the_shared_feature_records():
-    world = sim.World("column", circles=(sim.Circle((2.0, 0.0), 0.3),))
+    world = sim.World("column", circles=(sim.Column((2.0, 0.0), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     (c,) = detect_circles(scan)
     assert isinstance(c, Circle)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from labkit import Scan
-from labkit.incremental import incremental_lines
+from labkit.lines.incremental import incremental_lines
 from tests.line_scans import wall_rates, wall_scan
 
 

@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, sim
+from labkit.circles.iav import inscribed_angles, middle_point_offset
+from labkit.circles.legs import detect_legs, is_occluded, pair_legs
 from labkit.features import Leg, Person
-from labkit.iav import inscribed_angles, middle_point_offset
-from labkit.legs import detect_legs, is_occluded, pair_legs
 from labkit.segmentation import RangeSegment, range_segments
 
 LMS200 = sim.LIDARS["lms200"]
@@ -145,8 +145,8 @@ def test_batch_detector_matches_the_plain_loop(pad):
 
 def _two_legs_world(rear_offset_m):
     """A front leg 2 m ahead and a rear leg 0.5 m behind it, ``rear_offset_m`` to the side."""
-    return sim.World("legs", circles=(sim.Circle((2.0, 0.0), 0.07, "leg"),
-                                      sim.Circle((2.5, rear_offset_m), 0.07, "leg")))
+    return sim.World("legs", circles=(sim.Column((2.0, 0.0), 0.07, "leg"),
+                                      sim.Column((2.5, rear_offset_m), 0.07, "leg")))
 
 
 def test_a_partly_hidden_leg_is_rejected_as_occluded():
@@ -206,7 +206,7 @@ def test_is_occluded_checks_beam_indices(beam):
 
 def test_columns_and_walls_are_not_legs():
     world = sim.World("hall-like", walls=(sim.Wall((4.0, -3.0), (4.0, 3.0)),),
-                      circles=(sim.Circle((2.0, 1.0), 0.25), sim.Circle((2.5, -1.0), 0.15)))
+                      circles=(sim.Column((2.0, 1.0), 0.25), sim.Column((2.5, -1.0), 0.15)))
     rng = np.random.default_rng(0)
     for _ in range(10):
         scan, _ = sim.scan_at(world, LMS200, (0.0, 0.0, 0.0), rng=rng)
@@ -225,7 +225,7 @@ def test_optional_iav_thresholds_tighten_the_test(hall):
 
 @pytest.mark.parametrize("method", ["ray", "iav", "algebraic", "geometric"])
 def test_centre_methods_on_a_clean_leg(method):
-    world = sim.World("leg", circles=(sim.Circle((1.5, 0.4), 0.08),))
+    world = sim.World("leg", circles=(sim.Column((1.5, 0.4), 0.08),))
     scan, _ = sim.scan_at(world, LMS200, (0.0, 0.0, 0.0))
     (leg,) = detect_legs(scan, center_method=method)
     np.testing.assert_allclose(leg.center, (1.5, 0.4), atol=0.012)

@@ -14,10 +14,10 @@ from hypothesis import strategies as st
 
 from labkit import Scan, line_segment, range_segments, segment_labels
 from labkit.geometry import angle_difference
-from labkit.hough import hough_lines
-from labkit.incremental import incremental_lines
-from labkit.line_regression import regression_lines
-from labkit.ransac import ransac_lines
+from labkit.lines.hough import hough_lines
+from labkit.lines.incremental import incremental_lines
+from labkit.lines.ransac import ransac_lines
+from labkit.lines.regression import regression_lines
 from labkit.sim import Wall, World, simulate
 from tests.line_scans import ROOM, doorway_scan, key, noiseless, room_scan, rounded, wall_scan
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit import Scan
-from labkit.line_regression import regression_lines
+from labkit.lines.regression import regression_lines
 from tests.line_scans import room_scan, rounded, wall_rates, wall_scan
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from labkit.ransac import ransac_lines
+from labkit.lines.ransac import ransac_lines
 from labkit.sim import scenario, simulate
 from tests.line_scans import HEXAGON_ROOM, SQUARE_ROOM, check_room, polygon_scan, score, wall_rates, wall_scan
 

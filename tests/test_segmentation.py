@@ -104,7 +104,7 @@ def test_degenerate_scans():
 def test_separate_objects_in_the_simulator_are_separate_segments():
     """Beams on different objects at different depths never share a segment (a column in
     front of a wall), and one object seen in one piece is one segment."""
-    world = sim.World("t", walls=(sim.Wall((6.0, -20.0), (6.0, 20.0)),), circles=(sim.Circle((3.0, 0.0), 0.3),))
+    world = sim.World("t", walls=(sim.Wall((6.0, -20.0), (6.0, 20.0)),), circles=(sim.Column((3.0, 0.0), 0.3),))
     lidar = sim.LIDARS["lms200"]
     scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0))
     labels = segment_labels(scan, 0.08)

@@ -9,6 +9,7 @@ import pytest
 
 from labkit import sim
 from labkit.geometry import signed_distance_to_line, transform_points
+from labkit.sim.lidar import _frame
 
 
 def _world(**kw) -> sim.World:
@@ -53,7 +54,7 @@ def test_noise_has_the_stated_spread():
 def test_circle_tangent_beams():
     # a circle of radius R at distance D: beams hit it while |theta| < asin(R / D)
     R, D = 0.5, 4.0
-    world = _world(circles=(sim.Circle((D, 0.0), R),))
+    world = _world(circles=(sim.Column((D, 0.0), R),))
     lidar = _lidar(angle_min=-0.3, angle_increment=0.001, n_beams=601)
     scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0))
     half = np.arcsin(R / D)
@@ -125,7 +126,7 @@ def test_truth_is_consistent_with_the_scan(name):
 
 
 def test_people_walk_with_alternating_legs():
-    p = sim.Person(sim.PathSpec(((0.0, 0.0), (100.0, 0.0)), "bounce"), speed_mps=1.0, step_length_m=0.4)
+    p = sim.Walker(sim.PathSpec(((0.0, 0.0), (100.0, 0.0)), "bounce"), speed_mps=1.0, step_length_m=0.4)
     t = np.arange(0, 4, 0.01)
     left = np.array([p.legs_at(ti)[0] for ti in t])
     right = np.array([p.legs_at(ti)[1] for ti in t])
@@ -137,7 +138,7 @@ def test_people_walk_with_alternating_legs():
     centre = np.array([p.center_at(ti) for ti in t])
     assert np.all(np.abs(0.5 * (left[:, 0] + right[:, 0]) - centre[:, 0]) <= p.step_length_m)
     with pytest.raises(ValueError, match="leg_diameter_m"):
-        sim.Person(sim.PathSpec(((0, 0), (1, 0))), leg_diameter_m=0.3)
+        sim.Walker(sim.PathSpec(((0, 0), (1, 0))), leg_diameter_m=0.3)
 
 
 @pytest.mark.parametrize("name", ["hall", "corridor", "office"])
@@ -146,7 +147,7 @@ def test_scenarios_have_no_collisions(name):
     sc = sim.scenario(name)
     w = sc.world
     for t in np.arange(0.0, sc.duration_s, 0.05):
-        frame = sim._frame(w, t)
+        frame = _frame(w, t)
         pose = sc.trajectory.pose_at(t)
         c, r = frame.circ_center, frame.circ_radius
         if len(c):

@@ -80,7 +80,7 @@ def test_split_and_merge_replay_with_a_merge():
 
 def test_iav_circles_accepted_steps_are_the_circles():
     world = sim.World("columns", walls=(sim.Wall((5.0, -4.0), (5.0, 4.0)),),
-                      circles=(sim.Circle((2.0, 1.0), 0.3), sim.Circle((3.0, -1.5), 0.25)))
+                      circles=(sim.Column((2.0, 1.0), 0.3), sim.Column((3.0, -1.5), 0.25)))
     scan, truth = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     circles, steps = labkit.detect_circles(scan, trace=True)
     accepted = [s for s in steps if s.kind == "accept"]
@@ -99,7 +99,7 @@ def test_iav_circles_accepted_steps_are_the_circles():
 
 def test_iav_lines_accepted_steps_are_the_lines():
     world = sim.World("walls", walls=(sim.Wall((2.0, -1.0), (2.0, 1.0)), sim.Wall((-1.0, 3.0), (1.0, 3.0))),
-                      circles=(sim.Circle((1.5, -2.0), 0.3),))
+                      circles=(sim.Column((1.5, -2.0), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     lines, steps = labkit.detect_lines_iav(scan, trace=True)
     accepted = [s for s in steps if s.kind == "accept"]
@@ -110,7 +110,7 @@ def test_iav_lines_accepted_steps_are_the_lines():
 
 
 def test_legs_accepted_steps_are_the_legs():
-    world = sim.World("legs", circles=(sim.Circle((2.0, 0.5), 0.07), sim.Circle((2.5, -0.6), 0.06)))
+    world = sim.World("legs", circles=(sim.Column((2.0, 0.5), 0.07), sim.Column((2.5, -0.6), 0.06)))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     legs, steps = labkit.detect_legs(scan, trace=True)
     assert len(legs) == 2

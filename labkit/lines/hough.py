@@ -42,11 +42,11 @@ import math
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment
-from .ransac import _fit, _segments, _taking_part
-from .scan import Scan
-from .segmentation import _remembered
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from ..features import LineSegment
+from ..scan import Scan
+from ._runs import _fit, _segments, _taking_part
 
 __all__ = ["hough_lines"]
 
@@ -93,12 +93,12 @@ def hough_lines(
         of the cell each point voted for (2.1 MB as int64), kept to take votes back.
     threshold_m : float, metres
         A point is an inlier of a refined line when it is at most this far from it.
-        Default 0.03 m, as for :func:`labkit.ransac.ransac_lines` (see there why): 2 sigma
+        Default 0.03 m, as for :func:`labkit.lines.ransac.ransac_lines` (see there why): 2 sigma
         of the 15 mm noise of cheap sensors, 6 sigma of the LMS200's 5 mm; at 0.05 m, 86 %
         of the simulated corridor's walls are found (99 % at 0.03 m).
     min_votes : int
         The peak is accepted as a line only with at least this many votes. Default 8, as
-        ``min_inliers`` of :func:`labkit.ransac.ransac_lines`: the shortest wall worth a line
+        ``min_inliers`` of :func:`labkit.lines.ransac.ransac_lines`: the shortest wall worth a line
         in the simulator's ground truth has 10 beams, and its votes may be shared with a
         neighbouring cell. At 10, 2 % of the simulated office's walls are missed; at 5, 12 %
         of the corridor's lines are false (3 % at 8).
@@ -205,7 +205,7 @@ def hough_lines(
     return lines
 
 
-@_remembered
+@remembered
 def _params(r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m) -> tuple:
     """The parameters of :func:`hough_lines` checked and converted, in its order."""
     r_step_m = check_positive("r_step_m", r_step_m)

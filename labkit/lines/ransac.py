@@ -43,11 +43,11 @@ import math
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment, line_segment
-from .fitting import line_from_sums
-from .scan import Scan
-from .segmentation import _remembered, labels_from
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from ..features import LineSegment
+from ..scan import Scan
+from ._runs import _fit, _segments, _taking_part
 
 __all__ = ["ransac_lines"]
 
@@ -212,7 +212,7 @@ def ransac_lines(
     return lines
 
 
-@_remembered
+@remembered
 def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m) -> tuple:
     """The parameters of :func:`ransac_lines` checked and converted, in its order."""
     threshold_m = check_positive("threshold_m", threshold_m)
@@ -224,52 +224,3 @@ def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_l
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m
-
-
-
-def _taking_part(scan: Scan, segments, max_range: float = math.inf):
-    """The beams a global extractor uses: valid ones (given a segmentation, those in a
-    segment) nearer than ``max_range``. Returns the per-beam labels (None without a
-    segmentation) and the beams' indices, points (row k is beam ``beams[k]``), ranges and
-    the least-squares weights of labkit's fits (1 / range)."""
-    labels = None if segments is None else labels_from(scan, segments)
-    use = scan.valid if labels is None else labels >= 0
-    if math.isfinite(max_range):
-        with np.errstate(invalid="ignore"):  # NaN ranges of invalid beams
-            use = use & (scan.ranges < max_range)
-    beams = np.flatnonzero(use)
-    rho = scan.ranges[beams]
-    return labels, beams, scan.points[beams], rho, 1.0 / rho
-
-def _fit(p: np.ndarray, w: np.ndarray) -> tuple[float, float]:
-    """``(r, alpha)`` of the weighted least-squares line through points ``p`` (M, 2), weights ``w``
-    (the closed form of :func:`labkit.fitting.fit_line_polar`)."""
-    x, y = p[:, 0], p[:, 1]
-    wx, wy = w * x, w * y
-    return line_from_sums(float(w.sum()), float(wx.sum()), float(wy.sum()), float(wx @ x), float(wy @ y),
-                          float(wx @ y))
-
-
-def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inliers: np.ndarray, min_points: int,
-              min_length_m: float, max_gap_m: float) -> list[LineSegment]:
-    """The segments of one line: its inliers (positions into ``xy``/``beams``, ascending) cut
-    where neighbouring inliers are more than ``max_gap_m`` apart (or, given per-beam
-    ``labels``, in different range segments); runs with ``min_points`` points or more and
-    at least ``min_length_m`` long become segments. Shared by :mod:`labkit.hough`."""
-    if inliers.size < min_points:
-        return []
-    p = xy[inliers]
-    gap = np.hypot(*(p[1:] - p[:-1]).T)
-    cut = gap > max_gap_m
-    if labels is not None:
-        lab = labels[beams[inliers]]
-        cut |= lab[1:] != lab[:-1]
-    bounds = np.concatenate([[0], np.flatnonzero(cut) + 1, [inliers.size]]).tolist()
-    out = []
-    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
-        if b - a < min_points:
-            continue
-        seg = line_segment(p[a:b], beams[inliers[a:b]])
-        if seg.length >= min_length_m:
-            out.append(seg)
-    return out

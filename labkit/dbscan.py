@@ -12,8 +12,8 @@ module has two implementations of the same clustering:
   angles, and offers three policies for border points. :class:`DBSCAN1D` wraps it
   in a scikit-learn style estimator.
 
-``labkit.dbscan1d`` is the function (the package re-exports it); import the module's
-other names with ``from labkit.dbscan1d import ...``.
+``labkit.dbscan1d`` is the function (the package re-exports it); this module is
+``labkit.dbscan`` (``from labkit.dbscan import Cluster``).
 
 Semantics (both implementations, and scikit-learn's ``DBSCAN``)
 ----------------------------------------------------------------

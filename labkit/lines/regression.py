@@ -54,11 +54,11 @@ import math
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment
-from .incremental import _fitted, _PrefixSums, _runs
-from .scan import Scan
-from .segmentation import _remembered
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from ..features import LineSegment
+from ..scan import Scan
+from ._runs import _fitted, _PrefixSums, _runs
 
 __all__ = ["regression_lines"]
 
@@ -183,7 +183,7 @@ def regression_lines(
     return _fitted(xy, beams, spans, min_length_m)
 
 
-@_remembered
+@remembered
 def _params(window, fidelity_threshold, min_points, min_length_m, max_gap_m, range_sigma_m) -> tuple:
     """The parameters of :func:`regression_lines` checked and converted, in its order."""
     return (check_int("window", window, 3), check_positive("fidelity_threshold", fidelity_threshold),
@@ -194,7 +194,7 @@ def _params(window, fidelity_threshold, min_points, min_length_m, max_gap_m, ran
 
 class _Lines:
     """Equal-weight orthogonal fits of the point ranges ``a[k] .. b[k] - 1`` (arrays), from
-    the prefix sums ``table`` (:class:`labkit.incremental._PrefixSums` with unit weights):
+    the prefix sums ``table`` (:class:`labkit.lines._runs._PrefixSums` with unit weights):
     ``r``, ``alpha``, the RMS residual ``rms`` and the covariance of ``(r, alpha)`` divided
     by ``sigma^2`` (``crr``, ``cra``, ``caa``), all arrays."""
 

@@ -8,7 +8,7 @@ as "an extension of the circle prerequisites": a range segment is a leg when
    diameters, 0.1 to 0.25 m (see "Chord padding" below for the one change we make);
 3. its middle point passes the circle prerequisite of Fig. 5 (it lies towards the sensor
    from the chord, between 0.1 and 0.7 chord lengths, see
-   :func:`labkit.iav.middle_point_offset`);
+   :func:`labkit.circles.iav.middle_point_offset`);
 4. it is not partially occluded (below).
 
 The paper applies no inscribed-angle test to legs (Sec. II-E lists only the conditions
@@ -39,7 +39,7 @@ does not cover the full circle, a segment that touches the first or last beam is
 the field of view and counts as occluded; on a full-circle scan the neighbours wrap.
 
 Degenerate segments (fewer than 3 points, identical points) are skipped, never raised,
-as in :mod:`labkit.iav`.
+as in :mod:`labkit.circles.iav`.
 
 References
 ----------
@@ -54,10 +54,9 @@ import math
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import Leg, Person
-from .fitting import fit_circle
-from .iav import (
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from .._iav import (
     _ACCEPTED,
     _DEGENERATE,
     _FEW,
@@ -77,9 +76,11 @@ from .iav import (
     _trace,
     circle_from_iav,
 )
-from .scan import Scan
-from .segmentation import RangeSegment, _remembered
-from .steps import Step
+from ..features import Leg, Person
+from ..fitting import fit_circle
+from ..scan import Scan
+from ..segmentation import RangeSegment
+from ..steps import Step
 
 __all__ = ["detect_legs", "pair_legs", "is_occluded"]
 
@@ -176,7 +177,7 @@ def detect_legs(
         ``"ray"`` (default): the middle point moved half a (padded) chord further along
         its beam, i.e. the centre of a circle whose diameter is the padded chord, seen
         straight on; ``diameter`` is the padded chord. ``"iav"``:
-        :func:`labkit.iav.circle_from_iav`; ``"algebraic"``/``"geometric"``:
+        :func:`labkit.circles.iav.circle_from_iav`; ``"algebraic"``/``"geometric"``:
         :func:`labkit.fitting.fit_circle`; with these three, ``diameter`` is twice the
         fitted radius. On the ``hall`` scenario (as above) ``"ray"`` has the larger
         median centre error (1.4 cm against 0.9 cm) but no outliers (largest 4 cm against
@@ -198,7 +199,7 @@ def detect_legs(
     Examples
     --------
     >>> from labkit import sim
-    >>> world = sim.World("demo", circles=(sim.Circle((2.0, 0.5), 0.07),))
+    >>> world = sim.World("demo", circles=(sim.Column((2.0, 0.5), 0.07),))
     >>> scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
     >>> (leg,) = detect_legs(scan)
     >>> np.round(leg.center, 2).tolist(), round(leg.diameter, 2), leg.n_points
@@ -252,7 +253,7 @@ def detect_legs(
     return legs, _trace(runs, geo, chord, ratio, verdict, sel, ang, "legs", limits, legs)
 
 
-@_remembered
+@remembered
 def _leg_params(min_points, chord_range, middle_range, iav_mean_range, iav_std_max, center_method,
                 chord_padding_beams) -> tuple:
     """The parameters of :func:`detect_legs` checked, in its order, and converted."""

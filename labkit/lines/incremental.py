@@ -43,13 +43,14 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
+import numpy as np  # noqa: F401 - used in doctests
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment, line_segment
-from .fitting import line_from_sums
-from .scan import Scan
-from .segmentation import _remembered, labels_from
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from ..features import LineSegment
+from ..fitting import line_from_sums
+from ..scan import Scan
+from ._runs import _fitted, _PrefixSums, _runs
 
 __all__ = ["incremental_lines"]
 
@@ -151,19 +152,8 @@ def incremental_lines(
     return _fitted(xy, beams, spans, min_length_m)  # step 7
 
 
-def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float) -> list[LineSegment]:
-    """Step 7, shared with :mod:`labkit.line_regression`: every line, the points ``a..b-1`` of
-    ``xy`` (beams ``beams[a:b]``) for each ``(a, b)`` of ``spans``, fitted by
-    :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped."""
-    lines = []
-    for a, b in spans:
-        line = line_segment(xy[a:b], beams[a:b])
-        if line.length >= min_length_m:
-            lines.append(line)
-    return lines
 
-
-@_remembered
+@remembered
 def _params(max_error_m, min_points, min_length_m, max_gap_m) -> tuple:
     """The parameters of :func:`incremental_lines` checked and converted, in its order."""
     return (check_positive("max_error_m", max_error_m), check_int("min_points", min_points, 2),
@@ -185,58 +175,3 @@ def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int) ->
             if d2 >= d1:
                 break
             left[1] = right[0] = i
-
-
-class _PrefixSums:
-    """Prefix sums of ``w, w x, w y, w x^2, w y^2, w x y`` over points laid end to end:
-    ``sums(a, b)`` gives the weighted sums of the points ``a..b-1`` (for
-    :func:`labkit.fitting.line_from_sums`) in O(1). ``table`` is the (N + 1, 6) array, row
-    ``i`` the sums over points ``0..i-1``."""
-
-    __slots__ = ("table",)
-
-    def __init__(self, xy: np.ndarray, w: np.ndarray):
-        x, y = xy[:, 0], xy[:, 1]
-        wx, wy = w * x, w * y
-        terms = np.stack([w, wx, wy, wx * x, wy * y, wx * y], axis=1)
-        self.table = np.zeros((len(w) + 1, 6))
-        np.cumsum(terms, axis=0, out=self.table[1:])
-
-    def __call__(self, a: int, b: int) -> list[float]:
-        return (self.table[b] - self.table[a]).tolist()
-
-
-def _runs(scan: Scan, segments, max_gap_m: float, min_points: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
-    """The runs a line may not cross, shared by the extractors of this module and
-    :mod:`labkit.line_regression`.
-
-    Returns ``(beams, runs)``: ``beams`` the usable beams in scan order (valid, and with a
-    label >= 0 when ``segments`` is given); ``runs`` the ``(a, b)`` such that
-    ``beams[a:b]`` is a run: neighbouring usable beams whose points are at most ``max_gap_m``
-    apart and (with ``segments``) share a label and have no valid beam labelled -1 between
-    them (invalid beams between them are skipped). Runs of fewer than ``min_points`` beams
-    are left out. The seam of a full-circle scan always ends a run.
-    """
-    if segments is None:
-        usable = scan.valid
-        labels = None
-    else:
-        labels = labels_from(scan, segments)
-        usable = labels >= 0
-    beams = np.flatnonzero(usable)
-    if beams.size == 0:
-        return beams, []
-    p = scan.points.take(beams, axis=0)
-    d = p[1:] - p[:-1]
-    linked = np.hypot(d[:, 0], d[:, 1]) <= max_gap_m
-    if labels is not None:
-        lab = labels.take(beams)
-        linked &= lab[1:] == lab[:-1]
-        # a valid beam labelled -1 (taken by another detector) is a boundary, not a dropout
-        taken = np.concatenate(([0], np.cumsum(scan.valid & ~usable)))
-        linked &= taken.take(beams[1:]) == taken.take(beams[:-1] + 1)
-    cut = np.flatnonzero(~linked) + 1  # a run starts at 0 and after every unlinked pair
-    starts = np.concatenate(([0], cut))
-    stops = np.concatenate((cut, [beams.size]))
-    keep = stops - starts >= min_points
-    return beams, list(zip(starts[keep].tolist(), stops[keep].tolist(), strict=True))

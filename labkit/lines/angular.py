@@ -2,7 +2,7 @@
 
 Points on a straight wall share one local direction, whatever their range. The
 algorithm therefore clusters in *direction space* first and in *offset space* second,
-with DBSCAN on 1-D data both times (:func:`labkit.dbscan1d.dbscan1d`):
+with DBSCAN on 1-D data both times (:func:`labkit.dbscan.dbscan1d`):
 
 1. **Local direction.** For every beam ``i`` whose neighbours ``i - 1`` and ``i + 1``
    are valid too, fit a line to the three points by total least squares. Its direction,
@@ -66,12 +66,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import check_int, check_positive
-from .dbscan1d import dbscan1d
-from .features import LineSegment, line_segment
-from .geometry import circular_mean, signed_distance_to_line
-from .scan import Scan
-from .steps import Step
+from .._checks import check_int, check_positive
+from ..dbscan import dbscan1d
+from ..features import LineSegment, line_segment
+from ..geometry import circular_mean, signed_distance_to_line
+from ..scan import Scan
+from ..steps import Step
 
 __all__ = ["AngularSteps", "local_directions", "angular_segmentation", "angular_arrays"]
 

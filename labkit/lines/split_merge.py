@@ -38,12 +38,13 @@ from bisect import bisect_left
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
-from .features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from .fitting import _line_covariances, line_from_sums
-from .scan import Scan
-from .segmentation import _remembered, labels_from, segment_labels, segment_order
-from .steps import Step
+from .._cache import remembered
+from .._checks import check_int, check_nonneg, check_positive
+from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
+from ..fitting import _line_covariances, line_from_sums
+from ..scan import Scan
+from ..segmentation import labels_from, segment_labels, segment_order
+from ..steps import Step
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -449,7 +450,7 @@ def split_and_merge(
     return (out, list(steps)) if trace else out
 
 
-@_remembered
+@remembered
 def _params(method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
             merge_chi2, range_sigma_m) -> tuple:
     """The parameters of :func:`split_and_merge` checked, in its order; returns those it uses converted."""

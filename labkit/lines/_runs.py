@@ -1,0 +1,136 @@
+"""Internals shared by the line extractors (private: not part of labkit's API).
+
+* from the local extractors (:mod:`~labkit.lines.incremental`, :mod:`~labkit.lines.regression`):
+  :func:`_runs` (the runs a line may not cross), :class:`_PrefixSums` (O(1) weighted sums of
+  any run) and :func:`_fitted` (the final fit of every line);
+* from the global extractors (:mod:`~labkit.lines.ransac`, :mod:`~labkit.lines.hough`):
+  :func:`_taking_part` (the beams they use), :func:`_fit` (a weighted line in closed form)
+  and :func:`_segments` (one line's inliers cut into segments).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..features import LineSegment, line_segment
+from ..fitting import line_from_sums
+from ..scan import Scan
+from ..segmentation import labels_from
+
+
+def _runs(scan: Scan, segments, max_gap_m: float, min_points: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """The runs a line may not cross, shared by the extractors of this module and
+    :mod:`labkit.lines.regression`.
+
+    Returns ``(beams, runs)``: ``beams`` the usable beams in scan order (valid, and with a
+    label >= 0 when ``segments`` is given); ``runs`` the ``(a, b)`` such that
+    ``beams[a:b]`` is a run: neighbouring usable beams whose points are at most ``max_gap_m``
+    apart and (with ``segments``) share a label and have no valid beam labelled -1 between
+    them (invalid beams between them are skipped). Runs of fewer than ``min_points`` beams
+    are left out. The seam of a full-circle scan always ends a run.
+    """
+    if segments is None:
+        usable = scan.valid
+        labels = None
+    else:
+        labels = labels_from(scan, segments)
+        usable = labels >= 0
+    beams = np.flatnonzero(usable)
+    if beams.size == 0:
+        return beams, []
+    p = scan.points.take(beams, axis=0)
+    d = p[1:] - p[:-1]
+    linked = np.hypot(d[:, 0], d[:, 1]) <= max_gap_m
+    if labels is not None:
+        lab = labels.take(beams)
+        linked &= lab[1:] == lab[:-1]
+        # a valid beam labelled -1 (taken by another detector) is a boundary, not a dropout
+        taken = np.concatenate(([0], np.cumsum(scan.valid & ~usable)))
+        linked &= taken.take(beams[1:]) == taken.take(beams[:-1] + 1)
+    cut = np.flatnonzero(~linked) + 1  # a run starts at 0 and after every unlinked pair
+    starts = np.concatenate(([0], cut))
+    stops = np.concatenate((cut, [beams.size]))
+    keep = stops - starts >= min_points
+    return beams, list(zip(starts[keep].tolist(), stops[keep].tolist(), strict=True))
+
+
+class _PrefixSums:
+    """Prefix sums of ``w, w x, w y, w x^2, w y^2, w x y`` over points laid end to end:
+    ``sums(a, b)`` gives the weighted sums of the points ``a..b-1`` (for
+    :func:`labkit.fitting.line_from_sums`) in O(1). ``table`` is the (N + 1, 6) array, row
+    ``i`` the sums over points ``0..i-1``."""
+
+    __slots__ = ("table",)
+
+    def __init__(self, xy: np.ndarray, w: np.ndarray):
+        x, y = xy[:, 0], xy[:, 1]
+        wx, wy = w * x, w * y
+        terms = np.stack([w, wx, wy, wx * x, wy * y, wx * y], axis=1)
+        self.table = np.zeros((len(w) + 1, 6))
+        np.cumsum(terms, axis=0, out=self.table[1:])
+
+    def __call__(self, a: int, b: int) -> list[float]:
+        return (self.table[b] - self.table[a]).tolist()
+
+
+def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float) -> list[LineSegment]:
+    """Step 7, shared with :mod:`labkit.lines.regression`: every line, the points ``a..b-1`` of
+    ``xy`` (beams ``beams[a:b]``) for each ``(a, b)`` of ``spans``, fitted by
+    :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped."""
+    lines = []
+    for a, b in spans:
+        line = line_segment(xy[a:b], beams[a:b])
+        if line.length >= min_length_m:
+            lines.append(line)
+    return lines
+
+
+def _taking_part(scan: Scan, segments, max_range: float = math.inf):
+    """The beams a global extractor uses: valid ones (given a segmentation, those in a
+    segment) nearer than ``max_range``. Returns the per-beam labels (None without a
+    segmentation) and the beams' indices, points (row k is beam ``beams[k]``), ranges and
+    the least-squares weights of labkit's fits (1 / range)."""
+    labels = None if segments is None else labels_from(scan, segments)
+    use = scan.valid if labels is None else labels >= 0
+    if math.isfinite(max_range):
+        with np.errstate(invalid="ignore"):  # NaN ranges of invalid beams
+            use = use & (scan.ranges < max_range)
+    beams = np.flatnonzero(use)
+    rho = scan.ranges[beams]
+    return labels, beams, scan.points[beams], rho, 1.0 / rho
+
+
+def _fit(p: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """``(r, alpha)`` of the weighted least-squares line through points ``p`` (M, 2), weights ``w``
+    (the closed form of :func:`labkit.fitting.fit_line_polar`)."""
+    x, y = p[:, 0], p[:, 1]
+    wx, wy = w * x, w * y
+    return line_from_sums(float(w.sum()), float(wx.sum()), float(wy.sum()), float(wx @ x), float(wy @ y),
+                          float(wx @ y))
+
+
+def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inliers: np.ndarray, min_points: int,
+              min_length_m: float, max_gap_m: float) -> list[LineSegment]:
+    """The segments of one line: its inliers (positions into ``xy``/``beams``, ascending) cut
+    where neighbouring inliers are more than ``max_gap_m`` apart (or, given per-beam
+    ``labels``, in different range segments); runs with ``min_points`` points or more and
+    at least ``min_length_m`` long become segments. Shared by :mod:`labkit.lines.hough`."""
+    if inliers.size < min_points:
+        return []
+    p = xy[inliers]
+    gap = np.hypot(*(p[1:] - p[:-1]).T)
+    cut = gap > max_gap_m
+    if labels is not None:
+        lab = labels[beams[inliers]]
+        cut |= lab[1:] != lab[:-1]
+    bounds = np.concatenate([[0], np.flatnonzero(cut) + 1, [inliers.size]]).tolist()
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        if b - a < min_points:
+            continue
+        seg = line_segment(p[a:b], beams[inliers[a:b]])
+        if seg.length >= min_length_m:
+            out.append(seg)
+    return out

@@ -1,0 +1,123 @@
+"""Lines by inscribed angle variance (Xavier et al. 2005, Sec. II-B): a whole range
+segment is a line when its signed inscribed angles are all near 180 deg.
+
+The inscribed angles and their conventions are those of :mod:`labkit.circles.iav`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._checks import check_int, check_nonneg, check_positive
+from .._iav import (
+    _ACCEPTED,
+    _DEGENERATE,
+    _FEW,
+    _MEAN,
+    _SHORT,
+    _STD,
+    CIRCLE_STD_MAX,
+    _batch_angles,
+    _check_scan,
+    _geometry,
+    _scan_runs,
+    _trace,
+)
+from ..features import LineSegment, line_segment
+from ..scan import Scan
+from ..segmentation import RangeSegment
+from ..steps import Step
+
+__all__ = ["detect_lines_iav"]
+
+
+def detect_lines_iav(
+    scan: Scan,
+    *,
+    seg_threshold_m: float = 0.08,
+    min_points: int = 5,
+    min_length_m: float = 0.15,
+    mean_tolerance: float = math.radians(5.0),
+    std_max: float = CIRCLE_STD_MAX,
+    segments: list[RangeSegment] | np.ndarray | None = None,
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
+    """Lines as range segments whose inscribed angles are all near 180 deg (Sec. II-B.1).
+
+    A whole segment is a line when it has at least ``min_points`` points (Table II
+    ``line_min_pts``: 5), its extremes are at least ``min_length_m`` apart
+    (``line_min_len``: 150 mm), and its signed inscribed angles have a mean within
+    ``mean_tolerance`` of pi and a standard deviation below ``std_max`` (the circles'
+    0.15 rad: "the same procedure of circles"). The paper gives no tolerance for the
+    mean; 5 deg is ours: a circular arc has mean ``180 - phi / 2`` for an arc of ``phi``,
+    so 5 deg keeps arcs spanning more than 10 deg out. Unlike split-and-merge, a segment
+    is accepted or rejected as a whole, never split. Each accepted segment is fitted by
+    :func:`labkit.features.line_segment`.
+
+    Parameters
+    ----------
+    scan : Scan
+    seg_threshold_m : float, metres
+        Range segmentation threshold (Table II ``seg_threshold``, 80 mm). Ignored when
+        ``segments`` is given.
+    min_points : int
+        Table II ``line_min_pts``: 5.
+    min_length_m : float, metres
+        Table II ``line_min_len``: 150 mm between the segment's extremes.
+    mean_tolerance : float, radians
+        Largest distance of the mean inscribed angle from pi: 5 deg (ours).
+    std_max : float, radians
+        0.15 rad (8.6 deg), as for circles.
+    segments : list of RangeSegment or ndarray of per-beam labels, optional
+        Precomputed segments.
+    trace : bool
+        Also return one :class:`labkit.Step` per segment (``algorithm="iav_lines"``), as
+        :func:`labkit.detect_circles` does; an ``"accept"`` step carries the line ``r, alpha``,
+        and the ``"iav mean"`` test compares ``value = |mean - pi|`` with ``mean_tolerance``.
+
+    Returns
+    -------
+    list of LineSegment in scan order; with ``trace``, ``(lines, steps)``.
+
+    Examples
+    --------
+    >>> from labkit import sim
+    >>> world = sim.World("demo", walls=(sim.Wall((2.0, -1.0), (2.0, 1.0)),))
+    >>> scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
+    >>> (line,) = detect_lines_iav(scan)
+    >>> round(line.r, 6), abs(line.alpha) < 1e-6, line.n_points
+    (2.0, True, 107)
+    """
+    _check_scan(scan)
+    min_points = check_int("min_points", min_points, 3)
+    min_length_m = check_nonneg("min_length_m", min_length_m)
+    mean_tolerance = check_positive("mean_tolerance", mean_tolerance)
+    std_max = check_positive("std_max", std_max)
+    runs = _scan_runs(scan, segments, seg_threshold_m)
+    s = runs.starts.size
+    if s == 0:
+        return ([], []) if trace else []
+    geo = _geometry(runs)
+    verdict = np.full(s, _ACCEPTED, dtype=np.int64)
+    if geo.finite is not None:
+        verdict[~geo.finite] = _DEGENERATE
+    verdict[geo.chord < min_length_m] = _SHORT
+    verdict[geo.n < min_points] = _FEW
+    sel = np.flatnonzero(verdict == _ACCEPTED)
+    lines: list[LineSegment] = []
+    ang = None
+    if sel.size:
+        ang = _batch_angles(runs, sel)
+        verdict[sel[np.abs(ang.mean - math.pi) > mean_tolerance]] = _MEAN
+        verdict[sel[(verdict[sel] == _ACCEPTED) & (ang.std >= std_max)]] = _STD
+        verdict[sel[ang.degenerate]] = _DEGENERATE
+        for k in sel[verdict[sel] == _ACCEPTED]:
+            a, b = runs.starts[k], runs.ends[k]
+            lines.append(line_segment(runs.pts[a:b], runs.idx[a:b]))
+    if not trace:
+        return lines
+    limits = {_FEW: min_points, _SHORT: min_length_m, _MEAN: mean_tolerance, _STD: std_max, _ACCEPTED: std_max,
+              "mean_from": math.pi}  # the mean test compares |mean - pi| with the tolerance
+    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang, "iav_lines", limits, lines)
