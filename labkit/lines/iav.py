@@ -7,6 +7,7 @@ The inscribed angles and their conventions are those of :mod:`labkit.circles.iav
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,6 +30,7 @@ from .._iav import (
 from ..features import LineSegment, line_segment
 from ..scan import Scan
 from ..segmentation import RangeSegment
+from ._params import Params
 
 __all__ = ["detect_lines_iav"]
 
@@ -117,3 +119,14 @@ def detect_lines_iav(
     if not return_trace:
         return lines
     return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang)
+
+
+@dataclass(frozen=True)
+class IAVLineParams(Params):
+    """Parameters of :func:`detect_lines_iav`, the defaults once: lengths in metres, angles in
+    degrees (``std_max_deg``: Table II's 0.15 rad)."""
+
+    min_points: int = 5
+    min_length_m: float = 0.15
+    mean_tolerance_deg: float = 5.0
+    std_max_deg: float = math.degrees(CIRCLE_STD_MAX)
