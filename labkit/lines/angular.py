@@ -72,6 +72,7 @@ from ..features import LineSegment, line_segment
 from ..geometry import circular_mean, signed_distance_to_line
 from ..scan import Scan
 from ..steps import Step
+from ._params import Params
 
 __all__ = ["AngularSteps", "local_directions", "angular_segmentation", "angular_arrays"]
 
@@ -368,3 +369,35 @@ def _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, trace: bool):
     arrays = AngularSteps(_frozen(theta), _frozen(angular_labels), _frozen(np.array(directions, dtype=float)),
                           _frozen(distances), _frozen(labels))
     return segments, arrays, steps
+
+
+@dataclass(frozen=True)
+class AngularParams(Params):
+    """Parameters of :func:`angular_segmentation`, the defaults once: lengths in metres, angles
+    in degrees. ``split_gap_m`` inf: never split collinear clusters at a gap."""
+
+    eps_theta_deg: float = math.degrees(EPS_THETA)
+    eps_dist_m: float = EPS_DIST
+    min_points: int = MIN_PTS
+    split_gap_m: float = 0.3
+
+    @classmethod
+    def renamed(cls) -> dict:
+        return {"eps_dist_m": "eps_dist", "min_points": "min_pts"}
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        kw["split_gap_m"] = None if math.isinf(kw["split_gap_m"]) else kw["split_gap_m"]
+        return kw
+
+
+def angular_lines(scan: Scan, *, segments=None, **kwargs) -> list[LineSegment]:
+    """:func:`angular_segmentation` with the registry's call shape: given ``segments`` (labels
+    or RangeSegments), lines with most of their beams outside every segment are dropped."""
+    lines = angular_segmentation(scan, **kwargs)
+    if segments is None:
+        return lines
+    from ..segmentation import labels_from
+
+    outside = labels_from(scan, segments) < 0
+    return [ln for ln in lines if not outside[ln.indices].mean() > 0.5]

@@ -39,6 +39,7 @@ line extraction algorithms using 2D range data for indoor mobile robotics. Auton
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,6 +47,7 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
+from ._params import Params
 from ._runs import _fit, _segments, _taking_part
 
 __all__ = ["hough_lines"]
@@ -218,3 +220,16 @@ def _params(r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m
+
+
+@dataclass(frozen=True)
+class HoughParams(Params):
+    """Parameters of :func:`hough_lines`, the defaults once: lengths in metres, angles in degrees."""
+
+    r_step_m: float = 0.05
+    alpha_step_deg: float = 1.0
+    threshold_m: float = 0.03
+    min_votes: int = 8
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3

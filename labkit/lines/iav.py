@@ -7,6 +7,7 @@ The inscribed angles and their conventions are those of :mod:`labkit.circles.iav
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,6 +30,7 @@ from ..features import LineSegment, line_segment
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
+from ._params import Params
 
 __all__ = ["detect_lines_iav"]
 
@@ -121,3 +123,14 @@ def detect_lines_iav(
     limits = {_FEW: min_points, _SHORT: min_length_m, _MEAN: mean_tolerance, _STD: std_max, _ACCEPTED: std_max,
               "mean_from": math.pi}  # the mean test compares |mean - pi| with the tolerance
     return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang, "iav_lines", limits, lines)
+
+
+@dataclass(frozen=True)
+class IAVLineParams(Params):
+    """Parameters of :func:`detect_lines_iav`, the defaults once: lengths in metres, angles in
+    degrees (``std_max_deg``: Table II's 0.15 rad)."""
+
+    min_points: int = 5
+    min_length_m: float = 0.15
+    mean_tolerance_deg: float = 5.0
+    std_max_deg: float = math.degrees(CIRCLE_STD_MAX)

@@ -42,6 +42,7 @@ noisy pieces: 0.09 false positives instead of 0.02).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np  # noqa: F401 - used in doctests
 
@@ -50,6 +51,7 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..fitting import line_from_sums
 from ..scan import Scan
+from ._params import Params
 from ._runs import _fitted, _PrefixSums, _runs
 
 __all__ = ["incremental_lines"]
@@ -175,3 +177,13 @@ def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int) ->
             if d2 >= d1:
                 break
             left[1] = right[0] = i
+
+
+@dataclass(frozen=True)
+class IncrementalParams(Params):
+    """Parameters of :func:`incremental_lines`, the defaults once: lengths in metres."""
+
+    max_error_m: float = 0.05
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3

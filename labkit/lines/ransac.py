@@ -40,6 +40,7 @@ line extraction algorithms using 2D range data for indoor mobile robotics. Auton
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,6 +48,7 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
+from ._params import Params
 from ._runs import _fit, _segments, _taking_part
 
 __all__ = ["ransac_lines"]
@@ -224,3 +226,17 @@ def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_l
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m
+
+
+@dataclass(frozen=True)
+class RansacParams(Params):
+    """Parameters of :func:`ransac_lines`, the defaults once: lengths in metres (the random
+    generator is seeded with :data:`DEFAULT_SEED`)."""
+
+    threshold_m: float = 0.03
+    min_inliers: int = 8
+    max_trials: int = 50
+    draw_window: int | None = 20
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3

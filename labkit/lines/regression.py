@@ -51,6 +51,7 @@ by :func:`labkit.features.line_segment` (weights ``1 / rho``), as every labkit e
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -58,6 +59,7 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
+from ._params import Params
 from ._runs import _fitted, _PrefixSums, _runs
 
 __all__ = ["regression_lines"]
@@ -325,3 +327,16 @@ def _absorb(spans: list[list[int]], runs: list[tuple[int, int]], table: np.ndarr
                 i += 1
             out[k][1] = i
     return [(a, b) for a, b in out]
+
+
+@dataclass(frozen=True)
+class RegressionParams(Params):
+    """Parameters of :func:`regression_lines`, the defaults once: lengths in metres
+    (``range_sigma_m`` None: estimated from the scan, see the function)."""
+
+    window: int = 7
+    fidelity_threshold: float = 12.0
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3
+    range_sigma_m: float | None = None

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_left
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -45,6 +46,7 @@ from ..fitting import _line_covariances, line_from_sums
 from ..scan import Scan
 from ..segmentation import labels_from, segment_labels, segment_order
 from ..steps import Step
+from ._params import Params
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -553,3 +555,26 @@ def _finish(lines: list[_Line], points, ranges, weights, sigma: float) -> list[L
     return [LineSegment(ln.r, ln.alpha, c, start, end, ln.first, ln.last, n, error, ln.idx)
             for ln, c, start, end, n, error in zip(lines, cov, ends[0::2], ends[1::2], counts.tolist(), rms,
                                                    strict=True)]
+
+
+@dataclass(frozen=True)
+class SplitMergeParams(Params):
+    """Parameters of :func:`split_and_merge` (both ``"iepf"`` and ``"split_and_merge"`` in the
+    registry), the defaults once: lengths in metres, angles in degrees."""
+
+    split_threshold_m: float = 0.05
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3
+    merge: str = "thresholds"
+    merge_dr_m: float = 0.2
+    merge_dalpha_deg: float = 10.0
+    merge_chi2: float = 9.21
+    range_sigma_m: float = 0.01
+    weights: str = "inverse_range"
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        kw["merge"] = None if kw["merge"] == "none" else kw["merge"]
+        kw["weights"] = None if kw["weights"] == "inverse_range" else kw["weights"]
+        return kw
