@@ -29,7 +29,7 @@ __all__ = ["Step", "ALGORITHMS"]
 
 #: The algorithms that return steps, by the ``algorithm`` name their steps carry.
 ALGORITHMS = ("split_and_merge", "iepf", "angular", "iav_circles", "iav_lines", "iav_arcs", "legs", "incremental",
-              "ransac")
+              "ransac", "regression", "hough")
 
 
 @dataclass(frozen=True)
@@ -41,8 +41,8 @@ class Step:
     algorithm : str
         Which algorithm took it (one of :data:`ALGORITHMS`): ``"split_and_merge"``
         (``method="fit"``) or ``"iepf"`` (``method="endpoints"``), ``"angular"``,
-        ``"iav_circles"``, ``"iav_lines"``, ``"iav_arcs"``, ``"legs"``, ``"incremental"``,
-        ``"ransac"``.
+        ``"iav_circles"``, ``"iav_lines"``, ``"iav_arcs"``, ``"legs"``, and the reference
+        line extractors ``"incremental"``, ``"ransac"``, ``"regression"``, ``"hough"``.
     kind : str
         The action; each algorithm documents its kinds. ``"accept"`` and ``"reject"`` mean
         the same everywhere.
@@ -68,7 +68,8 @@ class Step:
         prose and may change wording, ``test`` does not. Empty when no check decided.
     beams : tuple of int
         The beams concerned when they are not the run ``first..last`` (angular clusters are
-        spread over the scan, RANSAC's consensus sets have holes); empty otherwise.
+        spread over the scan, RANSAC's and Hough's consensus sets have holes); may also be
+        given when they are (a line's own beams); empty otherwise.
     """
 
     algorithm: str
