@@ -143,3 +143,66 @@ def test_log_steps_puts_every_step_on_the_step_timeline(wall, tmp_path):
     assert [len(c) for c in circles] == [0, 0, 0, 0, 0, 1]
     beams = [v for b in batches["/world/steps/beams"] for v in b.column("Points2D:positions").to_pylist()]
     assert [len(p) for p in beams] == [161, 161, 81, 21, 11, 3]
+
+
+def _room():
+    """A noiseless 4 m square room seen over 270 deg, and its walls' beams (ground truth)."""
+    from labkit import sim
+
+    c = [(2.0, -2.0), (2.0, 2.0), (-2.0, 2.0), (-2.0, -2.0)]
+    world = sim.World("square", walls=tuple(sim.Wall(c[k], c[(k + 1) % 4]) for k in range(4)))
+    lidar = sim.Lidar.from_fov("t", 270.0, 0.5, range_max=20.0, noise_std_m=0.0)
+    return sim.scan_at(world, lidar, (0.0, 0.0, 0.3))
+
+
+_REFERENCE = ["incremental", "regression", "ransac", "hough"]
+
+
+@pytest.mark.parametrize("name", _REFERENCE)
+def test_step_viewer_replays_a_reference_extractor(name):
+    """The widget steps through a real trace of each reference line extractor: every kind it
+    takes is drawn, and after the last step the accepted lines (red) lie on the room's walls."""
+    from labkit.lines import LINE_EXTRACTORS
+
+    scan, truth = _room()
+    lines, steps = LINE_EXTRACTORS[name].fn(scan, trace=True)
+    box = step_viewer(scan, steps)
+    assert box.slider.max == len(steps) - 1
+    for kind in dict.fromkeys(s.kind for s in steps):
+        k = next(i for i, s in enumerate(steps) if s.kind == kind)
+        box.slider.value = k
+        assert box.figure.axes[0].get_title().startswith(f"step {k + 1} of {len(steps)}: {name} {kind.upper()}")
+        assert box.figure.axes[1].get_title() == steps[k].reason
+    # after the last step (a step with nothing to draw appended): every accepted line drawn, as a
+    # 2-point segment whose ends lie on the room's walls
+    fig, axes = plt.subplots(1, 2)
+    draw_step(scan, [*steps, Step(name, "end")], len(steps), axes)
+    drawn = [ln for ln in axes[0].lines if len(ln.get_xdata()) == 2 and ln.get_linestyle() == "-"]
+    assert len(drawn) == len(lines) == len(truth.walls)
+    c, s_ = math.cos(0.3), math.sin(0.3)
+    for ln in drawn:  # both ends on the square's boundary: max(|x|, |y|) = 2 in the world frame
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        np.testing.assert_allclose(np.maximum(np.abs(c * x - s_ * y), np.abs(s_ * x + c * y)), 2.0, atol=2e-3)
+
+
+@pytest.mark.parametrize("name", _REFERENCE)
+def test_log_steps_of_a_reference_extractor(name, tmp_path):
+    """The rerun step timeline holds one row per step of a real trace, every required
+    component present, and the accepted lines pile up one per accept step."""
+    from labkit.lines import LINE_EXTRACTORS
+    from labkit.viz import rr as lkrr
+
+    scan, _ = _room()
+    _, steps = LINE_EXTRACTORS[name].fn(scan, trace=True)
+    assert lkrr.record_steps(scan, steps, tmp_path / "s.rrd") == len(steps)
+    rows, batches = _rrd(tmp_path / "s.rrd")
+    for entity, column in {"/world/steps/beams": "Points2D:positions", "/world/steps/line": "LineStrips2D:strips",
+                           "/world/steps/accepted": "LineStrips2D:strips", "/steps/log": "TextLog:text"}.items():
+        assert rows[entity][0] == len(steps), entity
+        values = [v for b in batches[entity] for v in b.column(column).to_pylist()]
+        assert len(values) == len(steps) and all(v is not None for v in values), entity
+    strips = [v for b in batches["/world/steps/accepted"] for v in b.column("LineStrips2D:strips").to_pylist()]
+    accepted_before = np.cumsum([0] + [s.kind == "accept" for s in steps])[:-1]
+    assert [len(s) for s in strips] == accepted_before.tolist()
+    beams = [v for b in batches["/world/steps/beams"] for v in b.column("Points2D:positions").to_pylist()]
+    assert [len(p) for p in beams] == [len(step_beams(scan, s)) for s in steps]

@@ -148,6 +148,10 @@ def test_steps_view_in_the_widget_for_every_algorithm():
         "angular": labkit.angular_segmentation(scan, trace=True)[1],
         "iav_circles": labkit.detect_circles(scan, trace=True)[1],
         "iav_lines": labkit.detect_lines_iav(scan, trace=True)[1],
+        "incremental": labkit.lines.incremental_lines(scan, trace=True)[1],
+        "regression": labkit.lines.regression_lines(scan, trace=True)[1],
+        "ransac": labkit.lines.ransac_lines(scan, trace=True)[1],
+        "hough": labkit.lines.hough_lines(scan, trace=True)[1],
     }
     box = step_viewer(scan, traces)
     for name, steps in traces.items():
@@ -178,3 +182,152 @@ def test_the_notebook_04_viewer_cell():
     viewer.choice.value = "fit"
     assert viewer.slider.max == len(room_traces["fit"]) - 1
     plt.close("all")
+
+
+# ------------------------------------------------------------ the reference line extractors
+#: The square room's walls in the sensor frame (heading 0.3 rad): r = 2 m, normals 0, 90, 180,
+#: -90 deg in the world, turned by -0.3 rad.
+_ROOM_ALPHAS = [math.remainder(a - 0.3, 2 * math.pi) for a in (0.0, math.pi / 2, math.pi, -math.pi / 2)]
+
+
+def _line_key(lines):
+    return [(ln.first, ln.last, ln.r, ln.alpha, tuple(ln.indices.tolist())) for ln in lines]
+
+
+def _accepted_key(steps):
+    """The accepted lines, from the steps alone, in scan order."""
+    return [(s.first, s.last, s.r, s.alpha, s.beams) for s in sorted(
+        (s for s in steps if s.kind == "accept"), key=lambda s: s.first)]
+
+
+def _on_a_room_wall(r, alpha, atol_r=1e-6, atol_alpha=1e-6):
+    """Whether the line (r, alpha) is one of the room's walls, within the tolerances."""
+    off = min(abs(math.remainder(alpha - a, 2 * math.pi)) for a in _ROOM_ALPHAS)
+    return abs(r - 2.0) <= atol_r and off <= atol_alpha
+
+
+def test_incremental_replays_to_the_room_walls():
+    """Grow each line until a point misses it, hand the corner points back, accept: replayed from
+    the steps alone, the lines are the simulator's walls, beam for beam."""
+    scan, truth = _square_room()
+    lines, steps = labkit.incremental_lines(scan, trace=True)
+    assert {s.algorithm for s in steps} == {"incremental"}
+    assert _accepted_key(steps) == _line_key(lines)
+    spans = [[s.first, s.last] for s in steps if s.kind == "grow"]
+    for s in steps:
+        if s.kind == "hand_back":  # beam `at` leaves the line ending there for the next one
+            (left,) = [sp for sp in spans if sp[1] == s.at]
+            (right,) = [sp for sp in spans if sp[0] == s.at + 1]
+            left[1], right[0] = s.at - 1, s.at
+            assert s.value < s.threshold  # nearer the next line than its own
+    walls = [(w.first, w.last) for w in truth.walls]
+    assert [tuple(sp) for sp in spans] == [(s.first, s.last) for s in steps if s.kind == "accept"] == walls
+    for s in steps:
+        if s.kind == "grow" and s.at >= 0:  # a line stops on a point of the next wall, too far off
+            assert s.value > s.threshold == 0.05 and any(w.last < s.at <= w.last + 5 for w in truth.walls)
+    assert all(_on_a_room_wall(s.r, s.alpha) for s in steps if s.kind == "accept")
+
+
+def test_regression_replays_to_the_room_walls():
+    """Every window across a corner disagrees with its neighbours; the clusters lie inside the
+    walls; absorbing the free points gives the walls, beam for beam."""
+    scan, truth = _square_room()
+    lines, steps = labkit.lines.regression_lines(scan, trace=True)
+    assert {s.algorithm for s in steps} == {"regression"}
+    assert _accepted_key(steps) == _line_key(lines)
+    rejected = {(s.first, s.last) for s in steps if s.kind == "reject" and s.test == "fidelity_threshold"}
+    for w in truth.walls[:-1]:  # the windows of 7 beams holding both sides of a corner
+        across = {(a, a + 6) for a in range(w.last - 5, w.last + 1)}
+        assert across <= rejected
+    clusters = [(s.first, s.last) for s in steps if s.kind == "cluster"]
+    assert len(clusters) == 4
+    for (a, b), w in zip(clusters, truth.walls, strict=True):
+        assert w.first <= a <= b <= w.last
+    spans = dict(enumerate(clusters))
+    for s in steps:
+        if s.kind == "absorb":
+            (k,) = [k for k, (a, b) in spans.items() if s.first <= a and b <= s.last]
+            spans[k] = (s.first, s.last)
+    walls = [(w.first, w.last) for w in truth.walls]
+    assert list(spans.values()) == [(s.first, s.last) for s in steps if s.kind == "accept"] == walls
+
+
+@pytest.mark.parametrize("extract, algorithm", [(labkit.lines.ransac_lines, "ransac"),
+                                                (labkit.lines.hough_lines, "hough")])
+def test_global_extractors_replay_to_the_room_walls(extract, algorithm):
+    """Each round's candidate (RANSAC's best hypothesis, Hough's peak cell) is a room wall, its
+    consensus set the beams of that wall (give or take a corner beam), and the accepted runs are
+    the returned lines, one per wall."""
+    scan, truth = _square_room()
+    lines, steps = extract(scan, trace=True)
+    assert {s.algorithm for s in steps} == {algorithm}
+    assert _accepted_key(steps) == _line_key(lines)
+    candidate = "hypothesis" if algorithm == "ransac" else "peak"
+    rounds = [s for s in steps if s.kind == candidate]
+    consensus = [s for s in steps if s.kind == "consensus"]
+    assert len(consensus) == 4
+    for s in rounds[:4]:
+        assert s.value >= s.threshold == 8
+        # the candidate's beams (RANSAC: the two drawn, Hough: the voters) lie on one wall, give
+        # or take the corner beam next to it (as near to the line as the wall's own, in a Hough cell)
+        assert any(w.first - 1 <= min(s.beams) and max(s.beams) <= w.last + 1 for w in truth.walls)
+        if algorithm == "ransac":  # the line through two wall points (float32 ranges) is the wall
+            assert _on_a_room_wall(s.r, s.alpha, 1e-5, 1e-4)
+        else:  # every voter lies within half a cell of the peak cell's line, which is as near as the
+            # cells get to the wall: 2 m away, within a few cells of its direction
+            p = scan.points[list(s.beams)]
+            assert s.value == len(s.beams)
+            assert np.abs(p @ [math.cos(s.alpha), math.sin(s.alpha)] - s.r).max() <= 0.05 / 2 + 1e-9
+            assert _on_a_room_wall(s.r, s.alpha, 0.05 + 1e-9, math.radians(3.0))
+    for c in consensus:
+        (w,) = [w for w in truth.walls if w.first - 1 <= c.first and c.last <= w.last + 1]
+        assert len(c.beams) == c.value and set(range(w.first + 1, w.last)) <= set(c.beams)
+    if algorithm == "hough":  # the search ends on a peak with too few votes
+        assert steps[-1].kind == "reject" and steps[-1].test == "min_votes" and steps[-1].value < 8
+    accepted = [s for s in steps if s.kind == "accept"]
+    assert len(accepted) == 4 and all(_on_a_room_wall(s.r, s.alpha, 1e-3, 1e-3) for s in accepted)
+    for s, w in zip(sorted(accepted, key=lambda s: s.first), truth.walls, strict=True):
+        assert abs(s.first - w.first) <= 1 and abs(s.last - w.last) <= 1
+
+
+def test_ransac_trace_takes_the_same_draws():
+    scan, _ = _square_room()
+    noisy = scan.replace(ranges=scan.ranges + np.random.default_rng(3).normal(0.0, 0.01, scan.n_beams))
+    for seed in (1, 2):
+        plain = labkit.lines.ransac_lines(noisy, draw_window=None, rng=np.random.default_rng(seed))
+        traced, _ = labkit.lines.ransac_lines(noisy, draw_window=None, rng=np.random.default_rng(seed), trace=True)
+        assert _line_key(traced) == _line_key(plain)
+
+
+def _scenes():
+    """A few scans of every simulated scenario and of every bundled recording."""
+    import itertools
+
+    from labkit import bundled_data, read_scans
+    from labkit.data import BUNDLED
+
+    for name in ("hall", "corridor", "office", "random_polygons_2"):
+        for k, (scan, _) in enumerate(sim.simulate(name, seed=1, n_scans=3)):
+            yield f"sim {name} {k}", scan
+    for name in sorted(BUNDLED):
+        for k, scan in enumerate(itertools.islice(read_scans(bundled_data(name)), 0, 60, 20)):
+            yield f"{name} {k}", scan
+
+
+@pytest.mark.parametrize("name", ["incremental", "regression", "ransac", "hough"])
+def test_reference_extractors_give_the_same_lines_with_trace(name):
+    """Tracing changes nothing: the same lines with and without ``trace`` (with and without a
+    shared range segmentation), on simulated scenes and the bundled recordings; and the
+    accepted steps are those lines."""
+    from labkit.lines import LINE_EXTRACTORS
+
+    extract = LINE_EXTRACTORS[name].fn
+    n = 0
+    for where, scan in _scenes():
+        for segments in (None, labkit.segment_labels(scan, 0.3)):
+            lines, steps = extract(scan, segments=segments, trace=True)
+            assert _line_key(lines) == _line_key(extract(scan, segments=segments)), where
+            assert _accepted_key(steps) == _line_key(lines), where
+            assert all(s.algorithm == name for s in steps)
+            n += len(lines)
+    assert n > 100  # the scenes have lines to compare
