@@ -32,7 +32,6 @@ import sys as _sys
 from . import circles, evaluation, geometry, lines, poses, sim
 from .circles import (
     IAVStats,
-    SegmentCheck,
     circle_from_iav,
     detect_arcs,
     detect_circles,
@@ -61,7 +60,7 @@ from .io import (
 )
 from .lines import (
     AngularSteps,
-    Step,
+    angular_arrays,
     angular_segmentation,
     detect_lines_iav,
     hough_lines,
@@ -75,6 +74,7 @@ from .lines import (
 from .pipeline import Config, extract_all, extract_features
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
+from .steps import Step
 from .tables import features_table, read_table
 
 # TEMPORARY alias for the merge (issue 14): the notebooks and exercises still use the old module
@@ -128,6 +128,7 @@ __all__ = [
     "dbscan1d_reference",
     "DBSCAN1D",
     "angular_segmentation",
+    "angular_arrays",
     "AngularSteps",
     "local_directions",
     "lines",
@@ -137,7 +138,6 @@ __all__ = [
     "inscribed_angles",
     "iav_stats",
     "IAVStats",
-    "SegmentCheck",
     "circle_from_iav",
     "middle_point_offset",
     "detect_circles",

@@ -2,8 +2,8 @@
 
 :mod:`labkit.circles.iav` (circles, arcs), :mod:`labkit.circles.legs` and
 :mod:`labkit.lines.iav` (IAV lines) all test runs of points by their inscribed angles; this
-module holds what they share: the constants of Xavier et al.'s Table II, the trace record
-:class:`SegmentCheck`, the angle statistics, and the batched tests over the runs of a
+module holds what they share: the constants of Xavier et al.'s Table II, the trace (as
+:class:`labkit.Step` records), the angle statistics, and the batched tests over the runs of a
 scan. The public names are documented and re-exported by :mod:`labkit.circles.iav`; see
 its docstring for the conventions (angles in radians, signed angles counter-clockwise).
 """
@@ -11,7 +11,6 @@ its docstring for the conventions (angles in radians, signed angles counter-cloc
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -22,6 +21,7 @@ from .features import Circle
 from .fitting import fit_circle
 from .scan import Scan
 from .segmentation import RangeSegment, labels_from, segment_labels, segment_order
+from .steps import Step
 
 #: Table II ``circle_std_max``: largest standard deviation of the inscribed angles of a circle (rad, 8.6 deg).
 CIRCLE_STD_MAX = 0.15
@@ -41,41 +41,6 @@ class IAVStats(NamedTuple):
     mean: float
     std: float
     n_angles: int
-
-
-@dataclass(frozen=True)
-class SegmentCheck:
-    """What a detector decided about one run of points (one trace entry).
-
-    Attributes
-    ----------
-    first, last : int
-        First and last beam of the run.
-    n_points : int
-        Points in the run.
-    chord_m : float
-        Distance between the run's extreme points, metres.
-    middle_ratio : float
-        Signed offset of the middle point from the chord over the chord length (see
-        :func:`middle_point_offset`); NaN when not computed.
-    iav_mean, iav_std : float
-        Inscribed angle statistics, radians (NaN when not computed).
-    verdict : str
-        ``"accepted"`` or the first test the run failed, in the order the detectors
-        apply them: ``"too few points"``, ``"chord too short"``, ``"chord too long"``,
-        ``"degenerate"`` (non-finite points, a zero chord), ``"prerequisite"``,
-        ``"degenerate"`` (an interior point on an extreme), ``"iav mean"``,
-        ``"iav std"``, ``"v-corner"``, ``"occluded"`` (legs), ``"fit failed"``.
-    """
-
-    first: int
-    last: int
-    n_points: int
-    chord_m: float = math.nan
-    middle_ratio: float = math.nan
-    iav_mean: float = math.nan
-    iav_std: float = math.nan
-    verdict: str = "accepted"
 
 
 # ============================================================================ validation
@@ -546,24 +511,64 @@ def _batch_angles(runs: _Runs, sel: np.ndarray, flip: np.ndarray | None = None, 
     return _Angles(ang, offsets, counts, mean, np.sqrt(var), side, degenerate)
 
 
-def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel,
-           ang: _Angles | None) -> list[SegmentCheck]:
-    """One :class:`SegmentCheck` per run, with the values known when it was decided
-    (``chord``, ``ratio``: as tested; ``verdict`` per run; ``ang``: the inscribed angles of
-    the runs ``sel``, or None)."""
+def _nearest(value: float, bounds) -> float:
+    """The bound of ``bounds`` (a number or a (low, high) pair) that ``value`` is compared with."""
+    if not isinstance(bounds, tuple):
+        return float(bounds)
+    lo, hi = bounds
+    return float(lo) if abs(value - lo) <= abs(value - hi) else float(hi)
+
+
+def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel, ang: _Angles | None,
+           algorithm: str, limits: dict, found: list) -> list[Step]:
+    """One :class:`labkit.Step` per run, ``"accept"`` or ``"reject"``, with the values known when
+    it was decided (``chord``, ``ratio``: as tested; ``verdict`` per run; ``ang``: the inscribed
+    angles of the runs ``sel``, or None). ``limits``: the threshold (or (low, high) range) of
+    each verdict's test; ``found``: the features, in the order of the accepted runs."""
     mean, std = np.full(len(verdict), np.nan), np.full(len(verdict), np.nan)
     if ang is not None:
         mean[sel], std[sel] = ang.mean, ang.std
     out = []
     first, last = runs.idx[runs.starts], runs.idx[runs.ends - 1]
+    features = iter(found)
     for k in range(len(verdict)):
         v = int(verdict[k])
+        n = int(geo.n[k])
         c = float(chord[k]) if v != _FEW else math.nan
         r = float(ratio[k]) if v not in (_FEW, _SHORT, _LONG) else math.nan
-        iav = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED) else (
+        m, sd = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED) else (
             math.nan, math.nan)
-        out.append(SegmentCheck(int(first[k]), int(last[k]), int(geo.n[k]), c, r, *iav, _VERDICTS[v]))
+        value = {_FEW: n, _SHORT: c, _LONG: c, _PREREQ: abs(r) if limits.get("hollow") else r, _MEAN: m}.get(v, sd)
+        if v == _MEAN and "mean_from" in limits:
+            value = abs(m - limits["mean_from"])
+        if v in (_DEGENERATE, _FIT, _OCCLUDED):
+            value = math.nan
+        threshold = _nearest(value, limits[v]) if v in limits and not math.isnan(value) else math.nan
+        known = [f"{n} points"] + [text for ok, text in (
+            (not math.isnan(c), f"chord {c:.3f} m"), (not math.isnan(r), f"middle ratio {r:.2f}"),
+            (not math.isnan(m), f"iav mean {math.degrees(m):.1f} deg, std {math.degrees(sd):.1f} deg")) if ok]
+        fields = dict(value=value, threshold=threshold, test=_VERDICTS[v],
+                      reason=f"{_VERDICTS[v]}: " + ", ".join(known))
+        if v == _ACCEPTED:
+            feature = next(features)
+            if hasattr(feature, "radius"):  # a circle or an arc
+                fields.update(center=tuple(float(x) for x in feature.center), radius=float(feature.radius))
+            elif hasattr(feature, "diameter"):  # a leg
+                fields.update(center=tuple(float(x) for x in feature.center), radius=float(feature.diameter) / 2)
+            else:  # a line
+                fields.update(r=float(feature.r), alpha=float(feature.alpha))
+        out.append(Step(algorithm, "accept" if v == _ACCEPTED else "reject", int(first[k]), int(last[k]), **fields))
     return out
+
+
+def _circle_limits(t: _CircleTest) -> dict:
+    """The thresholds of the circle test by verdict, for the trace."""
+    limits = {_FEW: max(t.min_points, 3), _SHORT: t.chord_range[0], _LONG: t.chord_range[1],
+              _PREREQ: t.middle_range, _MEAN: t.mean_range, _STD: t.std_max, _ACCEPTED: t.std_max,
+              "hollow": t.hollow}
+    if t.arc_like_std_max is not None:
+        limits[_STD] = limits[_VCORNER] = t.arc_like_std_max
+    return limits
 
 
 class _CircleTest(NamedTuple):
@@ -582,7 +587,8 @@ class _CircleTest(NamedTuple):
     kind: str
 
 
-def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool) -> tuple[list[Circle], list[SegmentCheck]]:
+def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool,
+               algorithm: str = "iav_circles") -> tuple[list[Circle], list[Step]]:
     """The circle test of :func:`detect_circles` on every run."""
     s = runs.starts.size
     if s == 0:
@@ -599,7 +605,9 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool) -> tuple[list[Circ
             verdict[k] = v
             if circle is not None:
                 circles.append(circle)
-    return circles, (_trace(runs, geo, geo.chord, ratio, verdict, sel, ang) if want_trace else [])
+    if not want_trace:
+        return circles, []
+    return circles, _trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, _circle_limits(t), circles)
 
 
 def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,

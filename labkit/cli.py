@@ -300,13 +300,16 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from . import experiments as ex
     from ._safe import safe_output
     from .io.features import json_safe
+    from .lines import LINE_EXTRACTORS
 
-    extractors = ex.LINE_EXTRACTORS
-    if args.method:
-        unknown = [m for m in args.method if m not in extractors]
+    extractors = dict(ex.LINE_EXTRACTORS)
+    if args.method:  # the registry's names, as for extract --method (its labels are accepted too)
+        by_name = {e.name: e.label for e in LINE_EXTRACTORS.values()}
+        unknown = [m for m in args.method if m not in by_name and m not in extractors]
         if unknown:
-            raise RefusedError(f"--method {unknown[0]!r} is not a line extractor; choose from {sorted(extractors)}")
-        extractors = {m: extractors[m] for m in args.method}
+            raise RefusedError(f"--method {unknown[0]!r} is not a line extractor; choose from {list(by_name)}")
+        labels = [by_name.get(m, m) for m in args.method]
+        extractors = {label: extractors[label] for label in labels}
     if args.json:
         check_output(args.json, REPORT_FILE, overwrite=args.force, inputs=args.inputs)
     if args.topic and not args.inputs:
@@ -374,6 +377,8 @@ FORCE_HELP = "replace an existing output, if it is labkit's own kind of output (
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .pipeline import line_methods  # the registered line extractors, read when the parser is built
+
     p = argparse.ArgumentParser(prog="labkit", description=__doc__.splitlines()[0],
                                 epilog="Exit status: 0 done; 1 done, but an input was damaged (every readable "
                                        "record is in the output); 2 refused (bad command line or input); 3 the "
@@ -423,8 +428,9 @@ def build_parser() -> argparse.ArgumentParser:
     pipeline = argparse.ArgumentParser(add_help=False)  # what every command that runs the pipeline takes
     pipeline.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
     pipeline.add_argument("--config", help="TOML file of extractor parameters (write one with `labkit config -o`)")
-    pipeline.add_argument("--method", choices=["iepf", "split_and_merge", "angular", "none"],
-                          help="line extractor (overrides the config's lines.method)")
+    pipeline.add_argument("--method", choices=line_methods(),
+                          help="line extractor (overrides the config's lines.method; the names of "
+                          "labkit.lines.LINE_EXTRACTORS, or none)")
 
     e = sub.add_parser("extract", parents=[common, pipeline, reading, many],
                        help="extract every feature of every scan into JSON lines (one record per scan) or a "
@@ -474,7 +480,7 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--noise", type=float, nargs="+", default=[0.005, 0.02], metavar="M",
                     help="range noise levels of the simulated sets, metres (default 0.005 0.02)")
     ev.add_argument("--method", action="append", metavar="NAME",
-                    help="only this line extractor (repeatable), e.g. 'RANSAC'")
+                    help=f"only this line extractor (repeatable): {', '.join(line_methods()[:-1])}")
     ev.add_argument("--sweep", action="store_true", help="also sweep split-and-merge's split threshold")
     ev.add_argument("--json", help="also write every table's rows to this JSON file (strict JSON: null for no value)")
     ev.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -40,12 +40,7 @@ from .evaluation import (
     score_lines,
 )
 from .geometry import angle_difference
-from .lines.angular import angular_segmentation
-from .lines.hough import hough_lines
-from .lines.iav import detect_lines_iav
-from .lines.incremental import incremental_lines
-from .lines.ransac import ransac_lines
-from .lines.regression import regression_lines
+from .lines import LINE_EXTRACTORS as REGISTRY
 from .lines.split_merge import split_and_merge
 from .pipeline import Config, extract_features
 from .scan import Scan
@@ -63,24 +58,33 @@ __all__ = [
     "markdown_table",
 ]
 
-#: The line extractors compared, each called with a scan and its own documented defaults, and
-#: no line across a gap wider than 0.3 m (``max_gap_m``; angular segmentation's
-#: ``split_gap_m``, off by default, is set to match: without it its lines span collinear walls
-#: across doorways). Most share ``min_points`` 5 and ``min_length_m`` 0.15 (angular
+class _ByLabel(Mapping):
+    """The registered line extractors (:data:`labkit.lines.LINE_EXTRACTORS`) by display label,
+    read live so that an extractor registered later is compared too."""
+
+    def __getitem__(self, label: str) -> Callable[[Scan], list]:
+        for entry in REGISTRY.values():
+            if entry.label == label:
+                return entry.run
+        raise KeyError(label)
+
+    def __iter__(self):
+        return iter([entry.label for entry in REGISTRY.values()])
+
+    def __len__(self) -> int:
+        return len(REGISTRY)
+
+
+#: The line extractors compared: every registered one, by its label, each called with a scan
+#: and its parameter record's defaults, and no line across a gap wider than 0.3 m
+#: (``max_gap_m``; angular segmentation's ``split_gap_m``: without it its lines span collinear
+#: walls across doorways). Most share ``min_points`` 5 and ``min_length_m`` 0.15 (angular
 #: segmentation: ``min_pts`` 8, Meglicki's setting); the distance thresholds are 5 cm for
 #: split-and-merge and incremental, 3 cm for RANSAC and Hough, whose bands take in the next
 #: wall's first points at 5 cm. Nguyen et al.'s six minus EM, plus labkit's angular
 #: segmentation and IAV lines.
-LINE_EXTRACTORS: dict[str, Callable[[Scan], list]] = {
-    "split-and-merge (IEPF)": split_and_merge,
-    "split-and-merge (fit)": partial(split_and_merge, method="fit"),
-    "incremental": incremental_lines,
-    "line regression": regression_lines,
-    "RANSAC": ransac_lines,
-    "Hough": hough_lines,
-    "angular segmentation": partial(angular_segmentation, split_gap_m=0.3),
-    "IAV lines": detect_lines_iav,
-}
+LINE_EXTRACTORS: Mapping[str, Callable[[Scan], list]] = _ByLabel()
+
 
 #: Range noise of the two simulated sets: an LMS200's 5 mm and a cheap sensor's 2 cm.
 NOISE_LEVELS_M = (0.005, 0.02)

@@ -52,6 +52,7 @@ from ._safe import OutputKind, safe_output
 from .circles.iav import detect_arcs, detect_circles
 from .circles.legs import detect_legs, pair_legs
 from .features import Features, find_corners
+from .lines import LINE_EXTRACTORS
 from .lines.angular import angular_segmentation
 from .lines.split_merge import split_and_merge
 from .scan import Scan
@@ -66,11 +67,21 @@ __all__ = [
     "ArcsConfig",
     "LegsConfig",
     "LINE_METHODS",
+    "line_methods",
     "extract_features",
     "extract_all",
 ]
 
-LINE_METHODS = ("iepf", "split_and_merge", "angular", "none")
+
+
+def line_methods() -> tuple[str, ...]:
+    """The values of ``lines.method``: every registered line extractor
+    (:data:`labkit.lines.LINE_EXTRACTORS`), then ``"none"``."""
+    return (*LINE_EXTRACTORS, "none")
+
+
+#: The line methods registered when labkit was imported (see :func:`line_methods` for the live list).
+LINE_METHODS = line_methods()
 
 
 def _p(default, doc: str, *, lo: float | None = None, strict: bool = False, hi: float | None = None,
@@ -90,8 +101,9 @@ def _check_value(section: str, f: dataclasses.Field, value):
             raise ValueError(f"{name} must be true or false, got {value!r}")
         return bool(value)
     if isinstance(default, str):
-        if not isinstance(value, str) or (meta["choices"] and value not in meta["choices"]):
-            raise ValueError(f"{name} must be one of {meta['choices']}, got {value!r}")
+        choices = meta["choices"]() if callable(meta["choices"]) else meta["choices"]
+        if not isinstance(value, str) or (choices and value not in choices):
+            raise ValueError(f"{name} must be one of {choices}, got {value!r}")
         return value
     if isinstance(default, tuple):
         try:
@@ -157,8 +169,10 @@ class LinesConfig(_Section):
     """Line extraction (:func:`labkit.split_and_merge`, :func:`labkit.angular_segmentation`)."""
 
     _name = "lines"
-    method: str = _p("iepf", "iepf (split on the chord), split_and_merge (split on the fitted line), angular, none",
-                     choices=LINE_METHODS)
+    method: str = _p("iepf", "a registered line extractor (labkit.lines.LINE_EXTRACTORS: iepf splits on the chord, "
+                             "split_and_merge on the fitted line, angular, incremental, regression, ransac, hough, "
+                             "iav) or none; only iepf, split_and_merge and angular read the keys below, the others "
+                             "run with their own defaults", choices=line_methods)
     split_threshold_m: float = _p(0.05, "split when the worst point is farther than this from the line, metres",
                                   lo=0, strict=True)
     min_points: int = _p(5, "fewest points of a line (Xavier et al. line_min_pts)", lo=2)
@@ -478,6 +492,8 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
         if lc.skip_round and (legs or circles):
             round_beams = (labels >= 0) & (rest < 0)
             lines = [ln for ln in lines if not round_beams[ln.indices].mean() > 0.5]
+    elif lc.method != "none":  # any other registered extractor, with its own record's defaults
+        lines = LINE_EXTRACTORS[lc.method].run(scan, segments=rest if lc.skip_round else labels)
     lap("lines")
     corners = []
     if cfg.corners.enabled and len(lines) > 1:

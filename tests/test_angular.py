@@ -12,7 +12,15 @@ from hypothesis import strategies as st
 
 from labkit import Scan, read_scans, sim
 from labkit.geometry import angle_difference
-from labkit.lines.angular import EPS_DIST, EPS_THETA, MIN_PTS, AngularSteps, angular_segmentation, local_directions
+from labkit.lines.angular import (
+    EPS_DIST,
+    EPS_THETA,
+    MIN_PTS,
+    AngularSteps,
+    angular_arrays,
+    angular_segmentation,
+    local_directions,
+)
 
 DR_TOL = 0.05  # metres
 DA_TOL = math.radians(3.0)
@@ -84,7 +92,7 @@ def check_consistent(scan, segments, steps=None, min_pts=MIN_PTS):
 def test_recovers_the_walls_of_simulated_scenes(name, times, min_precision, min_recall):
     pairs = []
     for scan, truth in scenario_scans(name, times):
-        segments, steps = angular_segmentation(scan, return_steps=True)
+        segments, steps = angular_segmentation(scan), angular_arrays(scan)
         check_consistent(scan, segments, steps)
         pairs.append((segments, truth))
     precision, recall, n_segments, n_walls = score(pairs)
@@ -130,7 +138,7 @@ def corridor_world(*walls) -> sim.World:
 def test_parallel_walls_on_both_sides_share_an_angular_cluster_and_separate_by_offset():
     world = corridor_world(((-6.0, 1.0), (8.0, 1.0)), ((-6.0, -1.5), (8.0, -1.5)))
     scan, truth = sim.scan_at(world, LIDAR, (0.0, 0.0, 0.0), rng=np.random.default_rng(1))
-    segments, steps = angular_segmentation(scan, return_steps=True)
+    segments, steps = angular_segmentation(scan), angular_arrays(scan)
     assert len(segments) == 2
     # one angular cluster holds both walls; their offsets from the line through the origin differ
     both = np.flatnonzero(steps.labels >= 0)
@@ -147,7 +155,7 @@ def test_parallel_walls_on_the_same_side():
     # a step in a wall: y = 1.0 up to x = 2, then y = 1.6 (joined by a short wall across)
     world = corridor_world(((-4.0, 1.0), (2.0, 1.0)), ((2.0, 1.0), (2.0, 1.6)), ((2.0, 1.6), (8.0, 1.6)))
     scan, truth = sim.scan_at(world, LIDAR, (0.0, 0.0, 0.0), rng=np.random.default_rng(2))
-    segments, steps = angular_segmentation(scan, return_steps=True)
+    segments, steps = angular_segmentation(scan), angular_arrays(scan)
     near = [s for s in segments if abs(s.r - 1.0) < 0.02]
     far = [s for s in segments if abs(s.r - 1.6) < 0.02]
     assert len(near) == 1 and len(far) == 1
@@ -242,7 +250,7 @@ def test_rotating_the_scan_rotates_the_segments():
 # ------------------------------------------------------------------ steps, degenerate input, validation
 def test_steps_are_plain_arrays_per_beam():
     scan, _ = next(iter(sim.simulate("hall", seed=0)))
-    segments, steps = angular_segmentation(scan, return_steps=True)
+    segments, steps = angular_segmentation(scan), angular_arrays(scan)
     assert isinstance(steps, AngularSteps)
     n = scan.n_beams
     for a in (steps.local_angles, steps.angular_labels, steps.distances, steps.labels):
@@ -272,7 +280,7 @@ def test_steps_are_plain_arrays_per_beam():
 def test_degenerate_scans_give_no_segments(ranges):
     scan = Scan(ranges=ranges, angles=np.radians(np.arange(len(ranges), dtype=float)))
     assert angular_segmentation(scan) == []
-    segments, steps = angular_segmentation(scan, return_steps=True)
+    segments, steps = angular_segmentation(scan), angular_arrays(scan)
     assert segments == [] and steps.labels.shape == (len(ranges),) and np.all(steps.labels == -1)
 
 
@@ -324,7 +332,7 @@ def test_runs_on_real_recordings(shared_datasets, path, n_scans):
         pytest.skip(f"{file} not found")
     errors, counts = [], []
     for scan in itertools.islice(read_scans(file), n_scans):
-        segments, steps = angular_segmentation(scan, return_steps=True)
+        segments, steps = angular_segmentation(scan), angular_arrays(scan)
         check_consistent(scan, segments, steps)
         counts.append(len(segments))
         errors += [s.error for s in segments]

@@ -308,9 +308,9 @@ def test_walls_are_not_circles():
     rng = np.random.default_rng(3)
     for _ in range(10):
         scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0), rng=rng)
-        circles, trace = detect_circles(scan, return_trace=True)
+        circles, trace = detect_circles(scan, trace=True)
         assert circles == []
-        assert {t.verdict for t in trace} <= {"prerequisite", "iav mean", "too few points", "chord too short"}
+        assert {t.test for t in trace} <= {"prerequisite", "iav mean", "too few points", "chord too short"}
 
 
 @pytest.mark.parametrize("angle_deg", [60, 90])
@@ -327,7 +327,7 @@ def test_v_corners_are_not_circles(angle_deg, distance, arm_m):
     for _ in range(10):
         scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0), rng=rng)
         assert detect_circles(scan) == []
-        like, trace = detect_circles(scan, arc_like=True, return_trace=True)
+        like, trace = detect_circles(scan, arc_like=True, trace=True)
         assert like == [], trace
 
 
@@ -479,7 +479,7 @@ def test_batch_detector_matches_the_plain_loop(objects, walls, full, seed, arc_l
         assert c.iav_mean == pytest.approx(mean, abs=1e-9) and c.iav_std == pytest.approx(std, abs=1e-9)
         np.testing.assert_allclose(c.center, center, atol=1e-9)
         assert c.radius == pytest.approx(radius, rel=1e-9)
-    _, trace = detect_circles(scan, arc_like=arc_like, return_trace=True)
+    _, trace = detect_circles(scan, arc_like=arc_like, trace=True)
     assert [(t.first, t.last) for t in trace] == [(g.first, g.last) for g in range_segments(scan, 0.08)]
 
 
@@ -490,7 +490,7 @@ def test_invalid_beams_are_masked_not_raised():
     ranges = scan.ranges.copy()
     ranges[(c.first + c.last) // 2] = np.nan  # a dropout splits the column in two halves
     broken = scan.replace(ranges=ranges)
-    circles, trace = detect_circles(broken, return_trace=True)
+    circles, trace = detect_circles(broken, trace=True)
     assert len(trace) == 2  # two halves, each tested on its own
     assert all(c.last < (c.first + c.last) // 2 or c.first > (c.first + c.last) // 2 for c in circles)
     assert detect_circles(Scan(ranges=[np.nan] * 10, angles=np.arange(10) * 0.01)) == []
@@ -510,8 +510,8 @@ def _segment(points, first=0):
 ], ids=["one", "two", "identical", "repeated-end"])
 def test_degenerate_segments_are_skipped_with_a_reason(points, verdict):
     scan = Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1)
-    circles, trace = detect_circles(scan, segments=[_segment(points)], return_trace=True)
-    assert circles == [] and [t.verdict for t in trace] == [verdict]
+    circles, trace = detect_circles(scan, segments=[_segment(points)], trace=True)
+    assert circles == [] and [t.test for t in trace] == [verdict]
     if len(points) >= 3:  # the point functions raise on the same input (one policy)
         with pytest.raises(ValueError, match="points"):
             inscribed_angles(points)
@@ -529,12 +529,14 @@ def test_a_column_across_the_seam_of_a_full_circle_scan():
 def test_trace_has_one_record_per_segment():
     world = sim.World("mixed", walls=(sim.Wall((4.0, -3.0), (4.0, 3.0)),), circles=(sim.Column((2.0, 0.5), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
-    circles, trace = detect_circles(scan, return_trace=True)
+    circles, trace = detect_circles(scan, trace=True)
     assert len(trace) == len(range_segments(scan))
-    assert [t.verdict for t in trace].count("accepted") == len(circles) == 1
-    accepted = next(t for t in trace if t.verdict == "accepted")
+    assert [t.test for t in trace].count("accepted") == len(circles) == 1
+    accepted = next(t for t in trace if t.test == "accepted")
+    assert accepted.kind == "accept" and all(t.kind == "reject" for t in trace if t is not accepted)
     assert (accepted.first, accepted.last) == (circles[0].first, circles[0].last)
-    assert accepted.iav_mean == circles[0].iav_mean
+    assert accepted.value == circles[0].iav_std and accepted.threshold == 0.15
+    assert accepted.center == tuple(circles[0].center) and accepted.radius == circles[0].radius
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -596,9 +598,9 @@ def test_lines_by_iav_match_the_walls():
 def test_columns_and_corners_are_not_iav_lines():
     world = sim.World("x", walls=_v_corner((3.0, 0.0), 90, 1.0), circles=(sim.Column((2.0, 1.5), 0.4),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0), rng=np.random.default_rng(0))
-    lines, trace = detect_lines_iav(scan, return_trace=True)
+    lines, trace = detect_lines_iav(scan, trace=True)
     assert lines == []
-    assert "iav mean" in {t.verdict for t in trace}
+    assert "iav mean" in {t.test for t in trace}
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -665,7 +667,7 @@ def test_rounded_outside_corner_bulging_towards_the_sensor():
     rng = np.random.default_rng(6)
     for _ in range(5):
         scan, truth = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0), rng=rng)
-        arcs, trace = detect_arcs(scan, _truth_lines(scan, truth), return_trace=True)
+        arcs, trace = detect_arcs(scan, _truth_lines(scan, truth), trace=True)
         assert len(truth.arcs) == 1
         assert len(arcs) == _match_arcs(arcs, truth, r) == 1, trace
         assert middle_point_offset(scan.points[arcs[0].first:arcs[0].last + 1]) > 0  # bulging

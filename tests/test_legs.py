@@ -153,10 +153,10 @@ def test_a_partly_hidden_leg_is_rejected_as_occluded():
     scan, truth = sim.scan_at(_two_legs_world(0.15), LMS200, (0.0, 0.0, 0.0))
     front, rear = truth.circles
     assert rear.first == front.last + 1  # the front leg hides the rear one's right edge
-    legs, trace = detect_legs(scan, return_trace=True)
+    legs, trace = detect_legs(scan, trace=True)
     assert [(g.first, g.last) for g in legs] == [(front.first, front.last)]
     (rear_check,) = [t for t in trace if t.first == rear.first]
-    assert rear_check.verdict == "occluded"
+    assert rear_check.test == "occluded"
     assert is_occluded(scan, rear.first, rear.last) and not is_occluded(scan, front.first, front.last)
     # without the rule the partial leg passes, and its centre is off
     unguarded = detect_legs(scan, reject_occluded=False)
@@ -210,9 +210,9 @@ def test_columns_and_walls_are_not_legs():
     rng = np.random.default_rng(0)
     for _ in range(10):
         scan, _ = sim.scan_at(world, LMS200, (0.0, 0.0, 0.0), rng=rng)
-        legs, trace = detect_legs(scan, return_trace=True)
+        legs, trace = detect_legs(scan, trace=True)
         assert legs == []
-        assert "chord too long" in {t.verdict for t in trace}
+        assert "chord too long" in {t.test for t in trace}
 
 
 def test_optional_iav_thresholds_tighten_the_test(hall):
@@ -247,8 +247,8 @@ def _segment(points, first=1):
 ], ids=["one", "two", "identical", "repeated-end"])
 def test_degenerate_segments_are_skipped_with_a_reason(points, verdict):
     scan = Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1)
-    legs, trace = detect_legs(scan, segments=[_segment(points)], chord_padding_beams=0.0, return_trace=True)
-    assert legs == [] and [t.verdict for t in trace] == [verdict]
+    legs, trace = detect_legs(scan, segments=[_segment(points)], chord_padding_beams=0.0, trace=True)
+    assert legs == [] and [t.test for t in trace] == [verdict]
 
 
 def test_invalid_beams_are_masked_not_raised():

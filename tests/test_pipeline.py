@@ -53,7 +53,7 @@ def test_toml_round_trip_keeps_every_value(tmp_path):
 @pytest.mark.parametrize("changes, named", [
     ({"lines": {"split_threshold": 0.1}}, "lines.split_threshold"),
     ({"line": {"method": "iepf"}}, "'line'"),
-    ({"lines.method": "hough"}, "lines.method"),
+    ({"lines.method": "houghh"}, "lines.method"),  # a name no extractor is registered under
     ({"lines.split_threshold_m": -0.1}, "lines.split_threshold_m"),
     ({"lines.split_threshold_m": "5 cm"}, "lines.split_threshold_m"),
     ({"lines.split_threshold_m": float("nan")}, "lines.split_threshold_m"),

@@ -220,9 +220,9 @@ def test_trace_replays_the_decisions():
     assert kinds[0] == "segment" and "split" in kinds and kinds.count("accept") >= 3
     for s in steps:
         if s.kind == "split":
-            assert s.distance > 0.05 and s.first < s.at < s.last
+            assert s.value > 0.05 == s.threshold and s.first < s.at < s.last and s.test == "split_threshold_m"
         if s.kind == "accept":
-            assert s.distance <= 0.05
+            assert s.value <= 0.05
     accepted = [(s.first, s.last) for s in steps if s.kind == "accept"]
     assert len(accepted) == len(lines)  # nothing merged in this room
     for (first, last), line in zip(accepted, lines, strict=True):

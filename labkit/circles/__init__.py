@@ -4,7 +4,6 @@
 from . import iav, legs
 from .iav import (
     IAVStats,
-    SegmentCheck,
     circle_from_iav,
     detect_arcs,
     detect_circles,
@@ -14,5 +13,5 @@ from .iav import (
 )
 from .legs import detect_legs, pair_legs
 
-__all__ = ["iav", "legs", "IAVStats", "SegmentCheck", "circle_from_iav", "detect_arcs", "detect_circles", "iav_stats",
+__all__ = ["iav", "legs", "IAVStats", "circle_from_iav", "detect_arcs", "detect_circles", "iav_stats",
            "inscribed_angles", "middle_point_offset", "detect_legs", "pair_legs"]

@@ -57,7 +57,6 @@ from .._iav import (  # the shared machinery; the public names are documented he
     CIRCLE_MEAN_RANGE,
     CIRCLE_STD_MAX,
     IAVStats,
-    SegmentCheck,
     _check_scan,
     _circle_test,
     _Runs,
@@ -73,10 +72,10 @@ from .._iav import (  # the shared machinery; the public names are documented he
 from ..features import Circle, LineSegment
 from ..scan import Scan
 from ..segmentation import RangeSegment
+from ..steps import Step
 
 __all__ = [
     "IAVStats",
-    "SegmentCheck",
     "inscribed_angles",
     "iav_stats",
     "middle_point_offset",
@@ -114,8 +113,8 @@ def detect_circles(
     v_corner_neighbours: int = 4,
     v_corner_stride: int | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[Circle] | tuple[list[Circle], list[Step]]:
     """Circles in a scan by the Inscribed Angle Variance (Xavier et al. 2005, Sec. II-B to II-D).
 
     Each range segment is tested in order, cheapest test first:
@@ -171,13 +170,21 @@ def detect_circles(
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments (e.g. from an adaptive threshold, shared with other
         detectors) instead of ``range_segments(scan, seg_threshold_m)``.
-    return_trace : bool
-        Also return one :class:`SegmentCheck` per segment, saying why it was rejected.
+    trace : bool
+        Also return one :class:`labkit.Step` per segment (``algorithm="iav_circles"``),
+        in scan order: ``"accept"`` with the circle's ``center`` and ``radius`` (``value``
+        the inscribed angles' standard deviation, ``threshold`` ``std_max``), or
+        ``"reject"``; ``test`` is the first test the segment failed (``"too few points"``,
+        ``"chord too short"``, ``"chord too long"``, ``"prerequisite"``, ``"degenerate"``,
+        ``"iav mean"``, ``"iav std"``, ``"v-corner"``, ``"fit failed"``; ``"accepted"``),
+        ``value`` and ``threshold`` what it compared (points, chord, middle ratio, mean or
+        standard deviation of the inscribed angles), ``reason`` every statistic computed.
+        Replay: the ``accept`` steps are the returned circles, one for one.
 
     Returns
     -------
     list of Circle (``kind="circle"`` or ``"arc-like"``), in scan order; with
-    ``return_trace``, ``(circles, trace)``.
+    ``trace``, ``(circles, steps)``.
 
     Examples
     --------
@@ -195,8 +202,8 @@ def detect_circles(
                         middle_range=middle_range, mean_range=mean_range, std_max=std_max, arc_like=arc_like,
                         arc_like_std_max=arc_like_std_max, v_corner_neighbours=v_corner_neighbours,
                         v_corner_stride=v_corner_stride, hollow=False, center_method=center_method, kind="circle")
-    circles, trace = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, return_trace)
-    return (circles, trace) if return_trace else circles
+    circles, steps = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, trace)
+    return (circles, steps) if trace else circles
 
 
 def detect_arcs(
@@ -213,8 +220,8 @@ def detect_arcs(
     center_method: str = "geometric",
     line_params: dict | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[Circle] | tuple[list[Circle], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[Circle] | tuple[list[Circle], list[Step]]:
     """Arcs embedded in lines, such as rounded wall corners (Xavier et al. Sec. II-B.2, Fig. 3).
 
     Lines are found first; their points are excluded, and each remaining run of
@@ -260,7 +267,8 @@ def detect_arcs(
 
     Returns
     -------
-    list of Circle in scan order; with ``return_trace``, ``(arcs, trace)``.
+    list of Circle in scan order; with ``trace``, ``(arcs, steps)``: one :class:`labkit.Step`
+    per run tested (``algorithm="iav_arcs"``), as :func:`detect_circles`.
 
     Examples
     --------
@@ -300,7 +308,7 @@ def detect_arcs(
         excluded[idx] = True
     runs = _scan_runs(scan, segments, seg_threshold_m)
     if runs.starts.size == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     # keep the points of segments that hold a line, minus the lines' points, cut into runs
     out = excluded[runs.idx]
     seg_of = np.repeat(np.arange(runs.starts.size), runs.sizes)
@@ -309,9 +317,9 @@ def detect_arcs(
     continues = np.concatenate([[False], keep[:-1] & (seg_of[1:] == seg_of[:-1])])
     kept = np.flatnonzero(keep)
     if kept.size == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     starts = np.flatnonzero(~continues[kept])
     sub = _Runs(runs.idx[kept], runs.pts.take(kept, axis=0), starts, np.concatenate([starts[1:], [kept.size]]),
                 runs.check_finite)
-    arcs, trace = _test_runs(sub, test, return_trace)
-    return (arcs, trace) if return_trace else arcs
+    arcs, steps = _test_runs(sub, test, trace, "iav_arcs")
+    return (arcs, steps) if trace else arcs

@@ -59,11 +59,14 @@ from .._checks import check_int, check_nonneg, check_positive
 from .._iav import (
     _ACCEPTED,
     _DEGENERATE,
+    _FEW,
     _FIT,
+    _LONG,
     _MEAN,
     _OCCLUDED,
+    _PREREQ,
+    _SHORT,
     _STD,
-    SegmentCheck,
     _batch_angles,
     _cheap_tests,
     _check_range,
@@ -77,6 +80,7 @@ from ..features import Leg, Person
 from ..fitting import fit_circle
 from ..scan import Scan
 from ..segmentation import RangeSegment
+from ..steps import Step
 
 __all__ = ["detect_legs", "pair_legs", "is_occluded"]
 
@@ -144,8 +148,8 @@ def detect_legs(
     reject_occluded: bool = True,
     center_method: str = "ray",
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[Leg] | tuple[list[Leg], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[Leg] | tuple[list[Leg], list[Step]]:
     """Leg candidates in a scan (Xavier et al. 2005, Sec. II-E; see the module notes).
 
     Parameters
@@ -181,14 +185,16 @@ def detect_legs(
         points define a circle poorly.
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments (:func:`labkit.segmentation.labels_from`).
-    return_trace : bool
-        Also return one :class:`labkit.circles.iav.SegmentCheck` per segment (its ``chord_m`` is
-        the padded chord).
+    trace : bool
+        Also return one :class:`labkit.Step` per segment (``algorithm="legs"``), as
+        :func:`labkit.detect_circles` does (the chord tested is the padded chord; an
+        ``"accept"`` step's circle is the leg: its centre and half its diameter; ``test``
+        may also be ``"occluded"``).
 
     Returns
     -------
     list of Leg in scan order (``middle`` is the segment's middle point, the paper's
-    record); with ``return_trace``, ``(legs, trace)``.
+    record); with ``trace``, ``(legs, steps)``.
 
     Examples
     --------
@@ -204,7 +210,7 @@ def detect_legs(
         min_points, chord_range, middle_range, iav_mean_range, iav_std_max, center_method, chord_padding_beams)
     runs = _scan_runs(scan, segments, seg_threshold_m)
     if runs.starts.size == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     geo = _geometry(runs)
     spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
     chord = geo.chord + chord_padding_beams * spacing * np.hypot(geo.middle[:, 0], geo.middle[:, 1])
@@ -237,7 +243,14 @@ def detect_legs(
                 center.setflags(write=False)
                 middle.setflags(write=False)
                 legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
-    return (legs, _trace(runs, geo, chord, ratio, verdict, sel, ang)) if return_trace else legs
+    if not trace:
+        return legs
+    limits = {_FEW: min_points, _SHORT: chord_lo, _LONG: chord_hi, _PREREQ: middle_range}
+    if iav_mean_range is not None:
+        limits[_MEAN] = tuple(iav_mean_range)
+    if iav_std_max is not None:
+        limits[_STD] = limits[_ACCEPTED] = iav_std_max
+    return legs, _trace(runs, geo, chord, ratio, verdict, sel, ang, "legs", limits, legs)
 
 
 @remembered

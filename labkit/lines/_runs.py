@@ -5,7 +5,8 @@
   any run) and :func:`_fitted` (the final fit of every line);
 * from the global extractors (:mod:`~labkit.lines.ransac`, :mod:`~labkit.lines.hough`):
   :func:`_taking_part` (the beams they use), :func:`_fit` (a weighted line in closed form)
-  and :func:`_segments` (one line's inliers cut into segments).
+  and :func:`_segments` (one line's inliers cut into segments);
+* for ``trace=True``: :class:`_Trace`, the :class:`labkit.Step` records of one call.
 """
 
 from __future__ import annotations
@@ -18,6 +19,28 @@ from ..features import LineSegment, line_segment
 from ..fitting import line_from_sums
 from ..scan import Scan
 from ..segmentation import labels_from
+from ..steps import Step
+
+
+class _Trace(list):
+    """The steps of one call of an extractor, as :class:`labkit.Step` records."""
+
+    def __init__(self, algorithm: str):
+        super().__init__()
+        self.algorithm = algorithm
+
+    def add(self, kind: str, first: int = -1, last: int = -1, r: float = math.nan, alpha: float = math.nan,
+            **fields) -> None:
+        self.append(Step(self.algorithm, kind, int(first), int(last), float(r), float(alpha), **fields))
+
+    def verdict(self, line: LineSegment, kept: bool, min_length_m: float, what: str = "line") -> None:
+        """The last step of every line: ``accept`` (it is returned) or ``reject`` (shorter than
+        ``min_length_m``), with the line fitted to its beams, ``beams`` its beams."""
+        length = f"{line.length:.3f} m"
+        self.add("accept" if kept else "reject", line.first, line.last, line.r, line.alpha, value=line.length,
+                 threshold=min_length_m, test="" if kept else "min_length_m", beams=tuple(line.indices.tolist()),
+                 reason=f"{what} of {line.n_points} points, {length} long" + (
+                     "" if kept else f" < min_length_m={min_length_m} m"))
 
 
 def _runs(scan: Scan, segments, max_gap_m: float, min_points: int) -> tuple[np.ndarray, list[tuple[int, int]]]:
@@ -75,15 +98,20 @@ class _PrefixSums:
         return (self.table[b] - self.table[a]).tolist()
 
 
-def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float) -> list[LineSegment]:
+def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float,
+            steps: _Trace | None = None) -> list[LineSegment]:
     """Step 7, shared with :mod:`labkit.lines.regression`: every line, the points ``a..b-1`` of
     ``xy`` (beams ``beams[a:b]``) for each ``(a, b)`` of ``spans``, fitted by
-    :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped."""
+    :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped
+    (each line's verdict is added to ``steps`` if given)."""
     lines = []
     for a, b in spans:
         line = line_segment(xy[a:b], beams[a:b])
-        if line.length >= min_length_m:
+        kept = line.length >= min_length_m
+        if kept:
             lines.append(line)
+        if steps is not None:
+            steps.verdict(line, kept, min_length_m)
     return lines
 
 
@@ -112,12 +140,17 @@ def _fit(p: np.ndarray, w: np.ndarray) -> tuple[float, float]:
 
 
 def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inliers: np.ndarray, min_points: int,
-              min_length_m: float, max_gap_m: float) -> list[LineSegment]:
+              min_length_m: float, max_gap_m: float, steps: _Trace | None = None) -> list[LineSegment]:
     """The segments of one line: its inliers (positions into ``xy``/``beams``, ascending) cut
     where neighbouring inliers are more than ``max_gap_m`` apart (or, given per-beam
     ``labels``, in different range segments); runs with ``min_points`` points or more and
-    at least ``min_length_m`` long become segments. Shared by :mod:`labkit.lines.hough`."""
+    at least ``min_length_m`` long become segments. Shared by :mod:`labkit.lines.hough`.
+    Given ``steps``, every run ends in an ``accept`` or a ``reject`` step."""
     if inliers.size < min_points:
+        if steps is not None and inliers.size:
+            b = beams[inliers]
+            steps.add("reject", b[0], b[-1], value=inliers.size, threshold=min_points, test="min_points",
+                      beams=tuple(b.tolist()), reason=f"{inliers.size} inliers < min_points={min_points}")
         return []
     p = xy[inliers]
     gap = np.hypot(*(p[1:] - p[:-1]).T)
@@ -129,8 +162,15 @@ def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inli
     out = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         if b - a < min_points:
+            if steps is not None:
+                run = beams[inliers[a:b]]
+                steps.add("reject", run[0], run[-1], value=b - a, threshold=min_points, test="min_points",
+                          beams=tuple(run.tolist()), reason=f"a run of {b - a} inliers < min_points={min_points}")
             continue
         seg = line_segment(p[a:b], beams[inliers[a:b]])
-        if seg.length >= min_length_m:
+        kept = seg.length >= min_length_m
+        if kept:
             out.append(seg)
+        if steps is not None:
+            steps.verdict(seg, kept, min_length_m, "a run")
     return out

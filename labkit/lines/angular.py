@@ -71,8 +71,10 @@ from ..dbscan import dbscan1d
 from ..features import LineSegment, line_segment
 from ..geometry import circular_mean, signed_distance_to_line
 from ..scan import Scan
+from ..steps import Step
+from ._params import Params
 
-__all__ = ["AngularSteps", "local_directions", "angular_segmentation"]
+__all__ = ["AngularSteps", "local_directions", "angular_segmentation", "angular_arrays"]
 
 #: Default DBSCAN radius in direction space: 3 degrees (radians).
 EPS_THETA = math.radians(3.0)
@@ -84,7 +86,9 @@ MIN_PTS = 8
 
 @dataclass(frozen=True, eq=False)
 class AngularSteps:
-    """The intermediate results of :func:`angular_segmentation`, one array per step.
+    """The intermediate results of :func:`angular_segmentation`, one array per stage
+    (:func:`angular_arrays`); ``angular_segmentation(..., trace=True)`` gives the same stages
+    as :class:`labkit.Step` records for the step viewers.
 
     Attributes
     ----------
@@ -204,8 +208,8 @@ def angular_segmentation(
     min_pts: int = MIN_PTS,
     *,
     split_gap_m: float | None = None,
-    return_steps: bool = False,
-) -> list[LineSegment] | tuple[list[LineSegment], AngularSteps]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Line segments of a scan by angular segmentation (Meglicki 2021, Algorithm 5).
 
     Parameters
@@ -225,8 +229,17 @@ def angular_segmentation(
         Also split collinear pieces wherever consecutive points along the line are
         farther apart than this (e.g. 0.3 for walls on either side of a door). Default:
         no split, as in the paper.
-    return_steps : bool
-        Also return the intermediate arrays (:class:`AngularSteps`).
+    trace : bool
+        Also return the steps, as :class:`labkit.Step` records (``algorithm="angular"``;
+        ``beams`` holds each step's beams, spread over the scan): ``"directions"`` (step 1:
+        ``value`` beams with a local direction), ``"direction"`` (step 2, one per angular
+        cluster: ``value`` its mean direction, radians; ``r, alpha`` the line through the
+        origin along it), ``"offset"`` (step 3, one per offset cluster: ``value`` its
+        offset, ``r, alpha`` its line), ``"reject"`` (a cluster without a common direction,
+        ``test="direction"``, or a piece with fewer than ``min_pts`` points,
+        ``test="min_pts"``), and ``"accept"`` (one per returned segment, in the order
+        returned, with its fitted line). The per-beam arrays of these stages are
+        :func:`angular_arrays`.
 
     Returns
     -------
@@ -234,8 +247,8 @@ def angular_segmentation(
         One per final cluster, sorted by first beam. A segment's points are its beams in
         scan order. On a full-circle scan a segment that crosses the seam has
         ``first > last``.
-    steps : AngularSteps
-        Only with ``return_steps=True``.
+    steps : list of labkit.Step
+        Only with ``trace=True``.
 
     Raises
     ------
@@ -256,7 +269,41 @@ def angular_segmentation(
     The end beams and the beams next to the jump have no local direction (one of their
     neighbours is missing or on the other wall) and are left out.
     """
+    segments, _, steps = _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, trace)
+    return (segments, steps) if trace else segments
+
+
+def angular_arrays(
+    scan: Scan,
+    eps_theta: float = EPS_THETA,
+    eps_dist: float = EPS_DIST,
+    min_pts: int = MIN_PTS,
+    *,
+    split_gap_m: float | None = None,
+) -> AngularSteps:
+    """The intermediate arrays of :func:`angular_segmentation` (same parameters), one per
+    stage, per beam: local directions, angular labels, the clusters' mean directions, offsets
+    and the final labels (:class:`AngularSteps`), for plotting the stages.
+
+    Examples
+    --------
+    >>> angles = np.radians(np.arange(-40.0, 40.5, 0.5))
+    >>> a = angular_arrays(Scan(ranges=2.0 / np.cos(angles), angles=angles))
+    >>> np.degrees(a.directions).round(1).tolist(), int((a.labels == 0).sum())
+    ([90.0], 159)
+    """
+    return _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, False)[1]
+
+
+def _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, trace: bool):
+    """(segments, AngularSteps, list of Step or None): :func:`angular_segmentation`."""
     eps_theta, eps_dist, min_pts, split_gap_m = _check_params(scan, eps_theta, eps_dist, min_pts, split_gap_m)
+    steps: list[Step] | None = [] if trace else None
+
+    def note(kind: str, beams: np.ndarray, **fields) -> None:
+        b = beams.tolist()
+        steps.append(Step("angular", kind, min(b, default=-1), max(b, default=-1), beams=tuple(b), **fields))
+
     n = scan.n_beams
     theta = local_directions(scan)
     angular_labels = np.full(n, -1, dtype=np.int64)
@@ -269,6 +316,10 @@ def angular_segmentation(
     if defined.size:
         # step 2: DBSCAN on local directions, wrapping at pi
         angular_labels[defined] = dbscan1d(theta[defined], eps_theta, min_pts, period=math.pi)
+    if steps is not None:
+        note("directions", defined, value=defined.size,
+             reason=f"{defined.size} beams have a local direction; DBSCAN on them (eps_theta "
+                    f"{math.degrees(eps_theta):.1f} deg) finds {int(angular_labels.max(initial=-1)) + 1} clusters")
     pts = scan.points
     for k in range(int(angular_labels.max(initial=-1)) + 1):
         members = np.flatnonzero(angular_labels == k)
@@ -276,17 +327,34 @@ def angular_segmentation(
             direction = circular_mean(theta[members], period=math.pi)
         except ValueError:  # directions spread evenly round the circle: no common direction
             directions.append(math.nan)
+            if steps is not None:
+                note("reject", members, test="direction", reason=f"angular cluster {k}: no common direction")
             continue
         directions.append(direction)
+        normal = math.remainder(direction + math.pi / 2, 2 * math.pi)
+        if steps is not None:
+            note("direction", members, r=0.0, alpha=normal, value=direction,
+                 reason=f"angular cluster {k}: {members.size} beams, direction {math.degrees(direction):.1f} deg")
         # step 3: offsets from the line through the origin along the cluster's direction
         offset = signed_distance_to_line(pts[members], 0.0, direction + math.pi / 2)
         distances[members] = offset
         offset_labels = dbscan1d(offset, eps_dist, min_pts)
         for j in range(int(offset_labels.max(initial=-1)) + 1):
             beams = members[offset_labels == j]
+            if steps is not None:
+                d = float(np.median(offset[offset_labels == j]))
+                alpha = normal if d >= 0 else math.remainder(normal + math.pi, 2 * math.pi)
+                note("offset", beams, r=abs(d), alpha=alpha, value=d,
+                     reason=f"direction {math.degrees(direction):.1f} deg, offset cluster {j}: "
+                            f"{beams.size} beams {d:.3f} m from the origin")
             # step 4 (optional): collinear pieces
             pieces = [beams] if split_gap_m is None else _split_collinear(beams, pts[beams], direction, split_gap_m)
             clusters.extend(p for p in pieces if p.size >= min_pts)
+            if steps is not None:
+                for p in pieces:
+                    if p.size < min_pts:
+                        note("reject", p, value=p.size, threshold=min_pts, test="min_pts",
+                             reason=f"a collinear piece of {p.size} points < min_pts={min_pts}")
 
     full_circle = scan.is_full_circle
     ordered = [_scan_order(c, n, full_circle) for c in clusters]
@@ -294,8 +362,42 @@ def angular_segmentation(
     segments = [line_segment(pts[c], c) for c in ordered]
     for i, c in enumerate(ordered):
         labels[c] = i
-    if not return_steps:
-        return segments
-    steps = AngularSteps(_frozen(theta), _frozen(angular_labels), _frozen(np.array(directions, dtype=float)),
-                         _frozen(distances), _frozen(labels))
-    return segments, steps
+    if steps is not None:
+        for s, c in zip(segments, ordered, strict=True):
+            note("accept", c, r=s.r, alpha=s.alpha, value=s.n_points, threshold=min_pts,
+                 reason=f"segment of {s.n_points} beams, r {s.r:.3f} m, alpha {math.degrees(s.alpha):.1f} deg")
+    arrays = AngularSteps(_frozen(theta), _frozen(angular_labels), _frozen(np.array(directions, dtype=float)),
+                          _frozen(distances), _frozen(labels))
+    return segments, arrays, steps
+
+
+@dataclass(frozen=True)
+class AngularParams(Params):
+    """Parameters of :func:`angular_segmentation`, the defaults once: lengths in metres, angles
+    in degrees. ``split_gap_m`` inf: never split collinear clusters at a gap."""
+
+    eps_theta_deg: float = math.degrees(EPS_THETA)
+    eps_dist_m: float = EPS_DIST
+    min_points: int = MIN_PTS
+    split_gap_m: float = 0.3
+
+    @classmethod
+    def renamed(cls) -> dict:
+        return {"eps_dist_m": "eps_dist", "min_points": "min_pts"}
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        kw["split_gap_m"] = None if math.isinf(kw["split_gap_m"]) else kw["split_gap_m"]
+        return kw
+
+
+def angular_lines(scan: Scan, *, segments=None, **kwargs) -> list[LineSegment]:
+    """:func:`angular_segmentation` with the registry's call shape: given ``segments`` (labels
+    or RangeSegments), lines with most of their beams outside every segment are dropped."""
+    lines = angular_segmentation(scan, **kwargs)
+    if segments is None:
+        return lines
+    from ..segmentation import labels_from
+
+    outside = labels_from(scan, segments) < 0
+    return [ln for ln in lines if not outside[ln.indices].mean() > 0.5]

@@ -39,6 +39,7 @@ line extraction algorithms using 2D range data for indoor mobile robotics. Auton
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,7 +47,9 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
-from ._runs import _fit, _segments, _taking_part
+from ..steps import Step
+from ._params import Params
+from ._runs import _fit, _segments, _taking_part, _Trace
 
 __all__ = ["hough_lines"]
 
@@ -70,7 +73,8 @@ def hough_lines(
     min_length_m: float = 0.15,
     max_gap_m: float = 0.3,
     segments=None,
-) -> list[LineSegment]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Extract line segments from a scan by the Hough transform.
 
     Parameters
@@ -116,14 +120,26 @@ def hough_lines(
         A range segmentation computed elsewhere (for instance with the beams of circles and
         legs set to -1). Beams labelled -1 then do not vote, and a segment never spans two
         range segments. Default ``None``: every valid beam votes, and only ``max_gap_m`` cuts.
+    trace : bool
+        Also return the steps taken, as :class:`labkit.Step` records (``algorithm="hough"``),
+        in the order taken. Every round gives a ``"peak"`` step (the peak cell's line, at the
+        cell's centre; ``value`` its votes, ``threshold`` ``min_votes``, ``beams`` the
+        remaining points that voted for it); if it has too few votes, a ``"reject"`` step
+        (``test="min_votes"``) ends the search; else a ``"consensus"`` step (the refined
+        line, ``beams`` its inliers, taken away with their votes) and, for every run of the
+        inliers, ``"accept"`` (a segment, ``beams`` its beams) or ``"reject"`` (``test``
+        ``"min_points"`` or ``"min_length_m"``). Replay: the ``accept`` steps, sorted by
+        first beam, are the returned lines.
 
     Returns
     -------
-    list of LineSegment
+    lines : list of LineSegment
         Sorted by first beam; each fitted by :func:`labkit.features.line_segment` to the points
         of its run (beam indices ascending). The seam of a full-circle scan is ignored: a wall
         seen across it gives two segments, one ending at the last beam and one starting at
         beam 0. A scan without valid beams gives ``[]``.
+    steps : list of labkit.Step
+        Only with ``trace=True``.
 
     Raises
     ------
@@ -146,9 +162,10 @@ def hough_lines(
         r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m)
 
     # the beams that vote: valid ones (given a segmentation, those in a segment) within the accumulator
+    steps = _Trace("hough") if trace else None
     labels, beams, xy, rho, w = _taking_part(scan, segments, _MAX_R_CELLS * r_step_m)
     if beams.size < max(min_votes, 2):
-        return []
+        return ([], []) if trace else []
 
     # step 1: the accumulator. Directions alpha_k = -pi + (k + 1) d_alpha, k = 0..n_alpha-1 (the
     # last one is pi); distances r_j = j r_step_m, j = 0..n_r-1, to beyond the farthest point
@@ -176,9 +193,13 @@ def hough_lines(
         # step 2: the peak (the first of equals: deterministic)
         peak = int(np.argmax(votes))
         if votes[peak] < min_votes:
+            if steps is not None:
+                _peak_steps(steps, peak, cell_number, n_r, alphas, r_step_m, int(votes[peak]), min_votes, None)
             break
         k = (peak if cell_number is None else int(cell_number[peak])) // n_r  # its direction
         voters = np.flatnonzero(remaining & (cells[:, k] == peak))
+        if steps is not None:
+            _peak_steps(steps, peak, cell_number, n_r, alphas, r_step_m, int(votes[peak]), min_votes, beams[voters])
 
         # step 3: refine the peak's line by least squares, twice over the points near it
         pool = np.flatnonzero(remaining)
@@ -197,12 +218,33 @@ def hough_lines(
         remaining[inliers] = False
         gone = cells[inliers]
         np.subtract.at(votes, gone[gone >= 0], 1)
+        if steps is not None:  # the line whose inliers were taken
+            taken = beams[inliers]
+            steps.add("consensus", taken[0], taken[-1], r_fit, alpha_fit, value=inliers.size, test="threshold_m",
+                      beams=tuple(taken.tolist()),
+                      reason=f"refined by least squares: {inliers.size} points within threshold_m={threshold_m} m, "
+                             f"taken away with their votes")
 
         # cut the inliers into runs and make a segment of every run long enough
-        lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m)
+        lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m, steps)
 
     lines.sort(key=lambda s: s.first)
-    return lines
+    return (lines, list(steps)) if trace else lines
+
+
+def _peak_steps(steps: _Trace, peak: int, cell_number, n_r: int, alphas: np.ndarray, r_step_m: float, votes: int,
+                min_votes: int, voters: np.ndarray | None) -> None:
+    """The step of a peak cell (its line at the cell's centre), and the stop when it has fewer
+    than ``min_votes`` votes (``voters`` None)."""
+    cell = peak if cell_number is None else int(cell_number[peak])
+    r, alpha = (cell % n_r) * r_step_m, float(alphas[cell // n_r])
+    where = f"cell r={r:.2f} m, alpha={math.degrees(alpha):.0f} deg"
+    if voters is None:
+        steps.add("reject", r=r, alpha=alpha, value=votes, threshold=min_votes, test="min_votes",
+                  reason=f"the peak, {where}, has {votes} votes < min_votes={min_votes}: no more lines")
+        return
+    steps.add("peak", voters[0], voters[-1], r, alpha, value=votes, threshold=min_votes, test="min_votes",
+              beams=tuple(voters.tolist()), reason=f"the peak: {where}, {votes} votes")
 
 
 @remembered
@@ -218,3 +260,16 @@ def _params(r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m
+
+
+@dataclass(frozen=True)
+class HoughParams(Params):
+    """Parameters of :func:`hough_lines`, the defaults once: lengths in metres, angles in degrees."""
+
+    r_step_m: float = 0.05
+    alpha_step_deg: float = 1.0
+    threshold_m: float = 0.03
+    min_votes: int = 8
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3

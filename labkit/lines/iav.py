@@ -7,6 +7,7 @@ The inscribed angles and their conventions are those of :mod:`labkit.circles.iav
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,7 +20,6 @@ from .._iav import (
     _SHORT,
     _STD,
     CIRCLE_STD_MAX,
-    SegmentCheck,
     _batch_angles,
     _check_scan,
     _geometry,
@@ -29,6 +29,8 @@ from .._iav import (
 from ..features import LineSegment, line_segment
 from ..scan import Scan
 from ..segmentation import RangeSegment
+from ..steps import Step
+from ._params import Params
 
 __all__ = ["detect_lines_iav"]
 
@@ -42,8 +44,8 @@ def detect_lines_iav(
     mean_tolerance: float = math.radians(5.0),
     std_max: float = CIRCLE_STD_MAX,
     segments: list[RangeSegment] | np.ndarray | None = None,
-    return_trace: bool = False,
-) -> list[LineSegment] | tuple[list[LineSegment], list[SegmentCheck]]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Lines as range segments whose inscribed angles are all near 180 deg (Sec. II-B.1).
 
     A whole segment is a line when it has at least ``min_points`` points (Table II
@@ -72,12 +74,14 @@ def detect_lines_iav(
         0.15 rad (8.6 deg), as for circles.
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments.
-    return_trace : bool
-        Also return one :class:`SegmentCheck` per segment.
+    trace : bool
+        Also return one :class:`labkit.Step` per segment (``algorithm="iav_lines"``), as
+        :func:`labkit.detect_circles` does; an ``"accept"`` step carries the line ``r, alpha``,
+        and the ``"iav mean"`` test compares ``value = |mean - pi|`` with ``mean_tolerance``.
 
     Returns
     -------
-    list of LineSegment in scan order; with ``return_trace``, ``(lines, trace)``.
+    list of LineSegment in scan order; with ``trace``, ``(lines, steps)``.
 
     Examples
     --------
@@ -96,7 +100,7 @@ def detect_lines_iav(
     runs = _scan_runs(scan, segments, seg_threshold_m)
     s = runs.starts.size
     if s == 0:
-        return ([], []) if return_trace else []
+        return ([], []) if trace else []
     geo = _geometry(runs)
     verdict = np.full(s, _ACCEPTED, dtype=np.int64)
     if geo.finite is not None:
@@ -114,6 +118,19 @@ def detect_lines_iav(
         for k in sel[verdict[sel] == _ACCEPTED]:
             a, b = runs.starts[k], runs.ends[k]
             lines.append(line_segment(runs.pts[a:b], runs.idx[a:b]))
-    if not return_trace:
+    if not trace:
         return lines
-    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang)
+    limits = {_FEW: min_points, _SHORT: min_length_m, _MEAN: mean_tolerance, _STD: std_max, _ACCEPTED: std_max,
+              "mean_from": math.pi}  # the mean test compares |mean - pi| with the tolerance
+    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang, "iav_lines", limits, lines)
+
+
+@dataclass(frozen=True)
+class IAVLineParams(Params):
+    """Parameters of :func:`detect_lines_iav`, the defaults once: lengths in metres, angles in
+    degrees (``std_max_deg``: Table II's 0.15 rad)."""
+
+    min_points: int = 5
+    min_length_m: float = 0.15
+    mean_tolerance_deg: float = 5.0
+    std_max_deg: float = math.degrees(CIRCLE_STD_MAX)

@@ -42,6 +42,7 @@ noisy pieces: 0.09 false positives instead of 0.02).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np  # noqa: F401 - used in doctests
 
@@ -50,7 +51,9 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..fitting import line_from_sums
 from ..scan import Scan
-from ._runs import _fitted, _PrefixSums, _runs
+from ..steps import Step
+from ._params import Params
+from ._runs import _fitted, _PrefixSums, _runs, _Trace
 
 __all__ = ["incremental_lines"]
 
@@ -63,7 +66,8 @@ def incremental_lines(
     min_length_m: float = 0.15,
     max_gap_m: float = 0.3,
     segments=None,
-) -> list[LineSegment]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Extract line segments from a scan with the incremental (line-tracking) algorithm.
 
     Parameters
@@ -89,13 +93,28 @@ def incremental_lines(
         A range segmentation computed elsewhere (e.g. shared by a pipeline, with the beams
         of circles and legs set to -1): lines then never cross a segment boundary nor a
         valid beam labelled -1. Default None: the whole scan, broken only at gaps.
+    trace : bool
+        Also return the steps taken, as :class:`labkit.Step` records
+        (``algorithm="incremental"``), in the order taken. Kinds: ``"reject"`` with
+        ``test="max_error_m"`` (a seed that is no line: ``at`` its point farthest from its
+        fit, ``value`` that distance; the seed moves on by one beam), ``"seed"`` (a seed
+        that is a line, ``value`` its largest residual), ``"grow"`` (the line grown from
+        a seed, on the beams ``first..last`` it holds, with the fit it had; ``at`` the point
+        that failed the line condition, ``value`` its distance to the line refitted with it,
+        ``threshold`` ``max_error_m``; ``at`` -1 when the run ended first), ``"hand_back"``
+        (step 6: beam ``at`` moves from the line ending there to the next; ``value`` its
+        distance to the next line, ``threshold`` its distance to its own), then one
+        ``"accept"`` or ``"reject"`` (``test="min_length_m"``) per line, fitted as returned
+        (``beams``: its beams). Replay: the ``accept`` steps are the returned lines.
 
     Returns
     -------
-    list of LineSegment
+    lines : list of LineSegment
         Sorted by first beam; each fitted by :func:`labkit.features.line_segment` to the
         valid beams it covers (indices ascending). The seam of a full-circle scan is a
         break: a wall across it gives two lines.
+    steps : list of labkit.Step
+        Only with ``trace=True``.
 
     Examples
     --------
@@ -111,9 +130,10 @@ def incremental_lines(
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
     max_error_m, min_points, min_length_m, max_gap_m = _params(max_error_m, min_points, min_length_m, max_gap_m)
+    steps = _Trace("incremental") if trace else None
     beams, runs = _runs(scan, segments, max_gap_m, min_points)
     if not runs:
-        return []
+        return ([], []) if trace else []
     xy = scan.points.take(beams, axis=0)
     w = 1.0 / scan.ranges.take(beams)  # the weights of fit_line_polar: 1 / rho
     sums = _PrefixSums(xy, w)
@@ -131,8 +151,12 @@ def incremental_lines(
             r, alpha = line_from_sums(*s)
             c, sn = math.cos(alpha), math.sin(alpha)
             if max(abs(xs[i] * c + ys[i] * sn - r) for i in range(start, stop)) > max_error_m:
+                if steps is not None:
+                    _seed_step(steps, beams, start, stop, xs, ys, r, alpha, max_error_m, False)
                 start += 1
                 continue
+            if steps is not None:
+                _seed_step(steps, beams, start, stop, xs, ys, r, alpha, max_error_m, True)
             # steps 2-4: add the next point, refit, keep it while it lies near the refitted line
             sw, sx, sy, sxx, syy, sxy = s
             while stop < b:
@@ -144,12 +168,47 @@ def incremental_lines(
                     break  # step 5: put the point back (its sums t are dropped) and end the line
                 sw, sx, sy, sxx, syy, sxy = t
                 stop += 1
+            if steps is not None:
+                _grow_step(steps, beams, start, stop, b, sums, xs, ys, ws, max_error_m)
             run_spans.append([start, stop])
             start = stop  # step 5: the next line starts at the point that failed
-        _hand_back_corners(run_spans, sums, xs, ys, min_points)  # step 6
+        _hand_back_corners(run_spans, sums, xs, ys, min_points, steps, beams)  # step 6
         spans += run_spans
 
-    return _fitted(xy, beams, spans, min_length_m)  # step 7
+    lines = _fitted(xy, beams, spans, min_length_m, steps)  # step 7
+    return (lines, list(steps)) if trace else lines
+
+
+def _seed_step(steps: _Trace, beams, start: int, stop: int, xs, ys, r: float, alpha: float, max_error_m: float,
+               ok: bool) -> None:
+    """The step of a seed, the points ``start..stop-1``: ``seed`` if it is a line, else ``reject``."""
+    c, sn = math.cos(alpha), math.sin(alpha)
+    d = [abs(xs[i] * c + ys[i] * sn - r) for i in range(start, stop)]
+    worst = max(range(len(d)), key=d.__getitem__)
+    first, last, at = int(beams[start]), int(beams[stop - 1]), int(beams[start + worst])
+    if ok:
+        steps.add("seed", first, last, r, alpha, at=at, value=d[worst], threshold=max_error_m, test="max_error_m",
+                  reason=f"seed of {stop - start} points: worst {d[worst]:.3f} m <= max_error_m")
+    else:
+        steps.add("reject", first, last, r, alpha, at=at, value=d[worst], threshold=max_error_m, test="max_error_m",
+                  reason=f"seed is no line: beam {at} is {d[worst]:.3f} m off > max_error_m; move on one beam")
+
+
+def _grow_step(steps: _Trace, beams, start: int, stop: int, end: int, sums, xs, ys, ws, max_error_m: float) -> None:
+    """The step of a line grown over the points ``start..stop-1`` of a run ending at ``end``."""
+    r, alpha = line_from_sums(*sums(start, stop))
+    first, last = int(beams[start]), int(beams[stop - 1])
+    if stop == end:
+        steps.add("grow", first, last, r, alpha, threshold=max_error_m,
+                  reason=f"grown to {stop - start} points, to the end of the run")
+        return
+    t = [u + v for u, v in zip(sums(start, stop), sums(stop, stop + 1), strict=True)]
+    r1, a1 = line_from_sums(*t)  # the line refitted with the point that failed
+    d = abs(xs[stop] * math.cos(a1) + ys[stop] * math.sin(a1) - r1)
+    at = int(beams[stop])
+    steps.add("grow", first, last, r, alpha, at=at, value=d, threshold=max_error_m, test="max_error_m",
+              reason=f"grown to {stop - start} points; beam {at} is {d:.3f} m off the refitted line > max_error_m: "
+                     f"the line ends")
 
 
 
@@ -160,11 +219,12 @@ def _params(max_error_m, min_points, min_length_m, max_gap_m) -> tuple:
             check_nonneg("min_length_m", min_length_m), check_positive("max_gap_m", max_gap_m))
 
 
-def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int) -> None:
+def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int, steps: _Trace | None = None,
+                       beams=None) -> None:
     """Step 6: where a line ends on the point before the next line starts, move its last
     points to the next line while they are closer to the next line than to their own (at
     least ``min_points`` points stay). Both lines are refitted after every move. ``spans``
-    change in place."""
+    change in place; every move is a ``hand_back`` step in ``steps`` if given."""
     for left, right in zip(spans[:-1], spans[1:], strict=True):
         while left[1] == right[0] and left[1] - left[0] > min_points:
             i = left[1] - 1
@@ -175,3 +235,18 @@ def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int) ->
             if d2 >= d1:
                 break
             left[1] = right[0] = i
+            if steps is not None:
+                at = int(beams[i])
+                steps.add("hand_back", int(beams[right[0]]), int(beams[right[1] - 1]), r2, a2, at=at, value=d2,
+                          threshold=d1, reason=f"corner: beam {at} is {d2:.3f} m from the next line, {d1:.3f} m "
+                                               f"from its own: it moves to the next")
+
+
+@dataclass(frozen=True)
+class IncrementalParams(Params):
+    """Parameters of :func:`incremental_lines`, the defaults once: lengths in metres."""
+
+    max_error_m: float = 0.05
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3

@@ -40,6 +40,7 @@ line extraction algorithms using 2D range data for indoor mobile robotics. Auton
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,7 +48,9 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
-from ._runs import _fit, _segments, _taking_part
+from ..steps import Step
+from ._params import Params
+from ._runs import _fit, _segments, _taking_part, _Trace
 
 __all__ = ["ransac_lines"]
 
@@ -67,7 +70,8 @@ def ransac_lines(
     max_gap_m: float = 0.3,
     segments=None,
     rng: np.random.Generator | None = None,
-) -> list[LineSegment]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Extract line segments from a scan by RANSAC (random sample consensus).
 
     Parameters
@@ -118,14 +122,27 @@ def ransac_lines(
     rng : numpy.random.Generator, optional
         The source of every random draw. Default ``None``: ``np.random.default_rng(0)``, so
         the same call always gives the same lines; pass your own generator to draw anew.
+    trace : bool
+        Also return the steps taken, as :class:`labkit.Step` records (``algorithm="ransac"``),
+        in the order taken; the draws are the same, so are the lines. Every round gives a
+        ``"hypothesis"`` step (the best of the round's ``max_trials`` hypotheses: the line
+        through the two beams in ``beams``, ``at`` the first drawn; ``value`` its inliers,
+        ``threshold`` ``min_inliers``); if it has too few, a ``"reject"`` step
+        (``test="min_inliers"``) ends the search; else a ``"consensus"`` step (the refitted
+        line, ``beams`` its consensus set, the inliers taken away) and, for every run of the
+        consensus set, ``"accept"`` (a segment, ``beams`` its beams) or ``"reject"``
+        (``test`` ``"min_points"`` or ``"min_length_m"``). Replay: the ``accept`` steps,
+        sorted by first beam, are the returned lines.
 
     Returns
     -------
-    list of LineSegment
+    lines : list of LineSegment
         Sorted by first beam; each fitted by :func:`labkit.features.line_segment` to the points
         of its run (beam indices ascending). The seam of a full-circle scan is ignored: a wall
         seen across it gives two segments, one ending at the last beam and one starting at
         beam 0. A scan without valid beams gives ``[]``.
+    steps : list of labkit.Step
+        Only with ``trace=True``.
 
     Raises
     ------
@@ -160,9 +177,10 @@ def ransac_lines(
         raise ValueError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), "
                          f"got {type(rng).__name__}")
 
+    steps = _Trace("ransac") if trace else None
     labels, beams, xy, rho, w = _taking_part(scan, segments)
     if beams.size < max(min_inliers, 2):
-        return []
+        return ([], []) if trace else []
     remaining = np.ones(beams.size, dtype=bool)  # not yet taken by a line
     lines: list[LineSegment] = []
 
@@ -194,6 +212,9 @@ def ransac_lines(
         votes = np.count_nonzero(np.abs(distance) <= threshold_m, axis=0)
         votes[~usable] = 0
         best = int(np.argmax(votes))  # the first of equals: deterministic
+        if steps is not None:
+            _hypothesis_steps(steps, beams[pool[[first[best], second[best]]]], normal[best], offset[best],
+                              int(votes[best]), min_inliers, max_trials)
         if votes[best] < min_inliers:  # step 3: no hypothesis good enough, stop
             break
         inliers = pool[np.abs(distance[:, best]) <= threshold_m]
@@ -204,12 +225,38 @@ def ransac_lines(
         if refined.size >= min_inliers:
             inliers = refined
         remaining[inliers] = False
+        if steps is not None:  # the refitted line, whose consensus set is taken
+            taken = beams[inliers]
+            steps.add("consensus", taken[0], taken[-1], r, alpha, value=inliers.size, threshold=min_inliers,
+                      test="threshold_m", beams=tuple(taken.tolist()),
+                      reason=f"refitted to its inliers: {inliers.size} points within threshold_m={threshold_m} m, "
+                             f"taken away")
 
         # cut the inliers into runs and make a segment of every run long enough
-        lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m)
+        lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m, steps)
 
     lines.sort(key=lambda s: s.first)
-    return lines
+    return (lines, list(steps)) if trace else lines
+
+
+def _hypothesis_steps(steps: _Trace, pair: np.ndarray, normal: np.ndarray, offset: float, votes: int,
+                      min_inliers: int, max_trials: int) -> None:
+    """The best hypothesis of a round (the line through the beams ``pair``), and the stop if
+    it has fewer than ``min_inliers`` inliers."""
+    if normal[0] == 0.0 and normal[1] == 0.0:  # every draw was two identical points
+        r = alpha = math.nan
+    else:
+        if offset < 0:  # labkit's normal form: r >= 0
+            normal, offset = -normal, -offset
+        r, alpha = float(offset), math.atan2(normal[1], normal[0])
+    a, b = (int(k) for k in pair)
+    steps.add("hypothesis", min(a, b), max(a, b), r, alpha, at=a, value=votes, threshold=min_inliers,
+              test="min_inliers", beams=(a, b),
+              reason=f"best of {max_trials} hypotheses: the line through beams {a} and {b}, {votes} inliers")
+    if votes < min_inliers:
+        steps.add("reject", min(a, b), max(a, b), r, alpha, at=a, value=votes, threshold=min_inliers,
+                  test="min_inliers", beams=(a, b),
+                  reason=f"{votes} inliers < min_inliers={min_inliers}: no more lines")
 
 
 @remembered
@@ -224,3 +271,17 @@ def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_l
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m
+
+
+@dataclass(frozen=True)
+class RansacParams(Params):
+    """Parameters of :func:`ransac_lines`, the defaults once: lengths in metres (the random
+    generator is seeded with :data:`DEFAULT_SEED`)."""
+
+    threshold_m: float = 0.03
+    min_inliers: int = 8
+    max_trials: int = 50
+    draw_window: int | None = 20
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3

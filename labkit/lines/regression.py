@@ -51,6 +51,7 @@ by :func:`labkit.features.line_segment` (weights ``1 / rho``), as every labkit e
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -58,7 +59,9 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
-from ._runs import _fitted, _PrefixSums, _runs
+from ..steps import Step
+from ._params import Params
+from ._runs import _fitted, _PrefixSums, _runs, _Trace
 
 __all__ = ["regression_lines"]
 
@@ -77,7 +80,8 @@ def regression_lines(
     max_gap_m: float = 0.3,
     range_sigma_m: float | None = None,
     segments=None,
-) -> list[LineSegment]:
+    trace: bool = False,
+) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Extract line segments from a scan by line regression (sliding-window fits, clustered).
 
     Parameters
@@ -114,14 +118,29 @@ def regression_lines(
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere: lines then never cross a segment boundary
         and never use a beam labelled -1. Default None: the whole scan, cut only at gaps.
+    trace : bool
+        Also return the steps taken, as :class:`labkit.Step` records
+        (``algorithm="regression"``). Distances are in units of the noise (``d^2``, compared
+        with ``fidelity_threshold``). Kinds, in this order: ``"reject"`` with
+        ``test="fidelity_threshold"`` for every window that disagrees with its neighbours
+        (its fit on its beams ``first..last``; ``value`` its fidelity); ``"cluster"`` (a run
+        of kept windows: its equal-weight fit; ``value`` the largest fidelity of its
+        windows); ``"merge"`` (two neighbouring clusters joined: the joined span with the
+        first cluster's line, ``at`` the second's first beam, ``value`` the distance of their
+        lines) and ``"keep"`` (touching neighbours not joined); ``"absorb"`` (step 6: a line
+        took free points; ``first..last`` its new beams, ``value`` how many it gained);
+        then one ``"accept"`` or ``"reject"`` (``test="min_length_m"``) per line, fitted as
+        returned (``beams``: its beams). Replay: the ``accept`` steps are the returned lines.
 
     Returns
     -------
-    list of LineSegment
+    lines : list of LineSegment
         Sorted by first beam; each fitted by :func:`labkit.features.line_segment` to the
         valid beams it covers (indices ascending). A run needs at least ``window + 1``
         points (two windows to compare). The seam of a full-circle scan ends a run: a
         wall across it gives two lines.
+    steps : list of labkit.Step
+        Only with ``trace=True``.
 
     Examples
     --------
@@ -138,9 +157,10 @@ def regression_lines(
     window, threshold, min_points, min_length_m, max_gap_m, range_sigma_m = _params(
         window, fidelity_threshold, min_points, min_length_m, max_gap_m, range_sigma_m)
     # the runs a line may not cross; a run needs two windows, so that they can be compared
+    steps = _Trace("regression") if trace else None
     beams, runs = _runs(scan, segments, max_gap_m, max(min_points, window + 1))
     if not runs:
-        return []
+        return ([], []) if trace else []
     xy = scan.points.take(beams, axis=0)
     table = _PrefixSums(xy, np.ones(len(beams))).table  # equal weights: the noise model's fit
 
@@ -171,16 +191,47 @@ def regression_lines(
     last = kept & np.concatenate((~joined, [True]))
     spans = np.stack([starts[first], starts[last] + window], axis=1)  # each cluster's points [a, b)
     cluster_run = run_of[first]
+    if steps is not None:
+        _window_steps(steps, beams, lines, starts, window, fidelity, kept, first, last, threshold, range_sigma_m ** 2)
 
     # step 5: one line per cluster; neighbours that overlap or touch and agree are merged
-    spans = _merge(spans, cluster_run, table, threshold)
+    spans = _merge(spans, cluster_run, table, threshold, steps, beams, range_sigma_m ** 2)
     spans = _share(spans, table, xy, min_points)
 
     # step 6: the points between clusters join a neighbouring line they are within 3 sigma of
+    shared = spans
     spans = _absorb(spans, runs, table, xy, 3.0 * range_sigma_m)
+    if steps is not None:
+        for (a0, b0, _), (a, b) in zip(shared, spans, strict=True):
+            if (a, b) != (a0, b0):
+                steps.add("absorb", beams[a], beams[b - 1], value=(a0 - a) + (b - b0),
+                          reason=f"{(a0 - a) + (b - b0)} free points within 3 sigma = {3.0 * range_sigma_m:.3f} m "
+                                 f"join the line")
 
     # step 7: every line fitted to its points, the short ones dropped
-    return _fitted(xy, beams, spans, min_length_m)
+    out = _fitted(xy, beams, spans, min_length_m, steps)
+    return (out, list(steps)) if trace else out
+
+
+def _window_steps(steps: _Trace, beams, lines: _Lines, starts, window: int, fidelity, kept, first, last,
+                  threshold: float, s2: float) -> None:
+    """The windows that disagree with their neighbours (``reject``), then the clusters of the
+    others; ``threshold`` and ``fidelity`` are in ``d^2 sigma^2``, the steps divide by ``s2``."""
+    for k in np.flatnonzero(~kept).tolist():
+        a = int(starts[k])
+        steps.add("reject", beams[a], beams[a + window - 1], lines.r[k], lines.alpha[k], value=fidelity[k] / s2,
+                  threshold=threshold / s2, test="fidelity_threshold",
+                  reason=f"window {k}: fidelity {fidelity[k] / s2:.1f} >= fidelity_threshold: it disagrees with "
+                         f"its neighbours")
+    ends = np.flatnonzero(last).tolist()
+    for j, (k0, k1) in enumerate(zip(np.flatnonzero(first).tolist(), ends, strict=True)):
+        a, b = int(starts[k0]), int(starts[k1]) + window
+        n_windows = k1 - k0 + 1
+        worst = float(np.max(fidelity[k0:k1 + 1])) / s2
+        one = _Lines(lines.table, np.array([a]), np.array([b]))  # the cluster's equal-weight fit
+        steps.add("cluster", beams[a], beams[b - 1], one.r[0], one.alpha[0], value=worst, threshold=threshold / s2,
+                  test="fidelity_threshold",
+                  reason=f"cluster {j}: {n_windows} windows in a row, fidelity at most {worst:.1f}")
 
 
 @remembered
@@ -199,6 +250,7 @@ class _Lines:
     by ``sigma^2`` (``crr``, ``cra``, ``caa``), all arrays."""
 
     def __init__(self, table: np.ndarray, a: np.ndarray, b: np.ndarray):
+        self.table = table
         s = table[b] - table[a]
         n = s[:, 0]
         mx, my = s[:, 1] / n, s[:, 2] / n  # the centroid
@@ -236,11 +288,13 @@ class _Lines:
             return (saa * dr * dr - 2.0 * sra * dr * da + srr * da * da) / (srr * saa - sra * sra)
 
 
-def _merge(spans: np.ndarray, run: np.ndarray, table: np.ndarray, threshold: float) -> list[list[int]]:
+def _merge(spans: np.ndarray, run: np.ndarray, table: np.ndarray, threshold: float, steps: _Trace | None = None,
+           beams=None, s2: float = 1.0) -> list[list[int]]:
     """Step 5, merging: neighbouring clusters of one run (``run``: the run of each cluster)
     whose points overlap or touch and whose lines are within ``threshold`` (``d^2 sigma^2``)
     are joined; a chain of agreeing neighbours becomes one cluster (single linkage again).
-    Returns ``[a, b, run]`` for each cluster, its points ``a..b-1``."""
+    Returns ``[a, b, run]`` for each cluster, its points ``a..b-1``. Given ``steps``, every
+    touching pair is a ``merge`` or a ``keep`` step (distances divided by ``s2``)."""
     if len(spans) < 2:
         return [span + [k] for span, k in zip(spans.tolist(), run.tolist(), strict=True)]
     lines = _Lines(table, spans[:, 0], spans[:, 1])
@@ -248,7 +302,14 @@ def _merge(spans: np.ndarray, run: np.ndarray, table: np.ndarray, threshold: flo
     touch = (spans[1:, 0] <= spans[:-1, 1]) & (run[1:] == run[:-1])
     agree = touch & (lines.distance(slice(None, -1), slice(1, None)) < threshold)
     merged = [spans[0].tolist() + [int(run[0])]]
-    for (a, b), k, join in zip(spans[1:].tolist(), run[1:].tolist(), agree.tolist(), strict=True):
+    d = lines.distance(slice(None, -1), slice(1, None)) / s2 if steps is not None else None
+    for i, ((a, b), k, join) in enumerate(zip(spans[1:].tolist(), run[1:].tolist(), agree.tolist(), strict=True)):
+        if steps is not None and touch[i]:
+            steps.add("merge" if join else "keep", beams[merged[-1][0]], beams[b - 1], lines.r[i], lines.alpha[i],
+                      at=beams[a], value=d[i], threshold=threshold / s2,
+                      test="fidelity_threshold",
+                      reason=f"neighbouring clusters {d[i]:.1f} apart " + (
+                          "< fidelity_threshold: merged" if join else ">= fidelity_threshold: kept apart"))
         if join:
             merged[-1][1] = b
         else:
@@ -325,3 +386,16 @@ def _absorb(spans: list[list[int]], runs: list[tuple[int, int]], table: np.ndarr
                 i += 1
             out[k][1] = i
     return [(a, b) for a, b in out]
+
+
+@dataclass(frozen=True)
+class RegressionParams(Params):
+    """Parameters of :func:`regression_lines`, the defaults once: lengths in metres
+    (``range_sigma_m`` None: estimated from the scan, see the function)."""
+
+    window: int = 7
+    fidelity_threshold: float = 12.0
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3
+    range_sigma_m: float | None = None

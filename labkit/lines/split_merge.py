@@ -26,8 +26,9 @@ Every fit inside the split loop is O(1): prefix sums of ``w``, ``w x``, ``w y``,
 by two subtractions, and the closed form of :func:`labkit.fitting.fit_line_polar` needs
 nothing else. Only the worst-point search touches every point.
 
-``split_and_merge(..., trace=True)`` also returns the steps taken, as :class:`Step`
-records, so a notebook, a widget or the rerun viewer can replay them.
+``split_and_merge(..., trace=True)`` also returns the steps taken, as :class:`labkit.Step`
+records, so a notebook, a widget (:func:`labkit.viz.steps.step_viewer`) or the rerun viewer
+(:func:`labkit.viz.rr.log_steps`) can replay them.
 """
 
 from __future__ import annotations
@@ -44,50 +45,24 @@ from ..features import LineSegment, line_segment  # noqa: F401 - used in doctest
 from ..fitting import _line_covariances, line_from_sums
 from ..scan import Scan
 from ..segmentation import labels_from, segment_labels, segment_order
+from ..steps import Step
+from ._params import Params
 
-__all__ = ["split_and_merge", "Step", "lines_similar"]
+__all__ = ["split_and_merge", "lines_similar"]
 
 _METHODS = ("fit", "endpoints")
 _MERGES = ("thresholds", "chi2", None)
 
 
-@dataclass(frozen=True)
-class Step:
-    """One step of split-and-merge, for replay.
+class _Steps(list):
+    """The steps of one run of :func:`split_and_merge`, as :class:`labkit.Step` records."""
 
-    Attributes
-    ----------
-    kind : str
-        ``"segment"`` (a range segment enters the list), ``"fit"`` (a line fitted to the
-        beams ``first..last``), ``"split"`` (split at beam ``at``), ``"gap"`` (split at the
-        gap after beam ``at``), ``"accept"``, ``"reject"`` (too few points or too short),
-        ``"absorb"`` (points of a rejected run joined the neighbouring lines they fit),
-        ``"merge"`` (two lines merged into one), ``"keep"`` (two neighbours not merged).
-    first, last : int
-        Beam indices of the run concerned (for a merge: of the merged run).
-    r, alpha : float
-        The line the step measured against: for ``"fit"``, ``"split"`` and ``"accept"`` the
-        least-squares line (``method="fit"``) or the chord (``method="endpoints"``; accepted
-        runs are refitted by least squares afterwards); for ``"merge"`` the merged line;
-        for ``"keep"`` the first of the two lines when they differ. NaN when there is none.
-    at : int
-        The worst point's beam (``"fit"``, ``"split"``) or the beam before the gap; -1 if none.
-    distance : float
-        The worst point's distance to the line (``"fit"``), the gap (``"gap"``), or the
-        merge test's statistic (``"merge"``/``"keep"``: chi-square value, or the larger of
-        ``|dr| / merge_dr_m`` and ``|dalpha| / merge_dalpha``); NaN otherwise.
-    reason : str
-        Why, in words.
-    """
+    def __init__(self, algorithm: str):
+        super().__init__()
+        self.algorithm = algorithm
 
-    kind: str
-    first: int
-    last: int
-    r: float = math.nan
-    alpha: float = math.nan
-    at: int = -1
-    distance: float = math.nan
-    reason: str = ""
+    def add(self, kind: str, first: int, last: int, r: float = math.nan, alpha: float = math.nan, **fields) -> None:
+        self.append(Step(self.algorithm, kind, first, last, r, alpha, **fields))
 
 
 class _Run:
@@ -246,8 +221,8 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
         if right is not None:
             spans[right][0] = hi
         if steps is not None and (lo > a or hi < b):
-            steps.append(Step("absorb", int(run.idx[a]), int(run.idx[b - 1]),
-                              reason=f"{(lo - a) + (b - hi)} stranded points joined the neighbouring lines"))
+            steps.add("absorb", int(run.idx[a]), int(run.idx[b - 1]), value=(lo - a) + (b - hi),
+                      reason=f"{(lo - a) + (b - hi)} stranded points joined the neighbouring lines")
     return sorted((a, b) for a, b in spans)
 
 
@@ -329,13 +304,26 @@ def split_and_merge(
         beams of circles and legs set to -1 so that no line is fitted to them); then
         ``segment_threshold_m`` and ``adaptive_segmentation`` are not used.
     trace : bool
-        Also return the list of :class:`Step` records.
+        Also return the steps taken, as :class:`labkit.Step` records (``algorithm`` is
+        ``"iepf"`` for ``method="endpoints"``, ``"split_and_merge"`` for ``"fit"``). Kinds:
+        ``"segment"`` (a range segment enters the list; ``value``: its points), ``"fit"``
+        (the line measured against on the beams ``first..last``: the chord or the
+        least-squares line; ``at`` the worst point, ``value`` its distance,
+        ``threshold`` ``split_threshold_m``), ``"split"`` (split at beam ``at``),
+        ``"gap"`` (split at the gap after beam ``at``; ``value`` the gap), ``"accept"`` (a
+        run becomes a line), ``"reject"`` (a run with too few points, ``test="min_points"``,
+        or a line shorter than ``min_length_m`` after merging), ``"absorb"`` (``value``
+        stranded points joined the neighbouring lines), ``"merge"`` (two neighbours merged:
+        the merged line on their beams; ``at`` the last beam of the first), ``"keep"`` (two
+        neighbours not merged; ``value`` the merge statistic or the gap). Replay: the
+        ``accept`` runs, widened by ``absorb``, joined by ``merge`` and less the
+        ``reject``-ed lines, are the returned lines.
 
     Returns
     -------
     lines : list of LineSegment
         In scan order. On a full-circle scan a line may cross the seam (``first > last``).
-    steps : list of Step
+    steps : list of labkit.Step
         Only with ``trace=True``.
 
     Examples
@@ -353,7 +341,7 @@ def split_and_merge(
         method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
         merge_chi2, range_sigma_m)
 
-    steps: list[Step] | None = [] if trace else None
+    steps = _Steps("iepf" if method == "endpoints" else "split_and_merge") if trace else None
     if segments is None:
         labels = segment_labels(scan, segment_threshold_m, min_points=min_points, adaptive=adaptive_segmentation,
                                 range_sigma_m=range_sigma_m)
@@ -381,8 +369,8 @@ def split_and_merge(
     absorb_m = min(split_threshold_m, 3 * range_sigma_m)
     for seg_a, seg_b in zip(starts.tolist(), stops.tolist(), strict=True):
         if steps is not None:
-            steps.append(Step("segment", int(order[seg_a]), int(order[seg_b - 1]),
-                              reason=f"range segment of {seg_b - seg_a} points"))
+            steps.add("segment", int(order[seg_a]), int(order[seg_b - 1]), value=seg_b - seg_a,
+                      reason=f"range segment of {seg_b - seg_a} points")
         stack = [(seg_a, seg_b)]
         accepted: list[tuple[int, int]] = []
         leftovers: list[tuple[int, int]] = []
@@ -393,15 +381,16 @@ def split_and_merge(
                 first, last = int(order[a]), int(order[b - 1])
             if n < min_points:
                 if steps is not None:
-                    steps.append(Step("reject", first, last, reason=f"{n} points < min_points={min_points}"))
+                    steps.add("reject", first, last, value=n, threshold=min_points, test="min_points",
+                              reason=f"{n} points < min_points={min_points}")
                 leftovers.append((a, b))
                 continue
             k = bisect_left(wide, a) if wide else 0
             if k < len(wide) and wide[k] < b - 1:  # a gap wider than max_gap_m: cut at the widest
                 g = max(wide[k:bisect_left(wide, b - 1)], key=gaps.__getitem__)
                 if steps is not None:
-                    steps.append(Step("gap", first, last, at=int(order[g]), distance=gaps[g],
-                                      reason=f"gap {gaps[g]:.3f} m > max_gap_m"))
+                    steps.add("gap", first, last, at=int(order[g]), value=gaps[g], threshold=max_gap_m,
+                              test="max_gap_m", reason=f"gap {gaps[g]:.3f} m > max_gap_m")
                 stack.append((g + 1, b))
                 stack.append((a, g + 1))
                 continue
@@ -426,18 +415,20 @@ def split_and_merge(
                 worst, p = d_lo, lo + k_lo
             if steps is not None:
                 ref = "fitted line" if fit else "chord"
-                steps.append(Step("fit", first, last, r, alpha, at=int(order[p]), distance=worst,
-                                  reason=f"worst point {worst:.3f} m from the {ref}"))
+                steps.add("fit", first, last, r, alpha, at=int(order[p]), value=worst, threshold=split_threshold_m,
+                          reason=f"worst point {worst:.3f} m from the {ref}")
             if worst > split_threshold_m and a < p < b - 1:
                 if steps is not None:
-                    steps.append(Step("split", first, last, r, alpha, at=int(order[p]), distance=worst,
-                                      reason=f"{worst:.3f} m > split_threshold_m={split_threshold_m}"))
+                    steps.add("split", first, last, r, alpha, at=int(order[p]), value=worst,
+                              threshold=split_threshold_m, test="split_threshold_m",
+                              reason=f"{worst:.3f} m > split_threshold_m={split_threshold_m}")
                 stack.append((p + 1, b))  # right half, processed after the left half
                 stack.append((a, p + 1))  # the worst point ends the left half
                 continue
             if steps is not None:
-                steps.append(Step("accept", first, last, r, alpha, at=int(order[p]), distance=worst,
-                                  reason=f"{worst:.3f} m <= split_threshold_m"))
+                steps.add("accept", first, last, r, alpha, at=int(order[p]), value=worst,
+                          threshold=split_threshold_m, test="split_threshold_m",
+                          reason=f"{worst:.3f} m <= split_threshold_m")
             accepted.append((a, b))
         spans += _absorb(accepted, leftovers, run, absorb_m, steps) if leftovers else sorted(accepted)
     lines = run.lines(spans)
@@ -452,8 +443,9 @@ def split_and_merge(
     for line in lines:
         if line.length < min_length_m:
             if steps is not None:
-                steps.append(Step("reject", line.first, line.last, line.r, line.alpha,
-                                  reason=f"length {line.length:.3f} m < min_length_m={min_length_m}"))
+                steps.add("reject", line.first, line.last, line.r, line.alpha, value=line.length,
+                          threshold=min_length_m, test="min_length_m",
+                          reason=f"length {line.length:.3f} m < min_length_m={min_length_m}")
             continue
         kept.append(line)
     if merge is not None and 1 < len(kept) < len(lines):
@@ -461,7 +453,7 @@ def split_and_merge(
         # a dropout) no longer keeps them apart: try merging the new neighbours
         kept = _merge(kept, points, wrap, steps, **merge_args)
     out = _finish(kept, points, ranges, weights, range_sigma_m)
-    return (out, steps) if trace else out
+    return (out, list(steps)) if trace else out
 
 
 @remembered
@@ -499,8 +491,8 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
         gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
         if gap > max_gap_m:
             if steps is not None:
-                steps.append(Step("keep", first, last, at=a.last, distance=gap,
-                                  reason=f"facing ends {gap:.3f} m apart > max_gap_m"))
+                steps.add("keep", first, last, at=a.last, value=gap, threshold=max_gap_m, test="max_gap_m",
+                          reason=f"facing ends {gap:.3f} m apart > max_gap_m")
             return None
         if merge == "chi2":
             for ln in (a, b):
@@ -528,8 +520,9 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
             else:
                 reason = f"similar: statistic {stat:.2f}"
             ln = merged if merged is not None else a
-            steps.append(Step("merge" if merged is not None else "keep", first, last, ln.r, ln.alpha,
-                              at=a.last, distance=stat, reason=reason))
+            steps.add("merge" if merged is not None else "keep", first, last, ln.r, ln.alpha, at=a.last,
+                      value=stat, threshold=merge_chi2 if merge == "chi2" else 1.0,
+                      test="split_threshold_m" if ok and merged is None else "merge", reason=reason)
         return merged
 
     out = list(lines)
@@ -566,3 +559,26 @@ def _finish(lines: list[_Line], points, ranges, weights, sigma: float) -> list[L
     return [LineSegment(ln.r, ln.alpha, c, start, end, ln.first, ln.last, n, error, ln.idx)
             for ln, c, start, end, n, error in zip(lines, cov, ends[0::2], ends[1::2], counts.tolist(), rms,
                                                    strict=True)]
+
+
+@dataclass(frozen=True)
+class SplitMergeParams(Params):
+    """Parameters of :func:`split_and_merge` (both ``"iepf"`` and ``"split_and_merge"`` in the
+    registry), the defaults once: lengths in metres, angles in degrees."""
+
+    split_threshold_m: float = 0.05
+    min_points: int = 5
+    min_length_m: float = 0.15
+    max_gap_m: float = 0.3
+    merge: str = "thresholds"
+    merge_dr_m: float = 0.2
+    merge_dalpha_deg: float = 10.0
+    merge_chi2: float = 9.21
+    range_sigma_m: float = 0.01
+    weights: str = "inverse_range"
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        kw["merge"] = None if kw["merge"] == "none" else kw["merge"]
+        kw["weights"] = None if kw["weights"] == "inverse_range" else kw["weights"]
+        return kw
