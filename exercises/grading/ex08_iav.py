@@ -91,7 +91,7 @@ def _leg_world(rng):
         bearing = float(rng.uniform(-np.pi, np.pi))
         return float(rng.uniform(lo, hi)) * np.array([np.cos(bearing), np.sin(bearing)])
 
-    circles = tuple(sim.Circle(tuple(somewhere(0.5, 5.0)), float(rng.uniform(0.02, 0.2))) for _ in range(10))
+    circles = tuple(sim.Column(tuple(somewhere(0.5, 5.0)), float(rng.uniform(0.02, 0.2))) for _ in range(10))
     walls = []
     for _ in range(4):
         a = somewhere(0.7, 5.0)
@@ -142,20 +142,29 @@ def _check_sim_legs(is_leg, rng, scans, setting):
         lidar = sim.LIDARS[str(rng.choice(["lms200", "lms200", "lms111", "xv11"]))]
         scan, _ = sim.scan_at(_leg_world(rng), lidar, (0.0, 0.0, 0.0), rng=rng)
         kwargs, (chord_range, middle_range, padding) = _leg_kwargs(rng)
-        _, trace = labkit.detect_legs(scan, chord_range=chord_range, middle_range=middle_range,
-                                      chord_padding_beams=padding, return_trace=True)
+        _, steps = labkit.detect_legs(scan, chord_range=chord_range, middle_range=middle_range,
+                                      chord_padding_beams=padding, trace=True)
         xy, n = scan.points, scan.n_beams
-        for check in trace:
+        for check in steps:
             beams = np.arange(check.first, check.last + (n if check.last < check.first else 0) + 1) % n
             points = xy[beams]
-            if check.verdict == "degenerate" or (not np.isnan(check.chord_m) and _near(check.chord_m, chord_range)):
+            if check.test == "degenerate" or len(points) < 3:
                 continue
-            if not np.isnan(check.middle_ratio) and _near(check.middle_ratio, middle_range):
+            # the padded chord and the band ratio, in closed form from the points, to skip cases on an edge
+            chord = float(np.hypot(*(points[-1] - points[0])))
+            middle = points[len(points) // 2]
+            width = chord + padding * abs(float(scan.angle_increment)) * float(np.hypot(*middle))
+            if _near(width, chord_range):
                 continue
-            want = check.verdict in ("accepted", "occluded")
+            if chord > 0:
+                d = points[-1] - points[0]
+                offset = ((middle[0] - points[0][0]) * d[1] - (middle[1] - points[0][1]) * d[0]) / chord
+                if _near(abs(offset) / chord, middle_range):  # either side: a ratio on an edge is skipped
+                    continue
+            want = check.test in ("accepted", "occluded")
             _check_leg(is_leg, points, (float(scan.angle_increment),), kwargs, want,
                        f"{setting} scan {s} ({lidar.name}), beams {check.first}..{check.last} ({len(points)} points, "
-                       f"labkit.detect_legs: {check.verdict})")
+                       f"labkit.detect_legs: {check.test})")
             checked += 1
     return checked
 
