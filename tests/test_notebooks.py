@@ -139,10 +139,11 @@ def _run_your_turn(client, nb, stub: int, check: int, fill) -> None:
         try:
             client.execute_cell(nb.cells[check], check)
         except CellExecutionError as exc:
-            message = _ANSI.sub("", str(exc))
-            assert "YourTurnError" in message and fill.hint in message, (
-                f"cell {cid}: the planted mistake failed the check, but not with YourTurnError and the hint "
-                f"{fill.hint!r}:\n{message[-1500:]}")
+            # the error's own name and message (str(exc) also holds the cell's source, hints included)
+            name, message = exc.ename, _ANSI.sub("", exc.evalue)
+            assert name == "YourTurnError" and fill.hint in message, (
+                f"cell {cid}: the planted mistake failed the check with {name}: {message[-1500:]}, "
+                f"not with YourTurnError and the hint {fill.hint!r}")
         else:
             raise AssertionError(f"cell {cid}: the check passed the planted mistake:\n{fill.mistake}")
         nb.cells[stub].source = fill.correct
