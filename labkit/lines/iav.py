@@ -30,19 +30,32 @@ from .._iav import (
 from ..features import LineSegment, line_segment
 from ..scan import Scan
 from ..segmentation import RangeSegment
-from ._params import Params
+from ._params import Params, param, takes_params
 
 __all__ = ["detect_lines_iav"]
 
 
+@dataclass(frozen=True)
+class IAVLineParams(Params):
+    """Parameters of :func:`detect_lines_iav` and the ``[lines.iav]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees
+    (``std_max_deg``: Table II's 0.15 rad)."""
+
+    min_points: int = param(5, "fewest points of a line (line_min_pts)", lo=3)
+    min_length_m: float = param(0.15, "shortest line, metres (line_min_len)", lo=0)
+    mean_tolerance_deg: float = param(5.0, "largest |IAV mean - 180|, degrees", lo=0, strict=True)
+    std_max_deg: float = param(math.degrees(CIRCLE_STD_MAX), "largest IAV standard deviation, degrees", lo=0,
+                               strict=True)
+
+@takes_params(IAVLineParams, segmented=True, own_segmentation=("seg_threshold_m",))
 def detect_lines_iav(
     scan: Scan,
     *,
     seg_threshold_m: float = 0.08,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    mean_tolerance: float = math.radians(5.0),
-    std_max: float = CIRCLE_STD_MAX,
+    min_points: int,
+    min_length_m: float,
+    mean_tolerance: float,
+    std_max: float,
     segments: list[RangeSegment] | np.ndarray | None = None,
     return_trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[SegmentCheck]]:
@@ -119,14 +132,3 @@ def detect_lines_iav(
     if not return_trace:
         return lines
     return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang)
-
-
-@dataclass(frozen=True)
-class IAVLineParams(Params):
-    """Parameters of :func:`detect_lines_iav`, the defaults once: lengths in metres, angles in
-    degrees (``std_max_deg``: Table II's 0.15 rad)."""
-
-    min_points: int = 5
-    min_length_m: float = 0.15
-    mean_tolerance_deg: float = 5.0
-    std_max_deg: float = math.degrees(CIRCLE_STD_MAX)

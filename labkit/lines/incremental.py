@@ -51,19 +51,31 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..fitting import line_from_sums
 from ..scan import Scan
-from ._params import Params
+from ._params import Params, param, takes_params
 from ._runs import _fitted, _PrefixSums, _runs
 
 __all__ = ["incremental_lines"]
 
 
+@dataclass(frozen=True)
+class IncrementalParams(Params):
+    """Parameters of :func:`incremental_lines` and the ``[lines.incremental]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres."""
+
+    max_error_m: float = param(0.05, "a point joins the line while within this distance of the refitted line, metres",
+                               lo=0, strict=True)
+    min_points: int = param(5, "points of a seed, and fewest points of a line", lo=2)
+    min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+
+@takes_params(IncrementalParams)
 def incremental_lines(
     scan: Scan,
     *,
-    max_error_m: float = 0.05,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    max_gap_m: float = 0.3,
+    max_error_m: float,
+    min_points: int,
+    min_length_m: float,
+    max_gap_m: float,
     segments=None,
 ) -> list[LineSegment]:
     """Extract line segments from a scan with the incremental (line-tracking) algorithm.
@@ -177,13 +189,3 @@ def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int) ->
             if d2 >= d1:
                 break
             left[1] = right[0] = i
-
-
-@dataclass(frozen=True)
-class IncrementalParams(Params):
-    """Parameters of :func:`incremental_lines`, the defaults once: lengths in metres."""
-
-    max_error_m: float = 0.05
-    min_points: int = 5
-    min_length_m: float = 0.15
-    max_gap_m: float = 0.3
