@@ -22,6 +22,10 @@ al.'s 80 mm as its floor) and run in this order:
    long lines (:data:`labkit.circles.iav.ARC_LINE_PARAMS`), a second line pass that doubles the
    cost of a scan.
 
+The sections of a :class:`Config` are the detectors' parameter records (one default per
+parameter, held in the detector's module; see :mod:`labkit._params`), plus the pipeline's
+switches (``enabled``, ``lines.method``, ``lines.skip_round``): each stage calls its detector
+with its section, so a detector alone with its defaults gives what its stage gives.
 Angles in a :class:`Config` are in degrees (names end in ``_deg``) so that a TOML file
 reads naturally; lengths in metres (``_m``). ``inf`` is a valid TOML float and means "no
 limit".
@@ -233,7 +237,17 @@ class Config:
     >>> Config.from_dict({"lines": {"split_threshold": 0.1}})
     Traceback (most recent call last):
     ...
-    ValueError: unknown key lines.split_threshold; lines has: method, split_threshold_m, ...
+    ValueError: unknown key lines.split_threshold; lines has: method, skip_round, split_threshold_m, ...
+
+    Each section is its detector's parameter record (``Config().circles`` is a
+    :class:`labkit.CircleParams`, with ``enabled``), so ``labkit.detect_circles(scan,
+    cfg.circles)`` is the pipeline's call. [lines] holds split-and-merge's keys (iepf and
+    split_and_merge) and one table per other line method:
+
+    >>> Config().updated({"lines.ransac.threshold_m": 0.02}).lines.ransac.threshold_m
+    0.02
+    >>> Config.from_dict({"lines": {"angular_min_points": 6}}).lines.angular.min_points  # an old key
+    6
     """
 
     # in the order the stages run
