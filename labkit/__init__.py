@@ -31,7 +31,10 @@ import sys as _sys
 
 from . import circles, evaluation, geometry, lines, poses, sim
 from .circles import (
+    ArcParams,
+    CircleParams,
     IAVStats,
+    LegsParams,
     circle_from_iav,
     detect_arcs,
     detect_circles,
@@ -44,7 +47,7 @@ from .circles import (
 from .data import bundled_data
 from .dbscan import DBSCAN1D, dbscan1d, dbscan1d_reference
 from .evaluation import match_circles, match_legs, match_lines, ray_errors, score_detections, score_lines
-from .features import Circle, Corner, Features, Leg, LineSegment, Person, find_corners, line_segment
+from .features import Circle, Corner, CornerParams, Features, Leg, LineSegment, Person, find_corners, line_segment
 from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
 from .io import (
@@ -59,7 +62,14 @@ from .io import (
     write_scans,
 )
 from .lines import (
+    AngularParams,
     AngularSteps,
+    HoughParams,
+    IAVLineParams,
+    IncrementalParams,
+    RansacParams,
+    RegressionParams,
+    SplitMergeParams,
     angular_arrays,
     angular_segmentation,
     detect_lines_iav,
@@ -73,7 +83,7 @@ from .lines import (
 )
 from .pipeline import Config, extract_all, extract_features
 from .scan import Scan, polar_to_cartesian
-from .segmentation import RangeSegment, breakpoint_thresholds, range_segments, segment_labels
+from .segmentation import RangeSegment, SegmentationParams, breakpoint_thresholds, range_segments, segment_labels
 from .steps import Step
 from .tables import features_table, read_table
 
@@ -89,6 +99,19 @@ _sys.modules.update({"labkit.iav": circles.iav, "labkit.legs": circles.legs,
 __version__ = "0.1.0"
 
 __all__ = [
+    # the parameter records, one per extractor and detector (degrees and metres)
+    "SegmentationParams",
+    "LegsParams",
+    "CircleParams",
+    "ArcParams",
+    "CornerParams",
+    "SplitMergeParams",
+    "AngularParams",
+    "IncrementalParams",
+    "RegressionParams",
+    "RansacParams",
+    "HoughParams",
+    "IAVLineParams",
     "Scan",
     "polar_to_cartesian",
     "geometry",

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._params import Params, param, takes_params
 from ._plainfloat import intersect1, wrap1
 from ._records import fast_init
 from .fitting import fit_line_polar
@@ -162,12 +163,23 @@ def _side(a, b, p) -> float:
     return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
 
 
+@dataclass(frozen=True)
+class CornerParams(Params):
+    """Parameters of :func:`find_corners` and the ``[corners]`` table of :class:`labkit.Config`,
+    each default once: lengths in metres, angles in degrees."""
+
+    min_angle_deg: float = param(30.0, "smallest angle between the two lines, degrees", lo=0, strict=True, hi=90)
+    max_gap_m: float = param(0.3, "largest gap between the lines' facing ends, metres", lo=0)
+    max_extension_m: float = param(0.1, "how far a line may be extended to reach the corner, metres", lo=0)
+
+
+@takes_params(CornerParams)
 def find_corners(
     lines: list[LineSegment],
     *,
-    min_angle: float = math.radians(30.0),
-    max_gap_m: float = 0.3,
-    max_extension_m: float = 0.1,
+    min_angle: float,
+    max_gap_m: float,
+    max_extension_m: float,
     wrap: bool = False,
 ) -> list[Corner]:
     """Corners between consecutive line segments (in the order given, usually scan order).

@@ -22,6 +22,10 @@ al.'s 80 mm as its floor) and run in this order:
    long lines (:data:`labkit.circles.iav.ARC_LINE_PARAMS`), a second line pass that doubles the
    cost of a scan.
 
+The sections of a :class:`Config` are the detectors' parameter records (one default per
+parameter, held in the detector's module; see :mod:`labkit._params`), plus the pipeline's
+switches (``enabled``, ``lines.method``, ``lines.skip_round``): each stage calls its detector
+with its section, so a detector alone with its defaults gives what its stage gives.
 Angles in a :class:`Config` are in degrees (names end in ``_deg``) so that a TOML file
 reads naturally; lengths in metres (``_m``). ``inf`` is a valid TOML float and means "no
 limit".
@@ -48,15 +52,23 @@ from time import perf_counter
 
 import numpy as np
 
+from ._params import param
 from ._safe import OutputKind, safe_output
-from .circles.iav import detect_arcs, detect_circles
-from .circles.legs import detect_legs, pair_legs
-from .features import Features, find_corners
-from .lines import LINE_EXTRACTORS
-from .lines.angular import angular_segmentation
-from .lines.split_merge import split_and_merge
+from .circles.iav import ArcParams, CircleParams, detect_arcs, detect_circles
+from .circles.legs import LegsParams, detect_legs, pair_legs
+from .features import CornerParams, Features, find_corners
+from .lines import (
+    LINE_EXTRACTORS,
+    AngularParams,
+    HoughParams,
+    IAVLineParams,
+    IncrementalParams,
+    RansacParams,
+    RegressionParams,
+    SplitMergeParams,
+)
 from .scan import Scan
-from .segmentation import segment_labels
+from .segmentation import SegmentationParams, segment_labels
 
 __all__ = [
     "Config",
@@ -84,185 +96,92 @@ def line_methods() -> tuple[str, ...]:
 LINE_METHODS = line_methods()
 
 
-def _p(default, doc: str, *, lo: float | None = None, strict: bool = False, hi: float | None = None,
-       choices: tuple | None = None):
-    """A config field: its default, a one-line doc (written into TOML files as a comment),
-    and the checks applied when a config is built."""
-    return field(default=default, metadata={"doc": doc, "lo": lo, "strict": strict, "hi": hi, "choices": choices})
-
-
-def _check_value(section: str, f: dataclasses.Field, value):
-    """Type and range of one field; returns the value in its canonical Python type."""
-    name = f"{section}.{f.name}"
-    meta = f.metadata
-    default = f.default
-    if isinstance(default, bool):
-        if not isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"{name} must be true or false, got {value!r}")
-        return bool(value)
-    if isinstance(default, str):
-        choices = meta["choices"]() if callable(meta["choices"]) else meta["choices"]
-        if not isinstance(value, str) or (choices and value not in choices):
-            raise ValueError(f"{name} must be one of {choices}, got {value!r}")
-        return value
-    if isinstance(default, tuple):
-        try:
-            pair = tuple(float(v) for v in value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name} must be a pair [low, high], got {value!r}") from None
-        if len(pair) != 2 or not (pair[0] < pair[1]) or any(math.isnan(v) for v in pair):
-            raise ValueError(f"{name} must be a pair [low, high] with low < high, got {value!r}")
-        lo, hi = meta["lo"], meta["hi"]
-        if (lo is not None and pair[0] < lo) or (hi is not None and pair[1] > hi):
-            raise ValueError(f"{name} must lie within [{lo:g}, {hi:g}], got {list(pair)}")
-        return pair
-    is_int = isinstance(default, int)
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    if is_int:
-        if float(value) != int(value):
-            raise ValueError(f"{name} must be a whole number, got {value!r}")
-        value = int(value)
-    else:
-        value = float(value)
-        if math.isnan(value):
-            raise ValueError(f"{name} must be a number, got nan")
-    lo, hi, strict = meta["lo"], meta["hi"], meta["strict"]
-    if lo is not None and (value <= lo if strict else value < lo):
-        raise ValueError(f"{name} must be {'>' if strict else '>='} {lo:g}, got {value!r}")
-    if hi is not None and value > hi:
-        raise ValueError(f"{name} must be <= {hi:g}, got {value!r}")
-    return value
-
-
-class _Section:
-    """Validation and conversion shared by the config sections."""
-
-    _name = ""
-
-    def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            object.__setattr__(self, f.name, _check_value(self._name, f, getattr(self, f.name)))
-
-    def to_dict(self) -> dict:
-        return {f.name: list(v) if isinstance(v := getattr(self, f.name), tuple) else v
-                for f in dataclasses.fields(self)}
-
-
+# The sections of a Config are the detectors' parameter records (each default once, in the
+# records' modules), plus the pipeline's own switches (``enabled``, the line method).
 @dataclass(frozen=True)
-class SegmentationConfig(_Section):
+class SegmentationConfig(SegmentationParams):
     """Range segmentation shared by every detector (:func:`labkit.segment_labels`)."""
 
     _name = "segmentation"
-    threshold_m: float = _p(0.08, "largest gap between neighbouring points of a segment, metres (Xavier et al. "
-                                  "seg_threshold); the floor of the adaptive threshold", lo=0, strict=True)
-    adaptive: bool = _p(True, "grow the threshold with range and angular step (Borges & Aldon)")
-    incidence_deg: float = _p(10.0, "grazing angle lambda of the adaptive threshold, degrees",
-                              lo=0, strict=True, hi=89.9)
-    range_sigma_m: float = _p(0.01, "range noise of the sensor, metres (adaptive threshold, line covariances)",
-                              lo=0, strict=True)
-    min_points: int = _p(2, "smallest segment kept; isolated points are dropped", lo=1)
 
 
 @dataclass(frozen=True)
-class LinesConfig(_Section):
-    """Line extraction (:func:`labkit.split_and_merge`, :func:`labkit.angular_segmentation`)."""
-
-    _name = "lines"
-    method: str = _p("iepf", "a registered line extractor (labkit.lines.LINE_EXTRACTORS: iepf splits on the chord, "
-                             "split_and_merge on the fitted line, angular, incremental, regression, ransac, hough, "
-                             "iav) or none; only iepf, split_and_merge and angular read the keys below, the others "
-                             "run with their own defaults", choices=line_methods)
-    split_threshold_m: float = _p(0.05, "split when the worst point is farther than this from the line, metres",
-                                  lo=0, strict=True)
-    min_points: int = _p(5, "fewest points of a line (Xavier et al. line_min_pts)", lo=2)
-    min_length_m: float = _p(0.15, "shortest line kept, metres (Xavier et al. line_min_len)", lo=0)
-    max_gap_m: float = _p(0.3, "split a run at a gap wider than this between neighbouring points, metres",
-                          lo=0, strict=True)
-    merge: str = _p("thresholds", "merge test of neighbouring lines: thresholds, chi2 or none",
-                    choices=("thresholds", "chi2", "none"))
-    merge_dr_m: float = _p(0.2, "merge when |dr| is under this, metres", lo=0, strict=True)
-    merge_dalpha_deg: float = _p(10.0, "and |dalpha| under this, degrees", lo=0, strict=True)
-    merge_chi2: float = _p(9.21, "chi-square merge threshold (2 dof, 99 %)", lo=0, strict=True)
-    weights: str = _p("inverse_range", "point weights of the fits: inverse_range (1/rho, the slides) or uniform",
-                      choices=("inverse_range", "uniform"))
-    skip_round: bool = _p(True, "fit no line to a segment taken as a leg or a circle")
-    eps_theta_deg: float = _p(3.0, "angular segmentation: DBSCAN1D radius in line direction, degrees",
-                              lo=0, strict=True)
-    eps_dist_m: float = _p(0.03, "angular segmentation: DBSCAN1D radius in line offset, metres", lo=0, strict=True)
-    angular_min_points: int = _p(8, "angular segmentation: DBSCAN1D min_pts", lo=1)
-    angular_split_gap_m: float = _p(0.3, "angular segmentation: split collinear clusters at gaps wider than "
-                                         "this, metres (inf: never)", lo=0, strict=True)
-
-
-@dataclass(frozen=True)
-class CornersConfig(_Section):
-    """Corners where consecutive lines meet (:func:`labkit.find_corners`)."""
-
-    _name = "corners"
-    enabled: bool = _p(True, "find corners")
-    min_angle_deg: float = _p(30.0, "smallest angle between the two lines, degrees", lo=0, strict=True, hi=90)
-    max_gap_m: float = _p(0.3, "largest gap between the lines' facing ends, metres", lo=0)
-    max_extension_m: float = _p(0.1, "how far a line may be extended to reach the corner, metres", lo=0)
-
-
-@dataclass(frozen=True)
-class CirclesConfig(_Section):
-    """IAV circles (:func:`labkit.detect_circles`; Xavier et al. Table II)."""
-
-    _name = "circles"
-    enabled: bool = _p(True, "detect circles")
-    min_points: int = _p(4, "fewest points (circle_min_pts)", lo=3)
-    min_chord_m: float = _p(0.15, "shortest chord, metres (circle_min_len)", lo=0)
-    max_chord_m: float = _p(math.inf, "longest chord, metres (circle_max_len; inf: unlimited)", lo=0, strict=True)
-    middle_range: tuple = _p((0.1, 0.7), "prerequisite band: the middle point's distance from the chord, "
-                                         "as a fraction of the chord", lo=0)
-    mean_range_deg: tuple = _p((90.0, 135.0), "accepted IAV mean, degrees", lo=0, hi=180)
-    std_max_deg: float = _p(math.degrees(0.15), "largest IAV standard deviation, degrees (circle_std_max 0.15 rad)",
-                            lo=0, strict=True)
-    center_method: str = _p("iav", "centre and radius: iav (the paper's construction), algebraic or geometric",
-                            choices=("iav", "algebraic", "geometric"))
-    arc_like: bool = _p(False, "also keep arc-like shapes (tree trunks) with a larger spread, minus V-corners")
-    arc_like_std_max_deg: float = _p(23.0, "arc-like: largest IAV standard deviation, degrees", lo=0, strict=True)
-    v_corner_neighbours: int = _p(4, "arc-like: neighbours whose angles must grow for a V-corner", lo=1)
-
-
-@dataclass(frozen=True)
-class ArcsConfig(_Section):
-    """Arcs embedded in walls, e.g. rounded corners (:func:`labkit.detect_arcs`)."""
-
-    _name = "arcs"
-    enabled: bool = _p(False, "detect arcs in walls (a second, finer line pass: about twice the time per scan; "
-                              "needs an arc seen by many beams, and finds false arcs in 1-8 % of scans of rooms "
-                              "without any)")
-    split_threshold_m: float = _p(0.02, "split threshold of the finer line pass, metres", lo=0, strict=True)
-    min_length_m: float = _p(0.5, "shortest line of the finer line pass, metres", lo=0)
-    min_points: int = _p(4, "fewest points of an arc", lo=3)
-    min_chord_m: float = _p(0.15, "shortest chord of an arc, metres", lo=0)
-    mean_range_deg: tuple = _p((90.0, 155.0), "accepted IAV mean, degrees", lo=0, hi=180)
-    std_max_deg: float = _p(math.degrees(0.15), "largest IAV standard deviation, degrees", lo=0, strict=True)
-    center_method: str = _p("geometric", "centre and radius: geometric, algebraic or iav",
-                            choices=("iav", "algebraic", "geometric"))
-
-
-@dataclass(frozen=True)
-class LegsConfig(_Section):
+class LegsConfig(LegsParams):
     """Legs and people (:func:`labkit.detect_legs`, :func:`labkit.pair_legs`)."""
 
     _name = "legs"
-    enabled: bool = _p(True, "detect legs and pair them into people")
-    min_points: int = _p(3, "fewest points of a leg", lo=3)
-    chord_range_m: tuple = _p((0.1, 0.25), "accepted chord, metres (Xavier et al.)", lo=0)
-    chord_padding_beams: float = _p(1.0, "widen the chord by this many beam spacings at the leg's range", lo=0)
-    middle_range: tuple = _p((0.1, 0.7), "prerequisite band, as for circles", lo=0)
-    iav_mean_range_deg: tuple = _p((0.0, 180.0), "accepted IAV mean, degrees ([0, 180]: not tested)", lo=0, hi=180)
-    iav_std_max_deg: float = _p(math.inf, "largest IAV standard deviation, degrees (inf: not tested)",
-                                lo=0, strict=True)
-    reject_occluded: bool = _p(True, "drop segments partly hidden behind a nearer object")
-    center_method: str = _p("ray", "centre: ray (middle point pushed back by the radius), iav, algebraic, geometric",
-                            choices=("ray", "iav", "algebraic", "geometric"))
-    pair_max_distance_m: float = _p(0.6, "two legs closer than this are one person, metres", lo=0, strict=True)
 
+    enabled: bool = param(True, "detect legs and pair them into people")
+
+
+@dataclass(frozen=True)
+class CirclesConfig(CircleParams):
+    """IAV circles (:func:`labkit.detect_circles`; Xavier et al. Table II)."""
+
+    _name = "circles"
+
+    enabled: bool = param(True, "detect circles")
+
+
+@dataclass(frozen=True)
+class LinesConfig(SplitMergeParams):
+    """Line extraction: the method, the keys of split-and-merge (iepf, split_and_merge) and
+    one table per other method ([lines.angular], [lines.ransac], ...)."""
+
+    _name = "lines"
+    method: str = param("iepf", "a registered line extractor (labkit.lines.LINE_EXTRACTORS: iepf splits on the "
+                                "chord, split_and_merge on the fitted line, angular, incremental, regression, ransac, "
+                                "hough, iav) or none; iepf and split_and_merge read the keys of this table, the "
+                                "others their own table below", choices=line_methods)
+    skip_round: bool = param(True, "fit no line to a segment taken as a leg or a circle")
+    angular: AngularParams = param(AngularParams(), "angular segmentation (labkit.angular_segmentation)")
+    incremental: IncrementalParams = param(IncrementalParams(), "incremental (labkit.incremental_lines)")
+    regression: RegressionParams = param(RegressionParams(), "line regression (labkit.regression_lines)")
+    ransac: RansacParams = param(RansacParams(), "RANSAC (labkit.ransac_lines; seeded)")
+    hough: HoughParams = param(HoughParams(), "Hough transform (labkit.hough_lines)")
+    iav: IAVLineParams = param(IAVLineParams(), "IAV lines (labkit.detect_lines_iav)")
+
+    _not_passed = ("method", "skip_round")
+
+    def params_of(self, method: str):
+        """The parameter record of a registered line method: this table for iepf and
+        split_and_merge, its own table for the others (a method registered later runs with
+        its record's defaults)."""
+        entry = LINE_EXTRACTORS[method]
+        if isinstance(self, entry.params_cls):
+            return self
+        record = getattr(self, method, None)
+        return record if isinstance(record, entry.params_cls) else entry.params_cls()
+
+
+#: Old keys of [lines] (before issue 14), read into the angular table.
+_OLD_LINES_KEYS = {"eps_theta_deg": "angular.eps_theta_deg", "eps_dist_m": "angular.eps_dist_m",
+                   "angular_min_points": "angular.min_points", "angular_split_gap_m": "angular.split_gap_m"}
+
+
+@dataclass(frozen=True)
+class CornersConfig(CornerParams):
+    """Corners where consecutive lines meet (:func:`labkit.find_corners`)."""
+
+    _name = "corners"
+
+    enabled: bool = param(True, "find corners")
+
+
+@dataclass(frozen=True)
+class ArcsConfig(ArcParams):
+    """Arcs embedded in walls, e.g. rounded corners (:func:`labkit.detect_arcs`)."""
+
+    _name = "arcs"
+
+    enabled: bool = param(False, "detect arcs in walls (a second, finer line pass: about twice the time per scan; "
+                                 "needs an arc seen by many beams, and finds false arcs in 1-8 % of scans of rooms "
+                                 "without any)")
+
+
+for _cls in (LegsConfig, CirclesConfig, CornersConfig, ArcsConfig):
+    _cls._not_passed = (*_cls.__mro__[1]._not_passed, "enabled")
+del _cls
 
 _SECTIONS = {  # the order the stages run in, and the order of a TOML file
     "segmentation": SegmentationConfig,
@@ -272,6 +191,22 @@ _SECTIONS = {  # the order the stages run in, and the order of a TOML file
     "corners": CornersConfig,
     "arcs": ArcsConfig,
 }
+
+
+def _section(name: str, value):
+    """``value`` as the section ``name``: a record of the section's own detector (such as a
+    :class:`labkit.LegsParams`) becomes the section, its switches at their defaults."""
+    cls = _SECTIONS[name]
+    if isinstance(value, cls):
+        return value
+    record = cls.__mro__[1]
+    if isinstance(value, record):
+        return cls(**{f.name: getattr(value, f.name) for f in dataclasses.fields(record)})
+    raise ValueError(f"Config.{name} must be a {cls.__name__} (or a {record.__name__}), got {type(value).__name__}")
+
+
+def _first_line(doc: str) -> str:
+    return " ".join(doc.strip().split("\n\n")[0].split())
 
 
 def _toml_value(v) -> str:
@@ -302,7 +237,17 @@ class Config:
     >>> Config.from_dict({"lines": {"split_threshold": 0.1}})
     Traceback (most recent call last):
     ...
-    ValueError: unknown key lines.split_threshold; lines has: method, split_threshold_m, ...
+    ValueError: unknown key lines.split_threshold; lines has: method, skip_round, split_threshold_m, ...
+
+    Each section is its detector's parameter record (``Config().circles`` is a
+    :class:`labkit.CircleParams`, with ``enabled``), so ``labkit.detect_circles(scan,
+    cfg.circles)`` is the pipeline's call. [lines] holds split-and-merge's keys (iepf and
+    split_and_merge) and one table per other line method:
+
+    >>> Config().updated({"lines.ransac.threshold_m": 0.02}).lines.ransac.threshold_m
+    0.02
+    >>> Config.from_dict({"lines": {"angular_min_points": 6}}).lines.angular.min_points  # an old key
+    6
     """
 
     # in the order the stages run
@@ -314,13 +259,13 @@ class Config:
     arcs: ArcsConfig = field(default_factory=ArcsConfig)
 
     def __post_init__(self) -> None:
-        for name, cls in _SECTIONS.items():
-            if not isinstance(getattr(self, name), cls):
-                raise ValueError(f"Config.{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
+        for name in _SECTIONS:
+            object.__setattr__(self, name, _section(name, getattr(self, name)))
 
     # ------------------------------------------------------------------ dicts
     def to_dict(self) -> dict:
-        """``{section: {key: value}}`` with plain Python values (pairs as lists)."""
+        """``{section: {key: value}}`` with plain Python values (pairs as lists, the line
+        methods' tables as nested dicts)."""
         return {name: getattr(self, name).to_dict() for name in _SECTIONS}
 
     @classmethod
@@ -330,7 +275,9 @@ class Config:
 
     def updated(self, changes: dict) -> Config:
         """A copy with ``changes`` applied: ``{section: {key: value}}`` or dotted keys
-        ``{"section.key": value}`` (or both)."""
+        ``{"section.key": value}``, ``{"lines.ransac.threshold_m": value}`` (or both). The
+        keys of [lines] before the per-method tables (``eps_theta_deg``, ``eps_dist_m``,
+        ``angular_min_points``, ``angular_split_gap_m``) are read into [lines.angular]."""
         if not isinstance(changes, dict):
             raise ValueError(f"changes must be a dict of sections, got {type(changes).__name__}")
         per_section: dict[str, dict] = {}
@@ -349,24 +296,30 @@ class Config:
         for section, values in per_section.items():
             if section not in _SECTIONS:
                 raise ValueError(f"unknown config section {section!r}; sections: {', '.join(_SECTIONS)}")
-            current = getattr(self, section)
-            names = [f.name for f in dataclasses.fields(current)]
-            for k in values:
-                if k not in names:
-                    raise ValueError(f"unknown key {section}.{k}; {section} has: {', '.join(names)}")
-            new[section] = dataclasses.replace(current, **values)
+            if section == "lines":
+                values = {_OLD_LINES_KEYS.get(k, k): v for k, v in values.items()}
+            new[section] = getattr(self, section).updated(values, prefix=section)
         return dataclasses.replace(self, **new)
 
     # ------------------------------------------------------------------ TOML
     def to_toml(self) -> str:
         """The config as TOML, every key with its doc as a comment."""
         out = ["# labkit feature extraction config (labkit.Config); angles in degrees, lengths in metres", ""]
-        for name in _SECTIONS:
-            section = getattr(self, name)
-            out.append(f"[{name}]  # {type(section).__doc__.strip()}")
-            for f in dataclasses.fields(section):
-                out.append(f"{f.name} = {_toml_value(getattr(section, f.name))}  # {f.metadata['doc']}")
+        tables = [(name, getattr(self, name), _first_line(type(getattr(self, name)).__doc__)) for name in _SECTIONS]
+        while tables:
+            name, section, doc = tables.pop(0)
+            out.append(f"[{name}]  # {doc}")
+            nested = []
+            for f in section.ordered_fields():
+                value = getattr(section, f.name)
+                if f.metadata.get("record"):
+                    nested.append((f"{name}.{f.name}", value, f.metadata["doc"]))
+                elif value is None:  # TOML has no null: left out, so the default (None) is read back
+                    out.append(f"# {f.name} =  (none)  # {f.metadata['doc']}")
+                else:
+                    out.append(f"{f.name} = {_toml_value(value)}  # {f.metadata['doc']}")
             out.append("")
+            tables[:0] = nested
         return "\n".join(out)
 
     @classmethod
@@ -416,10 +369,6 @@ CONFIG_FILE = OutputKind("a labkit config (.toml)", (".toml",), _is_config_file)
 _DEFAULT = Config()  # frozen: built and validated once
 
 
-def _deg(pair) -> tuple[float, float]:
-    return (math.radians(pair[0]), math.radians(pair[1]))
-
-
 def _mask_segments(labels: np.ndarray, taken: list) -> np.ndarray:
     """``labels`` with the segments holding the first beam of each feature set to -1."""
     if not taken:
@@ -452,62 +401,39 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
         timings[stage] = now - t
         t = now
 
-    labels = segment_labels(scan, seg.threshold_m, min_points=seg.min_points, adaptive=seg.adaptive,
-                            incidence_deg=seg.incidence_deg, range_sigma_m=seg.range_sigma_m)
+    # Each stage is its detector called with its config section (which is its parameter
+    # record): the same call as the detector alone, given the segments the stages before left.
+    labels = segment_labels(scan, seg)
     lap("segmentation")
     legs, people = [], []
     if lg.enabled:
-        legs = detect_legs(
-            scan, min_points=lg.min_points, chord_range=lg.chord_range_m, chord_padding_beams=lg.chord_padding_beams,
-            middle_range=lg.middle_range,
-            iav_mean_range=None if lg.iav_mean_range_deg == (0.0, 180.0) else _deg(lg.iav_mean_range_deg),
-            iav_std_max=None if math.isinf(lg.iav_std_max_deg) else math.radians(lg.iav_std_max_deg),
-            reject_occluded=lg.reject_occluded, center_method=lg.center_method, segments=labels)
+        legs = detect_legs(scan, lg, segments=labels)
         people = pair_legs(legs, lg.pair_max_distance_m)
     lap("legs")
     rest = _mask_segments(labels, legs)
     circles = []
     if cc.enabled:
-        circles = detect_circles(
-            scan, min_points=cc.min_points, min_chord_m=cc.min_chord_m, max_chord_m=cc.max_chord_m,
-            middle_range=cc.middle_range, mean_range=_deg(cc.mean_range_deg), std_max=math.radians(cc.std_max_deg),
-            center_method=cc.center_method, arc_like=cc.arc_like,
-            arc_like_std_max=math.radians(cc.arc_like_std_max_deg), v_corner_neighbours=cc.v_corner_neighbours,
-            segments=rest)
+        circles = detect_circles(scan, cc, segments=rest)
     lap("circles")
     rest = _mask_segments(rest, circles)
     lines = []
-    if lc.method in ("iepf", "split_and_merge"):
-        lines = split_and_merge(
-            scan, method="endpoints" if lc.method == "iepf" else "fit", split_threshold_m=lc.split_threshold_m,
-            min_points=lc.min_points, min_length_m=lc.min_length_m, max_gap_m=lc.max_gap_m,
-            merge=None if lc.merge == "none" else lc.merge, merge_dr_m=lc.merge_dr_m,
-            merge_dalpha=math.radians(lc.merge_dalpha_deg), merge_chi2=lc.merge_chi2,
-            range_sigma_m=seg.range_sigma_m, weights=None if lc.weights == "inverse_range" else "uniform",
-            segments=rest if lc.skip_round else labels)
-    elif lc.method == "angular":
-        lines = angular_segmentation(
-            scan, math.radians(lc.eps_theta_deg), lc.eps_dist_m, lc.angular_min_points,
-            split_gap_m=None if math.isinf(lc.angular_split_gap_m) else lc.angular_split_gap_m)
-        if lc.skip_round and (legs or circles):
-            round_beams = (labels >= 0) & (rest < 0)
-            lines = [ln for ln in lines if not round_beams[ln.indices].mean() > 0.5]
-    elif lc.method != "none":  # any other registered extractor, with its own record's defaults
-        lines = LINE_EXTRACTORS[lc.method].run(scan, segments=rest if lc.skip_round else labels)
+    if lc.method != "none":
+        entry = LINE_EXTRACTORS[lc.method]
+        if entry.segmented:  # on the range segments (minus those taken as legs and circles)
+            segments = rest if lc.skip_round else labels
+        elif lc.skip_round and (legs or circles):  # on the whole scan, minus the beams taken
+            segments = np.where(scan.valid & ((rest >= 0) | (labels < 0)), 0, -1)
+        else:
+            segments = None
+        lines = entry.run(scan, lc.params_of(lc.method), segments=segments)
     lap("lines")
     corners = []
     if cfg.corners.enabled and len(lines) > 1:
-        co = cfg.corners
-        corners = find_corners(lines, min_angle=math.radians(co.min_angle_deg), max_gap_m=co.max_gap_m,
-                               max_extension_m=co.max_extension_m, wrap=scan.is_full_circle)
+        corners = find_corners(lines, cfg.corners, wrap=scan.is_full_circle)
     lap("corners")
     arcs = []
     if cfg.arcs.enabled:
-        ac = cfg.arcs
-        arcs = detect_arcs(
-            scan, None, min_points=ac.min_points, min_chord_m=ac.min_chord_m, mean_range=_deg(ac.mean_range_deg),
-            std_max=math.radians(ac.std_max_deg), center_method=ac.center_method,
-            line_params={"split_threshold_m": ac.split_threshold_m, "min_length_m": ac.min_length_m}, segments=rest)
+        arcs = detect_arcs(scan, cfg.arcs, segments=rest)
     lap("arcs")
     timings["total"] = perf_counter() - t_start
     return Features(scan.stamp_ns, scan.n_beams, labels, tuple(lines), tuple(corners), tuple(circles), tuple(arcs),

@@ -30,10 +30,39 @@ import numpy as np
 
 from ._cache import remembered
 from ._checks import check_int, check_positive
+from ._params import Params, param, takes_params
 from .scan import Scan
 
-__all__ = ["RangeSegment", "segment_labels", "range_segments", "breakpoint_thresholds", "segment_order",
+__all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
+           "range_segments", "breakpoint_thresholds", "segment_order",
            "segments_from_labels", "labels_from"]
+
+
+#: Range noise of the sensor assumed by default, metres (an LMS200's 5 mm, doubled): the
+#: adaptive breakpoints' and the line covariances' ``range_sigma_m``.
+RANGE_SIGMA_M = 0.01
+
+
+@dataclass(frozen=True)
+class SegmentationParams(Params):
+    """Parameters of :func:`segment_labels` and the ``[segmentation]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees.
+
+    The default is the adaptive detector with Xavier et al.'s 80 mm as its floor, the
+    segmentation every detector uses when given no ``segments`` and the pipeline's
+    (``adaptive=False`` gives the fixed threshold of the paper)."""
+
+    threshold_m: float = param(0.08, "largest gap between neighbouring points of a segment, metres (Xavier et al. "
+                                     "seg_threshold); the floor of the adaptive threshold", lo=0, strict=True)
+    adaptive: bool = param(True, "grow the threshold with range and angular step (Borges & Aldon)")
+    incidence_deg: float = param(10.0, "grazing angle lambda of the adaptive threshold, degrees",
+                                 lo=0, strict=True, hi=89.9)
+    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (adaptive threshold)", lo=0)
+    min_points: int = param(2, "smallest segment kept; isolated points are dropped", lo=1)
+
+    @classmethod
+    def renamed(cls) -> dict:
+        return {"incidence_deg": "incidence_deg"}  # segment_labels takes degrees
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,10 +109,10 @@ def breakpoint_thresholds(
     r_a: np.ndarray,
     r_b: np.ndarray,
     dphi: np.ndarray,
-    threshold_m: float = 0.08,
+    threshold_m: float = SegmentationParams.threshold_m,
     *,
-    incidence_deg: float = 10.0,
-    range_sigma_m: float = 0.01,
+    incidence_deg: float = SegmentationParams.incidence_deg,
+    range_sigma_m: float = SegmentationParams.range_sigma_m,
 ) -> np.ndarray:
     """Adaptive breakpoint distance (Borges & Aldon 2004) between beams of ranges ``r_a``,
     ``r_b`` that are ``dphi`` radians apart, floored at ``threshold_m``.
@@ -115,20 +144,24 @@ def _thresholds(r_a, r_b, dphi: np.ndarray, threshold_m: float, incidence_deg: f
     return np.fmax(d, threshold_m)
 
 
+@takes_params(SegmentationParams, positional=("threshold_m",))
 def segment_labels(
     scan: Scan,
-    threshold_m: float = 0.08,
     *,
-    min_points: int = 2,
-    adaptive: bool = False,
-    incidence_deg: float = 10.0,
-    range_sigma_m: float = 0.01,
+    threshold_m: float,
+    min_points: int,
+    adaptive: bool,
+    incidence_deg: float,
+    range_sigma_m: float,
 ) -> np.ndarray:
     """Label each beam with its range segment.
 
     Parameters
     ----------
     scan : Scan
+    params : SegmentationParams, optional
+        The parameters below (default: the record's defaults, the pipeline's segmentation);
+        each may also be given as a keyword (``threshold_m`` also by position, as before).
     threshold_m : float, metres
         Largest distance between neighbouring points of one segment. Default 0.08 m
         (Xavier et al. 2005, Table II ``seg_threshold``).
@@ -136,7 +169,8 @@ def segment_labels(
         Smallest segment kept. Default 2 (isolated points are rejected).
     adaptive : bool
         Grow the threshold with range and angular step (see :func:`breakpoint_thresholds`);
-        ``threshold_m`` is then the floor.
+        ``threshold_m`` is then the floor. Default True, as in the pipeline (the function alone
+        used to default to False: pass ``adaptive=False`` for the paper's fixed threshold).
     incidence_deg, range_sigma_m : float
         The adaptive detector's grazing angle ``lambda`` (default 10 deg) and range noise
         (default 0.01 m).
@@ -151,6 +185,8 @@ def segment_labels(
     --------
     >>> s = Scan(ranges=[1.0, 1.0, 1.0, 3.0, 3.0, np.nan, 2.0], angles=np.radians(np.arange(7)))
     >>> segment_labels(s).tolist()
+    [0, 0, 0, 1, 1, -1, -1]
+    >>> segment_labels(s, adaptive=False).tolist()
     [0, 0, 0, 1, 1, -1, -1]
     """
     _validate(threshold_m, min_points)
@@ -192,11 +228,11 @@ def segment_labels(
     return np.where(valid, new_id[raw], -1)
 
 
-def range_segments(scan: Scan, threshold_m: float = 0.08, *, min_points: int = 2, **adaptive) -> list[RangeSegment]:
-    """The segments of :func:`segment_labels` as :class:`RangeSegment` records, in scan
-    order (a seam-crossing segment is listed first and its indices run N-k..N-1, 0..m).
-    Keyword arguments ``adaptive``, ``incidence_deg`` and ``range_sigma_m`` are passed on."""
-    labels = segment_labels(scan, threshold_m, min_points=min_points, **adaptive)
+def range_segments(scan: Scan, params: SegmentationParams | None = None, *args, **overrides) -> list[RangeSegment]:
+    """The segments of :func:`segment_labels` (the same arguments) as :class:`RangeSegment`
+    records, in scan order (a seam-crossing segment is listed first and its indices run
+    N-k..N-1, 0..m)."""
+    labels = segment_labels(scan, params, *args, **overrides)
     return segments_from_labels(scan, labels)
 
 

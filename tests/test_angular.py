@@ -92,7 +92,7 @@ def check_consistent(scan, segments, steps=None, min_pts=MIN_PTS):
 def test_recovers_the_walls_of_simulated_scenes(name, times, min_precision, min_recall):
     pairs = []
     for scan, truth in scenario_scans(name, times):
-        segments, steps = angular_segmentation(scan), angular_arrays(scan)
+        segments, steps = angular_segmentation(scan, split_gap_m=None), angular_arrays(scan, split_gap_m=None)
         check_consistent(scan, segments, steps)
         pairs.append((segments, truth))
     precision, recall, n_segments, n_walls = score(pairs)
@@ -105,7 +105,7 @@ def test_recovers_random_polygon_rooms():
     pairs = []
     for i in range(1, 7):
         scan, truth = next(iter(sim.simulate(f"random_polygons_{i}", seed=0)))
-        pairs.append((angular_segmentation(scan), truth))
+        pairs.append((angular_segmentation(scan, split_gap_m=None), truth))
     precision, recall, _, n_walls = score(pairs)
     assert n_walls >= 30
     assert precision >= 0.9 and recall >= 0.8, (precision, recall)
@@ -114,7 +114,7 @@ def test_recovers_random_polygon_rooms():
 def test_noise_free_walls_are_exact():
     sc = sim.scenario("random_polygons_3")
     scan, truth = sim.scan_at(sc.world, sc.lidar, sc.trajectory.pose_at(0.0))
-    segments = angular_segmentation(scan)
+    segments = angular_segmentation(scan, split_gap_m=None)
     walls = {w.wall_id: w for w in truth.walls}
     errors = []
     for s in segments:
@@ -138,7 +138,7 @@ def corridor_world(*walls) -> sim.World:
 def test_parallel_walls_on_both_sides_share_an_angular_cluster_and_separate_by_offset():
     world = corridor_world(((-6.0, 1.0), (8.0, 1.0)), ((-6.0, -1.5), (8.0, -1.5)))
     scan, truth = sim.scan_at(world, LIDAR, (0.0, 0.0, 0.0), rng=np.random.default_rng(1))
-    segments, steps = angular_segmentation(scan), angular_arrays(scan)
+    segments, steps = angular_segmentation(scan, split_gap_m=None), angular_arrays(scan, split_gap_m=None)
     assert len(segments) == 2
     # one angular cluster holds both walls; their offsets from the line through the origin differ
     both = np.flatnonzero(steps.labels >= 0)
@@ -155,7 +155,7 @@ def test_parallel_walls_on_the_same_side():
     # a step in a wall: y = 1.0 up to x = 2, then y = 1.6 (joined by a short wall across)
     world = corridor_world(((-4.0, 1.0), (2.0, 1.0)), ((2.0, 1.0), (2.0, 1.6)), ((2.0, 1.6), (8.0, 1.6)))
     scan, truth = sim.scan_at(world, LIDAR, (0.0, 0.0, 0.0), rng=np.random.default_rng(2))
-    segments, steps = angular_segmentation(scan), angular_arrays(scan)
+    segments, steps = angular_segmentation(scan, split_gap_m=None), angular_arrays(scan, split_gap_m=None)
     near = [s for s in segments if abs(s.r - 1.0) < 0.02]
     far = [s for s in segments if abs(s.r - 1.6) < 0.02]
     assert len(near) == 1 and len(far) == 1
@@ -173,7 +173,7 @@ def test_walls_meeting_at_an_angle(turn_deg, separate):
     found = []
     for seed in range(3):
         scan, truth = sim.scan_at(world, LIDAR, (0.0, 0.0, 0.0), rng=np.random.default_rng(seed))
-        segments = angular_segmentation(scan)
+        segments = angular_segmentation(scan, split_gap_m=None)
         found.append(all(any(line_close(s, w) for s in segments) for w in truth.walls))
     assert all(found) if separate else not any(found)
 
@@ -182,7 +182,7 @@ def test_collinear_walls_split_only_with_split_gap():
     # a wall with a 1.2 m doorway in front of the sensor, and nothing behind the doorway
     world = corridor_world(((-5.0, 1.2), (-0.6, 1.2)), ((0.6, 1.2), (5.0, 1.2)))
     scan, truth = sim.scan_at(world, LIDAR, (0.0, 0.0, np.pi / 2), rng=np.random.default_rng(3))  # facing the wall
-    merged = angular_segmentation(scan)
+    merged = angular_segmentation(scan, split_gap_m=None)
     assert len(merged) == 1 and abs(merged[0].r - 1.2) < 0.01
     split = angular_segmentation(scan, split_gap_m=0.5)
     assert len(split) == 2
@@ -200,7 +200,7 @@ def test_a_wall_across_the_seam_of_a_full_circle_scan():
     lidar = sim.Lidar.from_fov("ring", 360.0, 1.0, full_circle=True, range_max=10.0, noise_std_m=0.005)
     scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0), rng=np.random.default_rng(4))
     assert scan.is_full_circle
-    segments = angular_segmentation(scan)
+    segments = angular_segmentation(scan, split_gap_m=None)
     assert len(segments) == 4
     behind = [s for s in segments if abs(s.r - 2.0) < 0.02]
     assert len(behind) == 1
@@ -238,9 +238,9 @@ def test_local_directions_skip_invalid_beams():
 
 def test_rotating_the_scan_rotates_the_segments():
     scan, _ = next(iter(sim.simulate("random_polygons_2", seed=5)))
-    base = angular_segmentation(scan)
+    base = angular_segmentation(scan, split_gap_m=None)
     for delta in (0.3, 1.7):
-        turned = angular_segmentation(scan.replace(angles=scan.angles + delta))
+        turned = angular_segmentation(scan.replace(angles=scan.angles + delta), split_gap_m=None)
         assert [s.indices.tolist() for s in turned] == [s.indices.tolist() for s in base]
         for a, b in zip(turned, base, strict=True):
             assert abs(a.r - b.r) < 1e-9
@@ -250,7 +250,7 @@ def test_rotating_the_scan_rotates_the_segments():
 # ------------------------------------------------------------------ steps, degenerate input, validation
 def test_steps_are_plain_arrays_per_beam():
     scan, _ = next(iter(sim.simulate("hall", seed=0)))
-    segments, steps = angular_segmentation(scan), angular_arrays(scan)
+    segments, steps = angular_segmentation(scan, split_gap_m=None), angular_arrays(scan, split_gap_m=None)
     assert isinstance(steps, AngularSteps)
     n = scan.n_beams
     for a in (steps.local_angles, steps.angular_labels, steps.distances, steps.labels):
@@ -261,7 +261,7 @@ def test_steps_are_plain_arrays_per_beam():
     assert np.all(np.isnan(steps.distances) == (steps.angular_labels < 0))
     assert np.all(steps.angular_labels[steps.labels >= 0] >= 0)
     check_consistent(scan, segments, steps)
-    again = angular_segmentation(scan)  # deterministic, and the same without the steps
+    again = angular_segmentation(scan, split_gap_m=None)  # deterministic, and the same without the steps
     assert [(s.first, s.last, s.r, s.alpha) for s in again] == [(s.first, s.last, s.r, s.alpha) for s in segments]
 
 
@@ -279,8 +279,8 @@ def test_steps_are_plain_arrays_per_beam():
 )
 def test_degenerate_scans_give_no_segments(ranges):
     scan = Scan(ranges=ranges, angles=np.radians(np.arange(len(ranges), dtype=float)))
-    assert angular_segmentation(scan) == []
-    segments, steps = angular_segmentation(scan), angular_arrays(scan)
+    assert angular_segmentation(scan, split_gap_m=None) == []
+    segments, steps = angular_segmentation(scan, split_gap_m=None), angular_arrays(scan, split_gap_m=None)
     assert segments == [] and steps.labels.shape == (len(ranges),) and np.all(steps.labels == -1)
 
 
@@ -332,7 +332,7 @@ def test_runs_on_real_recordings(shared_datasets, path, n_scans):
         pytest.skip(f"{file} not found")
     errors, counts = [], []
     for scan in itertools.islice(read_scans(file), n_scans):
-        segments, steps = angular_segmentation(scan), angular_arrays(scan)
+        segments, steps = angular_segmentation(scan, split_gap_m=None), angular_arrays(scan, split_gap_m=None)
         check_consistent(scan, segments, steps)
         counts.append(len(segments))
         errors += [s.error for s in segments]

@@ -57,10 +57,10 @@ def test_matches_the_loop_reference(ranges, threshold, min_points, full):
     n = len(ranges)
     step = 2 * np.pi / max(n, 1) if full else np.radians(1.0)
     scan = Scan(ranges=ranges, angles=-np.pi + step * np.arange(n), range_max=30.0)
-    got = segment_labels(scan, threshold, min_points=min_points)
+    got = segment_labels(scan, threshold, min_points=min_points, adaptive=False)
     want = reference_labels(scan, threshold, min_points)
     np.testing.assert_array_equal(got, want)
-    segments = range_segments(scan, threshold, min_points=min_points)
+    segments = range_segments(scan, threshold, min_points=min_points, adaptive=False)
     assert [s.indices.tolist() for s in segments] == reference_runs(scan, threshold, min_points)
 
 

@@ -281,7 +281,7 @@ def test_adaptive_threshold_keeps_a_far_wall_whole():
     world = World("test", walls=(Wall((2.0, 12.0), (14.0, 12.0)),))
     lidar = Lidar.from_fov("test", 180.0, 0.5, range_max=40.0, noise_std_m=0.0)
     scan = scan_at(world, lidar, (0.0, 0.0, 0.0), 0.0)[0]
-    fixed = segment_labels(scan)
+    fixed = segment_labels(scan, adaptive=False)
     adaptive = segment_labels(scan, adaptive=True)
     assert len(set(adaptive[scan.valid].tolist())) == 1
     assert (fixed[scan.valid] == -1).sum() > 10 or len(set(fixed[scan.valid].tolist())) > 3

@@ -3,6 +3,8 @@
 
 from . import iav, legs
 from .iav import (
+    ArcParams,
+    CircleParams,
     IAVStats,
     circle_from_iav,
     detect_arcs,
@@ -11,7 +13,8 @@ from .iav import (
     inscribed_angles,
     middle_point_offset,
 )
-from .legs import detect_legs, pair_legs
+from .legs import LegsParams, detect_legs, pair_legs
 
-__all__ = ["iav", "legs", "IAVStats", "circle_from_iav", "detect_arcs", "detect_circles", "iav_stats",
+__all__ = ["iav", "legs", "ArcParams", "CircleParams", "LegsParams",
+           "IAVStats", "circle_from_iav", "detect_arcs", "detect_circles", "iav_stats",
            "inscribed_angles", "middle_point_offset", "detect_legs", "pair_legs"]

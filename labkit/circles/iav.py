@@ -48,6 +48,7 @@ Table II (the defaults here).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
@@ -69,12 +70,15 @@ from .._iav import (  # the shared machinery; the public names are documented he
     is_v_corner,
     middle_point_offset,
 )
+from .._params import Params, param, takes_params
 from ..features import Circle, LineSegment
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
 
 __all__ = [
+    "CircleParams",
+    "ArcParams",
     "IAVStats",
     "inscribed_angles",
     "iav_stats",
@@ -93,24 +97,78 @@ __all__ = [
 #: Line extraction before :func:`detect_arcs` (Sec. II-B.2: "a very low peak error and high distance between
 #: line endpoints"): the paper's 0.02 m peak error, and lines shorter than 0.5 m dropped so that arcs are not
 #: cut into small polygons.
-ARC_LINE_PARAMS = MappingProxyType({"split_threshold_m": 0.02, "min_length_m": 0.5})
 
 
 # ============================================================================ detectors
+@dataclass(frozen=True)
+class CircleParams(Params):
+    """Parameters of :func:`detect_circles` and the ``[circles]`` table of :class:`labkit.Config`
+    (Xavier et al. Table II), each default once: lengths in metres, angles in degrees."""
+
+    min_points: int = param(4, "fewest points (circle_min_pts)", lo=3)
+    min_chord_m: float = param(0.15, "shortest chord, metres (circle_min_len)", lo=0)
+    max_chord_m: float = param(math.inf, "longest chord, metres (circle_max_len; inf: unlimited)", lo=0, strict=True)
+    middle_range: tuple = param((0.1, 0.7), "prerequisite band: the middle point's distance from the chord, "
+                                            "as a fraction of the chord", lo=0)
+    mean_range_deg: tuple = param(tuple(math.degrees(a) for a in CIRCLE_MEAN_RANGE), "accepted IAV mean, degrees",
+                                  lo=0, hi=180)
+    std_max_deg: float = param(math.degrees(CIRCLE_STD_MAX), "largest IAV standard deviation, degrees "
+                                                             "(circle_std_max 0.15 rad)", lo=0, strict=True)
+    center_method: str = param("iav", "centre and radius: iav (the paper's construction), algebraic or geometric",
+                               choices=("iav", "algebraic", "geometric"))
+    arc_like: bool = param(False, "also keep arc-like shapes (tree trunks) with a larger spread, minus V-corners")
+    arc_like_std_max_deg: float = param(math.degrees(ARC_LIKE_STD_MAX), "arc-like: largest IAV standard deviation, "
+                                                                        "degrees", lo=0, strict=True)
+    v_corner_neighbours: int = param(4, "arc-like: neighbours whose angles must grow for a V-corner", lo=1)
+
+
+@dataclass(frozen=True)
+class ArcParams(Params):
+    """Parameters of :func:`detect_arcs` and the ``[arcs]`` table of :class:`labkit.Config`, each
+    default once: lengths in metres, angles in degrees. ``split_threshold_m`` and
+    ``min_length_m`` are the finer line pass's (:data:`ARC_LINE_PARAMS`)."""
+
+    split_threshold_m: float = param(0.02, "split threshold of the finer line pass, metres", lo=0, strict=True)
+    min_length_m: float = param(0.5, "shortest line of the finer line pass, metres", lo=0)
+    min_points: int = param(4, "fewest points of an arc", lo=3)
+    min_chord_m: float = param(0.15, "shortest chord of an arc, metres", lo=0)
+    mean_range_deg: tuple = param((90.0, 155.0), "accepted IAV mean, degrees", lo=0, hi=180)
+    std_max_deg: float = param(math.degrees(CIRCLE_STD_MAX), "largest IAV standard deviation, degrees", lo=0,
+                               strict=True)
+    center_method: str = param("geometric", "centre and radius: geometric, algebraic or iav",
+                               choices=("iav", "algebraic", "geometric"))
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        kw["line_params"] = {"split_threshold_m": kw.pop("split_threshold_m"), "min_length_m": kw.pop("min_length_m")}
+        return kw
+
+    def _finish(self, kw: dict, raw: dict) -> dict:
+        if kw.get("lines") is not None and "line_params" not in raw:  # given lines, there is no line pass
+            kw.pop("line_params")
+        return kw
+
+
+#: The finer line pass of :func:`detect_arcs` (:class:`ArcParams` ' defaults).
+ARC_LINE_PARAMS = MappingProxyType({"split_threshold_m": ArcParams.split_threshold_m,
+                                    "min_length_m": ArcParams.min_length_m})
+
+
+@takes_params(CircleParams, segmented=True, own_segmentation=("seg_threshold_m",))
 def detect_circles(
     scan: Scan,
     *,
     seg_threshold_m: float = 0.08,
-    min_points: int = 4,
-    min_chord_m: float = 0.15,
-    max_chord_m: float = math.inf,
-    middle_range: tuple[float, float] = (0.1, 0.7),
-    mean_range: tuple[float, float] = CIRCLE_MEAN_RANGE,
-    std_max: float = CIRCLE_STD_MAX,
-    center_method: str = "iav",
-    arc_like: bool = False,
-    arc_like_std_max: float = ARC_LIKE_STD_MAX,
-    v_corner_neighbours: int = 4,
+    min_points: int,
+    min_chord_m: float,
+    max_chord_m: float,
+    middle_range: tuple[float, float],
+    mean_range: tuple[float, float],
+    std_max: float,
+    center_method: str,
+    arc_like: bool,
+    arc_like_std_max: float,
+    v_corner_neighbours: int,
     v_corner_stride: int | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,
@@ -206,18 +264,19 @@ def detect_circles(
     return (circles, steps) if trace else circles
 
 
+@takes_params(ArcParams, positional=("lines",), segmented=True, own_segmentation=("seg_threshold_m",))
 def detect_arcs(
     scan: Scan,
-    lines: list[LineSegment] | None = None,
     *,
+    lines: list[LineSegment] | None = None,
     seg_threshold_m: float = 0.08,
-    min_points: int = 4,
-    min_chord_m: float = 0.15,
+    min_points: int,
+    min_chord_m: float,
     max_chord_m: float = math.inf,
     middle_range: tuple[float, float] = (0.1, 0.7),
-    mean_range: tuple[float, float] = (math.radians(90.0), math.radians(155.0)),
-    std_max: float = CIRCLE_STD_MAX,
-    center_method: str = "geometric",
+    mean_range: tuple[float, float],
+    std_max: float,
+    center_method: str,
     line_params: dict | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,

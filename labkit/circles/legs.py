@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -76,13 +77,14 @@ from .._iav import (
     _trace,
     circle_from_iav,
 )
+from .._params import Params, param, takes_params
 from ..features import Leg, Person
 from ..fitting import fit_circle
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
 
-__all__ = ["detect_legs", "pair_legs", "is_occluded"]
+__all__ = ["LegsParams", "detect_legs", "pair_legs", "is_occluded"]
 
 _LEG_CENTER_METHODS = ("ray", "iav", "algebraic", "geometric")
 
@@ -135,18 +137,53 @@ def _leg_center(points: np.ndarray, chord: float, mean: float, side: float,
     return np.array(fit.center, dtype=np.float64), 2.0 * fit.radius
 
 
+@dataclass(frozen=True)
+class LegsParams(Params):
+    """Parameters of :func:`detect_legs` and :func:`pair_legs`, and the ``[legs]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
+
+    _not_passed = ("pair_max_distance_m",)  # pair_legs's
+    min_points: int = param(3, "fewest points of a leg", lo=3)
+    chord_range_m: tuple = param((0.1, 0.25), "accepted chord, metres (Xavier et al.)", lo=0)
+    chord_padding_beams: float = param(1.0, "widen the chord by this many beam spacings at the leg's range", lo=0)
+    middle_range: tuple = param((0.1, 0.7), "prerequisite band: the middle point's distance from the chord, "
+                                            "as a fraction of the chord", lo=0)
+    iav_mean_range_deg: tuple = param((0.0, 180.0), "accepted IAV mean, degrees ([0, 180]: not tested)", lo=0,
+                                      hi=180)
+    iav_std_max_deg: float = param(math.inf, "largest IAV standard deviation, degrees (inf: not tested)",
+                                   lo=0, strict=True)
+    reject_occluded: bool = param(True, "drop segments partly hidden behind a nearer object")
+    center_method: str = param("ray", "centre: ray (middle point pushed back by the radius), iav, algebraic, "
+                                      "geometric", choices=("ray", "iav", "algebraic", "geometric"))
+    pair_max_distance_m: float = param(0.6, "two legs closer than this are one person, metres (pair_legs)",
+                                       lo=0, strict=True)
+
+    @classmethod
+    def renamed(cls) -> dict:
+        return {"chord_range_m": "chord_range"}
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        if self.iav_mean_range_deg == (0.0, 180.0):
+            kw["iav_mean_range"] = None
+        if math.isinf(self.iav_std_max_deg):
+            kw["iav_std_max"] = None
+        return kw
+
+
+@takes_params(LegsParams, segmented=True, own_segmentation=("seg_threshold_m",))
 def detect_legs(
     scan: Scan,
     *,
     seg_threshold_m: float = 0.08,
-    min_points: int = 3,
-    chord_range: tuple[float, float] = (0.1, 0.25),
-    chord_padding_beams: float = 1.0,
-    middle_range: tuple[float, float] = (0.1, 0.7),
-    iav_mean_range: tuple[float, float] | None = None,
-    iav_std_max: float | None = None,
-    reject_occluded: bool = True,
-    center_method: str = "ray",
+    min_points: int,
+    chord_range: tuple[float, float],
+    chord_padding_beams: float,
+    middle_range: tuple[float, float],
+    iav_mean_range: tuple[float, float] | None,
+    iav_std_max: float | None,
+    reject_occluded: bool,
+    center_method: str,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,
 ) -> list[Leg] | tuple[list[Leg], list[Step]]:
@@ -270,7 +307,7 @@ def _leg_params(min_points, chord_range, middle_range, iav_mean_range, iav_std_m
     return min_points, chord_range, middle_range, iav_mean_range, iav_std_max, chord_padding_beams
 
 
-def pair_legs(legs: list[Leg], max_distance_m: float = 0.6) -> list[Person]:
+def pair_legs(legs: list[Leg], max_distance_m: float = LegsParams.pair_max_distance_m) -> list[Person]:
     """Pair legs into people: greedily, closest pair first, while the two centres are at
     most ``max_distance_m`` apart.
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ._params import LineExtractor, Params
+from ._params import LineExtractor, Params, takes_params
 from .angular import AngularParams, AngularSteps, angular_arrays, angular_lines, angular_segmentation, local_directions
 from .hough import HoughParams, hough_lines
 from .iav import IAVLineParams, detect_lines_iav
@@ -43,15 +43,19 @@ LINE_EXTRACTORS: dict[str, LineExtractor] = {}
 def register(name: str, fn: Callable, params_cls: type, description: str, *, label: str | None = None,
              fixed: dict | None = None) -> LineExtractor:
     """Add a line extractor under ``name`` (lower case, no spaces: it is a config value and a
-    CLI argument). ``fn(scan, *, segments=None, **params_cls().kwargs())`` returns a list of
-    :class:`~labkit.LineSegment`; ``params_cls`` is a frozen :class:`Params` record holding its
-    defaults; ``label`` (default: ``name``) names it in tables."""
+    CLI argument). ``fn`` returns a list of :class:`~labkit.LineSegment`; it either has the
+    call shape ``fn(scan, params=None, *, segments=None, trace=False, **overrides)`` (made by
+    :func:`labkit._params.takes_params`) or is a plain ``fn(scan, *, segments=None,
+    **params_cls().kwargs())``, which is given that shape here. ``params_cls`` is a frozen
+    :class:`Params` record holding its defaults; ``label`` (default: ``name``) names it in tables."""
     if not isinstance(name, str) or not name or name != name.strip().lower() or " " in name or name == "none":
         raise ValueError(f"an extractor name must be a lower-case word other than 'none', got {name!r}")
     if name in LINE_EXTRACTORS:
         raise ValueError(f"a line extractor {name!r} is already registered")
     if not (isinstance(params_cls, type) and issubclass(params_cls, Params)):
         raise ValueError(f"params_cls must be a labkit.lines.Params record, got {params_cls!r}")
+    if getattr(fn, "params_cls", None) is not params_cls:
+        fn = takes_params(params_cls)(fn)
     entry = LineExtractor(name, fn, params_cls, description, label or name, tuple((fixed or {}).items()))
     LINE_EXTRACTORS[name] = entry
     return entry

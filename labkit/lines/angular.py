@@ -72,7 +72,7 @@ from ..features import LineSegment, line_segment
 from ..geometry import circular_mean, signed_distance_to_line
 from ..scan import Scan
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 
 __all__ = ["AngularSteps", "local_directions", "angular_segmentation", "angular_arrays"]
 
@@ -201,13 +201,47 @@ def _scan_order(beams: np.ndarray, n: int, full_circle: bool) -> np.ndarray:
     return np.roll(beams, -(widest + 1))
 
 
+@dataclass(frozen=True)
+class AngularParams(Params):
+    """Parameters of :func:`angular_segmentation` and the ``[lines.angular]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
+
+    eps_theta_deg: float = param(math.degrees(EPS_THETA), "DBSCAN1D radius in line direction, degrees", lo=0,
+                                 strict=True, hi=89.9)
+    eps_dist_m: float = param(EPS_DIST, "DBSCAN1D radius in line offset, metres", lo=0, strict=True)
+    min_points: int = param(MIN_PTS, "DBSCAN1D min_pts of both clusterings", lo=2)
+    split_gap_m: float = param(0.3, "split collinear clusters at gaps wider than this, metres (inf: never)", lo=0,
+                               strict=True, optional=True)
+
+    @classmethod
+    def renamed(cls) -> dict:
+        return {"eps_dist_m": "eps_dist", "min_points": "min_pts"}
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        gap = kw["split_gap_m"]
+        kw["split_gap_m"] = None if gap is None or math.isinf(gap) else gap
+        return kw
+
+
+def _outside(scan: Scan, lines: list[LineSegment], segments) -> list[LineSegment]:
+    """Given ``segments`` (labels or RangeSegments), the lines with most of their beams in a
+    segment (angular segmentation clusters the whole scan; the pipeline masks the beams that
+    legs and circles took)."""
+    from ..segmentation import labels_from
+
+    outside = labels_from(scan, segments) < 0
+    return [ln for ln in lines if not outside[ln.indices].mean() > 0.5]
+
+
+@takes_params(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"), on_segments=_outside)
 def angular_segmentation(
     scan: Scan,
-    eps_theta: float = EPS_THETA,
-    eps_dist: float = EPS_DIST,
-    min_pts: int = MIN_PTS,
     *,
-    split_gap_m: float | None = None,
+    eps_theta: float,
+    eps_dist: float,
+    min_pts: int,
+    split_gap_m: float | None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Line segments of a scan by angular segmentation (Meglicki 2021, Algorithm 5).
@@ -217,6 +251,13 @@ def angular_segmentation(
     scan : Scan
         Invalid beams are skipped (they also leave their neighbours without a local
         direction).
+    params : AngularParams, optional
+        The parameters, in degrees and metres (default: its defaults); any of its fields may
+        be given as a keyword (``eps_theta_deg=5``), and so may the radian names below,
+        also by position as before.
+    segments : labels or list of RangeSegment, optional
+        Keep only the lines with most of their beams in a segment (the whole scan is
+        clustered all the same).
     eps_theta : float, radians
         DBSCAN radius on local directions (circular, period pi), in (0, pi/2). Default
         3 degrees.
@@ -227,8 +268,8 @@ def angular_segmentation(
         >= 2. Default 8. It is also the smallest segment.
     split_gap_m : float, optional, metres
         Also split collinear pieces wherever consecutive points along the line are
-        farther apart than this (e.g. 0.3 for walls on either side of a door). Default:
-        no split, as in the paper.
+        farther apart than this (e.g. 0.3 for walls on either side of a door). Default
+        0.3 m, as in the pipeline; None or inf: no split, as in the paper.
     trace : bool
         Also return the steps, as :class:`labkit.Step` records (``algorithm="angular"``;
         ``beams`` holds each step's beams, spread over the scan): ``"directions"`` (step 1:
@@ -273,13 +314,14 @@ def angular_segmentation(
     return (segments, steps) if trace else segments
 
 
+@takes_params(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
 def angular_arrays(
     scan: Scan,
-    eps_theta: float = EPS_THETA,
-    eps_dist: float = EPS_DIST,
-    min_pts: int = MIN_PTS,
     *,
-    split_gap_m: float | None = None,
+    eps_theta: float,
+    eps_dist: float,
+    min_pts: int,
+    split_gap_m: float | None,
 ) -> AngularSteps:
     """The intermediate arrays of :func:`angular_segmentation` (same parameters), one per
     stage, per beam: local directions, angular labels, the clusters' mean directions, offsets
@@ -371,33 +413,7 @@ def _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, trace: bool):
     return segments, arrays, steps
 
 
-@dataclass(frozen=True)
-class AngularParams(Params):
-    """Parameters of :func:`angular_segmentation`, the defaults once: lengths in metres, angles
-    in degrees. ``split_gap_m`` inf: never split collinear clusters at a gap."""
 
-    eps_theta_deg: float = math.degrees(EPS_THETA)
-    eps_dist_m: float = EPS_DIST
-    min_points: int = MIN_PTS
-    split_gap_m: float = 0.3
-
-    @classmethod
-    def renamed(cls) -> dict:
-        return {"eps_dist_m": "eps_dist", "min_points": "min_pts"}
-
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
-        kw["split_gap_m"] = None if math.isinf(kw["split_gap_m"]) else kw["split_gap_m"]
-        return kw
-
-
-def angular_lines(scan: Scan, *, segments=None, **kwargs) -> list[LineSegment]:
-    """:func:`angular_segmentation` with the registry's call shape: given ``segments`` (labels
-    or RangeSegments), lines with most of their beams outside every segment are dropped."""
-    lines = angular_segmentation(scan, **kwargs)
-    if segments is None:
-        return lines
-    from ..segmentation import labels_from
-
-    outside = labels_from(scan, segments) < 0
-    return [ln for ln in lines if not outside[ln.indices].mean() > 0.5]
+#: The registry's name for it (it takes ``segments`` and gives the lines of the whole scan's
+#: clusters that lie mostly in them).
+angular_lines = angular_segmentation

@@ -48,7 +48,7 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 from ._runs import _fit, _segments, _taking_part, _Trace
 
 __all__ = ["hough_lines"]
@@ -62,16 +62,31 @@ _DENSE_CELLS = 1 << 22
 _MAX_R_CELLS = 1 << 24
 
 
+@dataclass(frozen=True)
+class HoughParams(Params):
+    """Parameters of :func:`hough_lines` and the ``[lines.hough]`` table of :class:`labkit.Config`,
+    each default once: lengths in metres, angles in degrees."""
+
+    r_step_m: float = param(0.05, "accumulator cell size in r, metres", lo=0, strict=True)
+    alpha_step_deg: float = param(1.0, "accumulator cell size in alpha, degrees", lo=0, strict=True, hi=90)
+    threshold_m: float = param(0.03, "a point belongs to a peak's line within this distance, metres", lo=0,
+                               strict=True)
+    min_votes: int = param(8, "fewest votes of a peak", lo=2)
+    min_points: int = param(5, "fewest points of a line segment", lo=2)
+    min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+
+@takes_params(HoughParams)
 def hough_lines(
     scan: Scan,
     *,
-    r_step_m: float = 0.05,
-    alpha_step: float = math.radians(1.0),
-    threshold_m: float = 0.03,
-    min_votes: int = 8,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    max_gap_m: float = 0.3,
+    r_step_m: float,
+    alpha_step: float,
+    threshold_m: float,
+    min_votes: int,
+    min_points: int,
+    min_length_m: float,
+    max_gap_m: float,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -260,16 +275,3 @@ def _params(r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m
-
-
-@dataclass(frozen=True)
-class HoughParams(Params):
-    """Parameters of :func:`hough_lines`, the defaults once: lengths in metres, angles in degrees."""
-
-    r_step_m: float = 0.05
-    alpha_step_deg: float = 1.0
-    threshold_m: float = 0.03
-    min_votes: int = 8
-    min_points: int = 5
-    min_length_m: float = 0.15
-    max_gap_m: float = 0.3

@@ -30,19 +30,32 @@ from ..features import LineSegment, line_segment
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 
 __all__ = ["detect_lines_iav"]
 
 
+@dataclass(frozen=True)
+class IAVLineParams(Params):
+    """Parameters of :func:`detect_lines_iav` and the ``[lines.iav]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees
+    (``std_max_deg``: Table II's 0.15 rad)."""
+
+    min_points: int = param(5, "fewest points of a line (line_min_pts)", lo=3)
+    min_length_m: float = param(0.15, "shortest line, metres (line_min_len)", lo=0)
+    mean_tolerance_deg: float = param(5.0, "largest |IAV mean - 180|, degrees", lo=0, strict=True)
+    std_max_deg: float = param(math.degrees(CIRCLE_STD_MAX), "largest IAV standard deviation, degrees", lo=0,
+                               strict=True)
+
+@takes_params(IAVLineParams, segmented=True, own_segmentation=("seg_threshold_m",))
 def detect_lines_iav(
     scan: Scan,
     *,
     seg_threshold_m: float = 0.08,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    mean_tolerance: float = math.radians(5.0),
-    std_max: float = CIRCLE_STD_MAX,
+    min_points: int,
+    min_length_m: float,
+    mean_tolerance: float,
+    std_max: float,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -123,14 +136,3 @@ def detect_lines_iav(
     limits = {_FEW: min_points, _SHORT: min_length_m, _MEAN: mean_tolerance, _STD: std_max, _ACCEPTED: std_max,
               "mean_from": math.pi}  # the mean test compares |mean - pi| with the tolerance
     return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang, "iav_lines", limits, lines)
-
-
-@dataclass(frozen=True)
-class IAVLineParams(Params):
-    """Parameters of :func:`detect_lines_iav`, the defaults once: lengths in metres, angles in
-    degrees (``std_max_deg``: Table II's 0.15 rad)."""
-
-    min_points: int = 5
-    min_length_m: float = 0.15
-    mean_tolerance_deg: float = 5.0
-    std_max_deg: float = math.degrees(CIRCLE_STD_MAX)

@@ -52,19 +52,31 @@ from ..features import LineSegment
 from ..fitting import line_from_sums
 from ..scan import Scan
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 from ._runs import _fitted, _PrefixSums, _runs, _Trace
 
 __all__ = ["incremental_lines"]
 
 
+@dataclass(frozen=True)
+class IncrementalParams(Params):
+    """Parameters of :func:`incremental_lines` and the ``[lines.incremental]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres."""
+
+    max_error_m: float = param(0.05, "a point joins the line while within this distance of the refitted line, metres",
+                               lo=0, strict=True)
+    min_points: int = param(5, "points of a seed, and fewest points of a line", lo=2)
+    min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+
+@takes_params(IncrementalParams)
 def incremental_lines(
     scan: Scan,
     *,
-    max_error_m: float = 0.05,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    max_gap_m: float = 0.3,
+    max_error_m: float,
+    min_points: int,
+    min_length_m: float,
+    max_gap_m: float,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -240,13 +252,3 @@ def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int, st
                 steps.add("hand_back", int(beams[right[0]]), int(beams[right[1] - 1]), r2, a2, at=at, value=d2,
                           threshold=d1, reason=f"corner: beam {at} is {d2:.3f} m from the next line, {d1:.3f} m "
                                                f"from its own: it moves to the next")
-
-
-@dataclass(frozen=True)
-class IncrementalParams(Params):
-    """Parameters of :func:`incremental_lines`, the defaults once: lengths in metres."""
-
-    max_error_m: float = 0.05
-    min_points: int = 5
-    min_length_m: float = 0.15
-    max_gap_m: float = 0.3

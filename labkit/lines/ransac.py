@@ -49,7 +49,7 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 from ._runs import _fit, _segments, _taking_part, _Trace
 
 __all__ = ["ransac_lines"]
@@ -58,16 +58,32 @@ __all__ = ["ransac_lines"]
 DEFAULT_SEED = 0
 
 
+@dataclass(frozen=True)
+class RansacParams(Params):
+    """Parameters of :func:`ransac_lines` and the ``[lines.ransac]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres (the random generator is
+    seeded with :data:`DEFAULT_SEED`; pass ``rng=`` to the function for another)."""
+
+    threshold_m: float = param(0.03, "a point is an inlier within this distance of the line, metres", lo=0, strict=True)
+    min_inliers: int = param(8, "fewest inliers of a line", lo=2)
+    max_trials: int = param(50, "random pairs drawn per line", lo=1)
+    draw_window: int = param(20, "the second point of a pair is drawn within this many beams of the first "
+                                 "(none: anywhere)", lo=1, optional=True)
+    min_points: int = param(5, "fewest points of a line segment", lo=2)
+    min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+
+@takes_params(RansacParams)
 def ransac_lines(
     scan: Scan,
     *,
-    threshold_m: float = 0.03,
-    min_inliers: int = 8,
-    max_trials: int = 50,
-    draw_window: int | None = 20,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    max_gap_m: float = 0.3,
+    threshold_m: float,
+    min_inliers: int,
+    max_trials: int,
+    draw_window: int | None,
+    min_points: int,
+    min_length_m: float,
+    max_gap_m: float,
     segments=None,
     rng: np.random.Generator | None = None,
     trace: bool = False,
@@ -271,17 +287,3 @@ def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_l
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m
-
-
-@dataclass(frozen=True)
-class RansacParams(Params):
-    """Parameters of :func:`ransac_lines`, the defaults once: lengths in metres (the random
-    generator is seeded with :data:`DEFAULT_SEED`)."""
-
-    threshold_m: float = 0.03
-    min_inliers: int = 8
-    max_trials: int = 50
-    draw_window: int | None = 20
-    min_points: int = 5
-    min_length_m: float = 0.15
-    max_gap_m: float = 0.3

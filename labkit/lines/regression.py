@@ -60,7 +60,7 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..scan import Scan
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 from ._runs import _fitted, _PrefixSums, _runs, _Trace
 
 __all__ = ["regression_lines"]
@@ -70,15 +70,31 @@ __all__ = ["regression_lines"]
 _SIGMA_FLOOR_M = 0.001
 
 
+@dataclass(frozen=True)
+class RegressionParams(Params):
+    """Parameters of :func:`regression_lines` and the ``[lines.regression]`` table of
+    :class:`labkit.Config`, each default once: lengths in metres (``range_sigma_m`` none:
+    estimated from the scan, see the function)."""
+
+    window: int = param(7, "points per sliding window (Nguyen's Nf)", lo=3)
+    fidelity_threshold: float = param(12.0, "largest fidelity of a window kept (residual over expected noise)",
+                                      lo=0, strict=True)
+    min_points: int = param(5, "fewest points of a line", lo=2)
+    min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+    range_sigma_m: float = param(None, "range noise, metres (none: estimated from the scan)", lo=0, strict=True,
+                                 optional=True, kind=float)
+
+@takes_params(RegressionParams)
 def regression_lines(
     scan: Scan,
     *,
-    window: int = 7,
-    fidelity_threshold: float = 12.0,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    max_gap_m: float = 0.3,
-    range_sigma_m: float | None = None,
+    window: int,
+    fidelity_threshold: float,
+    min_points: int,
+    min_length_m: float,
+    max_gap_m: float,
+    range_sigma_m: float | None,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -386,16 +402,3 @@ def _absorb(spans: list[list[int]], runs: list[tuple[int, int]], table: np.ndarr
                 i += 1
             out[k][1] = i
     return [(a, b) for a, b in out]
-
-
-@dataclass(frozen=True)
-class RegressionParams(Params):
-    """Parameters of :func:`regression_lines`, the defaults once: lengths in metres
-    (``range_sigma_m`` None: estimated from the scan, see the function)."""
-
-    window: int = 7
-    fidelity_threshold: float = 12.0
-    min_points: int = 5
-    min_length_m: float = 0.15
-    max_gap_m: float = 0.3
-    range_sigma_m: float | None = None

@@ -44,9 +44,9 @@ from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..fitting import _line_covariances, line_from_sums
 from ..scan import Scan
-from ..segmentation import labels_from, segment_labels, segment_order
+from ..segmentation import RANGE_SIGMA_M, SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
-from ._params import Params
+from ._params import Params, param, takes_params
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -235,22 +235,52 @@ def _covariances(idx: np.ndarray, starts: np.ndarray, alpha: np.ndarray, p: np.n
     return _line_covariances(p[:, 0], p[:, 1], w, starts, alpha, var, r=r)
 
 
+@dataclass(frozen=True)
+class SplitMergeParams(Params):
+    """Parameters of :func:`split_and_merge` (both ``"iepf"`` and ``"split_and_merge"`` in the
+    registry, and the ``[lines]`` table of :class:`labkit.Config`), each default once: lengths
+    in metres (``_m``), angles in degrees (``_deg``)."""
+
+    split_threshold_m: float = param(0.05, "split when the worst point is farther than this from the line, metres",
+                                     lo=0, strict=True)
+    min_points: int = param(5, "fewest points of a line (Xavier et al. line_min_pts)", lo=2)
+    min_length_m: float = param(0.15, "shortest line kept, metres (Xavier et al. line_min_len)", lo=0)
+    max_gap_m: float = param(0.3, "split a run at a gap wider than this between neighbouring points, metres",
+                             lo=0, strict=True)
+    merge: str = param("thresholds", "merge test of neighbouring lines: thresholds, chi2 or none",
+                       choices=("thresholds", "chi2", "none"), optional=True)
+    merge_dr_m: float = param(0.2, "merge when |dr| is under this, metres", lo=0, strict=True)
+    merge_dalpha_deg: float = param(10.0, "and |dalpha| under this, degrees", lo=0, strict=True)
+    merge_chi2: float = param(9.21, "chi-square merge threshold (2 dof, 99 %)", lo=0, strict=True)
+    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (line covariances, chi2 merge)",
+                                 lo=0, strict=True)
+    weights: str = param("inverse_range", "point weights of the fits: inverse_range (1/rho, the slides) or uniform",
+                         choices=("inverse_range", "uniform"), optional=True)
+
+    def kwargs(self) -> dict:
+        kw = super().kwargs()
+        kw["merge"] = None if kw["merge"] == "none" else kw["merge"]
+        kw["weights"] = None if kw["weights"] == "inverse_range" else kw["weights"]
+        return kw
+
+
+@takes_params(SplitMergeParams, segmented=True, own_segmentation=("segment_threshold_m", "adaptive_segmentation"))
 def split_and_merge(
     scan: Scan,
     *,
     method: str = "endpoints",
-    split_threshold_m: float = 0.05,
-    min_points: int = 5,
-    min_length_m: float = 0.15,
-    max_gap_m: float = 0.3,
-    merge: str | None = "thresholds",
-    merge_dr_m: float = 0.2,
-    merge_dalpha: float = math.radians(10.0),
-    merge_chi2: float = 9.21,
-    segment_threshold_m: float = 0.08,
-    adaptive_segmentation: bool = True,
-    range_sigma_m: float = 0.01,
-    weights=None,
+    split_threshold_m: float,
+    min_points: int,
+    min_length_m: float,
+    max_gap_m: float,
+    merge: str | None,
+    merge_dr_m: float,
+    merge_dalpha: float,
+    merge_chi2: float,
+    segment_threshold_m: float = SegmentationParams.threshold_m,
+    adaptive_segmentation: bool = SegmentationParams.adaptive,
+    range_sigma_m: float,
+    weights,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -560,25 +590,3 @@ def _finish(lines: list[_Line], points, ranges, weights, sigma: float) -> list[L
             for ln, c, start, end, n, error in zip(lines, cov, ends[0::2], ends[1::2], counts.tolist(), rms,
                                                    strict=True)]
 
-
-@dataclass(frozen=True)
-class SplitMergeParams(Params):
-    """Parameters of :func:`split_and_merge` (both ``"iepf"`` and ``"split_and_merge"`` in the
-    registry), the defaults once: lengths in metres, angles in degrees."""
-
-    split_threshold_m: float = 0.05
-    min_points: int = 5
-    min_length_m: float = 0.15
-    max_gap_m: float = 0.3
-    merge: str = "thresholds"
-    merge_dr_m: float = 0.2
-    merge_dalpha_deg: float = 10.0
-    merge_chi2: float = 9.21
-    range_sigma_m: float = 0.01
-    weights: str = "inverse_range"
-
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
-        kw["merge"] = None if kw["merge"] == "none" else kw["merge"]
-        kw["weights"] = None if kw["weights"] == "inverse_range" else kw["weights"]
-        return kw
