@@ -41,7 +41,8 @@ def _as_pairs(got, setting):
     assert isinstance(got, (list, tuple)), f"{setting}: return a list of (i, j) pairs, got {type(got).__name__}"
     pairs = []
     for p in got:
-        assert isinstance(p, (list, tuple)) and len(p) == 2, f"{setting}: every pair is (line index, wall index), got {p!r}"
+        assert isinstance(p, (list, tuple)) and len(p) == 2, (
+            f"{setting}: every pair is (line index, wall index), got {p!r}")
         pairs.append((int(p[0]), int(p[1])))
     return pairs
 
@@ -129,7 +130,7 @@ def test_hidden_edges(match_lines, rng):
         ([[1.0, 0.3]], [[1.25, 0.3]], {"max_dr": 0.25}),                             # exactly on the limit
         ([[3.0, -3.14]], [[3.01, 3.14]], {}),                                        # across the seam
         ([[3.0, 0.0], [3.0, 0.0]], [[3.0, 0.0]], {}),                                # a tie: the lower line index
-        ([[2.0, 0.0], [2.0, 0.02]], [[2.0, 0.01], [2.0, 0.0]], {}),                  # cheapest pair first, then what is left
+        ([[2.0, 0.0], [2.0, 0.02]], [[2.0, 0.01], [2.0, 0.0]], {}),                  # cheapest first, then the rest
         ([[1, 0], [2, 1]], [[2, 1], [1, 0]], {}),                                    # integers in lists
     ]
     for k, (lines, walls, kwargs) in enumerate(cases):

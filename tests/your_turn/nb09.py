@@ -8,7 +8,7 @@ _MEAN = "def mean_per_scan(feats, kind):\n"
 FILLS = {
     "64190793": Fill(
         correct=_CONFIG + ('    return labkit.Config().updated({"lines.method": method,\n'
-                           '                                    "lines.split_threshold_m": split_threshold_cm / 100})\n'),
+                           '            "lines.split_threshold_m": split_threshold_cm / 100})\n'),
         # centimetres passed on as metres: 3 cm becomes a 3 m threshold (a valid, useless Config)
         mistake=_CONFIG + ('    return labkit.Config().updated({"lines.method": method,\n'
                            '                                    "lines.split_threshold_m": split_threshold_cm})\n'),

@@ -11,7 +11,8 @@ FILLS = {
         correct=_HEAD + ("    dalpha = labkit.angle_difference(line_alpha, wall_alpha)\n"
                          "    return bool(abs(line_r - wall_r) <= max_dr_m and abs(dalpha) <= max_dalpha)\n"),
         # the angle difference taken as it comes: 179.5 deg and -179.5 deg look 359 deg apart
-        mistake=_HEAD + ("    return bool(abs(line_r - wall_r) <= max_dr_m and abs(line_alpha - wall_alpha) <= max_dalpha)\n"),
+        mistake=_HEAD + ("    dalpha = line_alpha - wall_alpha\n"
+                         "    return bool(abs(line_r - wall_r) <= max_dr_m and abs(dalpha) <= max_dalpha)\n"),
         hint="wrap the angle difference",
     ),
     "00ef5576": Fill(

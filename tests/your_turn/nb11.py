@@ -8,18 +8,20 @@ _POSE_AT = "def pose_at(t0, p0, t1, p1, t):\n"
 FILLS = {
     "a7ab2543": Fill(
         correct=_COMPOSE + (
+            "    wrap = labkit.geometry.wrap_angle\n"
             "    c, s = np.cos(a[2]), np.sin(a[2])\n"
-            "    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], labkit.geometry.wrap_angle(a[2] + b[2])])\n"),
+            "    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap(a[2] + b[2])])\n"),
         # translations added as if both frames were aligned
         mistake=_COMPOSE + "    return np.array([a[0] + b[0], a[1] + b[1], labkit.geometry.wrap_angle(a[2] + b[2])])\n",
         hint="rotate b's translation by a's heading",
     ),
     "afdd537a": Fill(
         correct=_POSE_AT + (
+            "    wrap = labkit.geometry.wrap_angle\n"
             "    u = (t - t0) / (t1 - t0)\n"
             "    x = p0[0] + u * (p1[0] - p0[0])\n"
             "    y = p0[1] + u * (p1[1] - p0[1])\n"
-            "    return np.array([x, y, labkit.geometry.wrap_angle(p0[2] + u * labkit.geometry.wrap_angle(p1[2] - p0[2]))])\n"),
+            "    return np.array([x, y, wrap(p0[2] + u * wrap(p1[2] - p0[2]))])\n"),
         # theta interpolated like x and y: from 170 deg to -170 deg the long way, through 0
         mistake=_POSE_AT + (
             "    u = (t - t0) / (t1 - t0)\n"
