@@ -117,6 +117,10 @@ _ACCUMULATED = ("points", "lines", "corners", "circles", "legs")
 # rerun's 2D views have y pointing down; mirror so that y points up as in matplotlib.
 _Y_UP = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
 
+# The time-series panels are small beside the scan view, and a legend of five to seven series
+# covers most of one: no legend (hovering a curve names it, the entity tree lists them all).
+_NO_LEGEND = rrb.PlotLegend(visible=False)
+
 
 def map_view() -> rrb.Spatial2DView:
     """The world-frame view: ``map/**``, the accumulated map shown from the start up to the cursor."""
@@ -140,16 +144,17 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
         others = {n: [f"- /world/{m}/**" for m in compare if m != n] for n in compare}
         views = [rrb.Spatial2DView(origin="/", contents=["+ /world/**", *others[n]], name=f"{n}")
                  for n in compare]
-        plots = [rrb.Tabs(rrb.TimeSeriesView(origin=f"metrics/{n}/count", name=f"{n}: counts"),
-                          rrb.TimeSeriesView(origin=f"metrics/{n}/time_ms", name=f"{n}: ms per stage"))
+        plots = [rrb.Tabs(rrb.TimeSeriesView(origin=f"metrics/{n}/count", name=f"{n}: counts", plot_legend=_NO_LEGEND),
+                          rrb.TimeSeriesView(origin=f"metrics/{n}/time_ms", name=f"{n}: ms per stage",
+                                            plot_legend=_NO_LEGEND))
                  for n in compare]
         below = rrb.Horizontal(*plots, rrb.TextDocumentView(origin="description", name="About"))
         return rrb.Blueprint(rrb.Vertical(rrb.Horizontal(*views), below, row_shares=[3, 2]), collapse_panels=False)
     views = [rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)")]
     if with_map:
         views.append(map_view())
-    panels = [(rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts"), 2),
-              (rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage"), 2),
+    panels = [(rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts", plot_legend=_NO_LEGEND), 2),
+              (rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage", plot_legend=_NO_LEGEND), 2),
               (rrb.TextLogView(origin="log", name="Log"), 1),
               (rrb.TextDocumentView(origin="description", name="About"), 2)]
     if not with_times:
