@@ -128,8 +128,9 @@ def test_visible(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng):
 
 
 def test_hidden_random(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng):
-    """80 random sorted data sets on the line (bounds by brute force, labels against scikit-learn,
-    either border policy) and 60 on a circle (against scikit-learn on the circular distances)."""
+    """80 random sorted data sets on the line (bounds by brute force; labels on the grid against
+    scikit-learn, continuous ones against labkit; either border policy) and 60 on a circle (on the grid
+    against scikit-learn on the circular distances, continuous ones against labkit)."""
     for trial in range(80):
         n = int(rng.integers(2, 301))
         if trial % 2 == 0:  # a 0.25 grid: exact differences, so "exactly eps apart" is exact
@@ -141,7 +142,8 @@ def test_hidden_random(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng
         min_pts, border = int(rng.integers(1, 9)), ("first", "noise")[trial % 4 // 2]
         setting = f"random data {trial} ({n} points, eps={eps:g}, min_pts={min_pts}, border={border!r})"
         _check_bounds(neighbourhood_bounds, x, eps, setting)
-        _check_labels(dbscan_sorted(x, eps, min_pts, border), _sklearn_labels(x, eps, min_pts)[border], setting)
+        want = _sklearn_labels(x, eps, min_pts)[border] if trial % 2 == 0 else dbscan1d(x, eps, min_pts, border=border)
+        _check_labels(dbscan_sorted(x, eps, min_pts, border), want, setting)
     for trial in range(60):
         n = int(rng.integers(1, 151))
         if trial % 2 == 0:  # the grid again, and a period on it
@@ -155,8 +157,9 @@ def test_hidden_random(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng
         min_pts, border = int(rng.integers(1, 9)), ("first", "noise")[trial % 4 // 2]
         setting = (f"random circular data {trial} ({n} points, eps={eps:g}, min_pts={min_pts}, "
                    f"period={period:g}, border={border!r})")
-        _check_labels(dbscan_circular(x, eps, min_pts, period, border),
-                      _sklearn_labels(x, eps, min_pts, period)[border], setting)
+        want = (_sklearn_labels(x, eps, min_pts, period)[border] if trial % 2 == 0
+                else dbscan1d(x, eps, min_pts, period=period, border=border))
+        _check_labels(dbscan_circular(x, eps, min_pts, period, border), want, setting)
 
 
 def test_hidden_edges(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng):
