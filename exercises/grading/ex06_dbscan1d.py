@@ -174,14 +174,13 @@ def test_hidden_edges(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng)
     cases += [(_grid(rng, 30, 40).tolist(), 0.5, 40) for _ in range(2)]
     for case, (x, eps, min_pts) in enumerate(cases):
         want = _sklearn_labels(x, eps, min_pts)
-        for as_list in (True, False):
-            data = list(x) if as_list else np.array(x, dtype=np.float64)
-            setting = f"edge case {case} ({len(x)} points as {'a list' if as_list else 'an array'}, eps={eps}, " \
-                f"min_pts={min_pts})"
-            _check_bounds(neighbourhood_bounds, data, eps, setting)
-            for border in ("first", "noise"):
-                _check_labels(dbscan_sorted(data, eps, min_pts, border), want[border],
-                              f"{setting}, border={border!r}")
+        as_list = case % 2 == 0  # every other case as a Python list
+        data = list(x) if as_list else np.array(x, dtype=np.float64)
+        setting = f"edge case {case} ({len(x)} points as {'a list' if as_list else 'an array'}, eps={eps}, " \
+            f"min_pts={min_pts})"
+        _check_bounds(neighbourhood_bounds, data, eps, setting)
+        for border in ("first", "noise"):
+            _check_labels(dbscan_sorted(data, eps, min_pts, border), want[border], f"{setting}, border={border!r}")
 
     ring = (np.arange(40) * 0.25).tolist()  # every 0.25 round a circle of 10
     circular = [([], 1.0, 1, 10.0), ([3.0], 1.0, 1, 10.0), ([3.0], 1.0, 2, 10.0),
@@ -191,18 +190,17 @@ def test_hidden_edges(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng)
                 ([1.0, 3.0, 4.0, 4.0, 5.0, 9.0, 10.0, 10.0, 11.0], 2.0, 4, 12.0),  # a border point between two
                 ([0.0, 1.0, 1.0, 2.0, 4.0, 6.0, 7.0, 7.0, 8.0], 2.0, 4, 10.0),  # ... three ways across the wrap
                 ([0.0, 2.0, 3.0, 4.0, 6.0, 7.0, 8.0], 2.0, 3, 10.0)]
-    circular += [(_grid(rng, 12, 16).tolist(), e, m, 4.0) for e in (2.0, 3.0) for m in (1, 12, 13)]  # eps >= p/2
+    circular += [(_grid(rng, 12, 16).tolist(), e, m, 4.0) for e in (2.0, 3.0) for m in (12, 13)]  # eps >= p/2
     circular += [(_grid(rng, int(rng.integers(5, 40)), 40).tolist(), 0.25 * int(rng.integers(1, 5)),
-                  int(rng.integers(1, 6)), 10.0) for _ in range(6)]
+                  int(rng.integers(1, 6)), 10.0) for _ in range(3)]
     for case, (x, eps, min_pts, period) in enumerate(circular):
         want = _sklearn_labels(x, eps, min_pts, period)
-        for as_list in (True, False):
-            data = list(x) if as_list else np.array(x, dtype=np.float64)
-            for border in ("first", "noise"):
-                _check_labels(dbscan_circular(data, eps, min_pts, period, border),
-                              want[border],
-                              f"circular edge case {case} ({len(x)} points as {'a list' if as_list else 'an array'}, "
-                              f"eps={eps}, min_pts={min_pts}, period={period}, border={border!r})")
+        as_list = case % 2 == 1
+        data = list(x) if as_list else np.array(x, dtype=np.float64)
+        for border in ("first", "noise"):
+            _check_labels(dbscan_circular(data, eps, min_pts, period, border), want[border],
+                          f"circular edge case {case} ({len(x)} points as {'a list' if as_list else 'an array'}, "
+                          f"eps={eps}, min_pts={min_pts}, period={period}, border={border!r})")
 
     for border in ("last", "all", None):  # the exception's type is graded, not its wording
         for name, function, args in [("dbscan_sorted", dbscan_sorted, ([0.0, 1.0], 1.0, 1, border)),
