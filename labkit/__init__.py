@@ -27,7 +27,6 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.viz` matplotlib, rerun and ipywidgets viewers (import explicitly)
 """
 
-import sys as _sys
 
 from . import circles, evaluation, geometry, lines, poses, sim
 from .circles import (
@@ -86,15 +85,6 @@ from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, SegmentationParams, breakpoint_thresholds, range_segments, segment_labels
 from .steps import Step
 from .tables import features_table, read_table
-
-# TEMPORARY alias for the merge (issue 14): the notebooks and exercises still use the old module
-# paths (`from labkit import iav, legs`, `from labkit.dbscan1d import ...`, `from labkit.angular
-# import ...`); remove once they use labkit.circles.iav, labkit.circles.legs, labkit.dbscan and
-# labkit.lines.angular. Entries in sys.modules only, so `labkit.dbscan1d` stays the function.
-iav, legs = circles.iav, circles.legs
-_sys.modules.update({"labkit.iav": circles.iav, "labkit.legs": circles.legs,
-                     "labkit.dbscan1d": _sys.modules["labkit.dbscan"],
-                     "labkit.angular": _sys.modules["labkit.lines.angular"]})
 
 __version__ = "0.1.0"
 

@@ -24,7 +24,7 @@ import time
 import numpy as np
 from sklearn.cluster import DBSCAN
 
-from labkit.dbscan1d import dbscan1d
+from labkit import dbscan1d
 from labkit.grading import Moved, assert_labels_result
 
 FUNCTIONS = ("neighbourhood_bounds", "dbscan_sorted", "dbscan_circular")
@@ -246,7 +246,7 @@ def test_own_work(neighbourhood_bounds, dbscan_sorted, dbscan_circular, rng):
 # ---------------------------------------------------------------------------- proof (tests/test_exercises.py)
 #: A submission that gets the right answers by calling labkit: it must score 0.
 DELEGATE = {"dbscan": '''
-from labkit.dbscan1d import dbscan1d
+from labkit import dbscan1d
 
 
 def neighbourhood_bounds(x, eps):
