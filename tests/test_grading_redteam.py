@@ -273,7 +273,8 @@ BONUS_CELL = {"grade": True, "grade_id": "bonus", "points": 100, "locked": True,
 def _build_main_class(folder: Path) -> Graded:
     course = copy_course(folder / "course")
     for student, (name, answers, before, after, *_) in MAIN_CLASS.items():
-        notebook = notebook_with(name, {gid: _dedent(code) for gid, code in answers.items()},
+        # the solution cells an attack leaves alone keep the instructor's answer (ex01 has two)
+        notebook = notebook_with(name, {**solutions(name), **{gid: _dedent(code) for gid, code in answers.items()}},
                                  before=[_dedent(c) for c in before], extra=[_dedent(c) for c in after])
         if student == "feedback_markdown_script":
             _with_cells(notebook, {"cell_type": "markdown", "metadata": {}, "source": MARKDOWN_SCRIPT})
@@ -393,7 +394,7 @@ def _forget_key() -> None:
 def _build_persistence_class(folder: Path) -> Graded:
     course = copy_course(folder / "course")
     for student, (code, _) in PERSISTENCE_CLASS.items():
-        submit(course, student, EX1, notebook_with(EX1, {"segment": code}))
+        submit(course, student, EX1, notebook_with(EX1, {**solutions(EX1), "segment": code}))
     try:
         return _grade(course, EX1, jobs=1, first_slot=SLOT_KEYS)  # one uid: each student after the other
     finally:

@@ -10,7 +10,7 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
-from labkit.grading import Moved, random_wall_beams
+from labkit.grading import Moved, random_iepf_trace
 
 FUNCTIONS = ("split_index", "similar")
 #: Packages the student's code cannot import when graded (labkit never can): a Ramer-Douglas-Peucker.
@@ -24,15 +24,7 @@ def _split_decisions(rng, n_beams=None, **limits):
     ``(run, threshold_m, min_points, expected)``: the points of a run, and the index where IEPF
     split it or None.
     """
-    beams = random_wall_beams(rng, n_beams, invalid_fraction=0.0)
-    valid = np.isfinite(beams["ranges"]) & (beams["ranges"] > 0)
-    scan = labkit.Scan(ranges=beams["ranges"][valid], angles=beams["angles"][valid])
-    threshold_m = limits.get("threshold_m", float(rng.uniform(0.02, 0.5)))
-    min_points = limits.get("min_points", int(rng.integers(2, 11)))
-    _, steps = labkit.split_and_merge(
-        scan, method="endpoints", split_threshold_m=threshold_m, min_points=min_points, min_length_m=0.0,
-        max_gap_m=1e9, merge=None, segment_threshold_m=1e9, adaptive_segmentation=False, trace=True,
-    )
+    scan, threshold_m, min_points, steps = random_iepf_trace(rng, n_beams, **limits)
     for step, after in zip(steps, steps[1:], strict=False):
         if step.kind == "fit":
             expected = step.at - step.first if after.kind == "split" else None

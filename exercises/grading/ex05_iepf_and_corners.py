@@ -9,7 +9,7 @@ worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 import numpy as np
 
 import labkit
-from labkit.grading import Moved, random_wall_beams
+from labkit.grading import Moved, random_iepf_trace
 
 FUNCTIONS = ("iepf_lines", "corner")
 #: Packages the student's code cannot import when graded (labkit never can): a Ramer-Douglas-Peucker.
@@ -23,18 +23,7 @@ def _reference_runs(rng, n_beams=None, **limits):
     min_points, runs)`` with ``runs`` the ``(first, last)`` of every ``accept`` step of
     ``labkit.split_and_merge(..., trace=True)``, in the order it accepted them (scan order).
     """
-    while True:
-        beams = random_wall_beams(rng, n_beams, invalid_fraction=0.0)
-        valid = np.isfinite(beams["ranges"]) & (beams["ranges"] > 0)
-        if valid.sum() >= 2:
-            break
-    scan = labkit.Scan(ranges=beams["ranges"][valid], angles=beams["angles"][valid])
-    threshold_m = limits.get("threshold_m", float(rng.uniform(0.02, 0.5)))
-    min_points = limits.get("min_points", int(rng.integers(2, 11)))
-    _, steps = labkit.split_and_merge(
-        scan, method="endpoints", split_threshold_m=threshold_m, min_points=min_points, min_length_m=0.0,
-        max_gap_m=1e9, merge=None, segment_threshold_m=1e9, adaptive_segmentation=False, trace=True,
-    )
+    scan, threshold_m, min_points, steps = random_iepf_trace(rng, n_beams, **limits)
     runs = [(step.first, step.last) for step in steps if step.kind == "accept"]
     return scan.xy, threshold_m, min_points, runs
 

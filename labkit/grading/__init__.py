@@ -23,11 +23,12 @@ draw inputs, :func:`assert_beams_result`, :func:`assert_labels_result` and
 
 from .checks import Moved, assert_beams_result, assert_labels_result, assert_line_result
 from .command import add_grade_parser, check, grade, main, run_grade
-from .inputs import random_beams, random_wall_beams
+from .inputs import random_beams, random_iepf_trace, random_wall_beams
 
 __all__ = [
     "random_beams",
     "random_wall_beams",
+    "random_iepf_trace",
     "assert_beams_result",
     "assert_labels_result",
     "assert_line_result",

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["random_beams", "random_wall_beams"]
+__all__ = ["random_beams", "random_wall_beams", "random_iepf_trace"]
 
 _INVALID_KINDS = ("nan", "inf", "-inf", "zero", "negative", "at_max", "beyond_max", "below_min")
 
@@ -199,3 +199,34 @@ def random_wall_beams(
         else:
             ranges[i] = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf, "zero": 0.0}[name]
     return {"ranges": ranges, "angles": angles}
+
+
+def random_iepf_trace(rng: np.random.Generator, n_beams: int | None = None, *, threshold_m: float | None = None,
+                      min_points: int | None = None):
+    """A random scan of walls (valid beams only, at least two) and labkit's IEPF split step on it.
+
+    One range segment of all the valid beams, no gap splits, no merging, no length limit: the
+    trace holds only the split decisions (``fit``/``split``) and the accepted runs
+    (``accept``). Returns ``(scan, threshold_m, min_points, steps)``; ``threshold_m`` (0.02 to
+    0.5 m) and ``min_points`` (2 to 10) are drawn where not given. The hidden tests of the
+    split-and-merge exercises (ex04's split index, ex05's runs) read their answers from it.
+
+    >>> scan, threshold_m, min_points, steps = random_iepf_trace(np.random.default_rng(1))
+    >>> {s.kind for s in steps} <= {"segment", "fit", "split", "accept", "reject"}
+    True
+    """
+    import labkit  # the grader's trusted side only; inputs need no labkit otherwise
+
+    while True:
+        beams = random_wall_beams(rng, n_beams, invalid_fraction=0.0)
+        valid = np.isfinite(beams["ranges"]) & (beams["ranges"] > 0)
+        if valid.sum() >= 2:
+            break
+    scan = labkit.Scan(ranges=beams["ranges"][valid], angles=beams["angles"][valid])
+    threshold_m = float(rng.uniform(0.02, 0.5)) if threshold_m is None else threshold_m
+    min_points = int(rng.integers(2, 11)) if min_points is None else min_points
+    _, steps = labkit.split_and_merge(
+        scan, method="endpoints", split_threshold_m=threshold_m, min_points=min_points, min_length_m=0.0,
+        max_gap_m=1e9, merge=None, segment_threshold_m=1e9, adaptive_segmentation=False, trace=True,
+    )
+    return scan, threshold_m, min_points, steps
