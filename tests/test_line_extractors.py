@@ -293,3 +293,42 @@ def test_any_ranges_give_valid_lines(extract, drawn, values, full, data):
         assert np.all(np.diff(line.indices) > 0) and np.all(scan.valid[line.indices])
         p = scan.points[line.indices]
         assert np.all(np.hypot(*np.diff(p, axis=0).T) <= 0.3)  # never across a gap
+
+
+# ---------------------------------------------------------------------------- every registered extractor
+#: The part of the contract that every registered method keeps, read from the registry at
+#: collection time (the eight of labkit, and whatever a user registers): LineSegments on valid
+#: beams, no beam on two lines, the same lines twice, the same lines with ``trace=True`` (and a
+#: list of labkit.Step records beside them), nothing from an empty scan, a clear error for a non-scan.
+ALL = tuple(LINE_EXTRACTORS)
+
+
+def _contract_scans():
+    scans = [next(iter(simulate(world, seed, n_scans=1)))[0] for world, seed in (("corridor", 1), ("hall", 2))]
+    rng = np.random.default_rng(5)
+    values = rng.choice([0.5, 2.0, 2.01, 2.02, 7.0, np.nan, np.inf, 0.0], size=181)
+    scans.append(Scan(ranges=values, angles=np.radians(np.arange(-90.0, 90.5, 1.0)), range_max=30.0))
+    return scans
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_every_registered_extractor_keeps_the_common_contract(name):
+    from labkit import LineSegment, Step
+
+    extract = LINE_EXTRACTORS[name].fn
+    for scan in _contract_scans():
+        lines = extract(scan)
+        assert isinstance(lines, list) and all(isinstance(ln, LineSegment) for ln in lines), name
+        used = np.concatenate([ln.indices for ln in lines]) if lines else np.zeros(0, int)
+        assert len(np.unique(used)) == len(used), f"{name}: a beam on two lines"
+        assert np.all(scan.valid[used]), f"{name}: a line on an invalid beam"
+        for line in lines:
+            assert line.r >= 0 and -math.pi < line.alpha <= math.pi
+        assert key(extract(scan.replace())) == key(lines), f"{name}: not deterministic"
+        traced, steps = extract(scan, trace=True)
+        assert key(traced) == key(lines), f"{name}: trace=True changed the lines"
+        assert isinstance(steps, list) and all(isinstance(s, Step) for s in steps)
+    assert extract(Scan(ranges=[], angles=[])) == []
+    assert extract(Scan(ranges=[np.nan] * 50, angles=np.arange(50) * 0.01)) == []
+    with pytest.raises(ValueError, match="scan"):
+        extract(np.ones(10))

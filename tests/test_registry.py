@@ -78,6 +78,12 @@ def test_unregistered_names_are_refused():
         register("iepf", toy_lines, ToyParams, "again")
 
 
+def test_the_contract_suite_keeps_a_registered_extractor_to_the_common_contract(toy):
+    from tests import test_line_extractors as contract
+
+    contract.test_every_registered_extractor_keeps_the_common_contract("toy")
+
+
 def test_the_contract_suite_reads_the_registry():
     from tests import test_line_extractors as contract
 

@@ -19,8 +19,10 @@ contract tests all read it: adding an extractor is one :func:`register` line bel
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
+from ..scan import Scan
 from ._params import LineExtractor, Params, takes_params
 from .angular import AngularParams, AngularSteps, angular_arrays, angular_lines, angular_segmentation, local_directions
 from .hough import HoughParams, hough_lines
@@ -55,10 +57,22 @@ def register(name: str, fn: Callable, params_cls: type, description: str, *, lab
     if not (isinstance(params_cls, type) and issubclass(params_cls, Params)):
         raise ValueError(f"params_cls must be a labkit.lines.Params record, got {params_cls!r}")
     if getattr(fn, "params_cls", None) is not params_cls:
-        fn = takes_params(params_cls)(fn)
+        fn = takes_params(params_cls)(_scan_checked(fn))
     entry = LineExtractor(name, fn, params_cls, description, label or name, tuple((fixed or {}).items()))
     LINE_EXTRACTORS[name] = entry
     return entry
+
+
+def _scan_checked(fn: Callable) -> Callable:
+    """``fn``, refusing anything but a :class:`~labkit.Scan` with a clear error, as labkit's own extractors do."""
+
+    @functools.wraps(fn)
+    def checked(scan, *args, **kwargs):
+        if not isinstance(scan, Scan):
+            raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+        return fn(scan, *args, **kwargs)
+
+    return checked
 
 
 def unregister(name: str) -> None:
