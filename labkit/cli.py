@@ -39,6 +39,7 @@ from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with
 from .errors import CorruptFileError, RefusedError
 from .grading import add_grade_parser
 from .io import FORMATS, convert, detect_format, read_scans
+from .io.formats import writable_formats
 
 EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
 
@@ -263,12 +264,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from .io import bags
-
-    fmt = detect_format(args.input)
-    print(f"{args.input}: {FORMATS[fmt]}")
-    if fmt in bags.BAG_FORMATS:
-        topics, readable = bags.list_topics(Path(args.input), fmt)
+    row = FORMATS[detect_format(args.input)]
+    print(f"{args.input}: {row.description}")
+    if row.list_topics is not None:
+        topics, readable = row.list_topics(Path(args.input))
         if not readable:
             print("  damaged: rosbags cannot open it; labkit reads it sequentially")
         for name, msgtype, count in topics:
@@ -376,6 +375,15 @@ def _bar(items, total=None, desc=None):
 FORCE_HELP = "replace an existing output, if it is labkit's own kind of output (never another file or folder)"
 
 
+def _either(labels: list[str]) -> str:
+    return ", ".join(labels[:-1]) + f" or {labels[-1]}" if len(labels) > 1 else "".join(labels)
+
+
+def _readable_help() -> str:
+    """What the commands that read recordings take (labkit.io.FORMATS)."""
+    return ", ".join(f.label for f in FORMATS.values())
+
+
 def build_parser() -> argparse.ArgumentParser:
     from .pipeline import line_methods  # the registered line extractors, read when the parser is built
 
@@ -417,10 +425,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("convert", parents=[common, reading],
                        help="convert between bag formats, CARMEN logs and JSON")
-    c.add_argument("input")
-    c.add_argument("output", help=".bag, .mcap, a folder (ROS2 sqlite3), .jsonl or .json")
+    c.add_argument("input", help=f"recording ({_readable_help()})")
+    c.add_argument("output", help=_either([f.label for f in FORMATS.values() if f.writable]))
     c.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
-    c.add_argument("--format", choices=["ros1", "ros2", "mcap", "jsonl", "json"],
+    c.add_argument("--format", choices=writable_formats(),
                    help="output format (default: from the name; must agree with it)")
     c.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     c.set_defaults(func=cmd_convert)
@@ -436,7 +444,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="extract every feature of every scan into JSON lines (one record per scan) or a "
                        "Parquet table (one row per feature); several recordings run in parallel on Dask")
     e.add_argument("inputs", nargs="+", metavar="IN",
-                   help="recordings (.bag, .mcap, ROS2 folder, CARMEN .log/.gz, .json, .jsonl) or folders of them")
+                   help=f"recordings ({_readable_help()}) or folders of them")
     e.add_argument("-o", "--output", default="-",
                    help="features file (.jsonl; default: standard output) or table (.parquet); for several "
                    "recordings a folder (one NAME.features.jsonl each) or one .parquet table for all")
@@ -445,7 +453,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     v = sub.add_parser("view", parents=[common, pipeline, reading],
                        help="write a recording's scans and features to a rerun .rrd file")
-    v.add_argument("input")
+    v.add_argument("input", help=f"recording ({_readable_help()})")
     v.add_argument("-o", "--output", required=True, help="the .rrd file to write")
     v.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     v.add_argument("--no-features", action="store_true", help="scans and range segments only")
@@ -465,7 +473,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.set_defaults(func=cmd_config)
 
     i = sub.add_parser("info", help="format, topics and scan counts of a file")
-    i.add_argument("input")
+    i.add_argument("input", help=f"recording ({_readable_help()})")
     i.set_defaults(func=cmd_info)
 
     ev = sub.add_parser("evaluate", parents=[common, reading, many],

@@ -51,7 +51,6 @@ __all__ = ["Result", "recordings_in", "output_paths", "preflight", "extract_many
 
 #: Exit statuses of the command line (README, "When things go wrong"), per result.
 STATUS = {"done": 0, "damaged": 1, "refused": 2, "system": 3, "bug": 70, "interrupted": 130}
-_RECORDING_ENDS = (".bag", ".mcap", ".log", ".log.gz", ".clf", ".clf.gz")
 _CHECK_EVERY_S = 0.5
 
 
@@ -107,7 +106,9 @@ def _is_recording(p: Path) -> bool:
         return False
     if p.is_dir():
         return (p / "metadata.yaml").is_file()
-    return p.name.lower().endswith(_RECORDING_ENDS)
+    from .io.formats import recording_suffixes
+
+    return p.name.lower().endswith(recording_suffixes(in_folders_only=True))
 
 
 def recordings_in(paths: Iterable[str | Path]) -> list[Path]:
@@ -123,7 +124,10 @@ def recordings_in(paths: Iterable[str | Path]) -> list[Path]:
         if p.is_dir() and not (p / "metadata.yaml").is_file():
             found = sorted(q for q in p.iterdir() if _is_recording(q))
             if not found:
-                raise RefusedError(f"{p} holds no recordings (.bag, .mcap, ROS2 bag folders, CARMEN .log/.gz)")
+                from .io import FORMATS
+
+                kinds = ", ".join(f.label for f in FORMATS.values() if f.in_folders)
+                raise RefusedError(f"{p} holds no recordings ({kinds})")
             out.extend(found)
         else:
             out.append(p)
@@ -139,7 +143,9 @@ def recordings_in(paths: Iterable[str | Path]) -> list[Path]:
 def _stem(p: Path) -> str:
     name = p.name
     low = name.lower()
-    for end in sorted(_RECORDING_ENDS + (".jsonl", ".json"), key=len, reverse=True):
+    from .io.formats import recording_suffixes
+
+    for end in sorted(recording_suffixes(), key=len, reverse=True):
         if low.endswith(end):
             return name[: -len(end)]
     return name

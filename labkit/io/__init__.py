@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Iterator
+from functools import partial
 from pathlib import Path
 
 from .._safe import OutputKind, check_output
@@ -29,11 +30,23 @@ from .bags import StampsChangedWarning, plan_stamps, write_bag
 from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_carmen
 from .errors import CorruptFileError, EmptyRecordingError
 from .features import read_features, write_features
+from .formats import (
+    FORMATS,
+    FileFormat,
+    folder_format,
+    format_from_suffix,
+    register_format,
+    unregister_format,
+    writable_formats,
+)
 from .jsonscan import JSON_LINES, JSON_SCAN, read_json_lines, read_json_scan, write_json_lines, write_json_scan
 from .poses import PosePlan, plan_poses, read_bag_poses
 
 __all__ = [
     "FORMATS",
+    "FileFormat",
+    "register_format",
+    "unregister_format",
     "CorruptFileError",
     "EmptyRecordingError",
     "StampsChangedWarning",
@@ -52,33 +65,16 @@ __all__ = [
     "read_features",
 ]
 
-#: What each format name means.
-FORMATS = {
-    "ros1": "ROS1 bag (.bag)",
-    "ros2": "ROS2 bag folder with sqlite3 storage (metadata.yaml + .db3)",
-    "mcap": "MCAP file (.mcap) or ROS2 bag folder with MCAP storage",
-    "carmen": "CARMEN log (.log, .clf, optionally .gz)",
-    "json": "one scan as JSON {ranges, bearings} (.json)",
-    "jsonl": "scans as JSON lines, one per line (.jsonl)",
-}
-
-
-# File name endings of each file format (ROS2 bags are folders).
-_SUFFIXES = {
-    "ros1": (".bag",),
-    "mcap": (".mcap",),
-    "carmen": (".log", ".log.gz", ".clf", ".clf.gz"),
-    "jsonl": (".jsonl",),
-    "json": (".json",),
-}
+# The file formats are the rows of labkit.io.formats.FORMATS; the built-in ones are registered at
+# the end of this module.
 
 
 def _format_from_suffix(name: str) -> str | None:
-    return next((fmt for fmt, ends in _SUFFIXES.items() if name.lower().endswith(ends)), None)
+    return format_from_suffix(name)
 
 
 def _supported() -> str:
-    return "; ".join(f"{k}: {v}" for k, v in FORMATS.items())
+    return "; ".join(f"{k}: {v.description}" for k, v in FORMATS.items())
 
 
 def detect_format(path: str | Path) -> str:
@@ -92,13 +88,9 @@ def detect_format(path: str | Path) -> str:
         raise FileNotFoundError(f"{p} does not exist")
     name = p.name.lower()
     if p.is_dir():
-        meta = p / "metadata.yaml"
-        if meta.exists():
-            return "mcap" if "storage_identifier: mcap" in meta.read_text(errors="replace") else "ros2"
-        if any(p.glob("*.mcap")):
-            return "mcap"
-        if any(p.glob("*.db3")):
-            return "ros2"
+        fmt = next((k for k, f in FORMATS.items() if f.detect is not None and f.detect(p)), None)
+        if fmt is not None:
+            return fmt
         raise ValueError(f"{p} is a folder but not a ROS2 bag (no metadata.yaml, .db3 or .mcap); "
                          f"supported formats: {_supported()}")
     fmt = _format_from_suffix(name)
@@ -143,22 +135,8 @@ class ScanStream:
         self.pose_sources: dict[str, str] = {}
 
     def __iter__(self) -> Iterator[Scan]:
-        if self.format in bags.BAG_FORMATS:
-            return self._bag_scans()
-        if self.format == "carmen":
-            scans = read_carmen(self.path, self.topic, strict=self.strict)
-        elif self.format == "json":
-            scans = iter([read_json_scan(self.path)])
-        else:
-            scans = read_json_lines(self.path, strict=self.strict)
+        scans = FORMATS[self.format].read(self)
         return scans if self.poses is not None else _without_poses(scans)
-
-    def _bag_scans(self) -> Iterator[Scan]:
-        poses = None
-        if self.pose_plan is not None:
-            poses = read_bag_poses(self.path, self.format, self.pose_plan, self.readable, self.strict)
-            self.pose_sources = poses.sources  # filled in as scan frames are met
-        yield from bags.iter_bag(self.path, self.format, self.topic, self.readable, self.strict, poses=poses)
 
     def __len__(self) -> int:
         if self.count is None:
@@ -219,37 +197,24 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
     fmt = detect_format(p)
     if poses is not None and not isinstance(poses, (bool, str)):
         raise ValueError(f"poses must be None, True, False or a topic name, got {poses!r}")
-    if fmt in bags.BAG_FORMATS:
-        topics, readable = bags.list_topics(p, fmt)
-        chosen = bags.resolve_topic(p, topics, topic)
-        count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
-        plan = plan_poses(p, topics, None if poses is True else poses)
-        return ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
-    if isinstance(poses, str):
-        raise RefusedError(f"poses names a bag topic; {FORMATS[fmt]} files carry their poses in the scans "
-                           "(poses=False: none)",
-                           f"--poses names a bag topic; {FORMATS[fmt]} files carry their poses in the scans "
-                           "(--poses none: none)")
-    inline = None if poses is False else ("the log's laser poses" if fmt == "carmen" else "the scans' 'pose' fields")
-    if fmt == "carmen":
-        if topic is not None and topic not in LASER_MESSAGES:
-            raise RefusedError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}",
-                               f"for a CARMEN log, --topic is a laser message type {LASER_MESSAGES}, got {topic!r}")
-        counts = carmen_message_types(p)
-        if topic is None:
-            topic = default_message(counts)
-        if topic is None:
-            raise EmptyRecordingError(f"{p} has no laser messages ({', '.join(LASER_MESSAGES)})")
-        if topic not in counts:
-            found = ", ".join(f"{k} ({v})" for k, v in sorted(counts.items()))
-            raise ValueError(f"{p} has no {topic} messages; laser messages found: {found}")
-        return ScanStream(p, fmt, topic, counts[topic], True, strict, inline if topic in _POSED else None)
+    row = FORMATS[fmt]
+    if row.open is not None:
+        return row.open(p, fmt, topic, strict, poses)
+    _refuse_pose_topic(fmt, poses)
     if topic is not None:
-        raise RefusedError(f"topic does not apply to {FORMATS[fmt]} files",
-                           f"--topic does not apply to {FORMATS[fmt]} files")
-    if fmt == "json":
-        return ScanStream(p, fmt, None, 1, True, strict, inline)
-    return ScanStream(p, fmt, None, None, True, strict, inline)
+        raise RefusedError(f"topic does not apply to {row.description} files",
+                           f"--topic does not apply to {row.description} files")
+    inline = None if poses is False else "the scans' 'pose' fields"
+    return ScanStream(p, fmt, None, row.count(p) if row.count is not None else None, True, strict, inline)
+
+
+def _refuse_pose_topic(fmt: str, poses: str | bool | None) -> None:
+    if isinstance(poses, str):
+        what = FORMATS[fmt].description
+        raise RefusedError(f"poses names a bag topic; {what} files carry their poses in the scans "
+                           "(poses=False: none)",
+                           f"--poses names a bag topic; {what} files carry their poses in the scans "
+                           "(--poses none: none)")
 
 
 _POSED = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2")  # CARMEN laser messages that carry a pose
@@ -267,48 +232,45 @@ def write_scans(
     """
     p = Path(path)
     fmt = output_format(p, format)
-    if fmt in bags.BAG_FORMATS:
-        return write_bag(scans, p, fmt, topic=topic, overwrite=overwrite, inputs=inputs)
-    if fmt == "jsonl":
-        return write_json_lines(scans, p, overwrite=overwrite, inputs=inputs)
-    items = list(scans)
-    if len(items) != 1:
-        raise ValueError(f"a .json file holds exactly one scan, got {len(items)}; use .jsonl")
-    write_json_scan(items[0], p, overwrite=overwrite, inputs=inputs)
-    return 1
+    return FORMATS[fmt].write(scans, p, topic=topic, overwrite=overwrite, inputs=inputs)
 
 
 def output_format(p: Path, format: str | None = None) -> str:
     """The format written to ``p``: from its name (a name without suffix is a ROS2 bag folder),
     checked against ``format`` when one is given."""
     guess = _format_from_suffix(p.name)
-    if guess == "carmen":
-        raise RefusedError("labkit reads CARMEN logs but does not write them")
+    if guess is not None and not FORMATS[guess].writable:
+        raise RefusedError(f"labkit reads {FORMATS[guess].noun} but does not write them")
+    folder = folder_format()
     if guess is None and p.suffix not in ("", ".") and format is None:
-        raise RefusedError(f"cannot tell the output format of {p}; use .bag, .mcap, .jsonl, .json or a folder name"
-                           " (ROS2 bag)")
+        ends = [s for f in FORMATS.values() if f.writable for s in f.suffixes[:1]]
+        raise RefusedError(f"cannot tell the output format of {p}; use {', '.join(ends)}"
+                           + (f" or a folder name ({FORMATS[folder].label})" if folder else ""))
     if format is None:
-        return guess or "ros2"
-    if format not in WRITABLE:
-        raise ValueError(f"cannot write {format!r}; writable formats: {', '.join(WRITABLE)}")
-    if format in bags.BAG_FORMATS:
-        return bags.bag_format(p, format)
+        if guess is None and folder is None:
+            raise RefusedError(f"cannot tell the output format of {p}; give it a suffix")
+        return guess or folder
+    writable = writable_formats()
+    if format not in writable:
+        raise ValueError(f"cannot write {format!r}; writable formats: {', '.join(writable)}")
+    row = FORMATS[format]
+    if row.name_format is not None:
+        return row.name_format(p, format)
     if guess != format:
-        raise RefusedError(f"{p}: format={format!r} needs a name ending in .{format}",
-                           f"{p}: --format {format} needs a name ending in .{format}")
+        raise RefusedError(f"{p}: format={format!r} needs a name ending in {row.suffixes[0]}",
+                           f"{p}: --format {format} needs a name ending in {row.suffixes[0]}")
     return format
 
 
 def output_kind(p: Path, fmt: str) -> OutputKind:
     """What the writer of format ``fmt`` writes at ``p`` (for :func:`labkit._safe.check_output`)."""
-    if fmt in bags.BAG_FORMATS:
-        return bags.output_kind(p, fmt)
-    return JSON_LINES if fmt == "jsonl" else JSON_SCAN
+    return FORMATS[fmt].kind(p)
 
 
-#: Formats labkit writes.
-WRITABLE = ("ros1", "ros2", "mcap", "jsonl", "json")
-_FREE_STAMPS = ("carmen", "json", "jsonl")  # formats whose stamps may be anything
+def __getattr__(name: str):
+    if name == "WRITABLE":  # formats labkit writes, as registered now
+        return writable_formats()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
@@ -333,7 +295,7 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     stream = read_scans(src, topic=topic, strict=strict, poses=poses)
     check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
     restamp = None
-    if fmt in bags.BAG_FORMATS and stream.format in _FREE_STAMPS:
+    if FORMATS[stream.format].free_stamps and not FORMATS[fmt].free_stamps:
         try:
             restamp, note = plan_stamps(read_scans(src, topic=topic, poses=False), fmt)
         except CorruptFileError:  # read what can be read; the conversion reports the damage
@@ -355,3 +317,110 @@ def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
         yield from stream
     except CorruptFileError:
         return
+
+
+# ---------------------------------------------------------------------------- the built-in formats
+def _read_bag(stream: ScanStream) -> Iterator[Scan]:
+    poses = None
+    if stream.pose_plan is not None:
+        poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict)
+        stream.pose_sources = poses.sources  # filled in as scan frames are met
+    yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses)
+
+
+def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | bool | None) -> ScanStream:
+    topics, readable = bags.list_topics(p, fmt)
+    chosen = bags.resolve_topic(p, topics, topic)
+    count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
+    plan = plan_poses(p, topics, None if poses is True else poses)
+    return ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
+
+
+def _write_bag(fmt: str):
+    def write(scans: Iterable[Scan], path: Path, *, topic: str = "/scan", overwrite: bool = False,
+              inputs: Iterable[str | Path] = ()) -> int:
+        return write_bag(scans, path, fmt, topic=topic, overwrite=overwrite, inputs=inputs)
+    return write
+
+
+def _bag_metadata(p: Path) -> str | None:
+    meta = p / "metadata.yaml"
+    return meta.read_text(errors="replace") if meta.exists() else None
+
+
+def _is_ros2_folder(p: Path) -> bool:
+    meta = _bag_metadata(p)
+    if meta is not None:
+        return "storage_identifier: mcap" not in meta
+    return not any(p.glob("*.mcap")) and any(p.glob("*.db3"))
+
+
+def _is_mcap_folder(p: Path) -> bool:
+    meta = _bag_metadata(p)
+    return "storage_identifier: mcap" in meta if meta is not None else any(p.glob("*.mcap"))
+
+
+def _bag_row(name: str, suffixes: tuple[str, ...], description: str, **kw) -> FileFormat:
+    return FileFormat(name, suffixes, description, read=_read_bag, write=_write_bag(name),
+                      output_kind=partial(bags.output_kind, fmt=name), free_stamps=False, open=_open_bag,
+                      name_format=bags.bag_format, list_topics=partial(bags.list_topics, fmt=name), **kw)
+
+
+def _open_carmen(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | bool | None) -> ScanStream:
+    _refuse_pose_topic(fmt, poses)
+    inline = None if poses is False else "the log's laser poses"
+    if topic is not None and topic not in LASER_MESSAGES:
+        raise RefusedError(f"for a CARMEN log, topic is a laser message type {LASER_MESSAGES}, got {topic!r}",
+                           f"for a CARMEN log, --topic is a laser message type {LASER_MESSAGES}, got {topic!r}")
+    counts = carmen_message_types(p)
+    if topic is None:
+        topic = default_message(counts)
+    if topic is None:
+        raise EmptyRecordingError(f"{p} has no laser messages ({', '.join(LASER_MESSAGES)})")
+    if topic not in counts:
+        found = ", ".join(f"{k} ({v})" for k, v in sorted(counts.items()))
+        raise ValueError(f"{p} has no {topic} messages; laser messages found: {found}")
+    return ScanStream(p, fmt, topic, counts[topic], True, strict, inline if topic in _POSED else None)
+
+
+def _read_carmen(stream: ScanStream) -> Iterator[Scan]:
+    return read_carmen(stream.path, stream.topic, strict=stream.strict)
+
+
+def _read_json(stream: ScanStream) -> Iterator[Scan]:
+    return iter([read_json_scan(stream.path)])
+
+
+def _count_one(_path: Path) -> int:
+    return 1
+
+
+def _write_json(scans: Iterable[Scan], path: Path, *, topic: str = "/scan", overwrite: bool = False,
+                inputs: Iterable[str | Path] = ()) -> int:
+    items = list(scans)
+    if len(items) != 1:
+        raise ValueError(f"a .json file holds exactly one scan, got {len(items)}; use .jsonl")
+    write_json_scan(items[0], path, overwrite=overwrite, inputs=inputs)
+    return 1
+
+
+def _read_jsonl(stream: ScanStream) -> Iterator[Scan]:
+    return read_json_lines(stream.path, strict=stream.strict)
+
+
+def _write_jsonl(scans: Iterable[Scan], path: Path, *, topic: str = "/scan", overwrite: bool = False,
+                 inputs: Iterable[str | Path] = ()) -> int:
+    return write_json_lines(scans, path, overwrite=overwrite, inputs=inputs)
+
+
+register_format(_bag_row("ros1", (".bag",), "ROS1 bag (.bag)", noun="ROS1 bags", label=".bag"))
+register_format(_bag_row("ros2", (), "ROS2 bag folder with sqlite3 storage (metadata.yaml + .db3)",
+                         noun="ROS2 bags", label="ROS2 bag folder", folder=True, detect=_is_ros2_folder))
+register_format(_bag_row("mcap", (".mcap",), "MCAP file (.mcap) or ROS2 bag folder with MCAP storage",
+                         noun="MCAP bags", label=".mcap", detect=_is_mcap_folder))
+register_format(FileFormat("carmen", (".log", ".log.gz", ".clf", ".clf.gz"), "CARMEN log (.log, .clf, optionally .gz)",
+                           read=_read_carmen, noun="CARMEN logs", label="CARMEN .log/.gz", open=_open_carmen))
+register_format(FileFormat("json", (".json",), "one scan as JSON {ranges, bearings} (.json)", read=_read_json,
+                           count=_count_one, write=_write_json, output_kind=JSON_SCAN, in_folders=False))
+register_format(FileFormat("jsonl", (".jsonl",), "scans as JSON lines, one per line (.jsonl)", read=_read_jsonl,
+                           write=_write_jsonl, output_kind=JSON_LINES, in_folders=False))
