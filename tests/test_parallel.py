@@ -188,6 +188,7 @@ def test_ctrl_c_leaves_finished_outputs_and_valid_partials_only(tmp_path):
     left = sorted(p.name for p in out.iterdir())
     assert not [n for n in left if ".labkit-" in n], left  # no temporary output anywhere
     assert any(".partial." in n for n in left), (left, stderr)
+    partial_records = []
     for k in range(4):
         mine = [n for n in left if n.startswith(f"c{k}.")]
         assert len(mine) <= 1, mine
@@ -196,6 +197,9 @@ def test_ctrl_c_leaves_finished_outputs_and_valid_partials_only(tmp_path):
             continue
         records = [json.loads(line) for line in (out / mine[0]).read_text().splitlines()]  # each file is valid
         if ".partial." in mine[0]:
-            assert 0 < len(records) < n_scans
+            # a recording the other worker had only just opened may hold no record yet
+            assert len(records) < n_scans
+            partial_records.append(len(records))
         else:
             assert len(records) == n_scans
+    assert max(partial_records) > 0, partial_records  # the one that was part-way written kept its records

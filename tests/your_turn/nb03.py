@@ -21,8 +21,10 @@ _WEIGHTS = '''def ideal_weights(sigma, theta, alpha):
 FILLS = {
     "c030-yt": Fill(
         correct=_JACOBIAN.format(weights="w"),
-        mistake=_JACOBIAN.format(weights="1 / (rho + step)"),  # the weights follow the nudged ranges
-        hint="hold the weights fixed",
+        # the weights follow the nudged ranges (and ignore the w given): on this noise-free wall the fit's
+        # derivative does not feel the weights to first order, so the uniform-weights case is what catches it
+        mistake=_JACOBIAN.format(weights="1 / (rho + step)"),
+        hint="use the weights w you are given",
     ),
     "c020-yt": Fill(
         correct=_WEIGHTS.format(formula="1 / (np.asarray(sigma) * np.cos(np.asarray(theta) - alpha)) ** 2"),
