@@ -157,8 +157,8 @@ def test_validate_refuses_a_lesson_and_checks_an_exercise(lab):
 
 
 # ---------------------------------------------------------------------------- Run All in the browser
-# Every notebook of the selected tests runs at once, each in its own tab of one browser on the one
-# server (a kernel each): the waits overlap, which is most of a notebook's time in the browser.
+# Every notebook of the selected tests runs at once, each in its own browser on the one server (a
+# kernel each): the waits overlap, which is most of a notebook's time in the browser.
 PROBE = "probe_viewer_reports.ipynb"
 PROBE_CELLS = {
     "imports": "import numpy as np  # noqa: I001 (labkit.viz.rr before rerun, as in the course)\n"
@@ -174,13 +174,23 @@ PROBE_CELLS = {
            "lkrr.show_inline(bad, width=700, height=400)\n"
            "lkrr.log_static(bad, 'One leg, logged as points where the blueprint expects ellipses.')\n"
            "bad.log('world/legs', rr.Points2D([[1.0, 0.5]], radii=[0.07]), static=True)",
+    # the same, over time, sent as columns as notebook 08 does
+    "bad over time": "late = lkrr.new_recording('bad legs over time', recording_id='probe-bad-columns')\n"
+                     "lkrr.show_inline(late, width=700, height=400)\n"
+                     "lkrr.log_static(late, 'Three legs over time, logged as points.')\n"
+                     "late.send_columns('world/legs', indexes=[rr.TimeColumn(lkrr.SEQUENCE, sequence=[0, 1, 2])],\n"
+                     "                  columns=rr.Points2D.columns(positions=np.ones((3, 2))).partition([1, 1, 1]))",
 }
 
 # Where rerun's notebook widget creates its WebViewer; the test's copy of widget.js keeps each viewer
 # on `window` so that the test can ask it, through the Web Viewer API (`WebViewer.get_state`, rerun
-# 0.41), for the warnings and errors every view reports: the badges drawn in the canvas.
+# 0.41), for the warnings and errors every view reports: the badges drawn in the canvas. It also
+# counts the messages (the recording's data) the kernel sends to the viewer, which go on after the
+# cell has run (rerun flushes from a thread).
 WIDGET_ANCHOR = "let widget = new ViewerWidget(model, container);"
-WIDGET_HOOK = " (globalThis.__labkitRerunViewers ??= []).push({ widget, el: container });"
+WIDGET_HOOK = (" const labkitEntry = { widget, el: container, messages: 0, last: performance.now() };"
+               " model.on('msg:custom', () => { labkitEntry.messages += 1; labkitEntry.last = performance.now(); });"
+               " (globalThis.__labkitRerunViewers ??= []).push(labkitEntry);")
 
 _IDLE = """() => {
   const w = window.jupyterapp && window.jupyterapp.shell.currentWidget;
@@ -196,34 +206,60 @@ _MODEL = "() => window.jupyterapp.shell.currentWidget.context.model.toJSON()"
 _UNRENDERED = """() => [...document.querySelectorAll('.jp-OutputArea-output')]
   .map(o => o.innerText || '')
   .filter(t => /Error displaying widget|Loading widget|model not found/i.test(t))"""
-# Each inline viewer, scrolled into sight as a student would (it draws, and reports, when shown),
-# asked for its state once it has drawn a frame (get_state answers after the next frame).
+# Each inline viewer, scrolled into sight as a student would (it draws, and reports, when shown), asked
+# what it holds once it has drawn a frame (get_state answers after the next frame).
 _VIEWERS = """async () => {
   const cells = [...document.querySelectorAll('.jp-Notebook .jp-Cell')];
   const frame = () => new Promise(r => requestAnimationFrame(() => r()));
+  const big = (_, v) => typeof v === 'bigint' ? v.toString() : v;
   const out = [];
-  for (const { widget, el } of (globalThis.__labkitRerunViewers || [])) {
+  for (const { widget, el, messages, last } of (globalThis.__labkitRerunViewers || [])) {
     const cell = cells.findIndex(c => c.contains(el));
     if (!el.isConnected) { out.push({ cell, gone: true }); continue; }
     el.scrollIntoView({ block: 'center' });
-    if (!widget.channel) { out.push({ cell, starting: true }); continue; }  // still loading its wasm
+    if (!widget.channel) { out.push({ cell, starting: true, messages }); continue; }  // still loading its wasm
     await frame(); await frame();
     try {
       const timeout = new Promise((_, no) => setTimeout(() => no(new Error('no answer in 15 s')), 15000));
       const s = await Promise.race([widget.viewer.get_state(), timeout]);
-      out.push({ cell, loading: s.loading.length,
+      out.push({ cell, messages, quiet_ms: performance.now() - last, loading: s.loading.length,
                  recordings: s.recordings.map(r => String(r.location)),
-                 views: s.views.map(v => ({ name: v.name, origin: v.origin, visible: v.visible,
-                   reports: v.reports.map(r => ({ severity: String(r.severity), summary: r.summary,
-                                                  details: r.details || '' })) })) });
+                 timelines: JSON.stringify(s.recordings.map(r => r.timelines), big) });
     } catch (e) { out.push({ cell, error: String(e) }); }
   }
   return out;
 }"""
+# What the views of one viewer report (the badges on their title bars) as a student scrubs through the
+# active recording: paused at the start, the middle and the end of its active timeline (a report can
+# depend on the time: the viewer shows the data at the time cursor).
+_REPORTS = """async (index) => {
+  const { widget, el } = globalThis.__labkitRerunViewers[index];
+  el.scrollIntoView({ block: 'center' });
+  const viewer = widget.viewer;
+  let state = await viewer.get_state();
+  const active = state.recordings.find(r => JSON.stringify(r.store_id) === JSON.stringify(state.active_store_id))
+    || state.recordings[0];
+  const timeline = active && active.current_time && active.current_time.timeline;
+  const range = timeline && (active.timelines.find(t => t.name === timeline) || {}).time_range;
+  const times = range ? [range.start, range.start + (range.end - range.start) / 2n, range.end] : [null];
+  const reports = [];
+  for (const time of times) {
+    if (time !== null) {
+      await viewer.set_time({ timeline, sequence: time, play_state: 'paused' });
+      state = await viewer.get_state();  // the frame after the seek
+    }
+    state = await viewer.get_state();  // and the one after it, drawn at that time
+    for (const v of state.views) for (const r of v.reports) reports.push({
+      at: time === null ? '' : `${timeline}=${time}`, view: v.name, origin: v.origin, visible: v.visible,
+      severity: String(r.severity), summary: r.summary, details: r.details || '' });
+  }
+  return reports;
+}"""
 # Console text by which rerun's viewer reports an error (its Rust log level, as it prints it).
 RERUN_ERROR_MARKERS = (" ERROR re_", "panicked at")
 RUN_LIMIT_S = 420  # for all the notebooks together, generous: two cores shared with the rest of `make test`
-VIEWER_LIMIT_S = 90  # per notebook, for its viewers to take in their data and agree twice on what they report
+VIEWER_LIMIT_S = 180  # per notebook, for its viewers to take in their data and agree twice on what they report
+QUIET_S = 4  # a viewer has all its data when the kernel has sent it nothing for this long
 
 
 @dataclass
@@ -259,17 +295,24 @@ def _instrument(route) -> None:
 
 
 def _settle_viewers(page, run: BrowserRun) -> None:
-    """Ask the viewers until they hold a recording, load nothing more and answer the same twice."""
+    """Ask the viewers until each holds a recording, has been sent nothing for QUIET_S, loads nothing
+    more, and they answer the same twice (the reports are those of the data they now hold)."""
     deadline = time.monotonic() + VIEWER_LIMIT_S
     previous = None
     while True:
         states = page.evaluate(_VIEWERS)
-        ready = all(s.get("gone") or s.get("error") or (s.get("recordings") and not s["loading"]) for s in states)
-        if ready and states == previous:
+        ready = all(s.get("gone") or s.get("error")
+                    or (s.get("recordings") and not s["loading"] and s["quiet_ms"] > QUIET_S * 1000) for s in states)
+        now = [{k: v for k, v in s.items() if k != "quiet_ms"} for s in states]
+        if ready and now == previous:
+            for k, state in enumerate(states):
+                if not (state.get("gone") or state.get("error")):
+                    state["reports"] = page.evaluate(_REPORTS, k)
             break
         if time.monotonic() > deadline:
-            break  # report what they show now
-        previous = states
+            run.failure = f"the inline viewers did not settle in {VIEWER_LIMIT_S} s: {now}"
+            break
+        previous = now
         page.wait_for_timeout(1000)
     run.viewers = states
 
@@ -287,12 +330,14 @@ def browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
     runs = {name: BrowserRun(name) for name in names}
     sync_playwright = _playwright()
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-        pages = {}
+        browsers, pages = [], {}
         try:
-            context = browser.new_context(viewport={"width": 1400, "height": 1000})
-            context.route("**/widget.js", _instrument)
             for k, name in enumerate(names):
+                # a browser each: a page that is not the front one of its browser gets no data into its
+                # viewers (seen with two tabs of one browser: the viewer of the second stayed empty)
+                browsers.append(browser := p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS))
+                context = browser.new_context(viewport={"width": 1400, "height": 1000})
+                context.route("**/widget.js", _instrument)
                 page = pages[name] = context.new_page()
                 page.set_default_timeout(180_000)
                 page.on("console", lambda message, run=runs[name]: run.console.append(
@@ -326,7 +371,8 @@ def browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
                     runs[name].screenshot = shots / f"{name}.png"
                     page.screenshot(path=str(runs[name].screenshot))
             finally:
-                browser.close()
+                for browser in browsers:
+                    browser.close()
     for run in runs.values():
         (shots / f"{run.name}.console.log").write_text("\n".join(run.console))
         (shots / f"{run.name}.viewers.json").write_text(json.dumps(run.viewers, indent=1))
@@ -348,11 +394,13 @@ def _viewer_problems(run: BrowserRun) -> list[str]:
             continue
         if not viewer["recordings"]:
             problems.append(f"{where}: shows no recording")
-        for view in viewer["views"]:
-            for report in view["reports"]:
-                if report["severity"] == "error":
-                    problems.append(f"{where}, view {view['name']!r} ({view['origin']}): {report['summary']}"
-                                    + (f" ({report['details']})" if report["details"] else ""))
+        seen = set()
+        for report in viewer.get("reports", []):
+            text = f"{where}, view {report['view']!r} ({report['origin']}): {report['summary']}" + (
+                f" ({report['details']})" if report["details"] else "")
+            if report["severity"] == "error" and text not in seen:
+                seen.add(text)
+                problems.append(f"{text} [at {report['at']}]" if report["at"] else text)
     return problems
 
 
@@ -384,10 +432,15 @@ def test_viewer_reports_are_caught(browser_runs):
     """The detector fires: a view missing a component its visualizer needs (main's notebook 08: legs
     as Points2D under the blueprint's ellipses) fails the run, the same scene logged right does not."""
     run = browser_runs[PROBE]
-    cells = {k: name for k, name in enumerate(PROBE_CELLS)}
-    shown = {cells.get(v["cell"]): v for v in run.viewers}
-    assert set(shown) == {"good", "bad"}, f"expected the good and the bad probe viewer, saw {run.viewers}"
+    cells = dict(enumerate(PROBE_CELLS))
+    shown = {cells.get(v["cell"]) for v in run.viewers}
+    assert shown == {"good", "bad", "bad over time"}, f"expected the three probe viewers, saw {run.viewers}"
     problems = _problems(run)
-    assert problems, f"the bad probe viewer's error badge was not caught: {run.viewers}"
-    assert all(p.startswith("viewer in cell 2, view ") for p in problems), problems
-    assert any("half_sizes" in p for p in problems), problems
+    assert problems, f"the bad probe viewers' error badges were not caught: {run.viewers}"
+    for k, name in cells.items():
+        mine = [p for p in problems if p.startswith(f"viewer in cell {k}, view 'Scan (sensor frame)' (/): ")]
+        if name.startswith("bad"):
+            assert any("Ellipses2D:half_sizes" in p for p in mine), f"{name}: {problems}"
+        else:
+            assert not mine, f"{name}: {mine}"
+    assert all(p.startswith(("viewer in cell 2,", "viewer in cell 3,")) for p in problems), problems
