@@ -7,12 +7,26 @@ download), runs notebooks with Run All and fails on
 - an error output in any cell,
 - a widget that does not render (ipywidgets' "Error displaying widget", or a widget still loading
   once the notebook has run),
-- an ERROR the inline rerun viewer writes to the browser console.
+- an ERROR the inline rerun viewer writes to the browser console,
+- an error badge on a view of an inline rerun viewer (e.g. main's notebook 08: its legs logged as
+  Points2D under a blueprint expecting Ellipses2D, "Component 'Ellipses2D:half_sizes' does not
+  exist on the entity"), an inline viewer that never starts or never gets a recording.
 
-Not yet caught: the error badge rerun draws on a view whose entity misses a component its
-visualizer needs (e.g. 08's legs logged as Points2D under a blueprint expecting Ellipses2D). The
-viewer draws it inside its canvas and does not write it to the console (checked: Run All of 08 with
-that fault logs no such line), so this test does not see it yet.
+The badge is drawn inside the viewer's canvas (wasm/egui), not in the DOM nor on the console, so the
+test asks each viewer through rerun's Web Viewer API: ``WebViewer.get_state()`` (rerun 0.41) lists
+every view of the blueprint with the warnings and errors it reports. The notebook widget keeps its
+WebViewer private, so the test serves the pages a copy of rerun's ``widget.js`` that also keeps each
+viewer on ``window`` (one line after ``new ViewerWidget``; if rerun changes that line the viewers
+fail to load and every viewer test fails, never passes silently). Once a viewer has its data (the
+kernel sent it nothing for QUIET_S and it answers the same twice), it is paused at the start, middle
+and end of its timeline, as a student scrubbing it, and its reports read at each.
+``test_viewer_reports_are_caught`` keeps the detector honest: a probe notebook logs the legs as
+main's 08 did (statically and over time, as columns), which must fail, and the same scene logged as
+ellipses, which must not.
+
+The notebooks run on one server, BROWSERS_AT_ONCE at a time, each in its own headless browser; one
+batch serves all the selected tests of this module (`make test` keeps them on one xdist worker with
+--dist loadgroup).
 
 The server runs with the configuration of `make lab` (``jupyter/`` first on JUPYTER_CONFIG_PATH,
 RERUN_NOTEBOOK_ASSET=serve-local, so nothing is fetched from the internet) on copies of the
@@ -48,7 +62,7 @@ NOTEBOOKS = ["00_tour.ipynb", "08_iav_circles_and_legs.ipynb", "09_bag_playback_
 EXERCISE = REPO / "exercises" / "release" / "ex00_polar_to_cartesian" / "ex00_polar_to_cartesian.ipynb"
 TOKEN = "labkit-browser-test"
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("browser")]
 
 
 def _playwright():
@@ -259,6 +273,10 @@ _REPORTS = """async (index) => {
 RERUN_ERROR_MARKERS = (" ERROR re_", "panicked at")
 RUN_LIMIT_S = 420  # for all the notebooks together, generous: two cores shared with the rest of `make test`
 VIEWER_LIMIT_S = 180  # per notebook, for its viewers to take in their data and agree twice on what they report
+# Notebooks run at once. Two at once passed; four at once (00, 08, 09 and the probe) on the loaded
+# two-core machine left viewers of 00, 08 and 09 empty (no message from the kernel ever reached them,
+# cause not found): one at a time until that is understood.
+BROWSERS_AT_ONCE = 1
 QUIET_S = 4  # a viewer has all its data when the kernel has sent it nothing for this long
 
 
@@ -317,6 +335,52 @@ def _settle_viewers(page, run: BrowserRun) -> None:
     run.viewers = states
 
 
+def _run_batch(p, base: str, names: list[str], runs: dict[str, BrowserRun], shots: Path) -> None:
+    """Run All of ``names`` at once, a browser each, then read their viewers."""
+    browsers, pages = [], {}
+    try:
+        for name in names:
+            # a browser each, so that each page is the front one of its browser
+            browsers.append(browser := p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS))
+            context = browser.new_context(viewport={"width": 1400, "height": 1000})
+            context.route("**/widget.js", _instrument)
+            page = pages[name] = context.new_page()
+            page.set_default_timeout(180_000)
+            page.on("console", lambda message, run=runs[name]: run.console.append(
+                f"{message.type}: {message.text}"))
+            page.on("pageerror", lambda error, run=runs[name]: run.console.append(f"pageerror: {error}"))
+            page.goto(f"{base}/lab/workspaces/test-{Path(name).stem}/tree/{name}?token={TOKEN}&reset")
+        for page in pages.values():
+            page.wait_for_function(_IDLE)
+            page.evaluate(_START)
+        deadline = time.monotonic() + RUN_LIMIT_S
+        waiting = set(names)
+        while waiting and time.monotonic() < deadline:
+            for name in sorted(waiting):
+                done = pages[name].evaluate(_DONE)
+                if done is not None:
+                    waiting.discard(name)
+                    if "error" in done:
+                        runs[name].failure = f"Run All failed: {done['error']}"
+            if waiting:
+                pages[sorted(waiting)[0]].wait_for_timeout(1000)  # lets playwright serve the pages meanwhile
+        for name in waiting:
+            runs[name].failure = f"Run All did not finish in {RUN_LIMIT_S} s"
+        for name, page in pages.items():
+            run = runs[name]
+            if name not in waiting:
+                _settle_viewers(page, run)
+            run.notebook, run.unrendered = page.evaluate(_MODEL), page.evaluate(_UNRENDERED)
+    finally:
+        try:
+            for name, page in pages.items():
+                runs[name].screenshot = shots / f"{name}.png"
+                page.screenshot(path=str(runs[name].screenshot))
+        finally:
+            for browser in browsers:
+                browser.close()
+
+
 @pytest.fixture(scope="module")
 def browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
     base, root = lab
@@ -330,49 +394,8 @@ def browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
     runs = {name: BrowserRun(name) for name in names}
     sync_playwright = _playwright()
     with sync_playwright() as p:
-        browsers, pages = [], {}
-        try:
-            for k, name in enumerate(names):
-                # a browser each: a page that is not the front one of its browser gets no data into its
-                # viewers (seen with two tabs of one browser: the viewer of the second stayed empty)
-                browsers.append(browser := p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS))
-                context = browser.new_context(viewport={"width": 1400, "height": 1000})
-                context.route("**/widget.js", _instrument)
-                page = pages[name] = context.new_page()
-                page.set_default_timeout(180_000)
-                page.on("console", lambda message, run=runs[name]: run.console.append(
-                    f"{message.type}: {message.text}"))
-                page.on("pageerror", lambda error, run=runs[name]: run.console.append(f"pageerror: {error}"))
-                page.goto(f"{base}/lab/workspaces/browser-test-{k}/tree/{name}?token={TOKEN}&reset")
-            for page in pages.values():
-                page.wait_for_function(_IDLE)
-                page.evaluate(_START)
-            deadline = time.monotonic() + RUN_LIMIT_S
-            waiting = set(names)
-            while waiting and time.monotonic() < deadline:
-                for name in sorted(waiting):
-                    done = pages[name].evaluate(_DONE)
-                    if done is not None:
-                        waiting.discard(name)
-                        if "error" in done:
-                            runs[name].failure = f"Run All failed: {done['error']}"
-                if waiting:
-                    pages[sorted(waiting)[0]].wait_for_timeout(1000)  # lets playwright serve the pages meanwhile
-            for name in waiting:
-                runs[name].failure = f"Run All did not finish in {RUN_LIMIT_S} s"
-            for name, page in pages.items():
-                run = runs[name]
-                if name not in waiting:
-                    _settle_viewers(page, run)
-                run.notebook, run.unrendered = page.evaluate(_MODEL), page.evaluate(_UNRENDERED)
-        finally:
-            try:
-                for name, page in pages.items():
-                    runs[name].screenshot = shots / f"{name}.png"
-                    page.screenshot(path=str(runs[name].screenshot))
-            finally:
-                for browser in browsers:
-                    browser.close()
+        for first in range(0, len(names), BROWSERS_AT_ONCE):
+            _run_batch(p, base, names[first:first + BROWSERS_AT_ONCE], runs, shots)
     for run in runs.values():
         (shots / f"{run.name}.console.log").write_text("\n".join(run.console))
         (shots / f"{run.name}.viewers.json").write_text(json.dumps(run.viewers, indent=1))
