@@ -180,8 +180,9 @@ class Moved:
     The spec of an exercise grades its visible examples a second time, moved: every number changes,
     the answer changes as geometry says (labels and indices stay, points and lines move with the
     plane), so a table of the visible answers earns nothing while a working function passes.
-    ``scale`` is a power of two, so scaled readings keep exact ties (a gap of exactly ``eps``,
-    a reading exactly at ``range_min``).
+    ``scale`` is a power of two other than 1 (1/4 to 8), so scaled readings keep exact ties (a gap of
+    exactly ``eps``, a reading exactly at ``range_min``) and no visible input comes back unchanged
+    (with a scale of 1, a table keyed on the ranges found the turned examples again: 1 seed in 6).
 
     Examples
     --------
@@ -192,7 +193,8 @@ class Moved:
     """
 
     def __init__(self, rng: np.random.Generator, *, shift: bool = True) -> None:
-        self.scale = float(2.0 ** rng.integers(-2, 4))
+        k = int(rng.integers(-2, 3))
+        self.scale = float(2.0 ** (k + (k >= 0)))  # 1/4 to 8, never 1: a table of the visible inputs never matches
         self.angle = float(rng.uniform(-np.pi, np.pi))
         self.shift = rng.uniform(-5.0, 5.0, 2) if shift else np.zeros(2)
 

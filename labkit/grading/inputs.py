@@ -207,8 +207,9 @@ def random_iepf_trace(rng: np.random.Generator, n_beams: int | None = None, *, t
 
     One range segment of all the valid beams, no gap splits, no merging, no length limit: the
     trace holds only the split decisions (``fit``/``split``), runs too short to keep and their
-    points joined to a neighbour (``reject``/``absorb``), and the accepted runs (``accept``). Returns ``(scan, threshold_m, min_points, steps)``; ``threshold_m`` (0.02 to
-    0.5 m) and ``min_points`` (2 to 10) are drawn where not given. The hidden tests of the
+    points joined to a neighbour (``reject``/``absorb``), and the accepted runs (``accept``).
+    Returns ``(scan, threshold_m, min_points, steps)``; ``threshold_m`` (0.02 to 0.5 m) and
+    ``min_points`` (2 to 10) are drawn where not given. The hidden tests of the
     split-and-merge exercises (ex04's split index, ex05's runs) read their answers from it.
 
     >>> scan, threshold_m, min_points, steps = random_iepf_trace(np.random.default_rng(1))
