@@ -58,12 +58,12 @@ chromium:
 test: $(VENV)/.installed-dev sandbox chromium
 	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup
 
-# The students' JupyterLab: jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
+# The students' JupyterLab: notebooks/.jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
 # hides nbgrader's instructor tools and keeps Validate for exercises; the rerun viewer loads its code
 # from the installed package, not the internet. nbgrader 0.9 runs `alembic` from PATH: venv first.
 LAB_ROOT = $(if $(filter 0,$(shell id -u)),--allow-root)
 lab: $(VENV)/.installed
-	JUPYTER_CONFIG_PATH="$(abspath jupyter)$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))" \
+	JUPYTER_CONFIG_PATH="$(abspath notebooks/.jupyter)$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))" \
 	RERUN_NOTEBOOK_ASSET=serve-local PATH="$(abspath $(BIN)):$$PATH" \
 	  $(BIN)/jupyter lab --notebook-dir=. $(LAB_ROOT) notebooks/00_tour.ipynb
 

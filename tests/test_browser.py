@@ -28,7 +28,7 @@ The notebooks run on one server, BROWSERS_AT_ONCE at a time, each in its own hea
 batch serves all the selected tests of this module (`make test` keeps them on one xdist worker with
 --dist loadgroup).
 
-The server runs with the configuration of `make lab` (``jupyter/`` first on JUPYTER_CONFIG_PATH,
+The server runs with the configuration of `make lab` (``notebooks/.jupyter/`` first on JUPYTER_CONFIG_PATH,
 RERUN_NOTEBOOK_ASSET=serve-local, so nothing is fetched from the internet) on copies of the
 notebooks in a temporary folder (Run All must not save outputs into the repository). The same
 server is checked to show students nbgrader's student side only.
@@ -104,7 +104,7 @@ def lab(tmp_path_factory):
         "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
         "display_name": "Python 3 (labkit)", "language": "python"}))
     env = dict(os.environ,
-               JUPYTER_CONFIG_PATH=str(REPO / "jupyter"),  # as `make lab`
+               JUPYTER_CONFIG_PATH=str(REPO / "notebooks" / ".jupyter"),  # as `make lab`
                RERUN_NOTEBOOK_ASSET="serve-local",  # as `make lab`: the viewer's code from the installed package
                JUPYTER_PATH=str(root / ".jupyter-data"),
                JUPYTERLAB_WORKSPACES_DIR=str(root / ".workspaces"),

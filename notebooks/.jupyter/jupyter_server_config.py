@@ -1,4 +1,4 @@
-# The students' JupyterLab (`make lab`): the Makefile puts this folder first on JUPYTER_CONFIG_PATH,
+# The students' JupyterLab (`make lab`): the Makefile puts this folder (notebooks/.jupyter) first on JUPYTER_CONFIG_PATH,
 # so it applies to this project only (never to the user's ~/.jupyter). Students see nbgrader's student
 # side alone: the instructor's server extensions (formgrader, course list) are off here and their lab
 # plugins in labconfig/page_config.json; nbgrader's Validate is replaced by labkit_validate (this
