@@ -295,7 +295,7 @@ def _selected(request) -> list[str]:
     """The notebooks the selected tests of this module need (one batch serves them all)."""
     names: list[str] = []
     for item in request.session.items:
-        if item.module is not request.module:
+        if getattr(item, "module", None) is not request.module:  # doctest items have no module
             continue
         if item.originalname == "test_run_all_in_the_browser":
             names.append(item.callspec.params["name"])
