@@ -182,16 +182,20 @@ PROBE_CELLS = {
             "lkrr.show_inline(good, width=700, height=400)\n"
             "lkrr.log_static(good, 'One leg, logged as the blueprint expects it.')\n"
             "good.log('world/legs', rr.Ellipses2D(centers=[[1.0, 0.5]], half_sizes=[[0.1, 0.1]]), static=True)",
-    # the legs as main's notebook 08 logged them, Points2D where labkit's blueprint asks for ellipses:
-    # rerun draws "Component 'Ellipses2D:half_sizes' does not exist on the entity" on the view
+    # the legs as notebook 08 logged them before this was fixed: Points2D on an entity that labkit's
+    # log_static had declared as Ellipses2D (its draw order and labels, as the old code did for every
+    # feature layer); rerun draws "Component 'Ellipses2D:half_sizes' does not exist on the entity"
     "bad": "bad = lkrr.new_recording('bad leg', recording_id='probe-bad')\n"
            "lkrr.show_inline(bad, width=700, height=400)\n"
            "lkrr.log_static(bad, 'One leg, logged as points where the blueprint expects ellipses.')\n"
+           "bad.log('world/legs', rr.Ellipses2D.from_fields(show_labels=False, draw_order=42.0), static=True)\n"
            "bad.log('world/legs', rr.Points2D([[1.0, 0.5]], radii=[0.07]), static=True)",
     # the same, over time, sent as columns as notebook 08 does
     "bad over time": "late = lkrr.new_recording('bad legs over time', recording_id='probe-bad-columns')\n"
                      "lkrr.show_inline(late, width=700, height=400)\n"
                      "lkrr.log_static(late, 'Three legs over time, logged as points.')\n"
+                     "late.log('world/legs', rr.Ellipses2D.from_fields(show_labels=False, draw_order=42.0),\n"
+                     "         static=True)\n"
                      "late.send_columns('world/legs', indexes=[rr.TimeColumn(lkrr.SEQUENCE, sequence=[0, 1, 2])],\n"
                      "                  columns=rr.Points2D.columns(positions=np.ones((3, 2))).partition([1, 1, 1]))",
 }
