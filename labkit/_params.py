@@ -125,7 +125,17 @@ class Params:
 
     # ------------------------------------------------------------------ the function's arguments
     def kwargs(self) -> dict:
-        """The function's keyword arguments (radians for the ``_deg`` fields, see :meth:`renamed`)."""
+        """The function's keyword arguments (radians for the ``_deg`` fields, see :meth:`renamed`).
+
+        A record is frozen, so they are worked out once and a copy is handed out after that
+        (a pipeline calls every detector with the same records, scan after scan)."""
+        cached = self.__dict__.get("_kwargs")
+        if cached is None:
+            cached = self._kwargs_now()
+            object.__setattr__(self, "_kwargs", cached)
+        return dict(cached)
+
+    def _kwargs_now(self) -> dict:
         rename = type(self).renamed()
         out = {}
         for f in dataclasses.fields(self):
@@ -217,6 +227,12 @@ def _trace_keyword(parameters) -> str | None:
     return None
 
 
+@functools.cache
+def _default(record: type) -> Params:
+    """The record with its defaults: one shared instance per record (records are frozen)."""
+    return record()
+
+
 def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: bool = False,
                  own_segmentation: tuple[str, ...] = (), on_segments: Callable | None = None) -> Callable:
     """Decorate ``fn(first, *, <keywords>)`` into ``fn(first, params=None, *, segments=None,
@@ -253,7 +269,7 @@ def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: b
                     params = None
             if trace_kw is not None and trace_kw != "trace" and trace_kw in overrides:  # the old name of trace
                 trace = bool(overrides.pop(trace_kw)) or trace
-            p = record() if params is None else params
+            p = _default(record) if params is None else params
             if not isinstance(p, record):
                 raise ValueError(f"params of {fn.__name__} must be a {record.__name__}, got {type(p).__name__}")
             by_record = {k: v for k, v in overrides.items() if k in fields}
