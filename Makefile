@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PIP     = $(BIN)/python -m pip
 # pytest workers: the notebook and grading tests are independent and slow; use both cores
-# (--dist loadgroup: the tests of tests/test_browser.py share one server and one batch of browsers)
+# (the tests of tests/test_browser.py share one batch of browsers between the two, under a lock)
 JOBS   ?= 2
 
 .PHONY: demo test lab data release grade lint clean help sandbox chromium
@@ -56,7 +56,7 @@ chromium:
 	  fi; }
 
 test: $(VENV)/.installed-dev sandbox chromium
-	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup
+	$(BIN)/python -m pytest -n $(JOBS)
 
 # The students' JupyterLab: notebooks/.jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
 # hides nbgrader's instructor tools and keeps Validate for exercises; the rerun viewer loads its code

@@ -25,8 +25,8 @@ main's 08 did (statically and over time, as columns), which must fail, and the s
 ellipses, which must not.
 
 The notebooks run on one server, BROWSERS_AT_ONCE at a time, each in its own headless browser; one
-batch serves all the selected tests of this module (`make test` keeps them on one xdist worker with
---dist loadgroup).
+batch serves all the selected tests of this module, whichever xdist worker they reach (the first
+runs it under a lock, the other reads its results).
 
 The server runs with the configuration of `make lab` (``notebooks/.jupyter/`` first on JUPYTER_CONFIG_PATH,
 RERUN_NOTEBOOK_ASSET=serve-local, so nothing is fetched from the internet) on copies of the
@@ -39,6 +39,7 @@ Needs /usr/bin/chromium (`.ci/run` and `make test` install it as root with apt-g
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import shutil
@@ -48,7 +49,7 @@ import sys
 import time
 import urllib.error
 import urllib.request
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import nbformat
@@ -62,7 +63,7 @@ NOTEBOOKS = ["00_tour.ipynb", "08_iav_circles_and_legs.ipynb", "09_bag_playback_
 EXERCISE = REPO / "exercises" / "release" / "ex00_polar_to_cartesian" / "ex00_polar_to_cartesian.ipynb"
 TOKEN = "labkit-browser-test"
 
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("browser")]
+pytestmark = [pytest.mark.slow]
 
 
 def _playwright():
@@ -387,6 +388,24 @@ def _run_batch(p, base: str, names: list[str], runs: dict[str, BrowserRun], shot
 
 @pytest.fixture(scope="module")
 def browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
+    """One batch of browser runs for the whole session. Under pytest-xdist the module's tests reach
+    both workers (xdist 3.8's loadgroup does not group them under pytest 9.2), and two batches at
+    once leave viewers empty: the first worker runs the batch under a lock shared by the run's
+    workers and leaves the results for the other."""
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # pytest-N/: this run's workers
+    with (shared / "browser_runs.lock").open("w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = shared / "browser_runs.json"
+        if done.exists():
+            return {name: BrowserRun(**run) for name, run in json.loads(done.read_text()).items()}
+        runs = _browser_runs(lab, request, tmp_path_factory)
+        done.write_text(json.dumps({name: {**asdict(run), "screenshot": run.screenshot and str(run.screenshot)}
+                                    for name, run in runs.items()}))
+        return runs
+
+
+def _browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
     base, root = lab
     names = _selected(request)
     if PROBE in names:
