@@ -233,6 +233,45 @@ def _default(record: type) -> Params:
     return record()
 
 
+@functools.cache
+def _segmentation() -> tuple:
+    from .scan import Scan  # noqa: PLC0415 - lazily: segmentation imports this module
+    from .segmentation import segment_labels  # noqa: PLC0415
+
+    return Scan, segment_labels
+
+
+def _default_segments(data):
+    """The default range segmentation of a scan (None for anything else: the function says what is wrong)."""
+    scan_type, segment_labels = _segmentation()
+    return segment_labels(data) if isinstance(data, scan_type) else None
+
+
+_NONE: dict = {}  # no keyword passed as given (never written to)
+
+
+_OVERRIDDEN: dict = {}  # (id(record), changes) -> (record, the record with the changes)
+
+
+def _overridden(p: Params, changes: dict) -> Params:
+    """``p.replace(**changes)``, remembered for the last few hundred (record, changes): a loop that
+    calls a detector with the same keywords scan after scan checks and builds the record once.
+    (Keyed on the record's identity, kept alive by the entry, and on each value's type, as 1 and
+    True hash alike.)"""
+    try:
+        key = (id(p), *[(k, type(v), v) for k, v in changes.items()])
+        hit = _OVERRIDDEN.get(key)
+    except TypeError:  # an unhashable value (a list for a pair): the record says whether it is valid
+        return p.replace(**changes)
+    if hit is not None and hit[0] is p:
+        return hit[1]
+    out = p.replace(**changes)
+    if len(_OVERRIDDEN) >= 256:
+        _OVERRIDDEN.clear()
+    _OVERRIDDEN[key] = (p, out)
+    return out
+
+
 def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: bool = False,
                  own_segmentation: tuple[str, ...] = (), on_segments: Callable | None = None) -> Callable:
     """Decorate ``fn(first, *, <keywords>)`` into ``fn(first, params=None, *, segments=None,
@@ -255,40 +294,47 @@ def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: b
         trace_kw = _trace_keyword(own)
         takes_segments = "segments" in own
 
+        def positional_args(params, args: tuple, overrides: dict):
+            """The old call shape's positional values after ``first``, moved into ``overrides``."""
+            given = ((params,) if params is not None and not isinstance(params, Params) else ()) + args
+            if len(given) > len(positional):
+                raise TypeError(f"{fn.__name__}() takes the scan, a {record.__name__} and keyword arguments")
+            for name, value in zip(positional, given, strict=False):
+                if name in overrides:
+                    raise TypeError(f"{fn.__name__}() got {name!r} twice")
+                overrides[name] = value
+            return params if isinstance(params, Params) else None
+
         @functools.wraps(fn)
         def wrapper(data, params=None, *args, segments=None, trace=False, **overrides):
-            if params is not None and not isinstance(params, Params) or args:
-                given = ((params,) if params is not None and not isinstance(params, Params) else ()) + args
-                if len(given) > len(positional):
-                    raise TypeError(f"{fn.__name__}() takes the scan, a {record.__name__} and keyword arguments")
-                for name, value in zip(positional, given, strict=False):
-                    if name in overrides:
-                        raise TypeError(f"{fn.__name__}() got {name!r} twice")
-                    overrides[name] = value
-                if not isinstance(params, Params):
-                    params = None
-            if trace_kw is not None and trace_kw != "trace" and trace_kw in overrides:  # the old name of trace
-                trace = bool(overrides.pop(trace_kw)) or trace
+            if args or params is not None and not isinstance(params, Params):
+                params = positional_args(params, args, overrides)
             p = _default(record) if params is None else params
             if not isinstance(p, record):
                 raise ValueError(f"params of {fn.__name__} must be a {record.__name__}, got {type(p).__name__}")
-            by_record = {k: v for k, v in overrides.items() if k in fields}
-            raw = {k: v for k, v in overrides.items() if k not in fields}
-            unknown = [k for k in raw if k not in own or k in ("segments", trace_kw)]
-            if unknown:
-                raise TypeError(f"{fn.__name__}() has no parameter {unknown[0]!r}; its parameters: "
-                                f"{', '.join(fields)}")
-            kw = p.replace(**by_record).kwargs() if by_record else p.kwargs()
-            kw.update(raw)
+            raw = _NONE
+            if overrides:  # (a loop over scans mostly passes none: that path stays short)
+                if trace_kw is not None and trace_kw != "trace" and trace_kw in overrides:  # trace's old name
+                    trace = bool(overrides.pop(trace_kw)) or trace
+                if fields.issuperset(overrides):  # the record's own names only (the usual case)
+                    by_record = overrides
+                else:
+                    by_record = {k: v for k, v in overrides.items() if k in fields}
+                    raw = {k: v for k, v in overrides.items() if k not in fields}
+                    unknown = [k for k in raw if k not in own or k in ("segments", trace_kw)]
+                    if unknown:
+                        raise TypeError(f"{fn.__name__}() has no parameter {unknown[0]!r}; its parameters: "
+                                        f"{', '.join(fields)}")
+                kw = _overridden(p, by_record).kwargs() if by_record else p.kwargs()
+                if raw:
+                    kw.update(raw)
+            else:
+                kw = p.kwargs()
             kw = p._finish(kw, raw)
             if segments is not None and not takes_segments and on_segments is None:
                 raise TypeError(f"{fn.__name__}() takes no segments")
             if segmented and segments is None and not any(k in raw for k in own_segmentation):
-                from .scan import Scan  # noqa: PLC0415 - lazily: segmentation imports this module
-                from .segmentation import segment_labels  # noqa: PLC0415
-
-                if isinstance(data, Scan):  # (anything else: the function says what is wrong)
-                    segments = segment_labels(data)
+                segments = _default_segments(data)
             if takes_segments:
                 kw["segments"] = segments
             if trace_kw is not None:
