@@ -42,12 +42,13 @@ __all__ = ["Params", "param", "takes_params"]
 
 
 def param(default, doc: str, *, lo: float | None = None, strict: bool = False, hi: float | None = None,
-          choices=None, optional: bool = False, kind: type | None = None):
+          finite: bool = False, choices=None, optional: bool = False, kind: type | None = None):
     """A record field: its default, a one-line doc, and the checks applied when a record is
-    built (``lo``/``hi`` bounds, ``strict`` for ``> lo``, ``choices`` for strings (a tuple
-    or a callable giving one), ``optional`` to allow None, ``kind`` when the default is None)."""
-    meta = {"doc": doc, "lo": lo, "strict": strict, "hi": hi, "choices": choices, "optional": optional,
-            "kind": kind if kind is not None else type(default)}
+    built (``lo``/``hi`` bounds, ``strict`` for ``> lo``, ``finite`` to refuse infinity,
+    ``choices`` for strings (a tuple or a callable giving one), ``optional`` to allow None,
+    ``kind`` when the default is None)."""
+    meta = {"doc": doc, "lo": lo, "strict": strict, "hi": hi, "finite": finite, "choices": choices,
+            "optional": optional, "kind": kind if kind is not None else type(default)}
     if isinstance(default, Params):
         return field(default_factory=type(default), metadata={**meta, "record": type(default)})
     return field(default=default, metadata=meta)
@@ -99,6 +100,8 @@ def _check_value(section: str, f: dataclasses.Field, value):
         value = float(value)
         if math.isnan(value):
             raise ValueError(f"{name} must be a number, got nan")
+        if meta.get("finite") and math.isinf(value):
+            raise ValueError(f"{name} must be a finite number, got {value!r}")
     lo, hi, strict = meta["lo"], meta["hi"], meta["strict"]
     if lo is not None and (value <= lo if strict else value < lo):
         raise ValueError(f"{name} must be {'>' if strict else '>='} {lo:g}, got {value!r}")

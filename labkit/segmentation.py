@@ -29,7 +29,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._cache import remembered
-from ._checks import check_int, check_positive
 from ._params import Params, param, takes_params
 from .scan import Scan
 
@@ -53,11 +52,13 @@ class SegmentationParams(Params):
     (``adaptive=False`` gives the fixed threshold of the paper)."""
 
     threshold_m: float = param(0.08, "largest gap between neighbouring points of a segment, metres (Xavier et al. "
-                                     "seg_threshold); the floor of the adaptive threshold", lo=0, strict=True)
+                                     "seg_threshold); the floor of the adaptive threshold", lo=0, strict=True,
+                                 finite=True)
     adaptive: bool = param(True, "grow the threshold with range and angular step (Borges & Aldon)")
     incidence_deg: float = param(10.0, "grazing angle lambda of the adaptive threshold, degrees",
                                  lo=0, strict=True, hi=89.9)
-    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (adaptive threshold)", lo=0)
+    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (adaptive threshold)", lo=0,
+                                 finite=True)
     min_points: int = param(2, "smallest segment kept; isolated points are dropped", lo=1)
 
     @classmethod
@@ -97,12 +98,6 @@ class RangeSegment:
 
     def __repr__(self) -> str:
         return f"RangeSegment(beams {self.first}..{self.last}, {self.n_points} points)"
-
-
-@remembered
-def _validate(threshold_m: float, min_points: int) -> None:
-    check_positive("threshold_m", threshold_m)
-    check_int("min_points", min_points, 1)
 
 
 def breakpoint_thresholds(
@@ -189,12 +184,10 @@ def segment_labels(
     >>> segment_labels(s, adaptive=False).tolist()
     [0, 0, 0, 1, 1, -1, -1]
     """
-    _validate(threshold_m, min_points)
+    # (every value was checked when its SegmentationParams was built: each keyword is one of its fields)
     n = scan.n_beams
     if n == 0:
         return np.full(n, -1, dtype=np.int64)
-    if adaptive:
-        _check_adaptive(incidence_deg, range_sigma_m)
     valid = scan.valid
     if not valid.any():
         return np.full(n, -1, dtype=np.int64)
