@@ -4,6 +4,7 @@ students, and the command line's errors (one line, exit status 1)."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
 import os
@@ -320,6 +321,82 @@ def _running(pid: int) -> bool:
             return f.read().rpartition(")")[2].split()[0] != "Z"
     except OSError:
         return False
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/cmdline") as f:
+            return f.read()
+    except OSError:
+        return ""
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.1, 0.25, 0.5])
+def test_ctrl_c_while_the_grading_processes_start(course, delay):
+    """Ctrl-C ``delay`` s after the run's first grading process appeared, while the pool starts them: one
+    clear line and 130, at once. Found in make test (the Ctrl-C test above once waited past 30 s) and
+    staged here: on the old code a Ctrl-C in the submits left the pool's exit waiting for the queued jobs,
+    a grading process still in its imports printed a KeyboardInterrupt traceback, and one whose parent
+    stopped between fork and hand-over printed an EOFError traceback."""
+    slow = solutions(EX0)["beams_to_points"].replace("):\n", "):\n    __import__('time').sleep(3)\n", 1)
+    for student in ("carol", "dave"):
+        submit(course, student, EX0, notebook_with(EX0, {"beams_to_points": slow}))
+    run = subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2", "-q"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    seen, deadline = set(), time.monotonic() + 120
+    try:
+        while not seen and time.monotonic() < deadline and run.poll() is None:
+            seen = {pid for pid in _family(run.pid) if "spawn_main" in _cmdline(pid)}
+            time.sleep(0.005)
+        assert seen, "no grading process started"
+        time.sleep(delay)
+        seen |= {pid for pid in _family(run.pid) if "spawn_main" in _cmdline(pid)}
+        os.killpg(run.pid, signal.SIGINT)
+        _, stderr = run.communicate(timeout=30)
+        assert run.returncode == 130 and "labkit grade: interrupted" in stderr and "Traceback" not in stderr, stderr
+    finally:
+        if run.poll() is None:
+            os.killpg(run.pid, signal.SIGKILL)
+            run.communicate()
+        for pid in seen:  # (what the old code left behind: grading processes waiting for jobs forever)
+            with contextlib.suppress(ProcessLookupError):
+                if _running(pid):
+                    os.kill(pid, signal.SIGKILL)
+    deadline = time.monotonic() + 5
+    while [pid for pid in seen if _running(pid)] and time.monotonic() < deadline:
+        time.sleep(0.05)
+
+
+@pytest.mark.skipif(not cgroups.detect().usable, reason=f"no cgroups for the workers: {cgroups.detect().problem}")
+def test_a_killed_run_takes_its_grading_processes_and_workers_with_it(course):
+    """SIGKILL to the run alone (an out-of-memory kill, `kill -9`): its grading processes are told by the
+    kernel (PR_SET_PDEATHSIG) and remove their workers and cgroups. Before, they waited for jobs forever,
+    each with a worker and a cgroup."""
+    slow = solutions(EX0)["beams_to_points"].replace("):\n", "):\n    __import__('time').sleep(3)\n", 1)
+    for student in ("carol", "dave"):
+        submit(course, student, EX0, notebook_with(EX0, {"beams_to_points": slow}))
+    parent = cgroups.detect().parents["pids"]
+    run = subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2", "-q"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    graders, theirs, deadline = set(), set(), time.monotonic() + 120
+    try:
+        while len(theirs) < 2 and time.monotonic() < deadline and run.poll() is None:
+            graders |= {pid for pid in _family(run.pid) if "spawn_main" in _cmdline(pid)}
+            theirs |= {name for name in os.listdir(parent) if name.startswith(cgroups.PREFIX)
+                       and name.split("-")[2].isdigit() and int(name.split("-")[2]) in graders}
+            time.sleep(0.05)
+        assert len(theirs) >= 2, "the grading processes' workers never started"
+        os.kill(run.pid, signal.SIGKILL)
+        run.wait()
+        deadline = time.monotonic() + 20
+        while ([pid for pid in graders if _running(pid)] or [n for n in theirs if os.path.exists(os.path.join(
+                parent, n))]) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not [pid for pid in graders if _running(pid)], "grading processes outlived the killed run"
+        assert [name for name in theirs if os.path.exists(os.path.join(parent, name))] == []
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(run.pid, signal.SIGKILL)
 
 
 @pytest.mark.skipif(not cgroups.detect().usable, reason=f"no cgroups for the workers: {cgroups.detect().problem}")

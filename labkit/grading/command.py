@@ -157,9 +157,12 @@ def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
     for slot in range(first_slot, first_slot + workers):
         slots.put(slot)
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context, initializer=_grading_process,
-                                                initargs=(slots,)) as pool:
-        futures = {pool.submit(_guarded, job): job for job in jobs}
-        try:
+                                                initargs=(slots, os.getpid())) as pool:
+        futures = {}
+        try:  # (the submits too: a Ctrl-C there must not wait, in the pool's exit, for the jobs already queued)
+            with _ctrl_c_deferred():  # the first submits start the grading processes
+                for job in jobs:
+                    futures[pool.submit(_guarded, job)] = job
             for future in concurrent.futures.as_completed(futures):
                 try:
                     yield future.result()
@@ -172,14 +175,54 @@ def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
             raise
 
 
-def _grading_process(slots) -> None:
+@contextlib.contextmanager
+def _ctrl_c_deferred():
+    """A Ctrl-C within waits for the end: then it raises KeyboardInterrupt (the pool is started inside).
+
+    The first submits start the grading processes. A Ctrl-C in the middle of starting one would stop
+    this process between its fork and its handing the child what to run (the child then dies with an
+    EOFError traceback on the user's terminal), or reach the child before its initializer
+    (:func:`_grading_process`) has set its handler (a KeyboardInterrupt traceback in the middle of its
+    imports). So this thread blocks SIGINT, which a child inherits across exec and holds pending until
+    its initializer unblocks it, and this process only notes a Ctrl-C that another of its threads
+    receives, to raise it at the end."""
+    import threading  # noqa: PLC0415 - only here
+
+    caught: list[int] = []
+    main = threading.current_thread() is threading.main_thread()  # (only the main thread may set handlers)
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum)) if main else None
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGINT])
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)  # what is pending for this thread arrives: noted
+        if main:
+            signal.signal(signal.SIGINT, previous)
+    if caught:
+        raise KeyboardInterrupt
+
+
+def _grading_process(slots, run_pid: int) -> None:
     """Set up a trusted grading process of a parallel run: its job number, and signals. Ctrl-C is the run's
     to handle (the terminal sends it to the whole group), so this process ignores SIGINT; the run sends
     SIGTERM instead, on which it kills its workers (sandbox, cgroup, folder) and exits at once, the
-    submission it was grading left without a verdict."""
+    submission it was grading left without a verdict. It gets that SIGTERM from the kernel too when the
+    run dies without sending it (SIGKILL, an out-of-memory kill), instead of waiting for jobs forever."""
     set_slot(slots)
     signal.signal(signal.SIGINT, _ignore)  # not SIG_IGN: the workers would inherit that, and cells need SIGINT
     signal.signal(signal.SIGTERM, _stop_grading_process)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])  # started blocked (see _ctrl_c_deferred)
+    _end_with_parent(signal.SIGTERM)
+    if os.getppid() != run_pid:  # the run ended before the line above could take effect
+        _stop_grading_process(signal.SIGTERM, None)
+
+
+def _end_with_parent(signum: int) -> None:
+    """Ask Linux to send ``signum`` to this process when its parent ends (prctl PR_SET_PDEATHSIG)."""
+    import ctypes  # noqa: PLC0415 - only here
+
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signum, 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
 
 
 def _ignore(signum, frame) -> None:  # noqa: ARG001 -- a signal handler's signature
