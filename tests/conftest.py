@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -29,3 +30,12 @@ def shared_datasets() -> Path:
         pytest.skip(f"real datasets not found at {SHARED_DATASETS} (they live beside the repository, "
                     "in ../shared/datasets; set LABKIT_SHARED_DATASETS to point elsewhere)")
     return SHARED_DATASETS
+
+
+# The Ctrl-C tests send SIGINT to a command as a terminal does to a command run in the foreground, where
+# SIGINT has its default action. A test run started in the background by a script (`make test &`,
+# `nohup ... &`) starts with SIGINT ignored, which every command it starts would inherit (Python keeps an
+# ignored SIGINT ignored): those commands would rightly ignore the Ctrl-C (labkit grade's timed-out tests,
+# labkit extract's "finished before Ctrl-C arrived" skips). Each test process gives it back its default.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
