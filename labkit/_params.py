@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._cache import remembered
+
 __all__ = ["Params", "param", "takes_params"]
 
 
@@ -253,26 +255,11 @@ def _default_segments(data):
 _NONE: dict = {}  # no keyword passed as given (never written to)
 
 
-_OVERRIDDEN: dict = {}  # (id(record), changes) -> (record, the record with the changes)
-
-
-def _overridden(p: Params, changes: dict) -> Params:
-    """``p.replace(**changes)``, remembered for the last few hundred (record, changes): a loop that
-    calls a detector with the same keywords scan after scan checks and builds the record once.
-    (Keyed on the record's identity, kept alive by the entry, and on each value's type, as 1 and
-    True hash alike.)"""
-    try:
-        key = (id(p), *[(k, type(v), v) for k, v in changes.items()])
-        hit = _OVERRIDDEN.get(key)
-    except TypeError:  # an unhashable value (a list for a pair): the record says whether it is valid
-        return p.replace(**changes)
-    if hit is not None and hit[0] is p:
-        return hit[1]
-    out = p.replace(**changes)
-    if len(_OVERRIDDEN) >= 256:
-        _OVERRIDDEN.clear()
-    _OVERRIDDEN[key] = (p, out)
-    return out
+@remembered
+def _overridden(p: Params, **changes) -> Params:
+    """``p.replace(**changes)``, remembered (typed: ``adaptive=1`` is not ``adaptive=True``): a loop
+    that calls a detector with the same keywords scan after scan checks and builds the record once."""
+    return p.replace(**changes)
 
 
 def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: bool = False,
@@ -328,7 +315,7 @@ def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: b
                     if unknown:
                         raise TypeError(f"{fn.__name__}() has no parameter {unknown[0]!r}; its parameters: "
                                         f"{', '.join(fields)}")
-                kw = _overridden(p, by_record).kwargs() if by_record else p.kwargs()
+                kw = _overridden(p, **by_record).kwargs() if by_record else p.kwargs()
                 if raw:
                     kw.update(raw)
             else:

@@ -331,40 +331,69 @@ def _cmdline(pid: int) -> str:
         return ""
 
 
-@pytest.mark.parametrize("delay", [0.0, 0.1, 0.25, 0.5])
-def test_ctrl_c_while_the_grading_processes_start(course, delay):
-    """Ctrl-C ``delay`` s after the run's first grading process appeared, while the pool starts them: one
-    clear line and 130, at once. Found in make test (the Ctrl-C test above once waited past 30 s) and
-    staged here: on the old code a Ctrl-C in the submits left the pool's exit waiting for the queued jobs,
-    a grading process still in its imports printed a KeyboardInterrupt traceback, and one whose parent
-    stopped between fork and hand-over printed an EOFError traceback."""
+def _start_slow_run(course: Path) -> subprocess.Popen:
+    """``python -m labkit.grading ex00 -j 2`` on ``course`` with two more students whose function sleeps 3 s
+    per call, in a session of its own (so that a signal to its group reaches the run and its children only)."""
     slow = solutions(EX0)["beams_to_points"].replace("):\n", "):\n    __import__('time').sleep(3)\n", 1)
     for student in ("carol", "dave"):
         submit(course, student, EX0, notebook_with(EX0, {"beams_to_points": slow}))
-    run = subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2", "-q"],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    return subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2",
+                             "-q"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+
+
+def _graders(run_pid: int) -> set[int]:
+    """The run's grading processes (the pool's spawned interpreters)."""
+    return {pid for pid in _family(run_pid) if "spawn_main" in _cmdline(pid)}
+
+
+def _cgroups_of(parent: str, pids: set[int]) -> set[str]:
+    """The worker cgroups under ``parent`` made by one of ``pids`` (their names hold the maker's pid)."""
+    return {name for name in os.listdir(parent) if name.startswith(cgroups.PREFIX)
+            and name.split("-")[2].isdigit() and int(name.split("-")[2]) in pids}
+
+
+def _left(pids: set[int], parent: str = "", names: set[str] = frozenset(), seconds: float = 5.0):
+    """What is still there after waiting up to ``seconds``: the running ``pids`` and the cgroup ``names``."""
+    deadline = time.monotonic() + seconds
+    while True:
+        running = [pid for pid in pids if _running(pid)]
+        folders = [name for name in names if os.path.exists(os.path.join(parent, name))]
+        if not (running or folders) or time.monotonic() > deadline:
+            return running, folders
+        time.sleep(0.05)
+
+
+def _stop(run: subprocess.Popen) -> None:
+    """Whatever a failed test left of the run: SIGKILL to its session (grading processes included)."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(run.pid, signal.SIGKILL)
+    run.communicate()
+
+
+@pytest.mark.parametrize("delay", [round(i * 0.05, 2) for i in range(12)])  # the start: ~0.6 s here
+def test_ctrl_c_while_the_grading_processes_start(course, delay):
+    """Ctrl-C ``delay`` s after the run's first grading process appeared, while the pool starts them: one
+    clear line and 130, at once, and no grading process left. Staged after make test once waited past 30 s
+    for the Ctrl-C test below: on the old code a grading process still in its imports printed a
+    KeyboardInterrupt traceback, one whose parent stopped between fork and hand-over an EOFError traceback,
+    and a Ctrl-C in the submits left the pool's exit waiting for the queued jobs. A race: on the old code 4
+    of 16 moments 0.04 s apart failed in one run, so these 12 miss it about 3 % of the time."""
+    run = _start_slow_run(course)
     seen, deadline = set(), time.monotonic() + 120
     try:
         while not seen and time.monotonic() < deadline and run.poll() is None:
-            seen = {pid for pid in _family(run.pid) if "spawn_main" in _cmdline(pid)}
+            seen = _graders(run.pid)
             time.sleep(0.005)
         assert seen, "no grading process started"
         time.sleep(delay)
-        seen |= {pid for pid in _family(run.pid) if "spawn_main" in _cmdline(pid)}
+        seen |= _graders(run.pid)
         os.killpg(run.pid, signal.SIGINT)
         _, stderr = run.communicate(timeout=30)
         assert run.returncode == 130 and "labkit grade: interrupted" in stderr and "Traceback" not in stderr, stderr
+        assert _left(seen) == ([], []), "grading processes outlived the run"
     finally:
-        if run.poll() is None:
-            os.killpg(run.pid, signal.SIGKILL)
-            run.communicate()
-        for pid in seen:  # (what the old code left behind: grading processes waiting for jobs forever)
-            with contextlib.suppress(ProcessLookupError):
-                if _running(pid):
-                    os.kill(pid, signal.SIGKILL)
-    deadline = time.monotonic() + 5
-    while [pid for pid in seen if _running(pid)] and time.monotonic() < deadline:
-        time.sleep(0.05)
+        _stop(run)
 
 
 @pytest.mark.skipif(not cgroups.detect().usable, reason=f"no cgroups for the workers: {cgroups.detect().problem}")
@@ -372,31 +401,22 @@ def test_a_killed_run_takes_its_grading_processes_and_workers_with_it(course):
     """SIGKILL to the run alone (an out-of-memory kill, `kill -9`): its grading processes are told by the
     kernel (PR_SET_PDEATHSIG) and remove their workers and cgroups. Before, they waited for jobs forever,
     each with a worker and a cgroup."""
-    slow = solutions(EX0)["beams_to_points"].replace("):\n", "):\n    __import__('time').sleep(3)\n", 1)
-    for student in ("carol", "dave"):
-        submit(course, student, EX0, notebook_with(EX0, {"beams_to_points": slow}))
     parent = cgroups.detect().parents["pids"]
-    run = subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2", "-q"],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    run = _start_slow_run(course)
     graders, theirs, deadline = set(), set(), time.monotonic() + 120
     try:
         while len(theirs) < 2 and time.monotonic() < deadline and run.poll() is None:
-            graders |= {pid for pid in _family(run.pid) if "spawn_main" in _cmdline(pid)}
-            theirs |= {name for name in os.listdir(parent) if name.startswith(cgroups.PREFIX)
-                       and name.split("-")[2].isdigit() and int(name.split("-")[2]) in graders}
+            graders |= _graders(run.pid)
+            theirs |= _cgroups_of(parent, graders)
             time.sleep(0.05)
         assert len(theirs) >= 2, "the grading processes' workers never started"
         os.kill(run.pid, signal.SIGKILL)
         run.wait()
-        deadline = time.monotonic() + 20
-        while ([pid for pid in graders if _running(pid)] or [n for n in theirs if os.path.exists(os.path.join(
-                parent, n))]) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert not [pid for pid in graders if _running(pid)], "grading processes outlived the killed run"
-        assert [name for name in theirs if os.path.exists(os.path.join(parent, name))] == []
+        running, folders = _left(graders, parent, theirs, seconds=20)
+        assert not running, "grading processes outlived the killed run"
+        assert folders == []
     finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(run.pid, signal.SIGKILL)
+        _stop(run)
 
 
 @pytest.mark.skipif(not cgroups.detect().usable, reason=f"no cgroups for the workers: {cgroups.detect().problem}")
@@ -404,19 +424,14 @@ def test_ctrl_c_leaves_no_worker_cgroup_behind(course):
     """Ctrl-C (SIGINT to the run's process group, as a terminal sends it) while two jobs have workers: the run
     exits with 130 at once (not after its queue: 97 s here before the grading processes ignored SIGINT and
     were stopped by the run), saying what was saved, and no worker or cgroup of the run is left."""
-    slow = solutions(EX0)["beams_to_points"].replace("):\n", "):\n    __import__('time').sleep(3)\n", 1)
-    for student in ("carol", "dave"):
-        submit(course, student, EX0, notebook_with(EX0, {"beams_to_points": slow}))
     parent = cgroups.detect().parents["pids"]
-    run = subprocess.Popen([sys.executable, "-m", "labkit.grading", "ex00", "--course", str(course), "-j", "2", "-q"],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    run = _start_slow_run(course)
     theirs, seen, deadline = set(), set(), time.monotonic() + 120
     try:
         while len(theirs) < 2 and time.monotonic() < deadline and run.poll() is None:
             family = _family(run.pid)
             seen |= family - {run.pid}
-            theirs |= {name for name in os.listdir(parent) if name.startswith(cgroups.PREFIX)
-                       and name.split("-")[2].isdigit() and int(name.split("-")[2]) in family}
+            theirs |= _cgroups_of(parent, family)
             time.sleep(0.05)
         assert len(theirs) >= 2, "the run's workers never started"
         os.killpg(run.pid, signal.SIGINT)
@@ -424,10 +439,7 @@ def test_ctrl_c_leaves_no_worker_cgroup_behind(course):
         assert run.returncode == 130 and "interrupted:" in stderr and "Traceback" not in stderr, stderr
     finally:
         if run.poll() is None:
-            os.killpg(run.pid, signal.SIGKILL)
-            run.wait()
+            _stop(run)
     assert [name for name in theirs if os.path.exists(os.path.join(parent, name))] == []
-    deadline = time.monotonic() + 5  # multiprocessing's resource tracker ends when it reads the run's end
-    while [pid for pid in seen if _running(pid)] and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert seen and not [pid for pid in seen if _running(pid)], "grading processes outlived the run"
+    # (multiprocessing's resource tracker ends when it reads the run's end)
+    assert seen and _left(seen)[0] == [], "grading processes outlived the run"
