@@ -5,6 +5,7 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.scan` the :class:`Scan` model
 - :mod:`labkit.geometry` angles, normal-form lines, transforms
 - :mod:`labkit.segmentation` range segmentation
+- :mod:`labkit.noise` the range noise estimated from the scans, and the "auto" thresholds built on it
 - :mod:`labkit.fitting` line and circle fits
 - :mod:`labkit.lines` the line extractors, one module each: :mod:`~labkit.lines.split_merge`
   (split-and-merge and IEPF), :mod:`~labkit.lines.angular` (angular segmentation, Meglicki 2021),
@@ -47,7 +48,7 @@ from .data import bundled_data
 from .dbscan import DBSCAN1D, dbscan1d, dbscan1d_reference
 from .evaluation import match_circles, match_legs, match_lines, ray_errors, score_detections, score_lines
 from .features import Circle, Corner, CornerParams, Features, Leg, LineSegment, Person, find_corners, line_segment
-from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
+from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls, placement_probability
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
 from .io import (
     CorruptFileError,
@@ -80,6 +81,7 @@ from .lines import (
     regression_lines,
     split_and_merge,
 )
+from .noise import estimate_range_noise, range_noise_residuals
 from .pipeline import Config, extract_all, extract_features
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, SegmentationParams, breakpoint_thresholds, range_segments, segment_labels
@@ -111,6 +113,9 @@ __all__ = [
     "line_through_points",
     "RangeSegment",
     "segment_labels",
+    "estimate_range_noise",
+    "range_noise_residuals",
+    "placement_probability",
     "range_segments",
     "breakpoint_thresholds",
     "split_and_merge",

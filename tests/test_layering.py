@@ -14,7 +14,7 @@ LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 #: the model and the algorithms (modules, or whole family packages): each may import the
 #: others, numpy and the standard library
 ALGORITHMS = ["_checks", "_safe", "_cache", "_iav", "_params", "_records", "_plainfloat", "_dbscan_fast",
-              "errors", "scan", "steps", "geometry", "segmentation", "fitting",
+              "errors", "scan", "steps", "geometry", "noise", "segmentation", "fitting",
               "features", "dbscan", "pipeline", "evaluation", "poses", "lines", "circles", "sim"]
 
 
