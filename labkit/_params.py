@@ -40,17 +40,24 @@ import numpy as np
 
 from ._cache import remembered
 
-__all__ = ["Params", "param", "takes_params"]
+__all__ = ["AUTO", "Params", "param", "takes_params"]
+
+#: The value of a threshold that follows each scan's range noise (see :mod:`labkit.noise`).
+AUTO = "auto"
 
 
 def param(default, doc: str, *, lo: float | None = None, strict: bool = False, hi: float | None = None,
-          finite: bool = False, choices=None, optional: bool = False, kind: type | None = None):
+          finite: bool = False, choices=None, optional: bool = False, kind: type | None = None,
+          auto: bool = False):
     """A record field: its default, a one-line doc, and the checks applied when a record is
     built (``lo``/``hi`` bounds, ``strict`` for ``> lo``, ``finite`` to refuse infinity,
     ``choices`` for strings (a tuple or a callable giving one), ``optional`` to allow None,
-    ``kind`` when the default is None)."""
+    ``kind`` when the default is None or ``"auto"``, ``auto`` to allow the value ``"auto"``:
+    a number the function works out from each scan, see :mod:`labkit.noise`)."""
+    if kind is None:
+        kind = float if default == AUTO else type(default)
     meta = {"doc": doc, "lo": lo, "strict": strict, "hi": hi, "finite": finite, "choices": choices,
-            "optional": optional, "kind": kind if kind is not None else type(default)}
+            "optional": optional, "kind": kind, "auto": auto}
     if isinstance(default, Params):
         return field(default_factory=type(default), metadata={**meta, "record": type(default)})
     return field(default=default, metadata=meta)
@@ -71,6 +78,10 @@ def _check_value(section: str, f: dataclasses.Field, value):
         return value
     if value is None and meta["optional"]:
         return None
+    if meta.get("auto") and isinstance(value, str):
+        if value != AUTO:
+            raise ValueError(f'{name} must be a number or "auto", got {value!r}')
+        return AUTO
     kind = meta["kind"]
     if kind is bool:
         if not isinstance(value, (bool, np.bool_)):
@@ -93,7 +104,8 @@ def _check_value(section: str, f: dataclasses.Field, value):
             raise ValueError(f"{name} must lie within [{lo:g}, {hi:g}], got {list(pair)}")
         return pair
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
+        either = ' or "auto"' if meta.get("auto") else ""
+        raise ValueError(f"{name} must be a number{either}, got {value!r}")
     if kind is int:
         if not isinstance(value, (int, np.integer)):
             raise ValueError(f"{name} must be a whole number (an int), got {value!r}")

@@ -29,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._cache import remembered
-from ._params import Params, param, takes_params
+from ._params import AUTO, Params, param, takes_params
+from .noise import scan_sigma
 from .scan import Scan
 
 __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
@@ -37,8 +38,8 @@ __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_label
            "segments_from_labels", "labels_from"]
 
 
-#: Range noise of the sensor assumed by default, metres (an LMS200's 5 mm, doubled): the
-#: adaptive breakpoints' and the line covariances' ``range_sigma_m``.
+#: A range noise, metres (an LMS200's 5 mm, doubled): :func:`breakpoint_thresholds`' default
+#: (the detectors' default ``range_sigma_m`` is ``"auto"``: estimated from each scan).
 RANGE_SIGMA_M = 0.01
 
 
@@ -57,8 +58,8 @@ class SegmentationParams(Params):
     adaptive: bool = param(True, "grow the threshold with range and angular step (Borges & Aldon)")
     incidence_deg: float = param(10.0, "grazing angle lambda of the adaptive threshold, degrees",
                                  lo=0, strict=True, hi=89.9)
-    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (adaptive threshold)", lo=0,
-                                 finite=True)
+    range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (adaptive threshold); auto: estimated "
+                                       "from each scan (labkit.noise)", lo=0, finite=True, auto=True)
     min_points: int = param(2, "smallest segment kept; isolated points are dropped", lo=1)
 
     @classmethod
@@ -107,7 +108,7 @@ def breakpoint_thresholds(
     threshold_m: float = SegmentationParams.threshold_m,
     *,
     incidence_deg: float = SegmentationParams.incidence_deg,
-    range_sigma_m: float = SegmentationParams.range_sigma_m,
+    range_sigma_m: float = RANGE_SIGMA_M,
 ) -> np.ndarray:
     """Adaptive breakpoint distance (Borges & Aldon 2004) between beams of ranges ``r_a``,
     ``r_b`` that are ``dphi`` radians apart, floored at ``threshold_m``.
@@ -168,7 +169,8 @@ def segment_labels(
         used to default to False: pass ``adaptive=False`` for the paper's fixed threshold).
     incidence_deg, range_sigma_m : float
         The adaptive detector's grazing angle ``lambda`` (default 10 deg) and range noise
-        (default 0.01 m).
+        (default ``"auto"``: estimated from the scan by :func:`labkit.noise.scan_sigma`; a
+        number is used as given).
 
     Returns
     -------
@@ -200,6 +202,8 @@ def segment_labels(
         if adaptive:  # the adaptive threshold is never below threshold_m: only wider gaps need it
             k = (gap >= threshold_m).nonzero()[0]
             if k.size:
+                if range_sigma_m == AUTO:
+                    range_sigma_m = scan_sigma(scan)
                 linked[k] = gap[k] < _thresholds(ranges[k], ranges[k + 1], np.abs(angles[k + 1] - angles[k]),
                                                  threshold_m, incidence_deg, range_sigma_m)
     # a new segment starts at every valid beam not linked to its predecessor
@@ -209,6 +213,8 @@ def segment_labels(
     if n > 2 and valid[0] and valid[-1] and raw[-1] != raw[0] and scan.is_full_circle:
         seam_limit = threshold_m
         if adaptive:
+            if range_sigma_m == AUTO:
+                range_sigma_m = scan_sigma(scan)
             seam_limit = float(_thresholds(ranges[-1:], ranges[:1], np.abs([scan.angle_increment]), threshold_m,
                                            incidence_deg, range_sigma_m)[0])
         with np.errstate(invalid="ignore"):

@@ -214,8 +214,8 @@ def test_chi_square_merge_joins_halves_of_a_wall_but_not_parallel_walls():
 # ---------------------------------------------------------------------------- trace
 def test_trace_replays_the_decisions():
     scan = room_scan(full=False)
-    lines, steps = split_and_merge(scan, trace=True)
-    assert split_and_merge(scan) and len(lines) == 3
+    lines, steps = split_and_merge(scan, trace=True, split_threshold_m=0.05)
+    assert split_and_merge(scan, split_threshold_m=0.05) and len(lines) == 3
     kinds = [s.kind for s in steps]
     assert kinds[0] == "segment" and "split" in kinds and kinds.count("accept") >= 3
     for s in steps:

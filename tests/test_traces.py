@@ -44,7 +44,7 @@ def _replay_split_merge(steps: list[Step]) -> list[tuple[int, int]]:
 @pytest.mark.parametrize("method, algorithm", [("endpoints", "iepf"), ("fit", "split_and_merge")])
 def test_split_and_merge_splits_a_square_room_at_its_corners(method, algorithm):
     scan, truth = _square_room()
-    lines, steps = labkit.split_and_merge(scan, method=method, trace=True)
+    lines, steps = labkit.split_and_merge(scan, method=method, trace=True, split_threshold_m=0.05)
     assert {s.algorithm for s in steps} == {algorithm} and all(isinstance(s, Step) for s in steps)
     assert _replay_split_merge(steps) == [(ln.first, ln.last) for ln in lines]
     if method == "endpoints":  # (fit-split loses short walls: see split_and_merge's docstring)

@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .._params import Params, param, takes_params
+from .._params import AUTO, Params, param, takes_params
 
-__all__ = ["LineExtractor", "Params", "param", "takes_params"]
+__all__ = ["AUTO", "LineExtractor", "Params", "param", "takes_params"]
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,12 @@ The algorithm of the course slides (after Nguyen et al. 2005):
    ``|alpha1 - alpha2|`` under thresholds (the angle difference taken across the wrap, so
    170 deg and -170 deg are 20 deg apart), or a chi-square test on the covariances, and
    refit the merged line from all its points.
+6. Drop the lines the data cannot place: by its covariance, a line must lie within the
+   trusted ``|dr|`` and ``|dalpha|`` of the true line with probability ``place_confidence``.
+
+The thresholds that depend on the sensor's range noise follow it: with the default
+``"auto"``, ``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split
+threshold is five of those sigmas; numbers given by the user are used as they are.
 
 ``method="fit"`` measures the worst point from the least-squares line (the slides);
 ``method="endpoints"`` from the chord through the list's first and last points -- the
@@ -42,11 +48,12 @@ import numpy as np
 from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from ..fitting import _line_covariances, line_from_sums
+from ..fitting import _line_covariances, line_from_sums, placement_probability
+from ..noise import auto_split_threshold, scan_sigma
 from ..scan import Scan
-from ..segmentation import RANGE_SIGMA_M, SegmentationParams, labels_from, segment_labels, segment_order
+from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
-from ._params import Params, param, takes_params
+from ._params import AUTO, Params, param, takes_params
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -241,8 +248,9 @@ class SplitMergeParams(Params):
     registry, and the ``[lines]`` table of :class:`labkit.Config`), each default once: lengths
     in metres (``_m``), angles in degrees (``_deg``)."""
 
-    split_threshold_m: float = param(0.05, "split when the worst point is farther than this from the line, metres",
-                                     lo=0, strict=True)
+    split_threshold_m: float = param(AUTO, "split when the worst point is farther than this from the line, metres; "
+                                           "auto: 5 sigma of the scan's range noise, at least 2 cm (labkit.noise)",
+                                     lo=0, strict=True, auto=True)
     min_points: int = param(5, "fewest points of a line (Xavier et al. line_min_pts)", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres (Xavier et al. line_min_len)", lo=0)
     max_gap_m: float = param(0.3, "split a run at a gap wider than this between neighbouring points, metres",
@@ -252,8 +260,14 @@ class SplitMergeParams(Params):
     merge_dr_m: float = param(0.2, "merge when |dr| is under this, metres", lo=0, strict=True)
     merge_dalpha_deg: float = param(10.0, "and |dalpha| under this, degrees", lo=0, strict=True)
     merge_chi2: float = param(9.21, "chi-square merge threshold (2 dof, 99 %)", lo=0, strict=True)
-    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (line covariances, chi2 merge)",
-                                 lo=0, strict=True)
+    range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (breakpoints, line covariances, chi2 "
+                                       "merge, placing); auto: estimated from each scan (labkit.noise)",
+                                 lo=0, strict=True, auto=True)
+    place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
+                              lo=0, strict=True)
+    place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
+    place_confidence: float = param(0.8, "with at least this probability by its covariance (0: report every line)",
+                                    lo=0, hi=1)
     weights: str = param("inverse_range", "point weights of the fits: inverse_range (1/rho, the slides) or uniform",
                          choices=("inverse_range", "uniform"), optional=True)
 
@@ -281,6 +295,9 @@ def split_and_merge(
     adaptive_segmentation: bool = SegmentationParams.adaptive,
     range_sigma_m: float,
     weights,
+    place_dr_m: float = 0.05,
+    place_dalpha: float = math.radians(3.0),
+    place_confidence: float = 0.8,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -298,13 +315,14 @@ def split_and_merge(
         at a time, losing short walls; the chord passes through both ends and finds the
         corner. Over 30 scans of the simulated corridor the default finds every wall of 10 beams
         or more, "fit" 0.87 of them (``tests/test_split_merge.py``).
-    split_threshold_m : float
-        Split when the worst point is farther than this from the line. Default 0.05 m, ten
-        times the LMS200's range noise (the largest of 100 Gaussian residuals is about 3
-        sigma; the margin covers the 15 mm noise of cheap sensors). For the fewest false
-        positives on a known sensor, use about four times its range noise sigma: in the sweep
-        of ``benchmarks/evaluation.py`` (204 simulated scans of 722 beams) the false-positive
-        rate was lowest at 0.02 m for 5 mm noise and at 0.08-0.12 m for 2 cm noise.
+    split_threshold_m : float or "auto"
+        Split when the worst point is farther than this from the line. Default ``"auto"``:
+        five times the scan's range noise, at least 2 cm (:func:`labkit.noise.auto_split_threshold`;
+        the largest of 722 Gaussian residuals measured from a chord passes that about once in 20
+        scans). A fixed threshold suits one sensor only: 5 cm, the old default, is ten times an
+        LMS200's 5 mm and shatters walls at the 3 cm of cheap scanners (on the simulated sets of
+        ``benchmarks/evaluation.py`` its FalsePos grows from 0.06 at 5 mm to 0.80 at 3 cm).
+        A number given is used as it is.
     min_points : int
         ``minPointsPerLine``: runs with fewer points make no line, and the worst point is
         never among the first or last ``min_points // 2`` of a run. Default 5 (Xavier et
@@ -325,8 +343,19 @@ def split_and_merge(
     segment_threshold_m, adaptive_segmentation : float, bool
         Range segmentation (:func:`labkit.segmentation.segment_labels`): 0.08 m floor with
         the adaptive breakpoint detector on.
-    range_sigma_m : float
-        Range noise, for the adaptive breakpoints and the lines' covariances. Default 0.01 m.
+    range_sigma_m : float or "auto"
+        Range noise, for the adaptive breakpoints, the lines' covariances and the ``"auto"``
+        split threshold. Default ``"auto"``: estimated from the scan
+        (:func:`labkit.noise.scan_sigma`).
+    place_dr_m, place_dalpha, place_confidence : float
+        What a user trusts: a line is reported only if, by its covariance (from
+        ``range_sigma_m``), it lies within ``place_dr_m`` (default 5 cm) in ``r`` and
+        ``place_dalpha`` (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the
+        true line with probability ``place_confidence`` (default 0.8; 0 reports every line):
+        :func:`labkit.fitting.placement_probability`. A short piece seen from afar, whose angle
+        the data cannot fix to a few degrees, is dropped (a ``"reject"`` step with
+        ``test="place_confidence"``). The defaults are Nguyen et al.'s tolerance of a correct
+        line, so the line matches the wall it belongs to four times in five.
     weights : None or "uniform"
         Point weights of the fits: ``None`` is ``1 / rho`` (the slides).
     segments : ndarray of per-beam labels or list of RangeSegment, optional
@@ -345,7 +374,9 @@ def split_and_merge(
         or a line shorter than ``min_length_m`` after merging), ``"absorb"`` (``value``
         stranded points joined the neighbouring lines), ``"merge"`` (two neighbours merged:
         the merged line on their beams; ``at`` the last beam of the first), ``"keep"`` (two
-        neighbours not merged; ``value`` the merge statistic or the gap). Replay: the
+        neighbours not merged; ``value`` the merge statistic or the gap), ``"reject"`` with
+        ``test="place_confidence"`` (a line the data cannot place; ``value`` its probability of
+        lying within the trusted distance of the truth). Replay: the
         ``accept`` runs, widened by ``absorb``, joined by ``merge`` and less the
         ``reject``-ed lines, are the returned lines.
 
@@ -369,7 +400,11 @@ def split_and_merge(
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
     min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m = _params(
         method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
-        merge_chi2, range_sigma_m)
+        merge_chi2, range_sigma_m, place_dr_m, place_dalpha, place_confidence)
+    if range_sigma_m == AUTO:
+        range_sigma_m = scan_sigma(scan)
+    if split_threshold_m == AUTO:
+        split_threshold_m = auto_split_threshold(range_sigma_m)
 
     steps = _Steps("iepf" if method == "endpoints" else "split_and_merge") if trace else None
     if segments is None:
@@ -483,12 +518,17 @@ def split_and_merge(
         # a dropout) no longer keeps them apart: try merging the new neighbours
         kept = _merge(kept, points, wrap, steps, **merge_args)
     out = _finish(kept, points, ranges, weights, range_sigma_m)
+    if place_confidence > 0 and out:
+        chance = placement_probability(np.array([ln.covariance for ln in out]), place_dr_m, place_dalpha)
+        if (chance < place_confidence).any():
+            kept = _place(kept, chance.tolist(), place_confidence, steps)
+            out = _finish(kept, points, ranges, weights, range_sigma_m)
     return (out, list(steps)) if trace else out
 
 
 @remembered
 def _params(method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
-            merge_chi2, range_sigma_m) -> tuple:
+            merge_chi2, range_sigma_m, place_dr_m, place_dalpha, place_confidence) -> tuple:
     """The parameters of :func:`split_and_merge` checked, in its order; returns those it uses converted."""
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
@@ -497,13 +537,19 @@ def _params(method, merge, weights, min_points, split_threshold_m, min_length_m,
     if weights not in (None, "uniform"):
         raise ValueError(f'weights must be None (1/rho) or "uniform", got {weights!r}')
     min_points = check_int("min_points", min_points, 2)
-    split_threshold_m = check_positive("split_threshold_m", split_threshold_m)
+    if split_threshold_m != AUTO:
+        split_threshold_m = check_positive("split_threshold_m", split_threshold_m)
     min_length_m = check_nonneg("min_length_m", min_length_m)
     max_gap_m = check_positive("max_gap_m", max_gap_m)
     check_positive("merge_dr_m", merge_dr_m)
     check_positive("merge_dalpha", merge_dalpha)
     check_positive("merge_chi2", merge_chi2)
-    range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
+    if range_sigma_m != AUTO:
+        range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
+    check_positive("place_dr_m", place_dr_m)
+    check_positive("place_dalpha", place_dalpha)
+    if not 0 <= place_confidence <= 1:
+        raise ValueError(f"place_confidence must be in [0, 1], got {place_confidence!r}")
     return min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m
 
 
@@ -567,6 +613,21 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
         merged = attempt(out[-1], out[0])
         if merged is not None:
             out = [merged] + out[1:-1]
+    return out
+
+
+def _place(lines: list[_Line], chance: list[float], confidence: float, steps) -> list[_Line]:
+    """The lines the data can place: those whose ``chance`` of lying within the trusted
+    ``|dr|``, ``|dalpha|`` of the truth is at least ``confidence``. (Joining such a line to
+    its neighbour instead, when the joined line still passes the split test, found fewer walls
+    and more false lines on the simulated sets of ``benchmarks/evaluation.py``.)"""
+    out = []
+    for ln, c in zip(lines, chance, strict=True):
+        if c >= confidence:
+            out.append(ln)
+        elif steps is not None:
+            steps.add("reject", ln.first, ln.last, ln.r, ln.alpha, value=c, threshold=confidence,
+                      test="place_confidence", reason=f"placed with probability {c:.2f} < place_confidence")
     return out
 
 
