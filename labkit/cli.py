@@ -485,8 +485,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN) of the recordings")
     ev.add_argument("--scans", type=int, help="scans per noise level (simulated, default 102) or per recording"
                     " (default 100)")
-    ev.add_argument("--noise", type=float, nargs="+", default=[0.005, 0.02], metavar="M",
-                    help="range noise levels of the simulated sets, metres (default 0.005 0.02)")
+    ev.add_argument("--noise", type=float, nargs="+", default=[0.005, 0.01, 0.02, 0.03], metavar="M",
+                    help="range noise levels of the simulated sets, metres (default 0.005 0.01 0.02 0.03)")
     ev.add_argument("--method", action="append", metavar="NAME",
                     help=f"only this line extractor (repeatable): {', '.join(line_methods()[:-1])}")
     ev.add_argument("--sweep", action="store_true", help="also sweep split-and-merge's split threshold")

@@ -20,6 +20,7 @@ and every extractor.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -48,6 +49,8 @@ from .sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenari
 
 __all__ = [
     "LINE_EXTRACTORS",
+    "NOISE_LEVELS_M",
+    "SENSOR_NOISE_LEVELS_M",
     "SimScan",
     "nguyen_set",
     "compare_lines",
@@ -86,8 +89,11 @@ class _ByLabel(Mapping):
 LINE_EXTRACTORS: Mapping[str, Callable[[Scan], list]] = _ByLabel()
 
 
-#: Range noise of the two simulated sets: an LMS200's 5 mm and a cheap sensor's 2 cm.
+#: Range noise of the two simulated sets of notebook 10: an LMS200's 5 mm and a cheap sensor's 2 cm.
 NOISE_LEVELS_M = (0.005, 0.02)
+#: The range noise levels of ``labkit evaluate`` and ``benchmarks/evaluation.py``, from a SICK
+#: LMS200 (5 mm) to a cheap 360 deg scanner (3 cm): one default configuration must hold on all.
+SENSOR_NOISE_LEVELS_M = (0.005, 0.01, 0.02, 0.03)
 
 
 @dataclass(frozen=True)
@@ -187,12 +193,16 @@ def compare_lines(data: Sequence[SimScan], extractors: dict[str, Callable] | Non
 
 
 def score_round_objects(n_scans: int = 300, *, seed: int = 0, config: Config | None = None,
-                        progress: Callable | None = None) -> dict[str, dict]:
+                        progress: Callable | None = None, noise_std_m: float | None = None) -> dict[str, dict]:
     """Circles and legs of :func:`labkit.extract_features` on ``n_scans`` of the ``hall``
-    scenario (columns, bench feet, a rolling cylinder, a walking student; LMS200), scored with
-    :func:`labkit.evaluation.match_circles` and :func:`~labkit.evaluation.match_legs`."""
+    scenario (columns, bench feet, a rolling cylinder, a walking student; LMS200, 5 mm of range
+    noise unless ``noise_std_m`` is given), scored with :func:`labkit.evaluation.match_circles`
+    and :func:`~labkit.evaluation.match_legs`."""
     circles, legs = [], []
-    items = simulate("hall", seed, n_scans=n_scans)
+    hall = scenario("hall")
+    if noise_std_m is not None:
+        hall = dataclasses.replace(hall, lidar=dataclasses.replace(hall.lidar, noise_std_m=noise_std_m))
+    items = simulate(hall, seed, n_scans=n_scans)
     if progress is not None:
         items = progress(items, total=n_scans, desc="hall")
     spent = 0.0

@@ -94,8 +94,10 @@ def test_false_positive_reasons_account_for_every_false_positive(small_set):
     from labkit.evaluation import match_lines
 
     noisy = [s for s in small_set if s.noise_std_m == 0.02]
-    n_fp = sum(len(match_lines(split_and_merge(s.scan), s.truth).false_positives) for s in noisy)
-    rows = ex.false_positive_reasons(small_set, 0.02)
+    # the fixed defaults before "auto", which leave false lines to explain
+    old = {"split_threshold_m": 0.05, "range_sigma_m": 0.01, "place_confidence": 0.0}
+    n_fp = sum(len(match_lines(split_and_merge(s.scan, **old), s.truth).false_positives) for s in noisy)
+    rows = ex.false_positive_reasons(small_set, 0.02, **old)
     assert n_fp > 0 and sum(r["lines"] for r in rows) == n_fp
     assert {r["reason"] for r in rows} <= {"dr", "dalpha", "dr and dalpha", "overlap or a second line on the wall",
                                           "not on a wall"}
