@@ -25,12 +25,14 @@ import argparse
 import os
 import platform
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from labkit import experiments as ex
 from labkit import split_and_merge
+from labkit.noise import AUTO_LINES
 
 DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
 
@@ -71,7 +73,7 @@ def main() -> None:
 
     print("\n## (d) Split-and-merge (IEPF): true against false positives by split threshold\n")
     sweep = ex.sweep_split_and_merge(data, range_sigma_m=0.01, place_confidence=0.0)
-    auto = ex.compare_lines(data, {"auto": split_and_merge})
+    auto = ex.compare_lines(data, {"auto": partial(split_and_merge, **AUTO_LINES)})
     for r in auto:
         r["split_threshold_m"] = "auto"
     print(ex.markdown_table(sorted(sweep + auto, key=lambda r: r["noise_std_m"]),
@@ -87,7 +89,7 @@ def main() -> None:
     goals = []
     for r in auto:
         ok = r["tp_rate"] >= 0.9 and r["fp_rate"] <= 0.05
-        goals.append((f"issue 16: split-and-merge at its defaults TruePos >= 0.9, FalsePos <= 0.05, noise "
+        goals.append((f"issue 16: split-and-merge with AUTO_LINES TruePos >= 0.9, FalsePos <= 0.05, noise "
                       f"{r['noise_std_m']} m", f"{r['tp_rate']:.3f}, {r['fp_rate']:.3f}", "met" if ok else "not met"))
     c2, g2 = round_2cm["circles"], round_2cm["legs"]
     goals.append(("issue 16: circles precision >= 0.95, recall >= 0.9 at 2 cm", f"{c2['precision']:.3f}, "

@@ -51,7 +51,7 @@ import numpy as np
 from .scan import Scan
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "auto_split_threshold", "MIN_RESIDUALS",
-           "FALLBACK_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
+           "AUTO_LINES", "FALLBACK_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
 
 #: Fewest usable residuals (beams with two valid neighbours) for an estimate; with fewer,
 #: :func:`estimate_range_noise` returns NaN.
@@ -162,6 +162,11 @@ SPLIT_SIGMAS = 5.0
 #: The least ``split_threshold_m="auto"`` gives, metres: walls are not flat to a centimetre,
 #: and a split below that would follow the plaster.
 MIN_SPLIT_M = 0.02
+
+
+#: The noise-following setting of split-and-merge (``[lines]``), not yet its default:
+#: ``split_and_merge(scan, **AUTO_LINES)``, ``Config().updated({"lines": AUTO_LINES})``.
+AUTO_LINES = {"split_threshold_m": "auto", "range_sigma_m": "auto", "place_confidence": 0.8}
 
 
 def scan_sigma(scan: Scan) -> float:

@@ -38,8 +38,9 @@ __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_label
            "segments_from_labels", "labels_from"]
 
 
-#: A range noise, metres (an LMS200's 5 mm, doubled): :func:`breakpoint_thresholds`' default
-#: (the detectors' default ``range_sigma_m`` is ``"auto"``: estimated from each scan).
+#: Range noise of the sensor assumed by default, metres (an LMS200's 5 mm, doubled): the
+#: adaptive breakpoints' and the line covariances' ``range_sigma_m`` (``"auto"``: estimated
+#: from each scan, :mod:`labkit.noise`).
 RANGE_SIGMA_M = 0.01
 
 
@@ -58,8 +59,8 @@ class SegmentationParams(Params):
     adaptive: bool = param(True, "grow the threshold with range and angular step (Borges & Aldon)")
     incidence_deg: float = param(10.0, "grazing angle lambda of the adaptive threshold, degrees",
                                  lo=0, strict=True, hi=89.9)
-    range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (adaptive threshold); auto: estimated "
-                                       "from each scan (labkit.noise)", lo=0, finite=True, auto=True)
+    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (adaptive threshold); auto: "
+                                                "estimated from each scan (labkit.noise)", lo=0, finite=True, auto=True)
     min_points: int = param(2, "smallest segment kept; isolated points are dropped", lo=1)
 
     @classmethod
@@ -169,8 +170,7 @@ def segment_labels(
         used to default to False: pass ``adaptive=False`` for the paper's fixed threshold).
     incidence_deg, range_sigma_m : float
         The adaptive detector's grazing angle ``lambda`` (default 10 deg) and range noise
-        (default ``"auto"``: estimated from the scan by :func:`labkit.noise.scan_sigma`; a
-        number is used as given).
+        (default 0.01 m; ``"auto"`` estimates it from the scan, :func:`labkit.noise.scan_sigma`).
 
     Returns
     -------

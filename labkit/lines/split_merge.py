@@ -17,9 +17,9 @@ The algorithm of the course slides (after Nguyen et al. 2005):
 6. Drop the lines the data cannot place: by its covariance, a line must lie within the
    trusted ``|dr|`` and ``|dalpha|`` of the true line with probability ``place_confidence``.
 
-The thresholds that depend on the sensor's range noise follow it: with the default
-``"auto"``, ``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split
-threshold is five of those sigmas; numbers given by the user are used as they are.
+The thresholds that depend on the sensor's range noise can follow it: with ``"auto"``,
+``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split threshold is
+five of those sigmas (:data:`labkit.noise.AUTO_LINES` is the whole setting, placing included).
 
 ``method="fit"`` measures the worst point from the least-squares line (the slides);
 ``method="endpoints"`` from the chord through the list's first and last points -- the
@@ -51,7 +51,7 @@ from ..features import LineSegment, line_segment  # noqa: F401 - used in doctest
 from ..fitting import _line_covariances, line_from_sums, placement_probability
 from ..noise import auto_split_threshold, scan_sigma
 from ..scan import Scan
-from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
+from ..segmentation import RANGE_SIGMA_M, SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
 from ._params import AUTO, Params, param, takes_params
 
@@ -248,7 +248,7 @@ class SplitMergeParams(Params):
     registry, and the ``[lines]`` table of :class:`labkit.Config`), each default once: lengths
     in metres (``_m``), angles in degrees (``_deg``)."""
 
-    split_threshold_m: float = param(AUTO, "split when the worst point is farther than this from the line, metres; "
+    split_threshold_m: float = param(0.05, "split when the worst point is farther than this from the line, metres; "
                                            "auto: 5 sigma of the scan's range noise, at least 2 cm (labkit.noise)",
                                      lo=0, strict=True, auto=True)
     min_points: int = param(5, "fewest points of a line (Xavier et al. line_min_pts)", lo=2)
@@ -260,13 +260,14 @@ class SplitMergeParams(Params):
     merge_dr_m: float = param(0.2, "merge when |dr| is under this, metres", lo=0, strict=True)
     merge_dalpha_deg: float = param(10.0, "and |dalpha| under this, degrees", lo=0, strict=True)
     merge_chi2: float = param(9.21, "chi-square merge threshold (2 dof, 99 %)", lo=0, strict=True)
-    range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (breakpoints, line covariances, chi2 "
-                                       "merge, placing); auto: estimated from each scan (labkit.noise)",
+    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (breakpoints, line covariances, "
+                                                "chi2 merge, placing); auto: estimated from each scan (labkit.noise)",
                                  lo=0, strict=True, auto=True)
     place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
                               lo=0, strict=True)
     place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
-    place_confidence: float = param(0.8, "with at least this probability by its covariance (0: report every line)",
+    place_confidence: float = param(0.0, "with at least this probability by its covariance (0: report every "
+                                         "line; 0.8 with the auto thresholds)",
                                     lo=0, hi=1)
     weights: str = param("inverse_range", "point weights of the fits: inverse_range (1/rho, the slides) or uniform",
                          choices=("inverse_range", "uniform"), optional=True)
@@ -297,7 +298,7 @@ def split_and_merge(
     weights,
     place_dr_m: float = 0.05,
     place_dalpha: float = math.radians(3.0),
-    place_confidence: float = 0.8,
+    place_confidence: float = 0.0,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -316,13 +317,14 @@ def split_and_merge(
         corner. Over 30 scans of the simulated corridor the default finds every wall of 10 beams
         or more, "fit" 0.87 of them (``tests/test_split_merge.py``).
     split_threshold_m : float or "auto"
-        Split when the worst point is farther than this from the line. Default ``"auto"``:
-        five times the scan's range noise, at least 2 cm (:func:`labkit.noise.auto_split_threshold`;
+        Split when the worst point is farther than this from the line. Default 0.05 m.
+        ``"auto"``: five times the scan's range noise, at least 2 cm (:func:`labkit.noise.auto_split_threshold`;
         the largest of 722 Gaussian residuals measured from a chord passes that about once in 20
         scans). A fixed threshold suits one sensor only: 5 cm, the old default, is ten times an
         LMS200's 5 mm and shatters walls at the 3 cm of cheap scanners (on the simulated sets of
         ``benchmarks/evaluation.py`` its FalsePos grows from 0.06 at 5 mm to 0.80 at 3 cm).
-        A number given is used as it is.
+        ``"auto"`` is not the default yet: on the Radish logs with 1 deg steps the estimated
+        noise (27-28 mm) makes lines run across corners (see README, "Unknown range noise").
     min_points : int
         ``minPointsPerLine``: runs with fewer points make no line, and the worst point is
         never among the first or last ``min_points // 2`` of a run. Default 5 (Xavier et
@@ -345,17 +347,18 @@ def split_and_merge(
         the adaptive breakpoint detector on.
     range_sigma_m : float or "auto"
         Range noise, for the adaptive breakpoints, the lines' covariances and the ``"auto"``
-        split threshold. Default ``"auto"``: estimated from the scan
+        split threshold. Default 0.01 m; ``"auto"``: estimated from the scan
         (:func:`labkit.noise.scan_sigma`).
     place_dr_m, place_dalpha, place_confidence : float
         What a user trusts: a line is reported only if, by its covariance (from
         ``range_sigma_m``), it lies within ``place_dr_m`` (default 5 cm) in ``r`` and
         ``place_dalpha`` (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the
-        true line with probability ``place_confidence`` (default 0.8; 0 reports every line):
+        true line with probability ``place_confidence`` (default 0: every line is reported;
+        0.8 with the ``"auto"`` thresholds):
         :func:`labkit.fitting.placement_probability`. A short piece seen from afar, whose angle
         the data cannot fix to a few degrees, is dropped (a ``"reject"`` step with
         ``test="place_confidence"``). The defaults are Nguyen et al.'s tolerance of a correct
-        line, so the line matches the wall it belongs to four times in five.
+        line; at 0.8 a line matches the wall it belongs to four times in five.
     weights : None or "uniform"
         Point weights of the fits: ``None`` is ``1 / rho`` (the slides).
     segments : ndarray of per-beam labels or list of RangeSegment, optional
