@@ -34,8 +34,9 @@ import numpy as np
 from common import per_scan, world_scans
 
 from labkit import estimate_range_noise, extract_features, read_scans
+from labkit import experiments as ex
 from labkit.noise import range_noise_residuals
-from labkit.sim import LIDARS, make_world, random_polygons, scan_at, scenario
+from labkit.sim import LIDARS, make_world
 
 DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
 SIGMAS_M = (0.002, 0.005, 0.01, 0.02, 0.03, 0.05)
@@ -57,16 +58,8 @@ def markdown_table(rows: list[dict], columns: dict[str, str]) -> str:
     return "\n".join(lines)
 
 
-def sim_scans(world_name: str, lidar, n: int, seed: int) -> list:
-    """``n`` (scan, truth) pairs: along the scenario's trajectory (moving objects placed at each
-    time), or for ``random_polygons`` a new room per scan seen from its centre at a new heading."""
-    rng = np.random.default_rng(seed)
-    if world_name == "random_polygons":
-        headings = np.linspace(-np.pi, np.pi, n, endpoint=False)
-        return [scan_at(random_polygons(k), lidar, (6.0, 4.5, float(headings[k])), 0.0, rng=rng) for k in range(n)]
-    sc, world = scenario(world_name), make_world(world_name)
-    return [scan_at(world, lidar, sc.trajectory.pose_at(float(t)), float(t), rng=rng)
-            for t in np.linspace(0.0, 0.98 * sc.duration_s, n)]
+def _rng(key: str) -> np.random.Generator:
+    return np.random.default_rng(zlib.crc32(key.encode()))
 
 
 def ratio_row(estimates, sigma: float, **keys) -> dict:
@@ -89,8 +82,8 @@ def part_a(n_scans: int) -> None:
         for preset in sorted(LIDARS):
             for sigma in SIGMAS_M:
                 lidar = dataclasses.replace(LIDARS[preset], noise_std_m=sigma)
-                scans = [s for s, _ in sim_scans(world_name, lidar, n_scans, zlib.crc32(f"{world_name}/{preset}/"
-                                                                                         f"{sigma}".encode()))]
+                rng = _rng(f"{world_name}/{preset}/{sigma}")
+                scans = [s for s, _ in ex.world_scans(world_name, lidar, n_scans, rng)]
                 est = [estimate_range_noise(s) for s in scans]
                 row = ratio_row(est, sigma, preset=preset,
                                 residuals=np.mean([len(range_noise_residuals(s)) for s in scans]))
@@ -111,7 +104,7 @@ def part_a(n_scans: int) -> None:
         for sigma in SIGMAS_M:
             lidar = dataclasses.replace(LIDARS[preset], noise_std_m=sigma)
             full, walls = [], []
-            for scan, truth in sim_scans("hall", lidar, n_scans, zlib.crc32(f"hall/{preset}/{sigma}".encode())):
+            for scan, truth in ex.world_scans("hall", lidar, n_scans, _rng(f"hall/{preset}/{sigma}")):
                 full.append(estimate_range_noise(scan))
                 walls.append(estimate_range_noise(scan.replace(
                     ranges=np.where(truth.hits < len(world.walls), scan.ranges, np.nan))))

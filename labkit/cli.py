@@ -335,7 +335,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(ex.markdown_table(rows, ex.LOG_COLUMNS))
     else:
         n = args.scans or 102
-        data = ex.nguyen_set(n, noise_levels=args.noise)
+        data = ex.nguyen_set(n, noise_levels=args.noise or ex.SENSOR_NOISE_LEVELS_M)
         rows = ex.compare_lines(data, extractors, progress=progress)
         report["lines"] = rows
         print(f"## Line extractors on {n} simulated scans of 722 beams per noise level"
@@ -485,8 +485,9 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN) of the recordings")
     ev.add_argument("--scans", type=int, help="scans per noise level (simulated, default 102) or per recording"
                     " (default 100)")
-    ev.add_argument("--noise", type=float, nargs="+", default=[0.005, 0.01, 0.02, 0.03], metavar="M",
-                    help="range noise levels of the simulated sets, metres (default 0.005 0.01 0.02 0.03)")
+    ev.add_argument("--noise", type=float, nargs="+", metavar="M",
+                    help="range noise levels of the simulated sets, metres (default: 5 mm, 1 cm, 2 cm and 3 cm, "
+                         "labkit.experiments.SENSOR_NOISE_LEVELS_M)")
     ev.add_argument("--method", action="append", metavar="NAME",
                     help=f"only this line extractor (repeatable): {', '.join(line_methods()[:-1])}")
     ev.add_argument("--sweep", action="store_true", help="also sweep split-and-merge's split threshold")

@@ -53,6 +53,7 @@ __all__ = [
     "SENSOR_NOISE_LEVELS_M",
     "SimScan",
     "nguyen_set",
+    "world_scans",
     "compare_lines",
     "score_round_objects",
     "compare_on_logs",
@@ -135,18 +136,28 @@ def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVE
             raise ValueError(f"noise_levels must be >= 0, got {noise}")
         rng = np.random.default_rng(seed)
         lidar = nguyen_lidar(n_beams, noise)
-        for name, count in zip(("office", "corridor"), per, strict=False):
-            sc = scenario(name)
-            world = make_world(name)
-            for t in np.linspace(0.0, sc.duration_s * 0.98, count):
-                scan, truth = scan_at(world, lidar, sc.trajectory.pose_at(float(t)), float(t), rng=rng)
-                out.append(SimScan(name, noise, scan, truth))
         headings = np.random.default_rng(seed + 1).uniform(-math.pi, math.pi, per[2])
-        for k in range(per[2]):
-            world = random_polygons(seed + k)
-            scan, truth = scan_at(world, lidar, (6.0, 4.5, float(headings[k])), 0.0, rng=rng)
-            out.append(SimScan("random_polygons", noise, scan, truth))
+        for name, count in zip(("office", "corridor", "random_polygons"), per, strict=True):
+            for scan, truth in world_scans(name, lidar, count, rng, first_room=seed, headings=headings):
+                out.append(SimScan(name, noise, scan, truth))
     return out
+
+
+def world_scans(name: str, lidar: Lidar, n: int, rng: np.random.Generator, *, first_room: int = 0,
+                headings: Sequence[float] | None = None) -> list[tuple[Scan, ScanTruth]]:
+    """``n`` simulated ``(scan, truth)`` pairs of one kind of world, seen by ``lidar`` with the
+    noise drawn from ``rng``: for a scenario's world (``office``, ``corridor``, ``hall``, ...)
+    poses spread along its trajectory (moving objects placed at each time); for
+    ``random_polygons`` a new random room per scan (``random_polygons(first_room + k)``) seen
+    from its centre at ``headings[k]`` (default: ``n`` headings spread around the circle)."""
+    if name == "random_polygons":
+        if headings is None:
+            headings = np.linspace(-math.pi, math.pi, n, endpoint=False)
+        return [scan_at(random_polygons(first_room + k), lidar, (6.0, 4.5, float(headings[k])), 0.0, rng=rng)
+                for k in range(n)]
+    sc, world = scenario(name), make_world(name)
+    return [scan_at(world, lidar, sc.trajectory.pose_at(float(t)), float(t), rng=rng)
+            for t in np.linspace(0.0, sc.duration_s * 0.98, n)]
 
 
 def _timed(extract: Callable, scans: Sequence[Scan], progress=None, repeat: int = 1) -> tuple[list, float]:

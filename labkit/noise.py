@@ -51,11 +51,16 @@ import numpy as np
 from .scan import Scan
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "auto_split_threshold", "MIN_RESIDUALS",
-           "AUTO_LINES", "FALLBACK_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
+           "AUTO_LINES", "RANGE_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
 
 #: Fewest usable residuals (beams with two valid neighbours) for an estimate; with fewer,
 #: :func:`estimate_range_noise` returns NaN.
 MIN_RESIDUALS = 10
+
+#: Range noise of the sensor assumed by default, metres (an LMS200's 5 mm, doubled): the
+#: detectors' ``range_sigma_m`` unless it is ``"auto"``, and what ``"auto"`` assumes for a scan
+#: too small to estimate it (fewer than :data:`MIN_RESIDUALS` usable beams).
+RANGE_SIGMA_M = 0.01
 
 _MAD_TO_SIGMA = 1.482602218505602  # 1 / Phi^-1(3/4)
 _CUT = 3.5  # residuals within this many sigmas are inliers
@@ -149,9 +154,6 @@ def estimate_range_noise(scans: Scan | Iterable[Scan]) -> float:
 
 
 # ----------------------------------------------------------------------------- "auto" thresholds
-#: The range noise ``"auto"`` assumes for a scan too small to estimate it (fewer than
-#: :data:`MIN_RESIDUALS` usable beams), metres: an LMS200's 5 mm, doubled.
-FALLBACK_SIGMA_M = 0.01
 #: The least range noise ``"auto"`` assumes, metres: a noise-free (simulated) scan estimates 0,
 #: and no real surface is flat to better than this.
 MIN_SIGMA_M = 0.002
@@ -171,12 +173,12 @@ AUTO_LINES = {"split_threshold_m": "auto", "range_sigma_m": "auto", "place_confi
 
 def scan_sigma(scan: Scan) -> float:
     """The range noise ``"auto"`` uses for ``scan``, metres: :func:`estimate_range_noise`,
-    at least :data:`MIN_SIGMA_M`, :data:`FALLBACK_SIGMA_M` when the scan is too small to tell.
+    at least :data:`MIN_SIGMA_M`, :data:`RANGE_SIGMA_M` when the scan is too small to tell.
     Worked out once per scan (every detector of a pipeline asks for it)."""
     cached = scan.__dict__.get("_labkit_sigma")
     if cached is None:
         sigma = estimate_range_noise(scan)
-        cached = FALLBACK_SIGMA_M if not math.isfinite(sigma) else max(sigma, MIN_SIGMA_M)
+        cached = RANGE_SIGMA_M if not math.isfinite(sigma) else max(sigma, MIN_SIGMA_M)
         scan.__dict__["_labkit_sigma"] = cached  # (a frozen dataclass's cache, as its cached_property's)
     return cached
 

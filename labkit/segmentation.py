@@ -30,7 +30,7 @@ import numpy as np
 
 from ._cache import remembered
 from ._params import AUTO, Params, param, takes_params
-from .noise import scan_sigma
+from .noise import RANGE_SIGMA_M, scan_sigma
 from .scan import Scan
 
 __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
@@ -38,10 +38,6 @@ __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_label
            "segments_from_labels", "labels_from"]
 
 
-#: Range noise of the sensor assumed by default, metres (an LMS200's 5 mm, doubled): the
-#: adaptive breakpoints' and the line covariances' ``range_sigma_m`` (``"auto"``: estimated
-#: from each scan, :mod:`labkit.noise`).
-RANGE_SIGMA_M = 0.01
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ import numpy as np
 import pytest
 
 from labkit import Scan, read_scans
+from labkit.experiments import world_scans
 from labkit.noise import MIN_RESIDUALS, estimate_range_noise, range_noise_residuals
 from labkit.sim import LIDARS, Column, World, make_world, random_polygons, scan_at, scenario, simulate
 
@@ -59,17 +60,8 @@ def _seed(*key) -> int:
     return zlib.crc32(repr(key).encode())
 
 
-def _sim_scans(world_name: str, lidar, n: int, seed: int):
-    """``n`` (scan, truth) pairs in a world: along the bundled scenario's trajectory (moving objects
-    placed at each time) or, for ``random_polygons``, a new random room per scan seen from its
-    centre at a new heading."""
-    rng = np.random.default_rng(seed)
-    if world_name == "random_polygons":
-        headings = np.linspace(-np.pi, np.pi, n, endpoint=False)
-        return [scan_at(random_polygons(k), lidar, (6.0, 4.5, float(headings[k])), 0.0, rng=rng) for k in range(n)]
-    sc, world = scenario(world_name), make_world(world_name)
-    return [scan_at(world, lidar, sc.trajectory.pose_at(float(t)), float(t), rng=rng)
-            for t in np.linspace(0.0, 0.98 * sc.duration_s, n)]
+def _rng(*key) -> np.random.Generator:
+    return np.random.default_rng(_seed(*key))
 
 
 def _wall_scan(theta, *, d=2.5, alpha=0.7, sigma=0.0, rng=None, **kw) -> Scan:
@@ -111,7 +103,7 @@ def _sweep_params():
 @pytest.mark.parametrize(("world_name", "preset", "sigma"), list(_sweep_params()))
 def test_estimate_recovers_the_simulated_noise(world_name, preset, sigma):
     lidar = dataclasses.replace(LIDARS[preset], noise_std_m=sigma)
-    scans = [s for s, _ in _sim_scans(world_name, lidar, N_SCANS, _seed(world_name, preset, sigma))]
+    scans = [s for s, _ in world_scans(world_name, lidar, N_SCANS, _rng(world_name, preset, sigma))]
     ratio = np.array([estimate_range_noise(s) for s in scans]) / sigma
     n_residuals = np.array([len(range_noise_residuals(s)) for s in scans])
     assert np.all(np.isfinite(ratio))
@@ -130,7 +122,7 @@ def test_hall_bias_comes_from_its_round_objects(preset, sigma):
     world = make_world("hall")
     lidar = dataclasses.replace(LIDARS[preset], noise_std_m=sigma)
     ratios = []
-    for scan, truth in _sim_scans("hall", lidar, N_SCANS, _seed("hall", preset, sigma)):
+    for scan, truth in world_scans("hall", lidar, N_SCANS, _rng("hall", preset, sigma)):
         walls_only = np.where(truth.hits < len(world.walls), scan.ranges, np.nan)
         ratios.append(estimate_range_noise(scan.replace(ranges=walls_only)) / sigma)
     assert abs(np.mean(ratios) - 1.0) <= 0.05, f"mean estimate / true = {np.mean(ratios):.3f}"
@@ -144,7 +136,7 @@ def test_quantised_ranges_add_q_over_sqrt12(sigma):
     q = 0.01
     lidar = dataclasses.replace(LIDARS["lms200"], noise_std_m=sigma)
     est = [estimate_range_noise(s.replace(ranges=np.round(s.ranges / q) * q))
-           for s, _ in _sim_scans("random_polygons", lidar, N_SCANS, _seed("quantised", sigma))]
+           for s, _ in world_scans("random_polygons", lidar, N_SCANS, _rng("quantised", sigma))]
     assert np.mean(est) == pytest.approx(math.hypot(sigma, q / math.sqrt(12)), rel=0.05)
 
 
@@ -158,7 +150,7 @@ def test_quantisation_alone_at_fine_steps_gives_q_over_sqrt12():
     q = 0.01
     lidar = dataclasses.replace(LIDARS["lms200"], angle_increment=math.pi / 721, n_beams=722, noise_std_m=0.0)
     est = [estimate_range_noise(s.replace(ranges=np.round(s.ranges / q) * q))
-           for s, _ in _sim_scans("random_polygons", lidar, N_SCANS, 0)]
+           for s, _ in world_scans("random_polygons", lidar, N_SCANS, np.random.default_rng(0))]
     assert min(est) >= 0.5 * q / math.sqrt(12)
 
 

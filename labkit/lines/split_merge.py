@@ -49,9 +49,9 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..fitting import _line_covariances, line_from_sums, placement_probability
-from ..noise import auto_split_threshold, scan_sigma
+from ..noise import RANGE_SIGMA_M, auto_split_threshold, scan_sigma
 from ..scan import Scan
-from ..segmentation import RANGE_SIGMA_M, SegmentationParams, labels_from, segment_labels, segment_order
+from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
 from ._params import AUTO, Params, param, takes_params
 
@@ -296,9 +296,9 @@ def split_and_merge(
     adaptive_segmentation: bool = SegmentationParams.adaptive,
     range_sigma_m: float,
     weights,
-    place_dr_m: float = 0.05,
-    place_dalpha: float = math.radians(3.0),
-    place_confidence: float = 0.0,
+    place_dr_m: float,
+    place_dalpha: float,
+    place_confidence: float,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -522,10 +522,7 @@ def split_and_merge(
         kept = _merge(kept, points, wrap, steps, **merge_args)
     out = _finish(kept, points, ranges, weights, range_sigma_m)
     if place_confidence > 0 and out:
-        chance = placement_probability(np.array([ln.covariance for ln in out]), place_dr_m, place_dalpha)
-        if (chance < place_confidence).any():
-            kept = _place(kept, chance.tolist(), place_confidence, steps)
-            out = _finish(kept, points, ranges, weights, range_sigma_m)
+        out = _placed(out, place_dr_m, place_dalpha, place_confidence, steps)
     return (out, list(steps)) if trace else out
 
 
@@ -619,11 +616,13 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
     return out
 
 
-def _place(lines: list[_Line], chance: list[float], confidence: float, steps) -> list[_Line]:
-    """The lines the data can place: those whose ``chance`` of lying within the trusted
-    ``|dr|``, ``|dalpha|`` of the truth is at least ``confidence``. (Joining such a line to
+def _placed(lines: list[LineSegment], max_dr_m: float, max_dalpha: float, confidence: float,
+            steps) -> list[LineSegment]:
+    """The lines the data can place: those whose covariance gives them at least ``confidence``
+    of lying within ``max_dr_m`` and ``max_dalpha`` of the true line. (Joining such a line to
     its neighbour instead, when the joined line still passes the split test, found fewer walls
     and more false lines on the simulated sets of ``benchmarks/evaluation.py``.)"""
+    chance = placement_probability(np.array([ln.covariance for ln in lines]), max_dr_m, max_dalpha).tolist()
     out = []
     for ln, c in zip(lines, chance, strict=True):
         if c >= confidence:
