@@ -258,10 +258,14 @@ def _segmentation() -> tuple:
     return Scan, segment_labels
 
 
-def _default_segments(data):
-    """The default range segmentation of a scan (None for anything else: the function says what is wrong)."""
+def _default_segments(data, auto_noise: bool = False):
+    """The default range segmentation of a scan (None for anything else: the function says what
+    is wrong); with ``auto_noise`` (the detector's own ``range_sigma_m`` is ``"auto"``) its
+    breakpoints follow the scan's estimated range noise too, as the detector's thresholds do."""
     scan_type, segment_labels = _segmentation()
-    return segment_labels(data) if isinstance(data, scan_type) else None
+    if not isinstance(data, scan_type):
+        return None
+    return segment_labels(data, range_sigma_m=AUTO) if auto_noise else segment_labels(data)
 
 
 _NONE: dict = {}  # no keyword passed as given (never written to)
@@ -336,7 +340,7 @@ def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: b
             if segments is not None and not takes_segments and on_segments is None:
                 raise TypeError(f"{fn.__name__}() takes no segments")
             if segmented and segments is None and not any(k in raw for k in own_segmentation):
-                segments = _default_segments(data)
+                segments = _default_segments(data, kw.get("range_sigma_m") == AUTO)
             if takes_segments:
                 kw["segments"] = segments
             if trace_kw is not None:

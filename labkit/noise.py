@@ -167,7 +167,8 @@ MIN_SPLIT_M = 0.02
 
 
 #: The noise-following setting of split-and-merge (``[lines]``), not yet its default:
-#: ``split_and_merge(scan, **AUTO_LINES)``, ``Config().updated({"lines": AUTO_LINES})``.
+#: ``split_and_merge(scan, **AUTO_LINES)`` (its default segmentation then follows the noise too),
+#: or in the pipeline ``Config().updated({"lines": AUTO_LINES, "segmentation.range_sigma_m": "auto"})``.
 AUTO_LINES = {"split_threshold_m": "auto", "range_sigma_m": "auto", "place_confidence": 0.8}
 
 

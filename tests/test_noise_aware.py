@@ -150,3 +150,15 @@ def test_the_placing_probability_is_what_happens():
         claimed.append(placement_probability(line.covariance, 0.05, math.radians(3.0)))
     assert 0.2 < np.mean(hits) < 0.6  # a line the data can hardly place
     assert np.mean(claimed) == pytest.approx(np.mean(hits), abs=0.07)
+
+
+def test_a_detector_told_auto_segments_with_the_estimated_noise_too():
+    # the wall 1 m ahead under 5 cm of noise: the default breakpoints (1 cm) cut it into five or
+    # more segments; split-and-merge with AUTO_LINES and no segments given sees one or two
+    theta = np.radians(np.arange(-40.0, 40.25, 0.5))
+    rng = np.random.default_rng(1)
+    scan = Scan(ranges=1.0 / np.cos(theta) + rng.normal(0, 0.05, theta.size), angles=theta)
+    _, steps = split_and_merge(scan, trace=True, **AUTO_LINES)
+    assert sum(s.kind == "segment" for s in steps) <= 2
+    _, steps = split_and_merge(scan, trace=True)
+    assert sum(s.kind == "segment" for s in steps) >= 5
