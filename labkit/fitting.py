@@ -261,7 +261,7 @@ def placement_probability(cov, max_dr_m: float, max_dalpha: float) -> np.ndarray
 
     >>> c = np.diag([0.01 ** 2, np.radians(1.0) ** 2])
     >>> round(float(placement_probability(c, 0.02, np.radians(2.0))), 4)
-    0.9107
+    0.9111
     """
     c = np.asarray(cov, dtype=float)
     one = c.ndim == 2
