@@ -423,7 +423,8 @@ def _geometry(runs: _Runs) -> _Geometry:
 
 
 def _cheap_tests(geo: _Geometry, chord: np.ndarray, min_points: int, chord_range: tuple[float, float],
-                 middle_range: tuple[float, float], hollow: bool = False) -> tuple[list[int], list[float]]:
+                 middle_range: tuple[float, float], hollow: bool = False, sigma: float = 0.0,
+                 widened: dict | None = None) -> tuple[list[int], list[float]]:
     """The cheap tests of every run in the detectors' order, the first failed deciding: too
     few points, chord too short, chord too long, degenerate (a non-finite point, no chord),
     and the prerequisite on the middle point (``hollow``: on either side of the chord).
@@ -432,6 +433,10 @@ def _cheap_tests(geo: _Geometry, chord: np.ndarray, min_points: int, chord_range
     operations here. Returns each run's verdict (``_ACCEPTED`` when it passed them all) and
     its signed middle-point ratio (NaN for the runs that did not get that far). ``chord`` is
     the chord tested; the ratio is taken over ``geo.chord``.
+
+    ``sigma`` > 0 (range noise, metres) widens the prerequisite band of each run by
+    ``NOISE_Z`` times the ratio's standard deviation under that noise (:func:`_ratio_sd`);
+    the band tested goes to ``widened[k]`` when ``widened`` is a dict.
     """
     n, chords = geo.n.tolist(), geo.chord.tolist()
     tested = chords if chord is geo.chord else chord.tolist()
@@ -459,11 +464,96 @@ def _cheap_tests(geo: _Geometry, chord: np.ndarray, min_points: int, chord_range
             r = side / c2 if c2 > 0 else side * math.inf if c > 0 else math.nan
             if math.isnan(r) or not finite[k]:
                 v = _DEGENERATE
+            elif sigma > 0.0:
+                w = NOISE_Z * _ratio_sd(p0[k], p1[k], mid[k], c, sigma)
+                if widened is not None:
+                    widened[k] = (lo - w, hi + w)
+                v = _ACCEPTED if lo - w < (abs(r) if hollow else r) < hi + w else _PREREQ
             else:
                 v = _ACCEPTED if lo < (abs(r) if hollow else r) < hi else _PREREQ
         verdicts.append(v)
         ratios.append(r)
     return verdicts, ratios
+
+
+# ---------------------------------------------------------------- noise allowances
+# The paper's thresholds are fixed (Table II), which is right for the 5 mm of a SICK LMS200 and
+# wrong at 2 cm: a leg seen by 4 beams at 3 m has a chord of 10 cm, and 2 cm of range noise on its
+# middle point alone moves the prerequisite ratio by 0.2 -- the whole distance from a half circle's
+# 0.35 to the 0.1 limit. Given the range noise sigma, the tests below ask instead whether the data
+# *could* come from a shape that passes: each bound is moved out by NOISE_Z standard deviations
+# of the statistic under that noise, propagated to first order from the ranges of the very points
+# tested (noise along each beam). sigma = 0 is the paper's test.
+
+#: One-sided normal quantile of the noise allowances: from noise alone, a true circle fails one
+#: bound 2.3 % of the time.
+NOISE_Z = 2.0
+
+
+#: The widened mean bound stays this many standard deviations of the mean below 180 deg (a
+#: straight line), so that a short noisy piece of wall, which could be a line, is not called a circle.
+LINE_Z = 3.0
+
+
+def _cross(ax: float, ay: float, bx: float, by: float) -> float:
+    return ax * by - ay * bx
+
+
+def _ratio_sd(p0, p1, mid, chord: float, sigma: float) -> float:
+    """Standard deviation of the middle-point ratio (signed distance from the chord over the
+    chord) when the three points' ranges have noise ``sigma``, to first order: the middle
+    point's range error moves it by its beam's component across the chord, each extreme's
+    moves the chord at the middle by half of its own."""
+    (x0, y0), (x1, y1), (xm, ym) = p0, p1, mid
+    if chord <= 0.0:
+        return math.inf
+    ex, ey = (x1 - x0) / chord, (y1 - y0) / chord
+    acc = 0.0
+    for (x, y), w in (((xm, ym), 1.0), ((x0, y0), 0.25), ((x1, y1), 0.25)):
+        h = math.hypot(x, y)
+        if h > 0.0:
+            acc += w * _cross(ex, ey, x / h, y / h) ** 2
+    return sigma * math.sqrt(acc) / chord
+
+
+def _angle_noise(p: np.ndarray, sigma: float) -> tuple[float, float]:
+    """How much range noise ``sigma`` alone spreads the inscribed angles of the run ``p``
+    (n, 2), n >= 3: ``(spread_max_sq, mean_sd)``.
+
+    With ``J`` the first-order derivatives of the n - 2 angles with respect to the n ranges
+    (each point moved along its beam) and ``C`` the centring matrix, the population variance
+    of the angles has the mean ``E = sigma^2 |C J|_F^2 / m`` and about ``nu`` degrees of freedom
+    (Satterthwaite: ``nu = tr(S)^2 / tr(S^2)``, ``S = C J J^T C``); ``spread_max_sq`` is its
+    upper ``NOISE_Z`` quantile, ``E chi2(nu) / nu`` (Wilson-Hilferty). ``mean_sd`` is the
+    standard deviation of the mean angle, ``sigma |1^T J| / m``.
+    """
+    n = p.shape[0]
+    m = n - 2
+    h = np.hypot(p[:, 0], p[:, 1])
+    u = p / np.where(h > 0, h, 1.0)[:, None]
+    a = p[0] - p[1:-1]  # P_i -> P_1
+    b = p[-1] - p[1:-1]  # P_i -> P_n
+    na2, nb2 = (a * a).sum(axis=1), (b * b).sum(axis=1)
+
+    def cross(v, w):
+        return v[..., 0] * w[..., 1] - v[..., 1] * w[..., 0]
+
+    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a)
+    jac = np.zeros((m, n))
+    ui = u[1:-1]
+    jac[np.arange(m), np.arange(1, n - 1)] = cross(a, ui) / na2 - cross(b, ui) / nb2
+    jac[:, 0] += -cross(a, u[0]) / na2
+    jac[:, -1] += cross(b, u[-1]) / nb2
+    centred = jac - jac.mean(axis=0)
+    s = centred @ centred.T
+    tr = float(np.trace(s))
+    mean_sd = sigma * float(np.linalg.norm(jac.sum(axis=0))) / m
+    if tr <= 0.0:
+        return 0.0, mean_sd
+    nu = tr * tr / float((s * s).sum())
+    k = 2.0 / (9.0 * nu)
+    chi2_over_nu = max(1.0 - k + NOISE_Z * math.sqrt(k), 0.0) ** 3
+    return sigma * sigma * tr / m * chi2_over_nu, mean_sd
 
 
 class _Angles(NamedTuple):
@@ -520,11 +610,12 @@ def _nearest(value: float, bounds) -> float:
 
 
 def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel, ang: _Angles | None,
-           algorithm: str, limits: dict, found: list) -> list[Step]:
+           algorithm: str, limits: dict, found: list, widened: dict | None = None) -> list[Step]:
     """One :class:`labkit.Step` per run, ``"accept"`` or ``"reject"``, with the values known when
     it was decided (``chord``, ``ratio``: as tested; ``verdict`` per run; ``ang``: the inscribed
     angles of the runs ``sel``, or None). ``limits``: the threshold (or (low, high) range) of
-    each verdict's test; ``found``: the features, in the order of the accepted runs."""
+    each verdict's test; ``found``: the features, in the order of the accepted runs;
+    ``widened``: per run, the limits (by verdict) that noise allowances changed."""
     mean, std = np.full(len(verdict), np.nan), np.full(len(verdict), np.nan)
     if ang is not None:
         mean[sel], std[sel] = ang.mean, ang.std
@@ -543,7 +634,8 @@ def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel, 
             value = abs(m - limits["mean_from"])
         if v in (_DEGENERATE, _FIT, _OCCLUDED):
             value = math.nan
-        threshold = _nearest(value, limits[v]) if v in limits and not math.isnan(value) else math.nan
+        limit = widened[k].get(v, limits.get(v)) if widened and k in widened else limits.get(v)
+        threshold = _nearest(value, limit) if limit is not None and not math.isnan(value) else math.nan
         known = [f"{n} points"] + [text for ok, text in (
             (not math.isnan(c), f"chord {c:.3f} m"), (not math.isnan(r), f"middle ratio {r:.2f}"),
             (not math.isnan(m), f"iav mean {math.degrees(m):.1f} deg, std {math.degrees(sd):.1f} deg")) if ok]
@@ -587,45 +679,72 @@ class _CircleTest(NamedTuple):
     kind: str
 
 
-def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool,
-               algorithm: str = "iav_circles") -> tuple[list[Circle], list[Step]]:
-    """The circle test of :func:`detect_circles` on every run."""
+def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool, algorithm: str = "iav_circles",
+               sigma: float = 0.0) -> tuple[list[Circle], list[Step]]:
+    """The circle test of :func:`detect_circles` on every run (``sigma`` > 0: with the noise
+    allowances for that range noise)."""
     s = runs.starts.size
     if s == 0:
         return [], []
     geo = _geometry(runs)
-    verdict, ratio = _cheap_tests(geo, geo.chord, max(t.min_points, 3), t.chord_range, t.middle_range, t.hollow)
+    widened: dict = {}
+    verdict, ratio = _cheap_tests(geo, geo.chord, max(t.min_points, 3), t.chord_range, t.middle_range, t.hollow,
+                                  sigma, widened)
+    widened = {k: {_PREREQ: band} for k, band in widened.items()}
     sel = [k for k, v in enumerate(verdict) if v == _ACCEPTED]
     circles: list[Circle] = []
     ang = None
     if sel:
         ang = _batch_angles(runs, np.array(sel), np.array([ratio[k] < 0 for k in sel]) if t.hollow else None)
         for j, k in enumerate(sel):
-            circle, v = _finish_circle(runs, geo, ang, j, k, t)
+            circle, v = _finish_circle(runs, geo, ang, j, k, t, sigma, widened.get(k))
             verdict[k] = v
             if circle is not None:
                 circles.append(circle)
     if not want_trace:
         return circles, []
-    return circles, _trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, _circle_limits(t), circles)
+    return circles, _trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, _circle_limits(t), circles,
+                           widened)
 
 
-def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
-                   t: _CircleTest) -> tuple[Circle | None, int]:
+def _angle_limits(p: np.ndarray, sigma: float, mean_range: tuple[float, float], std_max: float | None,
+                  like_max: float | None = None) -> tuple[tuple[float, float], float | None, float | None]:
+    """``mean_range``, ``std_max`` and ``like_max`` (the arc-like bound, or None) of a run of
+    points ``p``, widened for range noise ``sigma`` (:func:`_angle_noise`); unchanged when
+    ``sigma`` is 0."""
+    if sigma <= 0.0:
+        return mean_range, std_max, like_max
+    spread_sq, mean_sd = _angle_noise(p, sigma)
+    w = NOISE_Z * mean_sd
+    hi = min(mean_range[1] + w, max(math.pi - LINE_Z * mean_sd, mean_range[1]))
+    cap = max(ARC_LIKE_STD_MAX, like_max or 0.0)
+    return ((mean_range[0] - w, hi), None if std_max is None else min(math.sqrt(std_max ** 2 + spread_sq), cap),
+            None if like_max is None else min(math.sqrt(like_max ** 2 + spread_sq), cap))
+
+
+def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t: _CircleTest,
+                   sigma: float = 0.0, widened: dict | None = None) -> tuple[Circle | None, int]:
     if ang.degenerate.item(j):
         return None, _DEGENERATE
     mean, std = ang.mean.item(j), ang.std.item(j)
-    if not (t.mean_range[0] <= mean <= t.mean_range[1]):
+    mean_range, std_max, like_max = t.mean_range, t.std_max, t.arc_like_std_max
+    if sigma > 0.0:
+        mean_range, std_max, like_max = _angle_limits(runs.pts[runs.starts.item(k):runs.ends.item(k)], sigma,
+                                                      mean_range, std_max, like_max)
+        if widened is not None:
+            widened.update({_MEAN: mean_range, _STD: std_max if like_max is None else like_max,
+                            _VCORNER: like_max, _ACCEPTED: std_max})
+    if not (mean_range[0] <= mean <= mean_range[1]):
         return None, _MEAN
-    kind, std_max = t.kind, t.std_max
-    if std >= t.std_max:
-        if t.arc_like_std_max is None or std >= t.arc_like_std_max:
+    kind = t.kind
+    if std >= std_max:
+        if like_max is None or std >= like_max:
             return None, _STD
         angles = ang.angles[ang.offsets[j]:ang.offsets[j] + ang.counts[j]]
         stride = t.v_corner_stride if t.v_corner_stride is not None else max(1, angles.size // 8)
         if is_v_corner(angles, t.v_corner_neighbours, stride):
             return None, _VCORNER
-        kind, std_max = "arc-like", t.arc_like_std_max
+        kind, std_max = "arc-like", like_max
     try:
         if t.center_method == "iav":
             side = ang.side.item(j)
@@ -638,7 +757,7 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int,
         return None, _FIT
     center.setflags(write=False)
     n = geo.n.item(k)
-    confidence = circle_confidence(n - 2, mean, std, std_max=std_max, mean_range=t.mean_range)
+    confidence = circle_confidence(n - 2, mean, std, std_max=std_max, mean_range=mean_range)
     first, last = runs.idx.item(runs.starts.item(k)), runs.idx.item(runs.ends.item(k) - 1)
     return Circle(center, float(radius), mean, std, confidence, first, last, n, kind), _ACCEPTED
 

@@ -57,6 +57,7 @@ __all__ = [
     "compare_lines",
     "score_round_objects",
     "compare_on_logs",
+    "round_objects_on_logs",
     "sweep_split_and_merge",
     "false_positive_reasons",
     "markdown_table",
@@ -239,22 +240,12 @@ def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable]
     :class:`labkit.CorruptFileError` goes to ``on_damage`` (default: raised after every
     recording was scored).
     """
-    from .io import CorruptFileError, read_scans  # I/O stays out of the algorithm imports above
 
     extractors = LINE_EXTRACTORS if extractors is None else extractors
     rows = []
-    damage = []
+    damage: list[Exception] = []
     for path in paths:
-        scans = []
-        try:
-            for scan in read_scans(path, topic=topic, strict=strict):
-                scans.append(scan)
-                if len(scans) >= n_scans:
-                    break
-        except CorruptFileError as exc:
-            damage.append(exc)
-            if on_damage is not None:
-                on_damage(exc)
+        scans = _first_scans(path, n_scans, topic, strict, damage, on_damage)
         for name, extract in extractors.items():
             bar = None if progress is None else partial(progress, desc=f"{Path(path).name} {name}")
             lines, spent = _timed(extract, scans, bar, repeat)
@@ -267,6 +258,51 @@ def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable]
                          "over_10cm": total.share_over(0.1), "coverage": total.coverage,
                          "lines_per_scan": sum(map(len, lines)) / max(len(scans), 1),
                          "scans_per_s": len(scans) / spent if spent else math.nan})
+    if damage and on_damage is None:
+        raise damage[0]
+    return rows
+
+
+def _first_scans(path, n_scans: int, topic, strict: bool, damage: list, on_damage) -> list[Scan]:
+    """The first ``n_scans`` scans of a recording; a :class:`labkit.CorruptFileError` goes to
+    ``damage`` and to ``on_damage`` (if given), and the scans read before it are kept."""
+    from .io import CorruptFileError, read_scans  # I/O stays out of the algorithm imports above
+
+    scans: list[Scan] = []
+    try:
+        for scan in read_scans(path, topic=topic, strict=strict):
+            scans.append(scan)
+            if len(scans) >= n_scans:
+                break
+    except CorruptFileError as exc:
+        damage.append(exc)
+        if on_damage is not None:
+            on_damage(exc)
+    return scans
+
+
+def round_objects_on_logs(paths: Iterable[str | Path], configs: Mapping[str, Config | None], *, n_scans: int = 100,
+                          topic: str | None = None, strict: bool = False,
+                          on_damage: Callable[[Exception], None] | None = None) -> list[dict]:
+    """Circles, legs and people per scan of :func:`labkit.extract_features` with each of
+    ``configs`` (name -> :class:`labkit.Config`, None for the defaults) on the first ``n_scans``
+    scans of each recording, and the median range noise of those scans
+    (:func:`labkit.noise.scan_sigma`). Real recordings have no truth: this counts, it does not
+    score. Damaged recordings as :func:`compare_on_logs`."""
+    from .noise import scan_sigma
+
+    rows = []
+    damage: list[Exception] = []
+    for path in paths:
+        scans = _first_scans(path, n_scans, topic, strict, damage, on_damage)
+        sigma = float(np.median([scan_sigma(s) for s in scans])) if scans else math.nan
+        for name, config in configs.items():
+            found = [extract_features(s, config) for s in scans]
+            per = max(len(scans), 1)
+            rows.append({"log": Path(path).name, "setting": name, "scans": len(scans), "sigma_m": sigma,
+                         "circles_per_scan": sum(len(f.circles) for f in found) / per,
+                         "legs_per_scan": sum(len(f.legs) for f in found) / per,
+                         "people_per_scan": sum(len(f.people) for f in found) / per})
     if damage and on_damage is None:
         raise damage[0]
     return rows
@@ -330,6 +366,9 @@ ROUND_COLUMNS = {"kind": "objects", "truth": "in truth", "detected": "detected",
 LOG_COLUMNS = {"log": "recording", "method": "method", "scans": "scans", "beams": "beams", "rmse_m": "RMSE (m):.4f",
                "median_abs_m": "median abs (m):.4f", "over_10cm": "beyond 10 cm:.1%", "coverage": "coverage:.1%",
                "lines_per_scan": "lines/scan:.1f", "scans_per_s": "scans/s:,.0f"}
+ROUND_LOG_COLUMNS = {"log": "recording", "setting": "setting", "scans": "scans", "sigma_m": "median sigma (m):.4f",
+                     "circles_per_scan": "circles/scan:.2f", "legs_per_scan": "legs/scan:.2f",
+                     "people_per_scan": "people/scan:.2f"}
 SWEEP_COLUMNS = {"noise_std_m": "noise (m)", "split_threshold_m": "split threshold (m)", "tp_rate": "TruePos:.3f",
                  "fp_rate": "FalsePos:.3f", "sigma_dr_m": "sigma dr (mm):", "lines_per_scan": "lines/scan:.1f"}
 

@@ -51,7 +51,7 @@ import numpy as np
 from .scan import Scan
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "auto_split_threshold", "MIN_RESIDUALS",
-           "AUTO_LINES", "RANGE_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
+           "AUTO_LINES", "AUTO_CONFIG", "RANGE_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
 
 #: Fewest usable residuals (beams with two valid neighbours) for an estimate; with fewer,
 #: :func:`estimate_range_noise` returns NaN.
@@ -170,6 +170,13 @@ MIN_SPLIT_M = 0.02
 #: ``split_and_merge(scan, **AUTO_LINES)`` (its default segmentation then follows the noise too),
 #: or in the pipeline ``Config().updated({"lines": AUTO_LINES, "segmentation.range_sigma_m": "auto"})``.
 AUTO_LINES = {"split_threshold_m": "auto", "range_sigma_m": "auto", "place_confidence": 0.8}
+
+#: The noise-following setting of the whole pipeline, not yet its default:
+#: ``Config().updated(AUTO_CONFIG)``, or the same keys in a TOML file for ``labkit extract
+#: --config``. Segmentation, split-and-merge (:data:`AUTO_LINES`), and the noise allowances of
+#: the IAV circle and leg tests (``range_sigma_m``, :func:`labkit.detect_circles`).
+AUTO_CONFIG = {"segmentation.range_sigma_m": "auto", **{f"lines.{k}": v for k, v in AUTO_LINES.items()},
+               "circles.range_sigma_m": "auto", "legs.range_sigma_m": "auto"}
 
 
 def scan_sigma(scan: Scan) -> float:

@@ -162,3 +162,160 @@ def test_a_detector_told_auto_segments_with_the_estimated_noise_too():
     assert sum(s.kind == "segment" for s in steps) <= 2
     _, steps = split_and_merge(scan, trace=True)
     assert sum(s.kind == "segment" for s in steps) >= 5
+
+
+# ----------------------------------------------------------------------------- circles and legs
+# The noise allowances of the IAV tests (labkit._iav: _ratio_sd, _angle_noise) are first-order
+# propagations; the truth here is what the statistics do when noise is drawn many times.
+def _arc_points(center, radius, n, half_span_deg):
+    """n points of a circle, in scan order, on the side facing the sensor at the origin."""
+    cx, cy = center
+    facing = math.atan2(-cy, -cx)
+    t = facing + np.radians(np.linspace(half_span_deg, -half_span_deg, n))
+    return np.column_stack([cx + radius * np.cos(t), cy + radius * np.sin(t)])
+
+
+def _noisy(points, sigma, rng, draws):
+    """``draws`` copies of ``points`` with Gaussian range noise along each beam."""
+    rho = np.hypot(points[:, 0], points[:, 1])
+    u = points / rho[:, None]
+    return (rho + rng.normal(0.0, sigma, (draws, rho.size)))[..., None] * u
+
+
+@pytest.mark.parametrize(("n", "half_span", "sigma"), [(5, 60, 0.005), (9, 70, 0.005), (15, 75, 0.003),
+                                                       (7, 50, 0.002)])
+def test_the_angle_allowances_match_the_noise_they_model(n, half_span, sigma):
+    from labkit._iav import NOISE_Z, _angle_noise
+
+    pts = _arc_points((3.0, 0.4), 0.3, n, half_span)
+    spread_max_sq, mean_sd = _angle_noise(pts, sigma)
+    rng = np.random.default_rng(n)
+    draws = _noisy(pts, sigma, rng, 4000)
+    from labkit.circles.iav import inscribed_angles
+
+    angles = np.array([inscribed_angles(p, signed=True) for p in draws])
+    # the mean's spread within 10 % (4000 draws: the standard error of an SD is 1.1 %)
+    assert np.std(angles.mean(axis=1)) == pytest.approx(mean_sd, rel=0.10)
+    # the spread's upper quantile: the share of draws beyond it is near the normal tail of NOISE_Z
+    tail = 1 - 0.5 * (1 + math.erf(NOISE_Z / math.sqrt(2)))
+    beyond = np.mean(angles.var(axis=1) > spread_max_sq)
+    assert tail / 3 < beyond < tail * 2, (beyond, tail)
+
+
+def test_the_prerequisite_allowance_matches_the_noise_it_models():
+    from labkit._iav import _middle_ratio, _ratio_sd
+
+    rng = np.random.default_rng(3)
+    for n, sigma in ((5, 0.02), (7, 0.01), (4, 0.005)):
+        pts = _arc_points((2.5, -0.6), 0.07, n, 70)
+        chord = float(np.hypot(*(pts[-1] - pts[0])))
+        predicted = _ratio_sd(pts[0].tolist(), pts[-1].tolist(), pts[n // 2].tolist(), chord, sigma)
+        ratios = [_middle_ratio(p) for p in _noisy(pts, sigma, rng, 4000)]
+        # first order: within 15 % while the noise is small against the chord (2 cm on a 12 cm chord is not)
+        assert np.std(ratios) == pytest.approx(predicted, rel=0.15 if sigma < 0.02 else 0.3)
+
+
+def _hall_scores(noise, n, config):
+    from labkit.experiments import score_round_objects
+
+    return score_round_objects(n, noise_std_m=noise, config=config)
+
+
+def test_circles_and_legs_follow_the_noise_at_2_cm():
+    from labkit.noise import AUTO_CONFIG
+
+    fixed = _hall_scores(0.02, 120, None)
+    auto = _hall_scores(0.02, 120, Config().updated(AUTO_CONFIG))
+    # issue 16's goals, on the simulator's truth (120 scans: each rate has a standard error under 1.5 %)
+    assert auto["circles"]["precision"] >= 0.95 and auto["circles"]["recall"] >= 0.9, auto["circles"]
+    assert auto["legs"]["precision"] >= 0.9 and auto["legs"]["recall"] >= 0.85, auto["legs"]
+    # and what the paper's fixed tests lose there
+    assert fixed["circles"]["recall"] < 0.75 and fixed["legs"]["recall"] < 0.8
+
+
+def test_the_allowances_lose_nothing_at_5_mm():
+    from labkit.noise import AUTO_CONFIG
+
+    fixed = _hall_scores(0.005, 60, None)
+    auto = _hall_scores(0.005, 60, Config().updated(AUTO_CONFIG))
+    for kind in ("circles", "legs"):
+        assert auto[kind]["recall"] >= fixed[kind]["recall"]
+        assert auto[kind]["precision"] >= fixed[kind]["precision"] - 0.01
+
+
+def _flat_pieces(sigma, trials=400, seed=7):
+    """Short straight pieces of wall (5-13 beams of 0.5 deg at 1.5-5 m), each its own scan."""
+    rng = np.random.default_rng(seed)
+    for _ in range(trials):
+        d, alpha = rng.uniform(1.5, 5.0), rng.uniform(-0.5, 0.5)
+        width = rng.integers(5, 14)
+        theta = alpha + math.radians(0.5) * (np.arange(width) - width // 2)
+        yield Scan(ranges=d / np.cos(theta - alpha) + rng.normal(0.0, sigma, width), angles=theta)
+
+
+@pytest.mark.parametrize("sigma", [0.005, 0.02])
+def test_short_noisy_walls_are_not_called_circles(sigma):
+    # the attack on the allowances: a short straight piece of wall could pass a widened band;
+    # it must not become a circle (LINE_Z keeps the mean angle below a line's 180 deg)
+    from labkit import detect_circles
+
+    found = sum(len(detect_circles(scan, range_sigma_m=sigma)) for scan in _flat_pieces(sigma))
+    assert found <= 4, found  # of 400 (1 measured at 2 cm, 0 at 5 mm)
+
+
+@pytest.mark.parametrize(("sigma", "fixed_max", "allowed_max"), [(0.005, 0.03, 0.3), (0.02, 0.2, 0.6)])
+def test_flat_pieces_of_leg_width_the_leg_allowance_lets_through(sigma, fixed_max, allowed_max):
+    # The same attack on legs wins often, and this test records by how much rather than hiding
+    # it: a leg has no angle test (Xavier et al.), and 3-7 points of a 10-25 cm piece at 2 cm of
+    # noise cannot tell round from flat -- the widened prerequisite band takes in about 49 % of
+    # flat pieces at 2 cm and 18 % at 5 mm (measured, 400 pieces), the fixed band 15 % and 0.8 %.
+    # That is why the allowances are opt-in (labkit.noise.AUTO_CONFIG), not the default.
+    from labkit import detect_legs
+
+    pieces = list(_flat_pieces(sigma))
+    fixed = sum(len(detect_legs(s, reject_occluded=False)) for s in pieces) / len(pieces)
+    allowed = sum(len(detect_legs(s, range_sigma_m=sigma, reject_occluded=False)) for s in pieces) / len(pieces)
+    assert fixed <= fixed_max and fixed < allowed <= allowed_max, (fixed, allowed)
+
+
+def test_auto_is_the_scans_estimate_a_number_wins_and_zero_is_the_paper():
+    from labkit import detect_circles, detect_legs, sim
+    from labkit.circles.iav import CircleParams
+    from labkit.circles.legs import LegsParams
+
+    assert CircleParams().range_sigma_m == 0 and LegsParams().range_sigma_m == 0  # opt-in, as AUTO_LINES
+    world = sim.World("demo", circles=(sim.Column((3.0, 0.5), 0.3), sim.Column((2.0, -0.8), 0.07)))
+    lidar = dataclasses_replace_noise(sim.LIDARS["lms200"], 0.02)
+    scan, _ = sim.scan_at(world, lidar, (0.0, 0.0, 0.0), rng=np.random.default_rng(2))
+    sigma = scan_sigma(scan)
+    for detect in (detect_circles, detect_legs):
+        def key(found):
+            return [(np.round(f.center, 12).tolist(), f.first, f.last) for f in found]
+
+        auto = detect(scan, range_sigma_m="auto")
+        assert auto and key(auto) == key(detect(scan, range_sigma_m=sigma))
+    with pytest.raises(ValueError, match="range_sigma_m"):
+        detect_circles(scan, range_sigma_m=-0.01)
+
+
+def test_the_trace_shows_the_widened_limit():
+    from labkit import detect_circles, sim
+
+    world = sim.World("demo", circles=(sim.Column((3.0, 0.0), 0.3),))
+    lidar = dataclasses_replace_noise(sim.LIDARS["lms200"], 0.02)
+    for seed in range(40):
+        scan, _ = sim.scan_at(world, lidar, (0.0, 0.0, 0.0), rng=np.random.default_rng(seed))
+        _, fixed = detect_circles(scan, trace=True)
+        circles, steps = detect_circles(scan, range_sigma_m=0.02, trace=True)
+        accepted = [s for s in steps if s.kind == "accept"]
+        if circles and not any(s.kind == "accept" for s in fixed):  # a circle only the allowance finds
+            (step,) = accepted
+            assert step.value < step.threshold and step.threshold > math.radians(8.6)
+            return
+    pytest.fail("no scan in 40 where the allowance changed the verdict")
+
+
+def dataclasses_replace_noise(lidar, sigma):
+    import dataclasses
+
+    return dataclasses.replace(lidar, noise_std_m=sigma)

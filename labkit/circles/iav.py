@@ -53,10 +53,12 @@ from types import MappingProxyType
 
 import numpy as np
 
+from .._checks import check_nonneg
 from .._iav import (  # the shared machinery; the public names are documented here
     ARC_LIKE_STD_MAX,
     CIRCLE_MEAN_RANGE,
     CIRCLE_STD_MAX,
+    NOISE_Z,
     IAVStats,
     _check_scan,
     _circle_test,
@@ -70,8 +72,9 @@ from .._iav import (  # the shared machinery; the public names are documented he
     is_v_corner,
     middle_point_offset,
 )
-from .._params import Params, param, takes_params
+from .._params import AUTO, Params, param, takes_params
 from ..features import Circle, LineSegment
+from ..noise import scan_sigma
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
@@ -92,6 +95,7 @@ __all__ = [
     "CIRCLE_STD_MAX",
     "ARC_LIKE_STD_MAX",
     "CIRCLE_MEAN_RANGE",
+    "NOISE_Z",
 ]
 
 #: Line extraction before :func:`detect_arcs` (Sec. II-B.2: "a very low peak error and high distance between
@@ -100,6 +104,14 @@ __all__ = [
 
 
 # ============================================================================ detectors
+def _noise_sigma(scan: Scan, range_sigma_m) -> float:
+    """The range noise the tests allow for: ``range_sigma_m``, or the scan's estimate."""
+    if range_sigma_m == AUTO:
+        return scan_sigma(scan)
+    return check_nonneg("range_sigma_m", range_sigma_m)
+
+
+
 @dataclass(frozen=True)
 class CircleParams(Params):
     """Parameters of :func:`detect_circles` and the ``[circles]`` table of :class:`labkit.Config`
@@ -120,6 +132,8 @@ class CircleParams(Params):
     arc_like_std_max_deg: float = param(math.degrees(ARC_LIKE_STD_MAX), "arc-like: largest IAV standard deviation, "
                                                                         "degrees", lo=0, strict=True)
     v_corner_neighbours: int = param(4, "arc-like: neighbours whose angles must grow for a V-corner", lo=1)
+    range_sigma_m: float = param(0.0, "range noise the tests allow for, metres (0: the paper's fixed tests); "
+                                      "auto: estimated from each scan (labkit.noise)", lo=0, auto=True)
 
 
 @dataclass(frozen=True)
@@ -170,6 +184,7 @@ def detect_circles(
     arc_like_std_max: float,
     v_corner_neighbours: int,
     v_corner_stride: int | None = None,
+    range_sigma_m: float | str,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,
 ) -> list[Circle] | tuple[list[Circle], list[Step]]:
@@ -225,9 +240,16 @@ def detect_circles(
         (900 scans): 16 passed as "arc-like" with stride 1, 1 with the default; of 200
         irregular trunks (16-gons, corners 10-15 % off the circle) 22 and 26 were kept
         as "arc-like".
-    segments : list of RangeSegment or ndarray of per-beam labels, optional
-        Precomputed segments (e.g. from an adaptive threshold, shared with other
-        detectors) instead of ``range_segments(scan, seg_threshold_m)``.
+    range_sigma_m : float or "auto", metres
+        Range noise the tests allow for (:data:`labkit.circles.iav.NOISE_Z` below). 0: the
+        paper's fixed thresholds. Given sigma, each test asks whether the segment *could* be
+        a circle seen through that noise: the prerequisite band, the mean range and the
+        spread limit are widened by what sigma does to the segment's own points (first-order
+        propagation along the beams; the spread limit becomes ``sqrt(std_max^2 + q)`` with
+        ``q`` the upper ``NOISE_Z`` quantile of the spread noise alone gives). ``"auto"``:
+        sigma estimated from the scan (:func:`labkit.noise.scan_sigma`). A column of 0.3 m
+        seen by an LMS200 with 2 cm of noise spreads its inscribed angles by 10-20 deg,
+        beyond Table II's 8.6 deg, so the fixed test misses about half the circles there.
     trace : bool
         Also return one :class:`labkit.Step` per segment (``algorithm="iav_circles"``),
         in scan order: ``"accept"`` with the circle's ``center`` and ``radius`` (``value``
@@ -260,7 +282,8 @@ def detect_circles(
                         middle_range=middle_range, mean_range=mean_range, std_max=std_max, arc_like=arc_like,
                         arc_like_std_max=arc_like_std_max, v_corner_neighbours=v_corner_neighbours,
                         v_corner_stride=v_corner_stride, hollow=False, center_method=center_method, kind="circle")
-    circles, steps = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, trace)
+    circles, steps = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, trace,
+                                sigma=_noise_sigma(scan, range_sigma_m))
     return (circles, steps) if trace else circles
 
 
