@@ -1,10 +1,12 @@
-"""Fill-ins for notebooks/10_evaluation.ipynb: the normal-form test of the matching rule, the two rates."""
+"""Fill-ins for notebooks/10_evaluation.ipynb: the normal-form test of the matching rule, the two rates,
+the three-beam residual of the range noise estimate."""
 
 from tests.your_turn import Fill
 
 _HEAD = ('def normal_form_match(line_r, line_alpha, wall_r, wall_alpha, max_dr_m=0.05, '
          'max_dalpha=math.radians(3)):\n')
 _RATES = "def rates(n_truth, n_matched, n_scored):\n"
+_RESIDUAL = "def three_beam_residual(r_prev, r_mid, r_next, dtheta):\n"
 
 FILLS = {
     "ceb8ee6d": Fill(
@@ -20,5 +22,13 @@ FILLS = {
         # both rates over the walls: FalsePos with TruePos's denominator
         mistake=_RATES + "    return n_matched / n_truth, (n_scored - n_matched) / n_truth\n",
         hint="not by the walls",
+    ),
+    "e4b8d150": Fill(
+        correct=_RESIDUAL + ("    u_prev, u_mid, u_next = 1 / r_prev, 1 / r_mid, 1 / r_next\n"
+                             "    return r_mid ** 2 * (u_mid - (u_prev + u_next) / (2 * np.cos(dtheta)))\n"),
+        # the neighbours' plain mean: on a wall the inverse ranges are a sinusoid, not a straight line
+        mistake=_RESIDUAL + ("    u_prev, u_mid, u_next = 1 / r_prev, 1 / r_mid, 1 / r_next\n"
+                             "    return r_mid ** 2 * (u_mid - (u_prev + u_next) / 2)\n"),
+        hint="divide their sum by 2 cos(dtheta)",
     ),
 }
