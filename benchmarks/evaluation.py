@@ -6,16 +6,18 @@ Four parts, every number computed here by :mod:`labkit.experiments` (the same co
 (a) every line extractor at its defaults on ``--scans`` simulated scans of 722 beams per noise
     level (5 mm, 1 cm, 2 cm, 3 cm), a third each from the office, corridor and random-polygon
     worlds: TruePos, FalsePos, sigma dr, sigma dalpha, lines per scan and scans per second --
-    then the same by world;
+    then the same by world, and split-and-merge with ``AUTO_LINES`` and angular segmentation
+    with ``AUTO_ANGULAR``;
 (b) circles and legs of the pipeline on 300 scans of the ``hall`` world at each noise level, with
     the default configuration and with ``labkit.noise.AUTO_CONFIG``;
 (c) ray-axis RMSE (Schaefer et al. 2018) and lines per scan of every extractor (and of
-    split-and-merge with ``AUTO_LINES``) on the first 100 scans of each Radish log in
-    ``../shared/datasets/carmen`` (skipped when absent), and the circles and legs per scan there
-    with the default configuration and ``AUTO_CONFIG`` (no truth: a count, to see how many more
-    shapes the noise allowances let through on real clutter);
+    split-and-merge with ``AUTO_LINES`` and angular segmentation with ``AUTO_ANGULAR``) on the
+    first 100 scans of each Radish log in ``../shared/datasets/carmen`` (skipped when absent),
+    and the circles and legs per scan there with the default configuration and ``AUTO_CONFIG``
+    (no truth: a count, to see how many more shapes the noise allowances let through on real
+    clutter);
 (d) split-and-merge's true- against false-positive rate as a fixed split threshold varies (with
-    the old fixed range noise of 1 cm and every line reported), against its ``"auto"`` default.
+    the old fixed range noise of 1 cm and every line reported), against its opt-in ``AUTO_LINES``.
 
 The goals of issues 7 and 16 are checked at the end against the measured numbers.
 
@@ -33,9 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-from labkit import Config, split_and_merge
+from labkit import Config, angular_segmentation, split_and_merge
 from labkit import experiments as ex
-from labkit.noise import AUTO_CONFIG, AUTO_LINES
+from labkit.noise import AUTO_ANGULAR, AUTO_CONFIG, AUTO_LINES
 
 DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
 
@@ -59,6 +61,10 @@ def main() -> None:
     by_world = ex.compare_lines(data, by=("noise_std_m", "world"))
     print("\nBy world:\n")
     print(ex.markdown_table(by_world, {"world": "world", **ex.LINE_COLUMNS}))
+    print("\nThe noise-following settings of the two extractors that have one (opt-in):\n")
+    print(ex.markdown_table(ex.compare_lines(data, {
+        "split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
+        "angular AUTO_ANGULAR": partial(angular_segmentation, **AUTO_ANGULAR)}, repeat=args.repeat), ex.LINE_COLUMNS))
 
     print("\n## (b) Circles and legs of the pipeline on 300 scans of the hall\n")
     auto_config = Config().updated(AUTO_CONFIG)
@@ -74,7 +80,8 @@ def main() -> None:
     print(f"\n## (c) Ray-axis RMSE on the first {args.log_scans} scans of each Radish log\n")
     logs = sorted(args.logs.glob("*.log*")) if args.logs.is_dir() else []
     if logs:
-        extractors = {**ex.LINE_EXTRACTORS, "split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES)}
+        extractors = {**ex.LINE_EXTRACTORS, "split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
+                      "angular AUTO_ANGULAR": partial(angular_segmentation, **AUTO_ANGULAR)}
         print(ex.markdown_table(ex.compare_on_logs(logs, extractors, n_scans=args.log_scans, repeat=args.repeat),
                                 ex.LOG_COLUMNS))
         print("\nCircles and legs per scan (no truth):\n")

@@ -19,6 +19,7 @@ from ._cache import remembered
 from ._checks import check_int, check_nonneg, check_positive
 from .features import Circle
 from .fitting import fit_circle
+from .noise import chi2_upper_over_dof
 from .scan import Scan
 from .segmentation import RangeSegment, labels_from, segment_labels, segment_order
 from .steps import Step
@@ -551,9 +552,7 @@ def _angle_noise(p: np.ndarray, sigma: float) -> tuple[float, float]:
     if tr <= 0.0:
         return 0.0, mean_sd
     nu = tr * tr / float((s * s).sum())
-    k = 2.0 / (9.0 * nu)
-    chi2_over_nu = max(1.0 - k + NOISE_Z * math.sqrt(k), 0.0) ** 3
-    return sigma * sigma * tr / m * chi2_over_nu, mean_sd
+    return sigma * sigma * tr / m * float(chi2_upper_over_dof(nu, NOISE_Z)), mean_sd
 
 
 class _Angles(NamedTuple):

@@ -48,10 +48,13 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from ._checks import check_nonneg
+from ._params import AUTO
 from .scan import Scan
 
-__all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "auto_split_threshold", "MIN_RESIDUALS",
-           "AUTO_LINES", "AUTO_CONFIG", "RANGE_SIGMA_M", "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
+__all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "noise_sigma", "auto_split_threshold",
+           "chi2_upper_over_dof", "MIN_RESIDUALS", "AUTO_LINES", "AUTO_ANGULAR", "AUTO_CONFIG", "RANGE_SIGMA_M",
+           "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M"]
 
 #: Fewest usable residuals (beams with two valid neighbours) for an estimate; with fewer,
 #: :func:`estimate_range_noise` returns NaN.
@@ -173,9 +176,16 @@ AUTO_LINES = {"split_threshold_m": "auto", "range_sigma_m": "auto", "place_confi
 
 #: The noise-following setting of the whole pipeline, not yet its default:
 #: ``Config().updated(AUTO_CONFIG)``, or the same keys in a TOML file for ``labkit extract
-#: --config``. Segmentation, split-and-merge (:data:`AUTO_LINES`), and the noise allowances of
+#: --config``. Segmentation, split-and-merge (:data:`AUTO_LINES`), angular segmentation
+#: (:data:`AUTO_ANGULAR`, when ``lines.method = "angular"``), and the noise allowances of
 #: the IAV circle and leg tests (``range_sigma_m``, :func:`labkit.detect_circles`).
+#: The noise-following setting of angular segmentation (``[lines.angular]``), not yet its
+#: default: ``angular_segmentation(scan, **AUTO_ANGULAR)``. Local directions over as many beams
+#: as the noise needs, and only where those beams are straight (:func:`labkit.angular_segmentation`).
+AUTO_ANGULAR = {"direction_window": "auto", "range_sigma_m": "auto"}
+
 AUTO_CONFIG = {"segmentation.range_sigma_m": "auto", **{f"lines.{k}": v for k, v in AUTO_LINES.items()},
+               **{f"lines.angular.{k}": v for k, v in AUTO_ANGULAR.items()},
                "circles.range_sigma_m": "auto", "legs.range_sigma_m": "auto"}
 
 
@@ -189,6 +199,26 @@ def scan_sigma(scan: Scan) -> float:
         cached = RANGE_SIGMA_M if not math.isfinite(sigma) else max(sigma, MIN_SIGMA_M)
         scan.__dict__["_labkit_sigma"] = cached  # (a frozen dataclass's cache, as its cached_property's)
     return cached
+
+
+def noise_sigma(scan: Scan, range_sigma_m) -> float:
+    """The range noise a detector allows for, metres: ``range_sigma_m`` as given (>= 0), or
+    :func:`scan_sigma` of ``scan`` when it is ``"auto"``."""
+    if range_sigma_m == AUTO:
+        return scan_sigma(scan)
+    return check_nonneg("range_sigma_m", range_sigma_m)
+
+
+def chi2_upper_over_dof(dof, z: float):
+    """About the upper quantile of ``chi2(dof) / dof`` that a standard normal reaches at ``z``
+    (Wilson-Hilferty; ``dof`` may be an array and need not be whole). At z = 3 (one in 741) it
+    is 10.53 for 1 degree of freedom (exactly 10.27), 4.00 for 5 (3.96) and 2.46 for 15 (2.45).
+
+    >>> round(float(chi2_upper_over_dof(15, 3.0)), 2)
+    2.46
+    """
+    k = 2.0 / (9.0 * np.asarray(dof, dtype=float))
+    return np.maximum(1.0 - k + z * np.sqrt(k), 0.0) ** 3
 
 
 def auto_split_threshold(sigma: float) -> float:

@@ -319,3 +319,120 @@ def dataclasses_replace_noise(lidar, sigma):
     import dataclasses
 
     return dataclasses.replace(lidar, noise_std_m=sigma)
+
+
+# ----------------------------------------------------------------------------- angular segmentation
+def _direction_of(alpha_normal: float) -> float:
+    return (alpha_normal + math.pi / 2) % math.pi
+
+
+@pytest.mark.parametrize("window", [1, 2, 5])
+@pytest.mark.parametrize("alpha_deg", [0.0, 35.0, -70.0])
+def test_windowed_directions_are_the_walls_direction_on_a_clean_wall(window, alpha_deg):
+    from labkit.lines.angular import local_directions
+
+    alpha = math.radians(alpha_deg)
+    theta = alpha + np.radians(np.arange(-50.0, 50.1, 0.5))
+    scan = Scan(ranges=2.5 / np.cos(theta - alpha), angles=theta)
+    phi = local_directions(scan, window)
+    assert np.isnan(phi[:window]).all() and np.isnan(phi[-window:]).all()
+    inner = phi[window:-window]
+    assert np.isfinite(inner).all()
+    gap = np.abs(np.angle(np.exp(2j * (inner - _direction_of(alpha))))) / 2  # period pi
+    assert gap.max() < 1e-9
+    # a straight wall is straight at any noise the test allows for, even a tiny one
+    assert np.isfinite(local_directions(scan, window, straight_sigma=1e-6)[window:-window]).all()
+
+
+@pytest.mark.parametrize("window", [1, 3, 7])
+def test_the_window_formula_is_the_spread_the_noise_gives(window):
+    """auto_direction_window assumes sigma / (s sqrt(h (h+1) (2h+1) / 3)) radians: check it against
+    the spread of 300 noisy walls seen at normal incidence."""
+    from labkit.lines.angular import local_directions
+
+    sigma, d, step = 0.01, 3.0, math.radians(0.5)
+    theta = step * (np.arange(2 * window + 1) - window)
+    rng = np.random.default_rng(window)
+    phi = np.array([local_directions(Scan(ranges=d / np.cos(theta) + rng.normal(0, sigma, theta.size),
+                                          angles=theta), window)[window] for _ in range(3000)])
+    spread = np.std(np.angle(np.exp(2j * (phi - math.pi / 2))) / 2)
+    predicted = sigma / (d * step * math.sqrt(window * (window + 1) * (2 * window + 1) / 3))
+    assert spread == pytest.approx(predicted, rel=0.08)  # first order, and 3000 draws: 1.3 % standard error
+
+
+def test_the_auto_window_is_the_narrowest_that_holds_eps_theta():
+    from labkit.lines.angular import EPS_THETA, auto_direction_window
+
+    theta = np.radians(np.arange(-60.0, 60.1, 0.5))
+    for d, sigma in [(2.0, 0.005), (3.0, 0.01), (3.0, 0.02), (5.0, 0.03)]:
+        scan = Scan(ranges=np.full(theta.size, d), angles=theta)
+        s = d * math.radians(0.5)
+
+        def spread(h, s=s, sigma=sigma):
+            return sigma / (s * math.sqrt(h * (h + 1) * (2 * h + 1) / 3))
+
+        h = auto_direction_window(scan, sigma)
+        assert spread(h) <= EPS_THETA and (h == 1 or spread(h - 1) > EPS_THETA), (d, sigma, h)
+    empty = Scan(ranges=np.full(5, np.nan), angles=np.radians(np.arange(5.0)))
+    assert auto_direction_window(empty, 0.01) == 1
+
+
+def test_the_straightness_test_rejects_windows_across_a_corner_and_few_on_a_wall():
+    from labkit.lines.angular import local_directions
+
+    sigma = 0.01
+    rng = np.random.default_rng(3)
+    # a right-angle corner at (2, 2): walls x = 2 (below) and y = 2 (to the left), 0.5 deg beams
+    theta = np.radians(np.arange(10.0, 80.1, 0.5))
+    clean = np.where(theta < math.pi / 4, 2.0 / np.cos(theta), 2.0 / np.sin(theta))
+    corner_beam = int(np.argmin(np.abs(theta - math.pi / 4)))
+    rejected_on_walls = 0
+    for _ in range(40):
+        scan = Scan(ranges=clean + rng.normal(0, sigma, theta.size), angles=theta)
+        phi = local_directions(scan, 5, straight_sigma=sigma)
+        # the windows with three or more beams on each wall are 7 cm or more off any one line: never straight
+        assert np.isnan(phi[corner_beam - 2:corner_beam + 3]).all()
+        away = np.r_[5:corner_beam - 6, corner_beam + 7:theta.size - 5]
+        rejected_on_walls += int(np.isnan(phi[away]).sum())
+    # each wall window fails with probability ~1/741 by design; 40 scans x ~120 windows
+    assert rejected_on_walls <= 20
+
+
+def test_auto_angular_follows_the_noise_and_loses_nothing_at_5_mm():
+    from functools import partial
+
+    from labkit import angular_segmentation
+    from labkit.experiments import SENSOR_NOISE_LEVELS_M, compare_lines, nguyen_set
+    from labkit.noise import AUTO_ANGULAR
+
+    rows = compare_lines(nguyen_set(30, noise_levels=SENSOR_NOISE_LEVELS_M),
+                         {"paper": angular_segmentation, "auto": partial(angular_segmentation, **AUTO_ANGULAR)})
+    by = {(r["method"], r["noise_std_m"]): r for r in rows}
+    for noise in SENSOR_NOISE_LEVELS_M:
+        paper, auto = by["paper", noise], by["auto", noise]
+        assert auto["fp_rate"] < paper["fp_rate"], noise
+        assert auto["tp_rate"] >= paper["tp_rate"] - 0.01, noise
+        if noise >= 0.01:  # three-beam directions are noise there; the windowed ones are not
+            assert auto["tp_rate"] > paper["tp_rate"] + 0.1 and auto["fp_rate"] < paper["fp_rate"] / 2, noise
+
+
+def test_angular_auto_in_the_config_and_its_errors():
+    from labkit import angular_segmentation
+    from labkit.lines.angular import AngularParams, auto_direction_window
+    from labkit.noise import AUTO_CONFIG
+
+    assert AngularParams().direction_window == 1 and AngularParams().range_sigma_m == 0  # the paper, by default
+    config = Config().updated({**AUTO_CONFIG, "lines.method": "angular"})
+    assert config.lines.angular.direction_window == "auto"
+    scan = _wall_scan(0.02, seed=4, step_deg=0.5)
+    h = auto_direction_window(scan, scan_sigma(scan))
+    lines, steps = angular_segmentation(scan, direction_window="auto", range_sigma_m="auto", trace=True)
+    (first,) = [s for s in steps if s.kind == "directions"]
+    assert first.threshold == h > 1 and f"over {2 * h + 1} beams" in first.reason and "straight at" in first.reason
+    assert [ln.first for ln in lines] == [ln.first for ln in angular_segmentation(
+        scan, direction_window=h, range_sigma_m=scan_sigma(scan))]  # "auto" is the estimate; a number wins
+    assert len(extract_features(scan, config).lines) == 1
+    for bad, key in [({"direction_window": 0}, "direction_window"), ({"direction_window": "wide"}, "direction_window"),
+                     ({"range_sigma_m": -1.0}, "range_sigma_m")]:
+        with pytest.raises(ValueError, match=key):
+            angular_segmentation(scan, **bad)

@@ -53,7 +53,6 @@ from types import MappingProxyType
 
 import numpy as np
 
-from .._checks import check_nonneg
 from .._iav import (  # the shared machinery; the public names are documented here
     ARC_LIKE_STD_MAX,
     CIRCLE_MEAN_RANGE,
@@ -72,9 +71,9 @@ from .._iav import (  # the shared machinery; the public names are documented he
     is_v_corner,
     middle_point_offset,
 )
-from .._params import AUTO, Params, param, takes_params
+from .._params import Params, param, takes_params
 from ..features import Circle, LineSegment
-from ..noise import scan_sigma
+from ..noise import noise_sigma
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
@@ -104,12 +103,6 @@ __all__ = [
 
 
 # ============================================================================ detectors
-def _noise_sigma(scan: Scan, range_sigma_m) -> float:
-    """The range noise the tests allow for: ``range_sigma_m``, or the scan's estimate."""
-    if range_sigma_m == AUTO:
-        return scan_sigma(scan)
-    return check_nonneg("range_sigma_m", range_sigma_m)
-
 
 
 @dataclass(frozen=True)
@@ -283,7 +276,7 @@ def detect_circles(
                         arc_like_std_max=arc_like_std_max, v_corner_neighbours=v_corner_neighbours,
                         v_corner_stride=v_corner_stride, hollow=False, center_method=center_method, kind="circle")
     circles, steps = _test_runs(_scan_runs(scan, segments, seg_threshold_m), test, trace,
-                                sigma=_noise_sigma(scan, range_sigma_m))
+                                sigma=noise_sigma(scan, range_sigma_m))
     return (circles, steps) if trace else circles
 
 

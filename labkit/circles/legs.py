@@ -81,10 +81,10 @@ from .._iav import (
 from .._params import Params, param, takes_params
 from ..features import Leg, Person
 from ..fitting import fit_circle
+from ..noise import noise_sigma
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
-from .iav import _noise_sigma
 
 __all__ = ["LegsParams", "detect_legs", "pair_legs", "is_occluded"]
 
@@ -267,7 +267,7 @@ def detect_legs(
     geo = _geometry(runs)
     spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
     chord = geo.chord + chord_padding_beams * spacing * np.hypot(geo.middle[:, 0], geo.middle[:, 1])
-    sigma = _noise_sigma(scan, range_sigma_m)
+    sigma = noise_sigma(scan, range_sigma_m)
     widened: dict = {}
     verdict, ratio = _cheap_tests(geo, chord, min_points, (chord_lo, chord_hi), middle_range, sigma=sigma,
                                   widened=widened)
