@@ -189,26 +189,33 @@ def local_directions(scan: Scan, window: int = 1, straight_sigma: float | None =
     w = 2 * h + 1
     if n < w:
         return out
-    pts = scan.points
-    mid = np.arange(n) if scan.is_full_circle else np.arange(h, n - h)
-    offsets = np.arange(-h, h + 1)
-    around = (mid[:, None] + offsets) % n  # (M, w) beams of each window
-    ok = scan.valid[around].all(axis=1)
-    mid, around = mid[ok], around[ok]
-    win = pts[around]  # (M, w, 2)
-    centre = win.mean(axis=1)
-    d = win - centre[:, None, :]
-    sxx = np.sum(d[..., 0] ** 2, axis=1)
-    syy = np.sum(d[..., 1] ** 2, axis=1)
-    sxy = np.sum(d[..., 0] * d[..., 1], axis=1)
-    spread = sxx + syy
-    scale = np.sum(np.abs(centre), axis=1) ** 2 + 1e-300
-    good = spread > 1e-24 * scale  # coincident points have no direction
-    if straight_sigma is not None:
-        sigma = check_nonneg("straight_sigma", straight_sigma)
-        smallest = 0.5 * spread - np.sqrt(0.25 * (sxx - syy) ** 2 + sxy * sxy)  # the scatter across the line
-        dof = w - 2
-        good &= smallest <= sigma * sigma * dof * float(chi2_upper_over_dof(dof, STRAIGHT_Z))
+    pts, valid = scan.points, scan.valid
+    if scan.is_full_circle:  # the window wraps: pad h beams on either side
+        pts, valid = np.concatenate([pts[n - h:], pts, pts[:h]]), np.concatenate([valid[n - h:], valid, valid[:h]])
+    m = pts.shape[0] - 2 * h  # windows: pts[k:k + m] is the k-th point of every window (views, no copies)
+    mid = np.arange(m) + (0 if scan.is_full_circle else h)
+    ok = valid[:m].copy()
+    total = pts[:m].copy()
+    for k in range(1, w):
+        ok &= valid[k:k + m]
+        total += pts[k:k + m]
+    centre = total / w
+    with np.errstate(invalid="ignore"):  # invalid beams' points are NaN; their windows are dropped below
+        d = pts[:m] - centre
+        sxx, syy, sxy = d[:, 0] ** 2, d[:, 1] ** 2, d[:, 0] * d[:, 1]
+        for k in range(1, w):
+            d = pts[k:k + m] - centre
+            sxx += d[:, 0] ** 2
+            syy += d[:, 1] ** 2
+            sxy += d[:, 0] * d[:, 1]
+        spread = sxx + syy
+        scale = np.sum(np.abs(centre), axis=1) ** 2 + 1e-300
+        good = ok & (spread > 1e-24 * scale)  # coincident points have no direction
+        if straight_sigma is not None:
+            sigma = check_nonneg("straight_sigma", straight_sigma)
+            smallest = 0.5 * spread - np.sqrt(0.25 * (sxx - syy) ** 2 + sxy * sxy)  # the scatter across the line
+            dof = w - 2
+            good &= smallest <= sigma * sigma * dof * float(chi2_upper_over_dof(dof, STRAIGHT_Z))
     phi = np.mod(0.5 * np.arctan2(2.0 * sxy[good], sxx[good] - syy[good]), np.pi)
     phi[phi >= np.pi] = 0.0
     out[mid[good]] = phi
