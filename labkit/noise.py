@@ -160,7 +160,8 @@ def estimate_range_noise(scans: Scan | Iterable[Scan]) -> float:
 #: The least range noise ``"auto"`` assumes, metres: a noise-free (simulated) scan estimates 0,
 #: and no real surface is flat to better than this.
 MIN_SIGMA_M = 0.002
-#: ``split_threshold_m="auto"`` is this many sigmas: the largest of 722 Gaussian residuals
+#: ``split_threshold_m="auto"`` is this many sigmas (across the line: ``sigma |cos(incidence)|``,
+#: :func:`labkit.split_and_merge`): the largest of 722 Gaussian residuals
 #: passes 4.0 sigma once in 20 scans (722 * 2 (1 - Phi(4.0)) = 0.05), and a residual measured
 #: from the chord of two noisy end points has up to 1.5 times the variance (sqrt(1.5) * 4.0 = 4.9).
 SPLIT_SIGMAS = 5.0
@@ -222,5 +223,7 @@ def chi2_upper_over_dof(dof, z: float):
 
 
 def auto_split_threshold(sigma: float) -> float:
-    """``split_threshold_m="auto"`` for range noise ``sigma``: ``max(5 sigma, 2 cm)``."""
+    """``split_threshold_m="auto"`` for range noise ``sigma`` at a point seen head-on:
+    ``max(5 sigma, 2 cm)``. At incidence ``i`` a point's threshold is ``max(5 sigma cos(i), 2 cm)``
+    (:func:`labkit.split_and_merge`), and this is what the trace and the merge report."""
     return max(SPLIT_SIGMAS * sigma, MIN_SPLIT_M)

@@ -105,6 +105,76 @@ def test_auto_segmentation_links_a_noisy_grazing_wall_that_a_small_fixed_sigma_b
     assert n_auto <= 2 and n_small >= 5
 
 
+# ----------------------------------------------------------------------------- the "auto" split test
+def _polyline_scan(corners, sigma, seed, step_deg=0.25):
+    """A scan from the origin of the polyline through ``corners`` (each beam meets one piece),
+    with Gaussian range noise ``sigma``; also each beam's piece."""
+    corners = np.asarray(corners, float)
+    a0, a1 = (math.degrees(math.atan2(c[1], c[0])) for c in (corners[0], corners[-1]))
+    theta = np.radians(np.arange(min(a0, a1) + 0.5, max(a0, a1) - 0.5, step_deg))
+    u = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    ranges, piece = np.full(theta.size, np.inf), np.full(theta.size, -1)
+    for k, (p, q) in enumerate(zip(corners[:-1], corners[1:], strict=True)):
+        d = q - p
+        den = u[:, 0] * d[1] - u[:, 1] * d[0]
+        s = (p[0] * d[1] - p[1] * d[0]) / den  # range along the ray
+        t = (p[0] * u[:, 1] - p[1] * u[:, 0]) / den  # where on the piece
+        hit = (s > 0) & (t >= 0) & (t <= 1) & (s < ranges)
+        ranges[hit], piece[hit] = s[hit], k
+    rng = np.random.default_rng(seed)
+    return Scan(ranges=ranges + rng.normal(0.0, sigma, theta.size), angles=theta), piece
+
+
+def _finds(lines, r, alpha_deg, dr=0.02, dalpha_deg=2.0):
+    return any(abs(ln.r - r) < dr and abs(math.degrees(math.remainder(ln.alpha - math.radians(alpha_deg),
+                                                                      2 * math.pi))) < dalpha_deg for ln in lines)
+
+
+def test_auto_splits_a_step_in_a_wall_seen_at_a_grazing_angle():
+    # a corridor wall 1 m to the side with an 8 cm step towards the sensor at x = 4 m, 2 cm of
+    # range noise: 5 sigma is 10 cm, but across a wall seen at 7-20 deg that noise is 3-7 mm
+    def split_at_step(lines, piece):  # no line has five or more beams on each side of the step
+        across = any(min(np.sum(piece[ln.indices] == 0), np.sum(piece[ln.indices] == 2)) >= 5 for ln in lines)
+        return not across and _finds(lines, 1.0, 90.0)
+
+    auto_ok = fixed_ok = 0
+    for seed in range(30):
+        scan, piece = _polyline_scan([(0.6, 1.0), (4.0, 1.0), (4.0, 0.92), (9.0, 0.92)], 0.02, seed)
+        auto_ok += split_at_step(split_and_merge(scan, split_threshold_m="auto", range_sigma_m=0.02), piece)
+        fixed_ok += split_at_step(split_and_merge(scan, split_threshold_m=auto_split_threshold(0.02),
+                                                  range_sigma_m=0.02), piece)
+    assert auto_ok >= 28 and fixed_ok <= 5
+
+
+def test_auto_does_not_shatter_a_straight_grazing_wall():
+    one = 0
+    for seed in range(30):
+        scan, _ = _polyline_scan([(0.6, 1.0), (9.0, 1.0)], 0.02, seed)
+        lines = split_and_merge(scan, split_threshold_m="auto", range_sigma_m=0.02)
+        one += len(lines) == 1 and _finds(lines, 1.0, 90.0)
+    assert one >= 28
+
+
+@pytest.mark.parametrize("bend_deg", [1.5, 2.0])
+def test_auto_splits_a_bend_no_single_point_shows(bend_deg):
+    # two walls 3 m ahead meeting at a gentle bend, 1 cm of noise: the chord misses the apex by
+    # 2.6-3.5 cm, under 5 sigma (5 cm), but the fitted line's residuals are wider than 1 cm allows
+    bend = math.radians(bend_deg)
+    found = found_fixed = by_residuals = 0
+    for seed in range(30):
+        scan, _ = _polyline_scan([(3.0, -2.0), (3.0, 0.0), (3.0 + 2.0 * math.tan(bend), 2.0)], 0.01, seed)
+
+        def both(lines):
+            return (_finds(lines, 3.0, 0.0, 0.02, bend_deg / 3)
+                    and _finds(lines, 3.0 * math.cos(bend), -bend_deg, 0.02, bend_deg / 3))
+
+        lines, steps = split_and_merge(scan, split_threshold_m="auto", range_sigma_m=0.01, trace=True)
+        found += both(lines)
+        by_residuals += any(s.test == "residual" for s in steps)
+        found_fixed += both(split_and_merge(scan, split_threshold_m=0.05, range_sigma_m=0.01))
+    assert found >= 27 and found_fixed <= 2 and by_residuals >= 25
+
+
 # ----------------------------------------------------------------------------- placing lines
 def test_a_line_the_data_cannot_place_is_dropped_with_its_reason():
     # a long wall 3 m ahead and a 0.25 m stub, 12 beams, 6 m away: at 3 cm its angle is not known to 3 deg

@@ -234,6 +234,54 @@ def test_trace_replays_the_decisions():
     assert lines[1].first - lines[0].last == 1  # no beam lost at the corner
 
 
+# ---------------------------------------------------------------------------- seen through
+def _wall_with_gap(between: np.ndarray) -> tuple[Scan, slice]:
+    """A wall at x = 2 m, 0.5 deg steps; the beams ``gap`` read ``between`` instead."""
+    scan = wall_scan(2.0, 0.0)
+    ranges = scan.ranges.copy()
+    gap = slice(78, 78 + len(between))
+    ranges[gap] = between
+    return scan.replace(ranges=ranges), gap
+
+
+def test_no_line_covers_a_gap_the_beams_saw_through():
+    # four beams pass a 7 cm slot in the wall (a door ajar, shelves) to clutter 6-14 m away: the
+    # wall's two pieces are collinear and their ends 9 cm apart, so the merge test alone joins them
+    scan, gap = _wall_with_gap(np.array([6.0, 9.0, 14.0, 7.0]))
+    lines, steps = split_and_merge(scan, trace=True)
+    assert len(lines) == 2 and all(ln.r == pytest.approx(2.0, abs=1e-9) for ln in lines)
+    assert lines[0].last < gap.start and lines[1].first >= gap.stop  # no line across the slot
+    (kept,) = [s for s in steps if s.test == "see_through"]
+    assert kept.kind == "keep" and kept.at == lines[0].last and f"beam {gap.start} " in kept.reason
+    # the ray-axis error of those beams is what a line across the slot would cost
+    assert np.all(np.isnan(_ray_hits(scan, lines)[gap]))
+
+
+def _ray_hits(scan, lines):
+    """Range at which each beam's ray meets the nearest line (NaN: none), by brute force."""
+    out = np.full(scan.n_beams, np.nan)
+    for i, t in enumerate(scan.angles):
+        u = np.array([math.cos(t), math.sin(t)])
+        for ln in lines:
+            p, d = np.asarray(ln.start), np.asarray(ln.end) - np.asarray(ln.start)
+            m = np.array([u, -d]).T
+            if abs(np.linalg.det(m)) < 1e-12:
+                continue
+            s_, t_ = np.linalg.solve(m, p)
+            if s_ > 0 and 0 <= t_ <= 1 and not s_ >= out[i]:
+                out[i] = s_
+    return out
+
+
+@pytest.mark.parametrize("between", [np.array([1.2, 1.21, 1.19, 1.2]), np.array([2.2, 2.22, 2.21, 2.2])])
+def test_beams_in_front_of_or_just_behind_the_wall_do_not_stop_the_merge(between):
+    # something in front of the wall (a chair leg) or a shallow recess: the wall is still one line
+    scan, gap = _wall_with_gap(between)
+    lines = split_and_merge(scan)
+    on_wall = [ln for ln in lines if ln.r == pytest.approx(2.0, abs=1e-9)]
+    assert len(on_wall) == 1 and on_wall[0].first == 0 and on_wall[0].last == scan.n_beams - 1
+
+
 # ---------------------------------------------------------------------------- invalid input
 def test_invalid_beams_are_masked():
     scan = wall_scan(2.0, 0.0)

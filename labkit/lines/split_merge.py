@@ -13,13 +13,17 @@ The algorithm of the course slides (after Nguyen et al. 2005):
 5. When every list is done, merge similar neighbouring lines: ``|r1 - r2|`` and
    ``|alpha1 - alpha2|`` under thresholds (the angle difference taken across the wrap, so
    170 deg and -170 deg are 20 deg apart), or a chi-square test on the covariances, and
-   refit the merged line from all its points.
+   refit the merged line from all its points. Two lines are never merged across a beam that
+   saw through the merged line (a doorway, a slot between shelves): a valid beam between them
+   that ends more than ``max_gap_m`` behind it.
 6. Drop the lines the data cannot place: by its covariance, a line must lie within the
    trusted ``|dr|`` and ``|dalpha|`` of the true line with probability ``place_confidence``.
 
 The thresholds that depend on the sensor's range noise can follow it: with ``"auto"``,
-``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split threshold is
-five of those sigmas (:data:`labkit.noise.AUTO_LINES` is the whole setting, placing included).
+``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split test measures
+each point against its own noise across the line, five times ``sigma |cos(incidence)|`` (at least
+2 cm), and the fit's residuals against ``sigma`` (:data:`labkit.noise.AUTO_LINES` is the whole
+setting, placing included).
 
 ``method="fit"`` measures the worst point from the least-squares line (the slides);
 ``method="endpoints"`` from the chord through the list's first and last points -- the
@@ -49,7 +53,7 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..fitting import _line_covariances, line_from_sums, placement_probability
-from ..noise import RANGE_SIGMA_M, auto_split_threshold, scan_sigma
+from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
 from ..scan import Scan
 from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
@@ -249,7 +253,8 @@ class SplitMergeParams(Params):
     in metres (``_m``), angles in degrees (``_deg``)."""
 
     split_threshold_m: float = param(0.05, "split when the worst point is farther than this from the line, metres; "
-                                           "auto: 5 sigma of the scan's range noise, at least 2 cm (labkit.noise)",
+                                           "auto: each point against 5 sigma of the scan's range noise across the "
+                                           "line (at least 2 cm), and the fit's residuals against sigma",
                                      lo=0, strict=True, auto=True)
     min_points: int = param(5, "fewest points of a line (Xavier et al. line_min_pts)", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres (Xavier et al. line_min_len)", lo=0)
@@ -318,13 +323,20 @@ def split_and_merge(
         or more, "fit" 0.87 of them (``tests/test_split_merge.py``).
     split_threshold_m : float or "auto"
         Split when the worst point is farther than this from the line. Default 0.05 m.
-        ``"auto"``: five times the scan's range noise, at least 2 cm (:func:`labkit.noise.auto_split_threshold`;
-        the largest of 722 Gaussian residuals measured from a chord passes that about once in 20
-        scans). A fixed threshold suits one sensor only: 5 cm, the old default, is ten times an
-        LMS200's 5 mm and shatters walls at the 3 cm of cheap scanners (on the simulated sets of
+        A fixed threshold suits one sensor only: 5 cm is ten times an LMS200's 5 mm and
+        shatters walls at the 3 cm of cheap scanners (on the simulated sets of
         ``benchmarks/evaluation.py`` its FalsePos grows from 0.06 at 5 mm to 0.80 at 3 cm).
-        ``"auto"`` is not the default yet: on the Radish logs with 1 deg steps the estimated
-        noise (27-28 mm) makes lines run across corners (see README, "Unknown range noise").
+        ``"auto"`` follows the scan's range noise sigma (``range_sigma_m``) with two tests. A
+        point fails when it is farther from the line than five of its own sigmas across the line,
+        ``max(5 sigma |cos(incidence)|, 2 cm)``: range noise moves a point across a wall by the
+        cosine of its incidence, so a wall seen at a grazing angle is thin and a step in it is
+        not noise (the largest of 722 Gaussian residuals measured from a chord passes 5 sigma
+        about once in 20 scans). And a run is split when its fit's weighted mean square residual
+        per degree of freedom exceeds ``sigma^2`` times the chi-square quantile at
+        :data:`RESIDUAL_Z` = 3 (a bend too gentle for any one point to show). Both also hold for
+        merges. :func:`labkit.noise.auto_split_threshold` (``max(5 sigma, 2 cm)``, a point seen
+        head-on) is the threshold the trace and the merge's worst-point test report.
+        ``"auto"`` is not the default yet (see README, "Unknown range noise").
     min_points : int
         ``minPointsPerLine``: runs with fewer points make no line, and the worst point is
         never among the first or last ``min_points // 2`` of a run. Default 5 (Xavier et
@@ -333,7 +345,9 @@ def split_and_merge(
         Shorter lines are dropped after merging. Default 0.15 m (``line_min_len``).
     max_gap_m : float
         A run is split at its widest gap between neighbours when that gap is wider than
-        this; lines whose facing ends are farther apart are never merged. Default 0.3 m.
+        this; lines whose facing ends are farther apart are never merged, nor are lines
+        between which a valid beam ends more than this behind the merged line (it saw through
+        it). Default 0.3 m.
     merge : {"thresholds", "chi2", None}
         The merge test (see :func:`lines_similar`); ``None`` skips the merge step.
     merge_dr_m, merge_dalpha, merge_chi2 : float
@@ -371,13 +385,17 @@ def split_and_merge(
         ``"segment"`` (a range segment enters the list; ``value``: its points), ``"fit"``
         (the line measured against on the beams ``first..last``: the chord or the
         least-squares line; ``at`` the worst point, ``value`` its distance,
-        ``threshold`` ``split_threshold_m``), ``"split"`` (split at beam ``at``),
-        ``"gap"`` (split at the gap after beam ``at``; ``value`` the gap), ``"accept"`` (a
-        run becomes a line), ``"reject"`` (a run with too few points, ``test="min_points"``,
-        or a line shorter than ``min_length_m`` after merging), ``"absorb"`` (``value``
-        stranded points joined the neighbouring lines), ``"merge"`` (two neighbours merged:
-        the merged line on their beams; ``at`` the last beam of the first), ``"keep"`` (two
-        neighbours not merged; ``value`` the merge statistic or the gap), ``"reject"`` with
+        ``threshold`` ``split_threshold_m``), ``"split"`` (split at beam ``at``; with
+        ``"auto"``, ``threshold`` is that point's own threshold, or ``test="residual"``: the
+        fit's residuals were too wide, ``threshold`` sigma), ``"gap"`` (split at the gap after
+        beam ``at``; ``value`` the gap), ``"accept"`` (a run becomes a line), ``"reject"`` (a
+        run with too few points, ``test="min_points"``, or a line shorter than ``min_length_m``
+        after merging), ``"absorb"`` (``value`` stranded points joined the neighbouring
+        lines), ``"merge"`` (two neighbours merged: the merged line on their beams; ``at`` the
+        last beam of the first), ``"keep"`` (two neighbours not merged; ``value`` the merge
+        statistic or the gap; ``test`` names what failed: ``"merge"``, ``"max_gap_m"``,
+        ``"split_threshold_m"``, ``"residual"``, or ``"see_through"`` when a beam between them
+        ends behind the merged line), ``"reject"`` with
         ``test="place_confidence"`` (a line the data cannot place; ``value`` its probability of
         lying within the trusted distance of the truth). Replay: the
         ``accept`` runs, widened by ``absorb``, joined by ``merge`` and less the
@@ -406,8 +424,10 @@ def split_and_merge(
         merge_chi2, range_sigma_m, place_dr_m, place_dalpha, place_confidence)
     if range_sigma_m == AUTO:
         range_sigma_m = scan_sigma(scan)
+    noise_sigma = 0.0  # > 0: the "auto" split test, which measures each point against this range noise
     if split_threshold_m == AUTO:
         split_threshold_m = auto_split_threshold(range_sigma_m)
+        noise_sigma = range_sigma_m
 
     steps = _Steps("iepf" if method == "endpoints" else "split_and_merge") if trace else None
     if segments is None:
@@ -424,6 +444,7 @@ def split_and_merge(
     xy = points.take(order, axis=0)  # = points[order], several times faster
     w = np.ones(len(order)) if weights == "uniform" else 1.0 / ranges.take(order)
     run = _Run(xy, w, order)
+    rho = ranges.take(order) if noise_sigma else None
     x, y = run.x, run.y
     # the gaps between neighbours wider than max_gap_m, where a run may have to be cut (ascending);
     # as hypot(dx, dy) <= |dx| + |dy|, only the few neighbours with |dx| + |dy| near max_gap_m are measured
@@ -485,11 +506,30 @@ def split_and_merge(
                 ref = "fitted line" if fit else "chord"
                 steps.add("fit", first, last, r, alpha, at=int(order[p]), value=worst, threshold=split_threshold_m,
                           reason=f"worst point {worst:.3f} m from the {ref}")
-            if worst > split_threshold_m and a < p < b - 1:
+            test, threshold = "split_threshold_m", split_threshold_m
+            failed = worst > split_threshold_m
+            if noise_sigma and not failed and a < p < b - 1:
+                # "auto": each point against its own noise across the line, then the fit's residuals
+                if worst > MIN_SPLIT_M:
+                    q, ratio = _beyond_own_noise(xy[lo:hi], rho[lo:hi], r, alpha, noise_sigma)
+                    if ratio > 1.0:
+                        failed, p = True, lo + q
+                        worst = abs(float(xy[p] @ normal) - r)
+                        threshold = worst / ratio
+                if not failed and _too_wide(run.sums(a, b), n, noise_sigma):
+                    failed, test, threshold = True, "residual", noise_sigma
+            if failed and a < p < b - 1:
                 if steps is not None:
+                    if test == "residual":
+                        reason = (f"residuals wider than range noise {noise_sigma:.3f} m allows "
+                                  f"(RMS {math.sqrt(_mean_square(run.sums(a, b))):.3f} m)")
+                    elif threshold < split_threshold_m:
+                        reason = (f"{worst:.3f} m > {threshold:.3f} m, {SPLIT_SIGMAS:g} sigma across the line "
+                                  "at this point's incidence")
+                    else:
+                        reason = f"{worst:.3f} m > split_threshold_m={split_threshold_m}"
                     steps.add("split", first, last, r, alpha, at=int(order[p]), value=worst,
-                              threshold=split_threshold_m, test="split_threshold_m",
-                              reason=f"{worst:.3f} m > split_threshold_m={split_threshold_m}")
+                              threshold=threshold, test=test, reason=reason)
                 stack.append((p + 1, b))  # right half, processed after the left half
                 stack.append((a, p + 1))  # the worst point ends the left half
                 continue
@@ -502,8 +542,8 @@ def split_and_merge(
     lines = run.lines(spans)
 
     merge_args = dict(max_gap_m=max_gap_m, max_error_m=split_threshold_m, merge=merge, merge_dr_m=merge_dr_m,
-                      merge_dalpha=merge_dalpha, merge_chi2=merge_chi2, ranges=ranges, weights=weights,
-                      sigma=range_sigma_m)
+                      merge_dalpha=merge_dalpha, merge_chi2=merge_chi2, ranges=ranges, angles=scan.angles,
+                      valid=scan.valid, weights=weights, sigma=range_sigma_m, noise_sigma=noise_sigma)
     wrap = merge is not None and len(lines) > 1 and scan.is_full_circle
     if merge is not None and len(lines) > 1:
         lines = _merge(lines, points, wrap, steps, **merge_args)
@@ -524,6 +564,38 @@ def split_and_merge(
     if place_confidence > 0 and out:
         out = _placed(out, place_dr_m, place_dalpha, place_confidence, steps)
     return (out, list(steps)) if trace else out
+
+
+#: With ``split_threshold_m="auto"``, a run whose fit has residuals wider than the range noise
+#: allows is split too: its weighted mean square residual (per degree of freedom) must stay under
+#: ``sigma^2`` times the upper quantile of chi-square / dof this many standard normal deviations out.
+RESIDUAL_Z = 3.0
+
+
+def _mean_square(s) -> float:
+    """The weighted mean square residual of the weighted orthogonal fit with the sums ``s``:
+    the smaller eigenvalue of the weighted scatter matrix over ``sum w``."""
+    sw, sx, sy, sxx, syy, sxy = s
+    cxx, cyy, cxy = sxx - sx * sx / sw, syy - sy * sy / sw, sxy - sx * sy / sw
+    return max(0.5 * (cxx + cyy) - math.hypot(0.5 * (cxx - cyy), cxy), 0.0) / sw
+
+
+def _too_wide(s, n: int, sigma: float) -> bool:
+    """Whether a fit of ``n`` points with the sums ``s`` leaves residuals wider than range noise
+    ``sigma`` allows (a bend too gentle for any one point to pass the split threshold). The
+    noise across a line is ``sigma |cos(incidence)| <= sigma``, so this errs towards a line."""
+    return n > 2 and _mean_square(s) * n / (n - 2) > sigma * sigma * float(chi2_upper_over_dof(n - 2, RESIDUAL_Z))
+
+
+def _beyond_own_noise(p: np.ndarray, rho: np.ndarray, r: float, alpha: float, sigma: float) -> tuple[int, float]:
+    """The point of ``p`` (ranges ``rho``) farthest from the line ``(r, alpha)`` in units of its
+    own split threshold, ``max(SPLIT_SIGMAS sigma |cos(incidence)|, MIN_SPLIT_M)``, and that ratio
+    (> 1: it fails). Range noise moves a point across the line by its cosine of incidence,
+    ``|p . n| / rho``: a wall seen at a grazing angle is thin, and a step in it is not noise."""
+    v = p[:, 0] * math.cos(alpha) + p[:, 1] * math.sin(alpha)
+    ratio = np.abs(v - r) / np.maximum(np.abs(v) * (SPLIT_SIGMAS * sigma) / rho, MIN_SPLIT_M)
+    q = int(ratio.argmax())
+    return q, ratio.item(q)
 
 
 @remembered
@@ -553,13 +625,35 @@ def _params(method, merge, weights, min_points, split_threshold_m, min_length_m,
     return min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m
 
 
+def _seen_through(line: _Line, after: int, before: int, ranges: np.ndarray, valid: np.ndarray, angles: np.ndarray,
+                  margin: float) -> int | None:
+    """The first valid beam strictly between beams ``after`` and ``before`` (across the seam
+    when ``before < after``) whose ray passes ``line`` and ends more than ``margin`` behind it,
+    or None. A beam with no valid return is no evidence either way."""
+    if before > after:
+        js = np.arange(after + 1, before)
+    else:
+        js = np.concatenate([np.arange(after + 1, len(ranges)), np.arange(0, before)])
+    if not len(js):
+        return None
+    c = np.cos(angles.take(js) - line.alpha)  # the ray meets the line at r / c when c > 0
+    rho = ranges.take(js)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        hit = valid.take(js) & (c > 0) & (rho * c > line.r + margin * c)
+    k = np.flatnonzero(hit)
+    return int(js[k[0]]) if len(k) else None
+
+
 def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_error_m, merge, merge_dr_m,
-           merge_dalpha, merge_chi2, ranges, weights, sigma) -> list[_Line]:
+           merge_dalpha, merge_chi2, ranges, angles, valid, weights, sigma, noise_sigma) -> list[_Line]:
     """Merge neighbouring similar lines, refitting from the summed weighted sums.
 
     Neighbours are consecutive lines whose facing ends are at most ``max_gap_m`` apart; on a
     full-circle scan the last and first lines are neighbours too. A merge is undone when the
-    refitted line's worst point is farther than ``max_error_m`` from it.
+    refitted line's worst point is farther than ``max_error_m`` from it, when (``noise_sigma``
+    > 0, the ``"auto"`` split test) it fails the split loop's noise tests, or when a beam
+    between the two lines ends more than ``max_gap_m`` behind the merged line: that beam saw
+    through it (a doorway, a window), so the line would cover a hole.
     """
 
     def attempt(a: _Line, b: _Line) -> _Line | None:
@@ -586,19 +680,30 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
             p = points.take(idx, axis=0)
             worst = float(np.max(np.abs(p[:, 0] * math.cos(merged.alpha) + p[:, 1] * math.sin(merged.alpha)
                                         - merged.r)))
+            failed = None  # (the test the merged line fails, why)
             if worst > max_error_m:
+                failed = "split_threshold_m", f"the merged line misses a point by {worst:.3f} m"
+            elif noise_sigma and worst > MIN_SPLIT_M and _beyond_own_noise(p, ranges.take(idx), merged.r,
+                                                                          merged.alpha, noise_sigma)[1] > 1.0:
+                failed = "split_threshold_m", f"a point misses it by more than {SPLIT_SIGMAS:g} of its sigmas"
+            elif noise_sigma and _too_wide(merged.s, len(idx), noise_sigma):
+                failed = "residual", "the merged line's residuals are wider than the range noise allows"
+            else:
+                through = _seen_through(merged, a.last, b.first, ranges, valid, angles, max_gap_m)
+                if through is not None:
+                    failed = "see_through", f"beam {through} ends more than max_gap_m behind the merged line"
+            if failed is not None:
                 merged = None
         if steps is not None:
             if not ok:
-                reason = f"different: statistic {stat:.2f}"
+                test, reason = "merge", f"different: statistic {stat:.2f}"
             elif merged is None:
-                reason = f"similar ({stat:.2f}) but the merged line misses a point by {worst:.3f} m"
+                test, reason = failed[0], f"similar ({stat:.2f}) but {failed[1]}"
             else:
-                reason = f"similar: statistic {stat:.2f}"
+                test, reason = "merge", f"similar: statistic {stat:.2f}"
             ln = merged if merged is not None else a
             steps.add("merge" if merged is not None else "keep", first, last, ln.r, ln.alpha, at=a.last,
-                      value=stat, threshold=merge_chi2 if merge == "chi2" else 1.0,
-                      test="split_threshold_m" if ok and merged is None else "merge", reason=reason)
+                      value=stat, threshold=merge_chi2 if merge == "chi2" else 1.0, test=test, reason=reason)
         return merged
 
     out = list(lines)
