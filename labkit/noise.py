@@ -36,7 +36,8 @@ feet and legs fill a fifth of the beams, the estimate is 12-22 % high at 2 mm an
 at 5 mm (with those beams removed, 1-2 %). Real sensors add what the model leaves out:
 quantisation (the Radish CARMEN logs store whole centimetres: ``1 cm / sqrt(12) = 2.9 mm``;
 at fine steps without other noise, equal neighbouring readings make the estimate fall below
-that), range-dependent noise, and surfaces that are not flat at the scale of a beam's
+that; in aces and infinite-corridor four in five ranges end in 1 or 4 modulo 5 cm, a coarser
+grid), range-dependent noise, and surfaces that are not flat at the scale of a beam's
 spacing: the Radish logs estimate 6 (intel) to 28 mm (aces). The estimate is then the
 effective noise of the data, not the sensor's specification.
 """
