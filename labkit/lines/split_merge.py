@@ -511,10 +511,10 @@ def split_and_merge(
             if noise_sigma and not failed and a < p < b - 1:
                 # "auto": each point against its own noise across the line, then the fit's residuals
                 if worst > MIN_SPLIT_M:
-                    q, ratio = _beyond_own_noise(xy[lo:hi], rho[lo:hi], r, alpha, noise_sigma)
+                    q, ratio = _beyond_own_noise(v, rho[lo:hi], r, noise_sigma)
                     if ratio > 1.0:
                         failed, p = True, lo + q
-                        worst = abs(float(xy[p] @ normal) - r)
+                        worst = abs(v.item(q) - r)
                         threshold = worst / ratio
                 if not failed and _too_wide(run.sums(a, b), n, noise_sigma):
                     failed, test, threshold = True, "residual", noise_sigma
@@ -584,15 +584,18 @@ def _too_wide(s, n: int, sigma: float) -> bool:
     """Whether a fit of ``n`` points with the sums ``s`` leaves residuals wider than range noise
     ``sigma`` allows (a bend too gentle for any one point to pass the split threshold). The
     noise across a line is ``sigma |cos(incidence)| <= sigma``, so this errs towards a line."""
-    return n > 2 and _mean_square(s) * n / (n - 2) > sigma * sigma * float(chi2_upper_over_dof(n - 2, RESIDUAL_Z))
+    if n <= 2:
+        return False
+    ms = _mean_square(s) * n / (n - 2)  # the quantile is above 1: most runs are decided without it
+    return ms > sigma * sigma and ms > sigma * sigma * float(chi2_upper_over_dof(n - 2, RESIDUAL_Z))
 
 
-def _beyond_own_noise(p: np.ndarray, rho: np.ndarray, r: float, alpha: float, sigma: float) -> tuple[int, float]:
-    """The point of ``p`` (ranges ``rho``) farthest from the line ``(r, alpha)`` in units of its
-    own split threshold, ``max(SPLIT_SIGMAS sigma |cos(incidence)|, MIN_SPLIT_M)``, and that ratio
-    (> 1: it fails). Range noise moves a point across the line by its cosine of incidence,
-    ``|p . n| / rho``: a wall seen at a grazing angle is thin, and a step in it is not noise."""
-    v = p[:, 0] * math.cos(alpha) + p[:, 1] * math.sin(alpha)
+def _beyond_own_noise(v: np.ndarray, rho: np.ndarray, r: float, sigma: float) -> tuple[int, float]:
+    """Which point is farthest from the line ``(r, alpha)`` in units of its own split threshold
+    ``max(SPLIT_SIGMAS sigma |cos(incidence)|, MIN_SPLIT_M)``, and that ratio (> 1: it fails);
+    ``v`` are the points' projections on the line's normal, ``rho`` their ranges. Range noise
+    moves a point across the line by its cosine of incidence, ``|v| / rho``: a wall seen at a
+    grazing angle is thin, and a step in it is not noise."""
     ratio = np.abs(v - r) / np.maximum(np.abs(v) * (SPLIT_SIGMAS * sigma) / rho, MIN_SPLIT_M)
     q = int(ratio.argmax())
     return q, ratio.item(q)
@@ -630,6 +633,8 @@ def _seen_through(line: _Line, after: int, before: int, ranges: np.ndarray, vali
     """The first valid beam strictly between beams ``after`` and ``before`` (across the seam
     when ``before < after``) whose ray passes ``line`` and ends more than ``margin`` behind it,
     or None. A beam with no valid return is no evidence either way."""
+    if before == after + 1:  # neighbours in the scan (most merges): no beam between them
+        return None
     if before > after:
         js = np.arange(after + 1, before)
     else:
@@ -678,13 +683,13 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
             merged = _Line(idx, [u + v for u, v in zip(a.s, b.s, strict=True)], a.first, b.last, a.p_first,
                            b.p_last)
             p = points.take(idx, axis=0)
-            worst = float(np.max(np.abs(p[:, 0] * math.cos(merged.alpha) + p[:, 1] * math.sin(merged.alpha)
-                                        - merged.r)))
+            v = p[:, 0] * math.cos(merged.alpha) + p[:, 1] * math.sin(merged.alpha)
+            worst = float(np.max(np.abs(v - merged.r)))
             failed = None  # (the test the merged line fails, why)
             if worst > max_error_m:
                 failed = "split_threshold_m", f"the merged line misses a point by {worst:.3f} m"
-            elif noise_sigma and worst > MIN_SPLIT_M and _beyond_own_noise(p, ranges.take(idx), merged.r,
-                                                                          merged.alpha, noise_sigma)[1] > 1.0:
+            elif noise_sigma and worst > MIN_SPLIT_M and _beyond_own_noise(v, ranges.take(idx), merged.r,
+                                                                          noise_sigma)[1] > 1.0:
                 failed = "split_threshold_m", f"a point misses it by more than {SPLIT_SIGMAS:g} of its sigmas"
             elif noise_sigma and _too_wide(merged.s, len(idx), noise_sigma):
                 failed = "residual", "the merged line's residuals are wider than the range noise allows"
