@@ -20,6 +20,7 @@ from labkit.grading.protocol import (
     MAX_CONTAINERS,
     MAX_DEPTH,
     MAX_FRAME_BYTES,
+    MAX_ITEMS,
     NUMERIC_DTYPES,
     ProtocolError,
     clean_text,
@@ -137,6 +138,25 @@ def test_nesting_and_size_are_capped():
         decode(deep)
     with pytest.raises(ProtocolError, match="values in one message"):
         decode([0] * (1 << 21 + 1))
+
+
+class ClaimsNoBytes(np.ndarray):
+    nbytes = property(lambda self: 0)
+
+
+def test_answers_too_big_for_a_frame_are_refused_before_they_are_copied():
+    # 8 TB of zeros as a broadcast view: any copy (C order, tobytes, base64) would fail with MemoryError
+    for huge in (np.broadcast_to(0.0, (10 ** 12,)), np.broadcast_to(0.0, (10 ** 12,)).view(ClaimsNoBytes)):
+        with pytest.raises(TypeError, match="larger than"):
+            encode(huge)
+    with pytest.raises(TypeError, match="larger than"):  # each piece fits, together they do not
+        encode([np.zeros(1 << 20)] * 2)
+    with pytest.raises(TypeError, match="larger than"):
+        encode({"k": "x" * (MAX_FRAME_BYTES + 1)})
+    with pytest.raises(TypeError, match="values in one answer"):
+        encode([0] * (MAX_ITEMS + 1))
+    fits = np.arange(1 << 20, dtype=np.float64)  # 8 MB, 11.2 MB of base64: fits in one frame
+    assert np.array_equal(decode(unpack(pack({"v": encode(fits)})[HEADER.size:])["v"]), fits)
 
 
 def test_every_numeric_dtype_is_little_or_no_endian():

@@ -40,6 +40,7 @@ import numpy as np
 
 __all__ = [
     "MAX_FRAME_BYTES",
+    "MAX_ITEMS",
     "NUMERIC_DTYPES",
     "ProtocolError",
     "encode",
@@ -92,11 +93,15 @@ def _numeric(value: Any, what: str) -> np.ndarray:
     return array if array.flags.c_contiguous else array.copy(order="C")
 
 
-def encode(value: Any, _depth: int = 0) -> Any:
+def encode(value: Any, _depth: int = 0, _budget: list[int] | None = None) -> Any:
     """``value`` as tagged JSON data (see the module's table); TypeError for anything else.
 
     Subclasses of the built-in types are sent as their base type, ndarray subclasses as plain
-    arrays: only their data crosses.
+    arrays: only their data crosses. A value that could not fit in one frame -- more than
+    :data:`MAX_ITEMS` values, or arrays and strings longer than :data:`MAX_FRAME_BYTES` once
+    encoded -- is refused as soon as it is met, before any of it is copied: a student's function
+    that returns 160 MB of zeros gets its TypeError at once instead of spending its time limit
+    on base64.
 
     Examples
     --------
@@ -107,6 +112,16 @@ def encode(value: Any, _depth: int = 0) -> Any:
     """
     if _depth > MAX_DEPTH:
         raise TypeError(f"values nest more than {MAX_DEPTH} levels deep")
+    if _budget is None:
+        _budget = [MAX_ITEMS, MAX_FRAME_BYTES]
+    _budget[0] -= 1
+    if _budget[0] < 0:
+        raise TypeError(f"more than {MAX_ITEMS} values in one answer")
+    if isinstance(value, (np.ndarray, np.generic, str)):  # sizes of the plain data, whatever a subclass says
+        size = str.__len__(value) if isinstance(value, str) else np.asarray(value).view(np.ndarray).nbytes
+        _budget[1] -= size if isinstance(value, str) else 4 * -(-size // 3)
+        if _budget[1] < 0:
+            raise TypeError(f"the answer is larger than the {MAX_FRAME_BYTES} bytes one message may hold")
     if value is None or type(value) in (bool, int, float, str):
         return value
     if isinstance(value, np.ndarray):
@@ -124,13 +139,13 @@ def encode(value: Any, _depth: int = 0) -> Any:
     if isinstance(value, str):
         return str(value)
     if isinstance(value, list):
-        return [encode(item, _depth + 1) for item in value]
+        return [encode(item, _depth + 1, _budget) for item in value]
     if isinstance(value, tuple):
-        return {"T": [encode(item, _depth + 1) for item in value]}
+        return {"T": [encode(item, _depth + 1, _budget) for item in value]}
     if isinstance(value, dict):
         if not all(isinstance(key, str) for key in value):
             raise TypeError("only dicts with str keys can be graded")
-        return {"D": [[str(key), encode(item, _depth + 1)] for key, item in value.items()]}
+        return {"D": [[str(key), encode(item, _depth + 1, _budget)] for key, item in value.items()]}
     raise TypeError(
         f"a {type(value).__name__} cannot be graded: return numbers, strings, None, lists, tuples, dicts"
         " or numpy arrays of numbers"
