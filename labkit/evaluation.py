@@ -482,7 +482,8 @@ class RayErrors:
 def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
     """The ray-axis errors of ``segments`` (anything with ``start``/``end``, sensor frame)
     against ``scan``: for each valid beam, the measured range minus the distance from the
-    sensor to the nearest point where the beam's ray crosses a segment.
+    sensor to the nearest point where the beam's ray crosses a segment (a ray through a
+    segment's end point meets it, to within a billionth of its length).
 
     Examples
     --------
@@ -515,7 +516,7 @@ def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
     with np.errstate(divide="ignore", invalid="ignore"):
         s = pxd[None, :] / den
         t = pxu / den
-    ok = (den != 0) & (s > 0) & (t >= 0) & (t <= 1)
+    ok = (den != 0) & (s > 0) & (t >= -1e-9) & (t <= 1 + 1e-9)
     s = np.where(ok, s, np.inf)
     nearest = s.min(axis=1)
     hit = np.isfinite(nearest)

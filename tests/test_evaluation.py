@@ -261,6 +261,24 @@ def test_ray_errors_against_a_per_beam_solve():
     assert e.coverage == pytest.approx(len(expected) / e.n_valid)
 
 
+def test_a_ray_through_a_segments_end_meets_it():
+    # a line extractor ends its segments where its first and last beams' rays meet the line; in
+    # floating point such an end can land a hair outside [0, 1] of the segment: still a hit
+    rng = np.random.default_rng(11)
+    angles = np.radians(np.arange(-60.0, 60.01, 0.5))
+    missed = 0
+    for _ in range(200):
+        r, alpha = rng.uniform(0.5, 8.0), rng.uniform(-0.5, 0.5)
+        i, j = sorted(rng.choice(len(angles), 2, replace=False))
+        ends = [r / math.cos(angles[k] - alpha) * np.array([math.cos(angles[k]), math.sin(angles[k])]) for k in (i, j)]
+        scan = Scan(r / np.cos(angles - alpha), angles)
+        e = ray_errors(scan, [NS(start=ends[0], end=ends[1])])
+        missed += len({i, j} - set(e.beams.tolist()))
+        assert set(e.beams.tolist()) <= set(range(i, j + 1))
+        np.testing.assert_allclose(e.errors, 0.0, atol=1e-9)
+    assert missed == 0
+
+
 def test_ray_rmse_of_the_true_walls_is_the_range_noise():
     """The simulator's walls as segments: the ray-axis errors are exactly its range noise."""
     sc = sim.scenario("hall")

@@ -251,8 +251,9 @@ def test_no_line_covers_a_gap_the_beams_saw_through():
     lines, steps = split_and_merge(scan, trace=True)
     assert len(lines) == 2 and all(ln.r == pytest.approx(2.0, abs=1e-9) for ln in lines)
     assert lines[0].last < gap.start and lines[1].first >= gap.stop  # no line across the slot
-    (kept,) = [s for s in steps if s.test == "see_through"]
-    assert kept.kind == "keep" and kept.at == lines[0].last and f"beam {gap.start} " in kept.reason
+    (kept,) = [s for s in steps if s.test == "beam_between"]
+    assert kept.kind == "keep" and kept.at == lines[0].last
+    assert f"beam {gap.start} ends 4.00 m behind" in kept.reason  # 6 m, where the line would be at 2 m
     # the ray-axis error of those beams is what a line across the slot would cost
     assert np.all(np.isnan(_ray_hits(scan, lines)[gap]))
 
@@ -273,13 +274,71 @@ def _ray_hits(scan, lines):
     return out
 
 
-@pytest.mark.parametrize("between", [np.array([1.2, 1.21, 1.19, 1.2]), np.array([2.2, 2.22, 2.21, 2.2])])
-def test_beams_in_front_of_or_just_behind_the_wall_do_not_stop_the_merge(between):
-    # something in front of the wall (a chair leg) or a shallow recess: the wall is still one line
+def test_no_line_covers_a_stretch_something_hid():
+    # a chair leg 0.8 m in front of the wall hides four beams' worth of it: the merged line
+    # would claim wall that no beam saw, and the ray-axis error charges those beams 0.8 m each
+    scan, gap = _wall_with_gap(np.array([1.2, 1.21, 1.19, 1.2]))
+    lines, steps = split_and_merge(scan, trace=True)
+    on_wall = [ln for ln in lines if ln.r == pytest.approx(2.0, abs=1e-9)]
+    assert len(on_wall) == 2 and on_wall[0].last < gap.start and on_wall[1].first >= gap.stop
+    (kept,) = [s for s in steps if s.test == "beam_between"]
+    assert f"beam {gap.start} ends 0.80 m in front of" in kept.reason
+    hits = _ray_hits(scan, on_wall)
+    assert np.all(np.isnan(hits[gap]))
+
+
+@pytest.mark.parametrize("between", [np.array([2.2, 2.22, 2.21, 2.2]), np.array([1.8, 1.81, 1.79, 1.8]),
+                                     np.array([np.nan, np.inf, 0.0, np.nan])])
+def test_beams_near_the_wall_or_without_a_return_do_not_stop_the_merge(between):
+    # a shallow recess, a shallow bump (within max_gap_m = 0.3 m of the wall), or beams with no
+    # valid return (no evidence either way): the wall is still one line
     scan, gap = _wall_with_gap(between)
-    lines = split_and_merge(scan)
+    lines, steps = split_and_merge(scan, trace=True)
     on_wall = [ln for ln in lines if ln.r == pytest.approx(2.0, abs=1e-9)]
     assert len(on_wall) == 1 and on_wall[0].first == 0 and on_wall[0].last == scan.n_beams - 1
+    assert not [s for s in steps if s.test == "beam_between"]
+
+
+# ---------------------------------------------------------------------------- end points
+def _past_own_rays(scan: Scan, line) -> float:
+    """How far (metres, 0 if not) ``line``'s start and end lie outside the wedge between the rays
+    of its first and last beams, measured perpendicular to those rays."""
+    worst = 0.0
+    for beam, end, other in ((line.first, line.start, line.last), (line.last, line.end, line.first)):
+        u = np.array([math.cos(scan.angles[beam]), math.sin(scan.angles[beam])])
+        q = scan.ranges[other] * np.array([math.cos(scan.angles[other]), math.sin(scan.angles[other])])
+        inside = np.sign(u[0] * q[1] - u[1] * q[0])  # the side of the ray the other end is on
+        off = u[0] * end[1] - u[1] * end[0]  # signed distance of the end from the beam's ray
+        worst = max(worst, -inside * off)
+    return worst
+
+
+@pytest.mark.parametrize("noise", [0.01, 0.03])
+def test_lines_never_reach_past_the_rays_of_their_own_end_beams(noise):
+    # a noisy end point seen at a grazing angle projects along the line, over the next beams'
+    # rays: the line would claim a surface where those beams saw farther (or nearer)
+    rng = np.random.default_rng(7)
+    world = scenario("corridor").world
+    lidar = Lidar.from_fov("test", 270.0, 0.5, range_max=20.0, noise_std_m=noise)
+    past = []
+    for x in np.linspace(1.0, 20.0, 12):
+        scan = scan_at(world, lidar, (x, 0.0, 0.0), 0.0, rng=rng)[0]
+        for ln in split_and_merge(scan):
+            past.append(_past_own_rays(scan, ln))
+    assert len(past) > 40 and max(past) < 1e-9, max(past)
+
+
+def test_an_end_point_off_the_line_at_a_grazing_angle_stops_at_its_ray():
+    # a wall at x = 2 m seen from 40 to 70 deg off its normal; the last beam reads 3 cm long:
+    # its projection onto the wall slides 3 sin(70 deg) = 2.8 cm along it, beyond the last ray
+    angles = np.radians(np.arange(40.0, 70.01, 0.5))
+    ranges = 2.0 / np.cos(angles)
+    ranges[-1] += 0.03
+    (line,) = split_and_merge(Scan(ranges=ranges, angles=angles))
+    assert line.last == len(angles) - 1
+    x_end = line.r / math.cos(angles[-1] - line.alpha)  # where the last beam's ray meets the line
+    assert np.allclose(line.end, x_end * np.array([math.cos(angles[-1]), math.sin(angles[-1])]), atol=1e-12)
+    assert _past_own_rays(Scan(ranges=ranges, angles=angles), line) < 1e-12
 
 
 # ---------------------------------------------------------------------------- invalid input

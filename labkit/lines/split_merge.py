@@ -13,11 +13,16 @@ The algorithm of the course slides (after Nguyen et al. 2005):
 5. When every list is done, merge similar neighbouring lines: ``|r1 - r2|`` and
    ``|alpha1 - alpha2|`` under thresholds (the angle difference taken across the wrap, so
    170 deg and -170 deg are 20 deg apart), or a chi-square test on the covariances, and
-   refit the merged line from all its points. Two lines are never merged across a beam that
-   saw through the merged line (a doorway, a slot between shelves): a valid beam between them
-   that ends more than ``max_gap_m`` behind it.
+   refit the merged line from all its points. Two lines are never merged across a valid beam
+   between them that ends more than ``max_gap_m`` off the merged line: behind it, the beam saw
+   through it (a doorway, a slot between shelves); in front of it, something else stopped the
+   beam (a chair leg, a person), so the stretch of wall behind was never seen.
 6. Drop the lines the data cannot place: by its covariance, a line must lie within the
    trusted ``|dr|`` and ``|dalpha|`` of the true line with probability ``place_confidence``.
+
+A line's segment runs between its first and last points projected onto it, but never past the
+rays of its first and last beams: a noisy end point seen at a grazing angle projects along the
+line over the next beams' rays, and the segment would claim a surface where they saw another.
 
 The thresholds that depend on the sensor's range noise can follow it: with ``"auto"``,
 ``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split test measures
@@ -129,11 +134,19 @@ class _Line:
         self.idx, self.s, self.first, self.last = idx, s, first, last
         self.r, self.alpha = r, alpha = line_from_sums(*s)
         self.p_first, self.p_last = p_first, p_last
-        # the first and last points projected onto the line
+        # the first and last points projected onto the line, but never past the rays of the
+        # first and last beams: a noisy end point seen at a grazing angle projects along the
+        # line, over the rays of the next beams, whose ranges the line would then contradict
         c, sn = math.cos(alpha), math.sin(alpha)
         (x0, y0), (x1, y1) = p_first, p_last
         d0, d1 = x0 * c + y0 * sn - r, x1 * c + y1 * sn - r
-        self.start, self.end = (x0 - d0 * c, y0 - d0 * sn), (x1 - d1 * c, y1 - d1 * sn)
+        sx, sy, ex, ey = x0 - d0 * c, y0 - d0 * sn, x1 - d1 * c, y1 - d1 * sn
+        inside = x0 * y1 - y0 * x1  # the side of the first ray the last point is on (and - for the last ray)
+        if (x0 * sy - y0 * sx) * inside < 0:  # projected past the first ray: where that ray meets the line
+            sx, sy = x0 * (r / (r + d0)), y0 * (r / (r + d0))
+        if (x1 * ey - y1 * ex) * inside > 0:
+            ex, ey = x1 * (r / (r + d1)), y1 * (r / (r + d1))
+        self.start, self.end = (sx, sy), (ex, ey)
         self.cov = None
 
     @property
@@ -347,7 +360,7 @@ def split_and_merge(
         A run is split at its widest gap between neighbours when that gap is wider than
         this; lines whose facing ends are farther apart are never merged, nor are lines
         between which a valid beam ends more than this behind the merged line (it saw through
-        it). Default 0.3 m.
+        it) or in front of it (it hides what the line would claim). Default 0.3 m.
     merge : {"thresholds", "chi2", None}
         The merge test (see :func:`lines_similar`); ``None`` skips the merge step.
     merge_dr_m, merge_dalpha, merge_chi2 : float
@@ -394,8 +407,8 @@ def split_and_merge(
         lines), ``"merge"`` (two neighbours merged: the merged line on their beams; ``at`` the
         last beam of the first), ``"keep"`` (two neighbours not merged; ``value`` the merge
         statistic or the gap; ``test`` names what failed: ``"merge"``, ``"max_gap_m"``,
-        ``"split_threshold_m"``, ``"residual"``, or ``"see_through"`` when a beam between them
-        ends behind the merged line), ``"reject"`` with
+        ``"split_threshold_m"``, ``"residual"``, or ``"beam_between"`` when a beam between them
+        ends more than ``max_gap_m`` behind or in front of the merged line), ``"reject"`` with
         ``test="place_confidence"`` (a line the data cannot place; ``value`` its probability of
         lying within the trusted distance of the truth). Replay: the
         ``accept`` runs, widened by ``absorb``, joined by ``merge`` and less the
@@ -628,11 +641,12 @@ def _params(method, merge, weights, min_points, split_threshold_m, min_length_m,
     return min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m
 
 
-def _seen_through(line: _Line, after: int, before: int, ranges: np.ndarray, valid: np.ndarray, angles: np.ndarray,
-                  margin: float) -> int | None:
+def _beam_between(line: _Line, after: int, before: int, ranges: np.ndarray, valid: np.ndarray, angles: np.ndarray,
+                  margin: float) -> tuple[int, float] | None:
     """The first valid beam strictly between beams ``after`` and ``before`` (across the seam
-    when ``before < after``) whose ray passes ``line`` and ends more than ``margin`` behind it,
-    or None. A beam with no valid return is no evidence either way."""
+    when ``before < after``) whose ray meets ``line`` and ends more than ``margin`` off it, and
+    how far in front of the line it ends (negative: behind), or None. A beam with no valid
+    return is no evidence either way; nor is one whose ray does not meet the line."""
     if before == after + 1:  # neighbours in the scan (most merges): no beam between them
         return None
     if before > after:
@@ -644,9 +658,9 @@ def _seen_through(line: _Line, after: int, before: int, ranges: np.ndarray, vali
     c = np.cos(angles.take(js) - line.alpha)  # the ray meets the line at r / c when c > 0
     rho = ranges.take(js)
     with np.errstate(invalid="ignore", divide="ignore"):
-        hit = valid.take(js) & (c > 0) & (rho * c > line.r + margin * c)
+        hit = valid.take(js) & (c > 0) & (np.abs(rho * c - line.r) > margin * c)
     k = np.flatnonzero(hit)
-    return int(js[k[0]]) if len(k) else None
+    return (int(js[k[0]]), float(line.r / c[k[0]] - rho[k[0]])) if len(k) else None
 
 
 def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_error_m, merge, merge_dr_m,
@@ -657,8 +671,9 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
     full-circle scan the last and first lines are neighbours too. A merge is undone when the
     refitted line's worst point is farther than ``max_error_m`` from it, when (``noise_sigma``
     > 0, the ``"auto"`` split test) it fails the split loop's noise tests, or when a beam
-    between the two lines ends more than ``max_gap_m`` behind the merged line: that beam saw
-    through it (a doorway, a window), so the line would cover a hole.
+    between the two lines ends more than ``max_gap_m`` off the merged line: behind it, the beam
+    saw through it (a doorway, a window) and the line would cover a hole; in front of it, the
+    beam hid the stretch the line would claim (a chair leg).
     """
 
     def attempt(a: _Line, b: _Line) -> _Line | None:
@@ -694,9 +709,11 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
             elif noise_sigma and _too_wide(merged.s, len(idx), noise_sigma):
                 failed = "residual", "the merged line's residuals are wider than the range noise allows"
             else:
-                through = _seen_through(merged, a.last, b.first, ranges, valid, angles, max_gap_m)
-                if through is not None:
-                    failed = "see_through", f"beam {through} ends more than max_gap_m behind the merged line"
+                off = _beam_between(merged, a.last, b.first, ranges, valid, angles, max_gap_m)
+                if off is not None:
+                    beam, ahead = off
+                    where = f"{ahead:.2f} m in front of" if ahead > 0 else f"{-ahead:.2f} m behind"
+                    failed = "beam_between", f"beam {beam} ends {where} the merged line (more than max_gap_m)"
             if failed is not None:
                 merged = None
         if steps is not None:
