@@ -344,8 +344,8 @@ def circle_confidence(n_angles: int, iav_mean: float, iav_std: float, *, std_max
 # a scan cost tens of microseconds rather than a millisecond; ``tests/test_iav.py`` checks it
 # against a plain loop over :func:`inscribed_angles` and :func:`middle_point_offset`.
 _VERDICTS = ("accepted", "too few points", "chord too short", "chord too long", "prerequisite", "degenerate",
-             "iav mean", "iav std", "v-corner", "fit failed", "occluded")
-_ACCEPTED, _FEW, _SHORT, _LONG, _PREREQ, _DEGENERATE, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED = range(11)
+             "iav mean", "iav std", "v-corner", "fit failed", "occluded", "residual")
+_ACCEPTED, _FEW, _SHORT, _LONG, _PREREQ, _DEGENERATE, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED, _RESIDUAL = range(12)
 
 
 # The internal records below are NamedTuples rather than frozen dataclasses: they are built
@@ -626,12 +626,13 @@ def _trace(runs: _Runs, geo: _Geometry, chord: np.ndarray, ratio, verdict, sel, 
         n = int(geo.n[k])
         c = float(chord[k]) if v != _FEW else math.nan
         r = float(ratio[k]) if v not in (_FEW, _SHORT, _LONG) else math.nan
-        m, sd = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED) else (
+        m, sd = (float(mean[k]), float(std[k])) if v in (_ACCEPTED, _MEAN, _STD, _VCORNER, _FIT, _OCCLUDED,
+                                                         _RESIDUAL) else (
             math.nan, math.nan)
         value = {_FEW: n, _SHORT: c, _LONG: c, _PREREQ: abs(r) if limits.get("hollow") else r, _MEAN: m}.get(v, sd)
         if v == _MEAN and "mean_from" in limits:
             value = abs(m - limits["mean_from"])
-        if v in (_DEGENERATE, _FIT, _OCCLUDED):
+        if v in (_DEGENERATE, _FIT, _OCCLUDED, _RESIDUAL):
             value = math.nan
         limit = widened[k].get(v, limits.get(v)) if widened and k in widened else limits.get(v)
         threshold = _nearest(value, limit) if limit is not None and not math.isnan(value) else math.nan
@@ -721,6 +722,24 @@ def _angle_limits(p: np.ndarray, sigma: float, mean_range: tuple[float, float], 
             None if like_max is None else min(math.sqrt(like_max ** 2 + spread_sq), cap))
 
 
+def _wider_than_noise(p: np.ndarray, sigma: float) -> bool:
+    """Whether the points ``p`` lie farther from their best circle (orthogonal fit) than range
+    noise ``sigma`` allows: the mean square distance per degree of freedom above the upper
+    ``NOISE_Z`` quantile of ``sigma^2 chi2(n - 3) / (n - 3)``. The inscribed angles of a room's
+    corner or a chair's back can pass the widened tests at a few centimetres of noise; their
+    points do not lie on one circle. (A beam's noise moves its point across the circle by at
+    most sigma, so true circles fail this less often than the quantile says.)"""
+    n = len(p)
+    if n <= 3:
+        return False
+    try:
+        fit = fit_circle(p, "geometric")
+    except ValueError:
+        return False
+    d = np.hypot(p[:, 0] - fit.center[0], p[:, 1] - fit.center[1]) - fit.radius
+    return float(d @ d) / (n - 3) > sigma * sigma * float(chi2_upper_over_dof(n - 3, NOISE_Z))
+
+
 def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t: _CircleTest,
                    sigma: float = 0.0, widened: dict | None = None) -> tuple[Circle | None, int]:
     if ang.degenerate.item(j):
@@ -744,6 +763,8 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t:
         if is_v_corner(angles, t.v_corner_neighbours, stride):
             return None, _VCORNER
         kind, std_max = "arc-like", like_max
+    if sigma > 0.0 and _wider_than_noise(runs.pts[runs.starts.item(k):runs.ends.item(k)], sigma):
+        return None, _RESIDUAL
     try:
         if t.center_method == "iav":
             side = ang.side.item(j)
