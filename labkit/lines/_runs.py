@@ -6,7 +6,10 @@
 * from the global extractors (:mod:`~labkit.lines.ransac`, :mod:`~labkit.lines.hough`):
   :func:`_taking_part` (the beams they use), :func:`_fit` (a weighted line in closed form)
   and :func:`_segments` (one line's inliers cut into segments);
-* for ``trace=True``: :class:`_Trace`, the :class:`labkit.Step` records of one call.
+* for ``trace=True``: :class:`_Trace`, the :class:`labkit.Step` records of one call;
+* for the noise-following settings (``"auto"``, ``place_confidence``) of every extractor that has
+  them: :func:`_noise` (a threshold and the covariances' range noise for one scan),
+  :func:`_check_placing` and :func:`_placed` (drop the lines the data cannot place).
 """
 
 from __future__ import annotations
@@ -15,11 +18,14 @@ import math
 
 import numpy as np
 
+from .._checks import check_positive
 from ..features import LineSegment, line_segment
-from ..fitting import line_from_sums
+from ..fitting import line_from_sums, placement_probability
+from ..noise import MIN_SPLIT_M, scan_sigma
 from ..scan import Scan
 from ..segmentation import labels_from
 from ..steps import Step
+from ._params import AUTO
 
 
 class _Trace(list):
@@ -99,14 +105,15 @@ class _PrefixSums:
 
 
 def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float,
-            steps: _Trace | None = None) -> list[LineSegment]:
+            steps: _Trace | None = None, range_sigma: float | None = None) -> list[LineSegment]:
     """Step 7, shared with :mod:`labkit.lines.regression`: every line, the points ``a..b-1`` of
     ``xy`` (beams ``beams[a:b]``) for each ``(a, b)`` of ``spans``, fitted by
     :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped
-    (each line's verdict is added to ``steps`` if given)."""
+    (each line's verdict is added to ``steps`` if given). ``range_sigma``: the range noise of
+    the lines' covariances (None: each line's own residuals)."""
     lines = []
     for a, b in spans:
-        line = line_segment(xy[a:b], beams[a:b])
+        line = line_segment(xy[a:b], beams[a:b], range_sigma=range_sigma)
         kept = line.length >= min_length_m
         if kept:
             lines.append(line)
@@ -140,12 +147,14 @@ def _fit(p: np.ndarray, w: np.ndarray) -> tuple[float, float]:
 
 
 def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inliers: np.ndarray, min_points: int,
-              min_length_m: float, max_gap_m: float, steps: _Trace | None = None) -> list[LineSegment]:
+              min_length_m: float, max_gap_m: float, steps: _Trace | None = None,
+              range_sigma: float | None = None) -> list[LineSegment]:
     """The segments of one line: its inliers (positions into ``xy``/``beams``, ascending) cut
     where neighbouring inliers are more than ``max_gap_m`` apart (or, given per-beam
     ``labels``, in different range segments); runs with ``min_points`` points or more and
     at least ``min_length_m`` long become segments. Shared by :mod:`labkit.lines.hough`.
-    Given ``steps``, every run ends in an ``accept`` or a ``reject`` step."""
+    Given ``steps``, every run ends in an ``accept`` or a ``reject`` step. ``range_sigma``: the
+    range noise of the segments' covariances (None: each segment's own residuals)."""
     if inliers.size < min_points:
         if steps is not None and inliers.size:
             b = beams[inliers]
@@ -167,10 +176,58 @@ def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inli
                 steps.add("reject", run[0], run[-1], value=b - a, threshold=min_points, test="min_points",
                           beams=tuple(run.tolist()), reason=f"a run of {b - a} inliers < min_points={min_points}")
             continue
-        seg = line_segment(p[a:b], beams[inliers[a:b]])
+        seg = line_segment(p[a:b], beams[inliers[a:b]], range_sigma=range_sigma)
         kept = seg.length >= min_length_m
         if kept:
             out.append(seg)
         if steps is not None:
             steps.verdict(seg, kept, min_length_m, "a run")
+    return out
+
+
+def _noise(scan: Scan, threshold_m, range_sigma_m, sigmas: float) -> tuple[float, float | None]:
+    """A distance threshold for ``scan`` and the range noise of its lines' covariances.
+
+    ``range_sigma_m``: a number as given, ``"auto"`` the scan's estimate
+    (:func:`labkit.noise.scan_sigma`), None each line's own residuals (the covariances of
+    :func:`labkit.features.line_segment`). ``threshold_m``: a number as given, ``"auto"``
+    ``sigmas`` of that range noise (of the scan's estimate when it is None), at least
+    :data:`labkit.noise.MIN_SPLIT_M` (2 cm)."""
+    sigma = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
+    if threshold_m == AUTO:
+        threshold_m = max(sigmas * (scan_sigma(scan) if sigma is None else sigma), MIN_SPLIT_M)
+    return threshold_m, sigma
+
+
+def _check_placing(range_sigma_m, place_dr_m: float, place_dalpha: float, place_confidence: float):
+    """The placing parameters checked (as the records check them); returns ``range_sigma_m``
+    as a float, None or ``"auto"``."""
+    if range_sigma_m is not None and range_sigma_m != AUTO:
+        range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
+    check_positive("place_dr_m", place_dr_m)
+    check_positive("place_dalpha", place_dalpha)
+    if not 0 <= place_confidence <= 1:
+        raise ValueError(f"place_confidence must be in [0, 1], got {place_confidence!r}")
+    return range_sigma_m
+
+
+def _placed(lines: list[LineSegment], max_dr_m: float, max_dalpha: float, confidence: float,
+            steps) -> list[LineSegment]:
+    """The lines the data can place: those whose covariance gives them at least ``confidence``
+    of lying within ``max_dr_m`` and ``max_dalpha`` of the true line
+    (:func:`labkit.fitting.placement_probability`); every other line is a ``"reject"`` step with
+    ``test="place_confidence"`` in ``steps`` if given. Shared by every extractor with a
+    ``place_confidence``. (In split-and-merge, joining such a line to its neighbour instead,
+    when the joined line still passes the split test, found fewer walls and more false lines on
+    the simulated sets of ``benchmarks/evaluation.py``.)"""
+    if confidence <= 0 or not lines:
+        return lines
+    chance = placement_probability(np.array([ln.covariance for ln in lines]), max_dr_m, max_dalpha).tolist()
+    out = []
+    for ln, c in zip(lines, chance, strict=True):
+        if c >= confidence:
+            out.append(ln)
+        elif steps is not None:
+            steps.add("reject", ln.first, ln.last, ln.r, ln.alpha, value=c, threshold=confidence,
+                      test="place_confidence", reason=f"placed with probability {c:.2f} < place_confidence")
     return out

@@ -57,12 +57,13 @@ import numpy as np
 from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from ..fitting import _line_covariances, line_from_sums, placement_probability
+from ..fitting import _line_covariances, line_from_sums
 from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
 from ..scan import Scan
 from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
 from ._params import AUTO, Params, param, takes_params
+from ._runs import _placed
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -740,23 +741,6 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
         merged = attempt(out[-1], out[0])
         if merged is not None:
             out = [merged] + out[1:-1]
-    return out
-
-
-def _placed(lines: list[LineSegment], max_dr_m: float, max_dalpha: float, confidence: float,
-            steps) -> list[LineSegment]:
-    """The lines the data can place: those whose covariance gives them at least ``confidence``
-    of lying within ``max_dr_m`` and ``max_dalpha`` of the true line. (Joining such a line to
-    its neighbour instead, when the joined line still passes the split test, found fewer walls
-    and more false lines on the simulated sets of ``benchmarks/evaluation.py``.)"""
-    chance = placement_probability(np.array([ln.covariance for ln in lines]), max_dr_m, max_dalpha).tolist()
-    out = []
-    for ln, c in zip(lines, chance, strict=True):
-        if c >= confidence:
-            out.append(ln)
-        elif steps is not None:
-            steps.add("reject", ln.first, ln.last, ln.r, ln.alpha, value=c, threshold=confidence,
-                      test="place_confidence", reason=f"placed with probability {c:.2f} < place_confidence")
     return out
 
 
