@@ -6,12 +6,12 @@ Four parts, every number computed here by :mod:`labkit.experiments` (the same co
 (a) every line extractor at its defaults on ``--scans`` simulated scans of 722 beams per noise
     level (5 mm, 1 cm, 2 cm, 3 cm), a third each from the office, corridor and random-polygon
     worlds: TruePos, FalsePos, sigma dr, sigma dalpha, lines per scan and scans per second --
-    then the same by world, and split-and-merge with ``AUTO_LINES`` and angular segmentation
-    with ``AUTO_ANGULAR``;
+    then the same by world, and every extractor's noise-following setting (``AUTO_LINES``,
+    ``AUTO_ANGULAR``, ``AUTO_RANSAC``, ``AUTO_HOUGH``, ``AUTO_INCREMENTAL``);
 (b) circles and legs of the pipeline on 300 scans of the ``hall`` world at each noise level, with
     the default configuration and with ``labkit.noise.AUTO_CONFIG``;
 (c) ray-axis RMSE (Schaefer et al. 2018) and lines per scan of every extractor (and of
-    split-and-merge with ``AUTO_LINES`` and angular segmentation with ``AUTO_ANGULAR``) on the
+    the noise-following settings) on the
     first 100 scans of each Radish log in ``../shared/datasets/carmen`` (skipped when absent),
     and the circles and legs per scan there with the default configuration and ``AUTO_CONFIG``
     (no truth: a count, to see how many more shapes the noise allowances let through on real
@@ -37,7 +37,17 @@ import numpy as np
 
 from labkit import Config, angular_segmentation, split_and_merge
 from labkit import experiments as ex
-from labkit.noise import AUTO_ANGULAR, AUTO_CONFIG, AUTO_LINES
+from labkit.lines.hough import hough_lines
+from labkit.lines.incremental import incremental_lines
+from labkit.lines.ransac import ransac_lines
+from labkit.noise import AUTO_ANGULAR, AUTO_CONFIG, AUTO_HOUGH, AUTO_INCREMENTAL, AUTO_LINES, AUTO_RANSAC
+
+#: Every extractor with a noise-following setting, at that setting.
+AUTO_EXTRACTORS = {"split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
+                   "angular AUTO_ANGULAR": partial(angular_segmentation, **AUTO_ANGULAR),
+                   "ransac AUTO_RANSAC": partial(ransac_lines, **AUTO_RANSAC),
+                   "hough AUTO_HOUGH": partial(hough_lines, **AUTO_HOUGH),
+                   "incremental AUTO_INCREMENTAL": partial(incremental_lines, **AUTO_INCREMENTAL)}
 
 DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
 
@@ -61,10 +71,8 @@ def main() -> None:
     by_world = ex.compare_lines(data, by=("noise_std_m", "world"))
     print("\nBy world:\n")
     print(ex.markdown_table(by_world, {"world": "world", **ex.LINE_COLUMNS}))
-    print("\nThe noise-following settings of the two extractors that have one (opt-in):\n")
-    print(ex.markdown_table(ex.compare_lines(data, {
-        "split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
-        "angular AUTO_ANGULAR": partial(angular_segmentation, **AUTO_ANGULAR)}, repeat=args.repeat), ex.LINE_COLUMNS))
+    print("\nThe noise-following settings of the extractors (opt-in):\n")
+    print(ex.markdown_table(ex.compare_lines(data, AUTO_EXTRACTORS, repeat=args.repeat), ex.LINE_COLUMNS))
 
     print("\n## (b) Circles and legs of the pipeline on 300 scans of the hall\n")
     auto_config = Config().updated(AUTO_CONFIG)
@@ -80,8 +88,7 @@ def main() -> None:
     print(f"\n## (c) Ray-axis RMSE on the first {args.log_scans} scans of each Radish log\n")
     logs = sorted(args.logs.glob("*.log*")) if args.logs.is_dir() else []
     if logs:
-        extractors = {**ex.LINE_EXTRACTORS, "split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
-                      "angular AUTO_ANGULAR": partial(angular_segmentation, **AUTO_ANGULAR)}
+        extractors = {**ex.LINE_EXTRACTORS, **AUTO_EXTRACTORS}
         print(ex.markdown_table(ex.compare_on_logs(logs, extractors, n_scans=args.log_scans, repeat=args.repeat),
                                 ex.LOG_COLUMNS))
         print("\nCircles and legs per scan (no truth):\n")
