@@ -49,7 +49,7 @@ from ..features import LineSegment
 from ..noise import INLIER_SIGMAS
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, Params, param, takes_params
+from ._params import AUTO, PlacingParams, param, takes_params
 from ._runs import _check_placing, _fit, _noise, _placed, _segments, _taking_part, _Trace
 
 __all__ = ["hough_lines"]
@@ -64,7 +64,7 @@ _MAX_R_CELLS = 1 << 24
 
 
 @dataclass(frozen=True)
-class HoughParams(Params):
+class HoughParams(PlacingParams):
     """Parameters of :func:`hough_lines` and the ``[lines.hough]`` table of :class:`labkit.Config`,
     each default once: lengths in metres, angles in degrees."""
 
@@ -76,14 +76,6 @@ class HoughParams(Params):
     min_points: int = param(5, "fewest points of a line segment", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
     max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
-    range_sigma_m: float = param(None, "range noise of the lines' covariances (placing), metres; none: each "
-                                       "line's own residuals; auto: estimated from each scan (labkit.noise)",
-                                 lo=0, strict=True, optional=True, kind=float, auto=True)
-    place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
-                              lo=0, strict=True)
-    place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
-    place_confidence: float = param(0.0, "with at least this probability by its covariance (0: report every "
-                                         "line; 0.8 in labkit.noise.AUTO_HOUGH)", lo=0, hi=1)
 
 
 @takes_params(HoughParams)
@@ -149,22 +141,14 @@ def hough_lines(
         the inliers of a line are cut there into separate segments. Default 0.3 m, as for
         :func:`labkit.split_and_merge`.
     range_sigma_m : float, "auto" or None
-        The range noise of the lines' covariances, hence of the placing below. Default ``None``:
-        each line's covariance is worked out from its own residuals, as before
-        (:func:`labkit.features.line_segment`); ``"auto"``: the scan's estimate
-        (:func:`labkit.noise.scan_sigma`); a number: that noise. With ``threshold_m="auto"`` it is
-        also the noise the threshold follows (the scan's estimate when ``None``).
+        The range noise of the lines' covariances (and of ``threshold_m="auto"``), as for
+        :func:`labkit.lines.ransac.ransac_lines`. Default ``None``: each line's own residuals.
     place_dr_m, place_dalpha, place_confidence : float
-        What a user trusts, as in :func:`labkit.split_and_merge`: a line is reported only if, by its
-        covariance, it lies within ``place_dr_m`` (default 5 cm) in ``r`` and ``place_dalpha``
-        (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the true line with
-        probability ``place_confidence`` (default 0: every line is reported; 0.8 in
-        :data:`labkit.noise.AUTO_HOUGH`): :func:`labkit.fitting.placement_probability`. A short
-        piece whose angle the data cannot fix to a few degrees is dropped (a ``"reject"`` step
-        with ``test="place_confidence"``). On the 408 simulated scans of
-        :func:`labkit.experiments.nguyen_set` at 2 cm of range noise, :data:`labkit.noise.AUTO_HOUGH`
-        reports 0.05 false lines instead of the default's 0.37, and finds 0.85 of the walls
-        instead of 0.90.
+        Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
+        ``place_confidence`` 0: every line; 0.8 in :data:`labkit.noise.AUTO_HOUGH`). On the 408
+        simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
+        :data:`labkit.noise.AUTO_HOUGH` reports 0.05 false lines instead of the default's 0.37, and
+        finds 0.85 of the walls instead of 0.90.
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere (for instance with the beams of circles and
         legs set to -1). Beams labelled -1 then do not vote, and a segment never spans two

@@ -55,14 +55,14 @@ from ..fitting import line_from_sums
 from ..noise import GROW_SIGMAS
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, Params, param, takes_params
+from ._params import AUTO, PlacingParams, param, takes_params
 from ._runs import _check_placing, _fitted, _noise, _placed, _PrefixSums, _runs, _Trace
 
 __all__ = ["incremental_lines"]
 
 
 @dataclass(frozen=True)
-class IncrementalParams(Params):
+class IncrementalParams(PlacingParams):
     """Parameters of :func:`incremental_lines` and the ``[lines.incremental]`` table of
     :class:`labkit.Config`, each default once: lengths in metres."""
 
@@ -72,14 +72,6 @@ class IncrementalParams(Params):
     min_points: int = param(5, "points of a seed, and fewest points of a line", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
     max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
-    range_sigma_m: float = param(None, "range noise of the lines' covariances (placing), metres; none: each "
-                                       "line's own residuals; auto: estimated from each scan (labkit.noise)",
-                                 lo=0, strict=True, optional=True, kind=float, auto=True)
-    place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
-                              lo=0, strict=True)
-    place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
-    place_confidence: float = param(0.0, "with at least this probability by its covariance (0: report every "
-                                         "line; 0.8 in labkit.noise.AUTO_INCREMENTAL)", lo=0, hi=1)
 
 
 @takes_params(IncrementalParams)
@@ -122,22 +114,14 @@ def incremental_lines(
         A line never spans two neighbouring points farther apart than this. Default 0.3 m,
         as split-and-merge.
     range_sigma_m : float, "auto" or None
-        The range noise of the lines' covariances, hence of the placing below. Default ``None``:
-        each line's covariance is worked out from its own residuals, as before
-        (:func:`labkit.features.line_segment`); ``"auto"``: the scan's estimate
-        (:func:`labkit.noise.scan_sigma`); a number: that noise. With ``max_error_m="auto"`` it is
-        also the noise the threshold follows (the scan's estimate when ``None``).
+        The range noise of the lines' covariances (and of ``max_error_m="auto"``), as for
+        :func:`labkit.lines.ransac.ransac_lines`. Default ``None``: each line's own residuals.
     place_dr_m, place_dalpha, place_confidence : float
-        What a user trusts, as in :func:`labkit.split_and_merge`: a line is reported only if, by its
-        covariance, it lies within ``place_dr_m`` (default 5 cm) in ``r`` and ``place_dalpha``
-        (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the true line with
-        probability ``place_confidence`` (default 0: every line is reported; 0.8 in
-        :data:`labkit.noise.AUTO_INCREMENTAL`): :func:`labkit.fitting.placement_probability`. A short
-        piece whose angle the data cannot fix to a few degrees is dropped (a ``"reject"`` step
-        with ``test="place_confidence"``). On the 408 simulated scans of
-        :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
-        :data:`labkit.noise.AUTO_INCREMENTAL` reports 0.07 false lines instead of the default's
-        0.36, and finds 0.84 of the walls instead of 0.92.
+        Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
+        ``place_confidence`` 0: every line; 0.8 in :data:`labkit.noise.AUTO_INCREMENTAL`). On the 408
+        simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
+        :data:`labkit.noise.AUTO_INCREMENTAL` reports 0.07 false lines instead of the default's 0.36, and
+        finds 0.84 of the walls instead of 0.92.
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere (e.g. shared by a pipeline, with the beams
         of circles and legs set to -1): lines then never cross a segment boundary nor a

@@ -50,7 +50,7 @@ from ..features import LineSegment
 from ..noise import INLIER_SIGMAS
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, Params, param, takes_params
+from ._params import AUTO, PlacingParams, param, takes_params
 from ._runs import _check_placing, _fit, _noise, _placed, _segments, _taking_part, _Trace
 
 __all__ = ["ransac_lines"]
@@ -60,7 +60,7 @@ DEFAULT_SEED = 0
 
 
 @dataclass(frozen=True)
-class RansacParams(Params):
+class RansacParams(PlacingParams):
     """Parameters of :func:`ransac_lines` and the ``[lines.ransac]`` table of
     :class:`labkit.Config`, each default once: lengths in metres (the random generator is
     seeded with :data:`DEFAULT_SEED`; pass ``rng=`` to the function for another)."""
@@ -74,14 +74,6 @@ class RansacParams(Params):
     min_points: int = param(5, "fewest points of a line segment", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
     max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
-    range_sigma_m: float = param(None, "range noise of the lines' covariances (placing), metres; none: each "
-                                       "line's own residuals; auto: estimated from each scan (labkit.noise)",
-                                 lo=0, strict=True, optional=True, kind=float, auto=True)
-    place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
-                              lo=0, strict=True)
-    place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
-    place_confidence: float = param(0.0, "with at least this probability by its covariance (0: report every "
-                                         "line; 0.8 in labkit.noise.AUTO_RANSAC)", lo=0, hi=1)
 
 
 @takes_params(RansacParams)
