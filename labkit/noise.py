@@ -254,8 +254,9 @@ def chi2_upper_over_dof(dof, z: float):
     return np.maximum(1.0 - k + z * np.sqrt(k), 0.0) ** 3
 
 
-def auto_split_threshold(sigma: float) -> float:
+def auto_split_threshold(sigma: float, sigmas: float = SPLIT_SIGMAS) -> float:
     """``split_threshold_m="auto"`` for range noise ``sigma`` at a point seen head-on:
     ``max(5 sigma, 2 cm)``. At incidence ``i`` a point's threshold is ``max(5 sigma cos(i), 2 cm)``
-    (:func:`labkit.split_and_merge`), and this is what the trace and the merge report."""
-    return max(SPLIT_SIGMAS * sigma, MIN_SPLIT_M)
+    (:func:`labkit.split_and_merge`), and this is what the trace and the merge report. ``sigmas``:
+    the multiple other extractors' ``"auto"`` uses instead (:data:`INLIER_SIGMAS`, :data:`GROW_SIGMAS`)."""
+    return max(sigmas * sigma, MIN_SPLIT_M)

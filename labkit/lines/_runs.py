@@ -21,7 +21,7 @@ import numpy as np
 from .._checks import check_positive
 from ..features import LineSegment, line_segment
 from ..fitting import line_from_sums, placement_probability
-from ..noise import MIN_SPLIT_M, scan_sigma
+from ..noise import auto_split_threshold, scan_sigma
 from ..scan import Scan
 from ..segmentation import labels_from
 from ..steps import Step
@@ -195,7 +195,7 @@ def _noise(scan: Scan, threshold_m, range_sigma_m, sigmas: float) -> tuple[float
     :data:`labkit.noise.MIN_SPLIT_M` (2 cm)."""
     sigma = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
     if threshold_m == AUTO:
-        threshold_m = max(sigmas * (scan_sigma(scan) if sigma is None else sigma), MIN_SPLIT_M)
+        threshold_m = auto_split_threshold(scan_sigma(scan) if sigma is None else sigma, sigmas)
     return threshold_m, sigma
 
 

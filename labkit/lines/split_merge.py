@@ -63,7 +63,7 @@ from ..scan import Scan
 from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
 from ._params import AUTO, Params, param, takes_params
-from ._runs import _placed
+from ._runs import _check_placing, _placed
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -633,12 +633,9 @@ def _params(method, merge, weights, min_points, split_threshold_m, min_length_m,
     check_positive("merge_dr_m", merge_dr_m)
     check_positive("merge_dalpha", merge_dalpha)
     check_positive("merge_chi2", merge_chi2)
-    if range_sigma_m != AUTO:
+    if range_sigma_m != AUTO:  # a number or "auto" here (no per-line residual noise)
         range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
-    check_positive("place_dr_m", place_dr_m)
-    check_positive("place_dalpha", place_dalpha)
-    if not 0 <= place_confidence <= 1:
-        raise ValueError(f"place_confidence must be in [0, 1], got {place_confidence!r}")
+    _check_placing(range_sigma_m, place_dr_m, place_dalpha, place_confidence)
     return min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m
 
 
