@@ -453,40 +453,60 @@ def fit_circle(points, method: str = "algebraic", *, max_iterations: int = 50, t
         raise ValueError(f'method must be "algebraic" or "geometric", got {method!r}')
     p = _as_points(points)
     _check_count(len(p), 3, "points", "circle")
-    # centre and scale for conditioning
-    mean = p.mean(axis=0)
+    # centre and scale for conditioning: then the algebraic fit's columns (x, y, 1) are orthogonal
+    # to the last, and everything below is a few sums of the points (3 x 3 systems in closed form)
+    n = len(p)
+    mean = p.sum(axis=0) / n
     q = p - mean
-    scale = float(np.sqrt((q * q).sum(axis=1).mean()))
+    sxx, sxy, _, syy = (q.T @ q).ravel().tolist()
+    scale = math.sqrt((sxx + syy) / n)
     if scale == 0:
         raise ValueError("points are all identical: a circle through them is undefined")
     q = q / scale
-    a = np.c_[q, np.ones(len(q))]
-    b = (q * q).sum(axis=1)
-    sv = np.linalg.svd(a, compute_uv=False)
-    if sv[-1] < 1e-9 * sv[0]:
+    sxx, sxy, syy = sxx / scale ** 2, sxy / scale ** 2, syy / scale ** 2  # sxx + syy = n
+    # the smallest singular value of [x y 1] is the root of the scatter's smaller eigenvalue: the
+    # sum of squares across the points' major axis, summed directly (no cancellation)
+    half = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
+    across = q[:, 1] * math.cos(half) - q[:, 0] * math.sin(half)
+    small = float(across @ across)
+    if small < 1e-18 * n:
         raise ValueError("points are collinear: no finite circle fits them")
-    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
-    c = sol[:2] / 2.0
-    rad2 = sol[2] + c @ c
-    if not rad2 > 0 or np.hypot(*c) > 1e6:
+    det = small * (n - small)  # the product of the scatter's eigenvalues (they sum to n)
+    z = (q * q).sum(axis=1)
+    sxz, syz = (q.T @ z).tolist()
+    # minimise sum (z - 2 a x - 2 b y - c)^2: c = mean z, and a 2 x 2 system for (a, b)
+    cx, cy = (syy * sxz - sxy * syz) / (2 * det), (sxx * syz - sxy * sxz) / (2 * det)
+    rad2 = float(z.sum()) / n + cx * cx + cy * cy
+    if not rad2 > 0 or math.hypot(cx, cy) > 1e6:
         raise ValueError("points are collinear: no finite circle fits them")
     radius = math.sqrt(rad2)
     iterations = 0
-    if method == "geometric":
+    if method == "geometric":  # Gauss-Newton on the orthogonal distances, normal equations in closed form
         for iterations in range(1, max_iterations + 1):  # noqa: B007 - reported
-            diff = q - c
-            dist = np.hypot(diff[:, 0], diff[:, 1])
-            dist = np.where(dist == 0, 1e-300, dist)
+            dx, dy = q[:, 0] - cx, q[:, 1] - cy
+            dist = np.hypot(dx, dy)
+            dist[dist == 0] = 1e-300
+            ux, uy = dx / dist, dy / dist
             res = dist - radius
-            jac = np.c_[-diff / dist[:, None], -np.ones(len(q))]
-            step, *_ = np.linalg.lstsq(jac, -res, rcond=None)
-            c = c + step[:2]
-            radius += step[2]
-            if float(step @ step) < tol * max(1.0, radius * radius):
+            # J = -(ux, uy, 1); solve (J^T J) step = -J^T res
+            a11, a12, a22 = float(ux @ ux), float(ux @ uy), float(uy @ uy)
+            a13, a23 = float(ux.sum()), float(uy.sum())
+            b1, b2, b3 = float(ux @ res), float(uy @ res), float(res.sum())
+            m11, m12, m13 = a22 * n - a23 * a23, a13 * a23 - a12 * n, a12 * a23 - a13 * a22
+            m22, m23, m33 = a11 * n - a13 * a13, a12 * a13 - a11 * a23, a11 * a22 - a12 * a12
+            d3 = a11 * m11 + a12 * m12 + a13 * m13
+            if d3 > 1e-8 * a11 * a22 * n:
+                s1 = (m11 * b1 + m12 * b2 + m13 * b3) / d3
+                s2 = (m12 * b1 + m22 * b2 + m23 * b3) / d3
+                s3 = (m13 * b1 + m23 * b2 + m33 * b3) / d3
+            else:  # a nearly straight run (a huge radius): the normal equations lose too many digits
+                s1, s2, s3 = np.linalg.lstsq(np.column_stack([ux, uy, np.ones(n)]), res, rcond=None)[0].tolist()
+            cx, cy, radius = cx + s1, cy + s2, radius + s3
+            if s1 * s1 + s2 * s2 + s3 * s3 < tol * max(1.0, radius * radius):
                 break
         radius = abs(radius)
-    center = c * scale + mean
+    center = np.array([cx * scale + mean[0], cy * scale + mean[1]])
     radius *= scale
     d = np.hypot(p[:, 0] - center[0], p[:, 1] - center[1]) - radius
     center.setflags(write=False)
-    return CircleFit(center, float(radius), float(np.sqrt(np.mean(d * d))), len(p), method, iterations)
+    return CircleFit(center, float(radius), math.sqrt(float(d @ d) / n), n, method, iterations)
