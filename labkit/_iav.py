@@ -539,19 +539,26 @@ def _angle_noise(p: np.ndarray, sigma: float) -> tuple[float, float]:
     def cross(v, w):
         return v[..., 0] * w[..., 1] - v[..., 1] * w[..., 0]
 
-    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a)
-    jac = np.zeros((m, n))
+    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a). J (m x n) has three
+    # nonzero columns' worth of entries: angle i depends on point 0 (g), on its own point i + 1
+    # (d) and on point n - 1 (h); every sum below is over those, in closed form
     ui = u[1:-1]
-    jac[np.arange(m), np.arange(1, n - 1)] = cross(a, ui) / na2 - cross(b, ui) / nb2
-    jac[:, 0] += -cross(a, u[0]) / na2
-    jac[:, -1] += cross(b, u[-1]) / nb2
-    centred = jac - jac.mean(axis=0)
-    s = centred @ centred.T
-    tr = float(np.trace(s))
-    mean_sd = sigma * float(np.linalg.norm(jac.sum(axis=0))) / m
+    d = cross(a, ui) / na2 - cross(b, ui) / nb2
+    g = -cross(a, u[0]) / na2
+    h = cross(b, u[-1]) / nb2
+    gc, hc = g - g.mean(), h - h.mean()  # the centred columns (C J)
+    gg, hh, gh = float(gc @ gc), float(hc @ hc), float(gc @ hc)
+    d2 = d * d
+    sd2 = float(d2.sum())
+    # tr(S) = |C J|_F^2 and tr(S^2) = |(C J)^T (C J)|_F^2, with (C J)^T (C J) = [[gg, d_i gc_i, gh], [.,
+    # d_i d_j (delta_ij - 1 / m), d_i hc_i], [., ., hh]]
+    tr = gg + hh + sd2 * (1.0 - 1.0 / m)
+    mean_sd = sigma * math.sqrt(float(g.sum()) ** 2 + sd2 + float(h.sum()) ** 2) / m
     if tr <= 0.0:
         return 0.0, mean_sd
-    nu = tr * tr / float((s * s).sum())
+    tr2 = (gg * gg + hh * hh + 2.0 * gh * gh + 2.0 * float(d2 @ (gc * gc + hc * hc))
+           + float(d2 @ d2) * (1.0 - 2.0 / m) + sd2 * sd2 / (m * m))
+    nu = tr * tr / tr2
     return sigma * sigma * tr / m * float(chi2_upper_over_dof(nu, NOISE_Z)), mean_sd
 
 
