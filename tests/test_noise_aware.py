@@ -175,6 +175,45 @@ def test_auto_splits_a_bend_no_single_point_shows(bend_deg):
     assert found >= 27 and found_fixed <= 2 and by_residuals >= 25
 
 
+def test_auto_splits_a_shallow_recess_in_a_grazing_wall():
+    # a corridor wall 1 m to the side with a 3 cm deep recess from x = 3 to 5 m, 2 cm of range
+    # noise: no point of the recess is 5 sigma off a line through it all, and its residuals are
+    # well within 2 cm, but across a wall seen at 11-19 deg the noise is 4-6 mm and the recess's
+    # 40 beams all lie to one side
+    separated = 0
+    for seed in range(30):
+        scan, piece = _polyline_scan([(0.6, 1.0), (3.0, 1.0), (3.0, 1.03), (5.0, 1.03), (5.0, 1.0), (9.0, 1.0)],
+                                     0.02, seed)
+        lines = split_and_merge(scan, split_threshold_m="auto", range_sigma_m=0.02)
+        across = any(min(np.sum(piece[ln.indices] == 2), np.sum(np.isin(piece[ln.indices], (0, 4)))) >= 5
+                     for ln in lines)
+        separated += not across and _finds(lines, 1.03, 90.0, 0.01, 1.0)
+    assert separated >= 20
+
+
+def test_the_shift_test_finds_a_shifted_stretch_and_rarely_noise():
+    # the residual tests of "auto" on points of one straight wall (their distances along the
+    # normal, known sigma): Gaussian noise alone fails them rarely; 16 of 200 points moved 2
+    # sigma to one side (a recess, a chair against the wall) fail them 99 times in 100, more than
+    # half of the time by the shift test alone (the mean-square test, asked first, passed them:
+    # their squares add a third to the sum)
+    from labkit.lines.split_merge import _misfit
+
+    rng = np.random.default_rng(3)
+    n, sigma, r = 200, 0.01, 2.0
+    rho = np.full(n, r)  # head-on: the noise across the line is sigma
+    noise_only = sum(_misfit(r + rng.normal(0.0, sigma, n), rho, r, sigma) is not None for _ in range(2000))
+    assert noise_only <= 10  # 0.5 %
+    found = by_shift = 0
+    for _ in range(200):
+        v = r + rng.normal(0.0, sigma, n)
+        v[100:116] += 2 * sigma
+        res = _misfit(v, rho, float(np.mean(v)), sigma)
+        found += res is not None
+        by_shift += res is not None and res[0] == "shift" and 96 <= res[1][0] <= 104 and res[1][1] == 16
+    assert found >= 198 and by_shift >= 100
+
+
 # ----------------------------------------------------------------------------- placing lines
 def test_a_line_the_data_cannot_place_is_dropped_with_its_reason():
     # a long wall 3 m ahead and a 0.25 m stub, 12 beams, 6 m away: at 3 cm its angle is not known to 3 deg

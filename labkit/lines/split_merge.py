@@ -58,7 +58,7 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..fitting import _line_covariances, line_from_sums
-from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
+from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, scan_sigma
 from ..scan import Scan
 from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
@@ -205,14 +205,17 @@ def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds", 
                     merge_chi2)
 
 
-def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tuple[int, int]]:
+def _absorb(accepted, leftovers, run: _Run, threshold: float, steps, rho=None,
+            noise_sigma: float = 0.0) -> list[tuple[int, int]]:
     """Give the points of runs too short for a line to the neighbouring lines they fit.
 
     A split can strand a few points between two lines, e.g. the beams just around a corner
     when the worst point is not the corner beam itself; left out, they make the corner look
     hidden. Each stranded point joins the line next to it (within the same range segment)
     when it is within ``threshold`` of that line (the nearer one if both), working outwards
-    from the line.
+    from the line. With ``noise_sigma`` (``"auto"``) a point's threshold is at most three of its
+    own sigmas across the line, ``3 max(noise_sigma |cos(incidence)|, MIN_SPLIT_M / SPLIT_SIGMAS)``
+    (``rho``: the points' ranges): a wall seen at a grazing angle is thin.
     """
     if not leftovers or not accepted:
         return sorted(accepted)
@@ -229,7 +232,11 @@ def _absorb(accepted, leftovers, run: _Run, threshold: float, steps) -> list[tup
             r, alpha = line_from_sums(*run.sums(*accepted[k]))
             fits[k] = math.cos(alpha), math.sin(alpha), r
         c, s, r = fits[k]
-        return abs(x.item(i) * c + y.item(i) * s - r)
+        v = x.item(i) * c + y.item(i) * s
+        if noise_sigma:  # in units of the threshold at this point's incidence
+            return abs(v - r) * threshold / min(threshold, 3.0 * max(noise_sigma * abs(v) / rho.item(i),
+                                                                      MIN_SPLIT_M / SPLIT_SIGMAS))
+        return abs(v - r)
 
     for a, b in leftovers:
         left, right = by_end.get(a), by_start.get(b)
@@ -345,11 +352,15 @@ def split_and_merge(
         ``max(5 sigma |cos(incidence)|, 2 cm)``: range noise moves a point across a wall by the
         cosine of its incidence, so a wall seen at a grazing angle is thin and a step in it is
         not noise (the largest of 722 Gaussian residuals measured from a chord passes 5 sigma
-        about once in 20 scans). And a run is split when its fit's weighted mean square residual
-        per degree of freedom exceeds ``sigma^2`` times the chi-square quantile at
-        :data:`RESIDUAL_Z` = 3 (a bend too gentle for any one point to show). Both also hold for
-        merges. :func:`labkit.noise.auto_split_threshold` (``max(5 sigma, 2 cm)``, a point seen
-        head-on) is the threshold the trace and the merge's worst-point test report.
+        about once in 20 scans). And a run is split when its fitted line's residuals, each in
+        units of its point's own sigma across the line (at least 4 mm), have a mean square per
+        degree of freedom above the chi-square quantile at :data:`RESIDUAL_Z` = 3 (a bend too
+        gentle for any one point to show), or when a stretch of its points lies to one side
+        of that line (:data:`SHIFT_Z`: a recess, a chair against the wall, a bent end; the
+        stretch is cut out). All of these also hold for merges, and stranded points join a
+        line only within three of their own sigmas. :func:`labkit.noise.auto_split_threshold`
+        (``max(5 sigma, 2 cm)``, a point seen head-on) is the threshold the trace and the
+        merge's worst-point test report.
         ``"auto"`` is not the default yet (see README, "Unknown range noise").
     min_points : int
         ``minPointsPerLine``: runs with fewer points make no line, and the worst point is
@@ -401,14 +412,16 @@ def split_and_merge(
         least-squares line; ``at`` the worst point, ``value`` its distance,
         ``threshold`` ``split_threshold_m``), ``"split"`` (split at beam ``at``; with
         ``"auto"``, ``threshold`` is that point's own threshold, or ``test="residual"``: the
-        fit's residuals were too wide, ``threshold`` sigma), ``"gap"`` (split at the gap after
+        fit's residuals were too wide, ``threshold`` sigma, or ``test="shift"``: the beams
+        ``at`` onwards lie ``value`` metres to one side of the fitted line on average, and the
+        run is cut before and after them), ``"gap"`` (split at the gap after
         beam ``at``; ``value`` the gap), ``"accept"`` (a run becomes a line), ``"reject"`` (a
         run with too few points, ``test="min_points"``, or a line shorter than ``min_length_m``
         after merging), ``"absorb"`` (``value`` stranded points joined the neighbouring
         lines), ``"merge"`` (two neighbours merged: the merged line on their beams; ``at`` the
         last beam of the first), ``"keep"`` (two neighbours not merged; ``value`` the merge
         statistic or the gap; ``test`` names what failed: ``"merge"``, ``"max_gap_m"``,
-        ``"split_threshold_m"``, ``"residual"``, or ``"beam_between"`` when a beam between them
+        ``"split_threshold_m"``, ``"residual"``, ``"shift"``, or ``"beam_between"`` when a beam between them
         ends more than ``max_gap_m`` behind or in front of the merged line), ``"reject"`` with
         ``test="place_confidence"`` (a line the data cannot place; ``value`` its probability of
         lying within the trusted distance of the truth). Replay: the
@@ -530,7 +543,12 @@ def split_and_merge(
                         failed, p = True, lo + q
                         worst = abs(v.item(q) - r)
                         threshold = worst / ratio
-                if not failed and _too_wide(run.sums(a, b), n, noise_sigma):
+            misfit = None
+            if noise_sigma and not failed and n > 2:  # "auto": the fit's residuals against the noise
+                rf, af = line_from_sums(*run.sums(a, b))
+                normal[0], normal[1] = math.cos(af), math.sin(af)
+                misfit = _misfit(xy[a:b].dot(normal), rho[a:b], rf, noise_sigma)
+                if misfit is not None and misfit[0] == "residual" and a < p < b - 1:
                     failed, test, threshold = True, "residual", noise_sigma
             if failed and a < p < b - 1:
                 if steps is not None:
@@ -547,12 +565,24 @@ def split_and_merge(
                 stack.append((p + 1, b))  # right half, processed after the left half
                 stack.append((a, p + 1))  # the worst point ends the left half
                 continue
+            if misfit is not None and misfit[0] == "shift":  # a stretch of points to one side of the fit
+                k, width, mean = misfit[1]
+                cuts = (a, a + k, a + k + width, b)  # the stretch and what lies either side of it
+                if steps is not None:
+                    steps.add("split", first, last, rf, af, at=int(order[a + k]), value=abs(mean),
+                              threshold=noise_sigma, test="shift",
+                              reason=f"beams {int(order[a + k])}..{int(order[a + k + width - 1])} lie "
+                                     f"{abs(mean):.3f} m to one side of the fitted line on average")
+                for c0, c1 in reversed(list(zip(cuts[:-1], cuts[1:], strict=True))):
+                    if c1 > c0:
+                        stack.append((c0, c1))
+                continue
             if steps is not None:
                 steps.add("accept", first, last, r, alpha, at=int(order[p]), value=worst,
                           threshold=split_threshold_m, test="split_threshold_m",
                           reason=f"{worst:.3f} m <= split_threshold_m")
             accepted.append((a, b))
-        spans += _absorb(accepted, leftovers, run, absorb_m, steps) if leftovers else sorted(accepted)
+        spans += _absorb(accepted, leftovers, run, absorb_m, steps, rho, noise_sigma) if leftovers else sorted(accepted)
     lines = run.lines(spans)
 
     merge_args = dict(max_gap_m=max_gap_m, max_error_m=split_threshold_m, merge=merge, merge_dr_m=merge_dr_m,
@@ -594,14 +624,56 @@ def _mean_square(s) -> float:
     return max(0.5 * (cxx + cyy) - math.hypot(0.5 * (cxx - cyy), cxy), 0.0) / sw
 
 
-def _too_wide(s, n: int, sigma: float) -> bool:
-    """Whether a fit of ``n`` points with the sums ``s`` leaves residuals wider than range noise
-    ``sigma`` allows (a bend too gentle for any one point to pass the split threshold). The
-    noise across a line is ``sigma |cos(incidence)| <= sigma``, so this errs towards a line."""
+#: With ``split_threshold_m="auto"``, a run is split where a stretch of its points lies to one side
+#: of its fitted line: the sum of the residuals over some window of ``w`` consecutive points (``w`` =
+#: 4, 8, 16, ... up to half the run) exceeds this many ``sigma sqrt(w)``, its mean at least
+#: :data:`SHIFT_MIN_M`. Unlike the worst-point and mean-square tests, a shift in a stretch does not
+#: hide among the run's other points, and noise spread evenly along a line does not mimic one.
+SHIFT_Z = 5.0
+#: The least mean offset of a shifted stretch, metres: walls are not flat to a centimetre.
+SHIFT_MIN_M = 0.01
+
+
+def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
+    """How a run of points fails to lie on its fitted line ``r`` within range noise ``sigma``
+    (``v``: the points' projections on the line's normal, ``rho``: their ranges), or None.
+
+    Each point's noise across the line is ``sigma |cos(incidence)|``, at least ``MIN_SPLIT_M /
+    SPLIT_SIGMAS`` (the split threshold's floor): a wall seen at a grazing angle is thin.
+    ``("residual", rms)``: the residuals in those units have a mean square per degree of freedom
+    above 1 and above the chi-square quantile at :data:`RESIDUAL_Z` (a bend too gentle for any one
+    point to show); ``("shift", (k, w, mean))``: the ``w`` points from the ``k``-th lie to one side
+    of the line (:data:`SHIFT_Z`, :data:`SHIFT_MIN_M`).
+    """
+    n = len(v)
     if n <= 2:
-        return False
-    ms = _mean_square(s) * n / (n - 2)  # the quantile is above 1: most runs are decided without it
-    return ms > sigma * sigma and ms > sigma * sigma * float(chi2_upper_over_dof(n - 2, RESIDUAL_Z))
+        return None
+    res = v - r
+    sd = np.abs(v)
+    sd *= sigma
+    sd /= rho
+    np.maximum(sd, MIN_SPLIT_M / SPLIT_SIGMAS, out=sd)
+    z = res / sd
+    total = float(z @ z)
+    if total > n - 2:
+        k = 2.0 / (9.0 * (n - 2))  # the chi-square quantile as chi2_upper_over_dof, in scalars
+        if total > (n - 2) * max(1.0 - k + RESIDUAL_Z * math.sqrt(k), 0.0) ** 3:
+            return "residual", math.sqrt(float(res @ res) / n)
+    if n < 8 or total <= SHIFT_Z * SHIFT_Z:  # (a shifted stretch's z squared is at most the total)
+        return None
+    c = np.zeros((n + 1, 2))
+    np.cumsum(res, out=c[1:, 0])
+    np.cumsum(sd * sd, out=c[1:, 1])
+    best, best_z = None, SHIFT_Z
+    w = 4
+    while 2 * w <= n:
+        s = c[w:] - c[:-w]
+        zw = np.abs(s[:, 0]) / np.sqrt(s[:, 1])
+        k = int(zw.argmax())
+        if zw.item(k) > best_z and abs(s.item(k, 0)) > SHIFT_MIN_M * w:
+            best, best_z = (k, w, s.item(k, 0) / w), zw.item(k)
+        w *= 2
+    return None if best is None else ("shift", best)
 
 
 def _beyond_own_noise(v: np.ndarray, rho: np.ndarray, r: float, sigma: float) -> tuple[int, float]:
@@ -704,8 +776,12 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
             elif noise_sigma and worst > MIN_SPLIT_M and _beyond_own_noise(v, ranges.take(idx), merged.r,
                                                                           noise_sigma)[1] > 1.0:
                 failed = "split_threshold_m", f"a point misses it by more than {SPLIT_SIGMAS:g} of its sigmas"
-            elif noise_sigma and _too_wide(merged.s, len(idx), noise_sigma):
-                failed = "residual", "the merged line's residuals are wider than the range noise allows"
+            elif noise_sigma and (misfit := _misfit(v, ranges.take(idx), merged.r, noise_sigma)) is not None:
+                if misfit[0] == "residual":
+                    failed = "residual", "the merged line's residuals are wider than the range noise allows"
+                else:
+                    failed = "shift", (f"{misfit[1][1]} of its points lie {abs(misfit[1][2]):.3f} m to one side "
+                                       "of it on average")
             else:
                 off = _beam_between(merged, a.last, b.first, ranges, valid, angles, max_gap_m)
                 if off is not None:
