@@ -18,7 +18,7 @@ import numpy as np
 from ._cache import remembered
 from ._checks import check_int, check_nonneg, check_positive
 from .features import Circle
-from .fitting import fit_circle
+from .fitting import fit_circle, fit_circles
 from .noise import chi2_upper_over_dof
 from .scan import Scan
 from .segmentation import RangeSegment, labels_from, segment_labels, segment_order
@@ -519,47 +519,65 @@ def _ratio_sd(p0, p1, mid, chord: float, sigma: float) -> float:
 
 def _angle_noise(p: np.ndarray, sigma: float) -> tuple[float, float]:
     """How much range noise ``sigma`` alone spreads the inscribed angles of the run ``p``
-    (n, 2), n >= 3: ``(spread_max_sq, mean_sd)``.
+    (n, 2), n >= 3: ``(spread_max_sq, mean_sd)`` (:func:`_angle_noise_runs` for one run)."""
+    spread_sq, mean_sd = _angle_noise_runs(p, np.array([0]), np.array([len(p)]), sigma)
+    return spread_sq.item(0), mean_sd.item(0)
 
-    With ``J`` the first-order derivatives of the n - 2 angles with respect to the n ranges
+
+def _angle_noise_runs(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray,
+                      sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """How much range noise ``sigma`` alone spreads the inscribed angles of each run
+    ``pts[starts[k]:ends[k]]`` (n >= 3 points), all runs at once: ``(spread_max_sq, mean_sd)``.
+
+    With ``J`` the first-order derivatives of the m = n - 2 angles with respect to the n ranges
     (each point moved along its beam) and ``C`` the centring matrix, the population variance
     of the angles has the mean ``E = sigma^2 |C J|_F^2 / m`` and about ``nu`` degrees of freedom
     (Satterthwaite: ``nu = tr(S)^2 / tr(S^2)``, ``S = C J J^T C``); ``spread_max_sq`` is its
     upper ``NOISE_Z`` quantile, ``E chi2(nu) / nu`` (Wilson-Hilferty). ``mean_sd`` is the
     standard deviation of the mean angle, ``sigma |1^T J| / m``.
+
+    Angle i depends on three ranges only: the first point's (``g_i``), its own point's (``d_i``)
+    and the last point's (``h_i``). With ``gc, hc`` the centred ``g, h``, ``(C J)^T (C J)`` is
+    ``[[gc.gc, d_i gc_i, gc.hc], [., d_i d_j (delta_ij - 1/m), d_i hc_i], [., ., hc.hc]]``, so
+    ``tr(S)`` and ``tr(S^2)`` (its trace and squared Frobenius norm) are sums over the angles.
     """
-    n = p.shape[0]
-    m = n - 2
-    h = np.hypot(p[:, 0], p[:, 1])
-    u = p / np.where(h > 0, h, 1.0)[:, None]
-    a = p[0] - p[1:-1]  # P_i -> P_1
-    b = p[-1] - p[1:-1]  # P_i -> P_n
-    na2, nb2 = (a * a).sum(axis=1), (b * b).sum(axis=1)
+    starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
+    m_k = ends - starts - 2
+    off = np.concatenate([[0], np.cumsum(m_k)[:-1]])
+    run = np.repeat(np.arange(len(starts)), m_k)  # the run of each angle
+    mid = np.arange(int(m_k.sum())) + np.repeat(starts + 1 - off, m_k)  # each angle's own point
+    h = np.hypot(pts[:, 0], pts[:, 1])
+    u = pts / np.where(h > 0, h, 1.0)[:, None]
+    p0, p1 = pts[starts][run], pts[ends - 1][run]
+    pm, um = pts[mid], u[mid]
+    a, b = p0 - pm, p1 - pm  # P_i -> P_1, P_i -> P_n
+    na2, nb2 = a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1], b[:, 0] * b[:, 0] + b[:, 1] * b[:, 1]
 
     def cross(v, w):
-        return v[..., 0] * w[..., 1] - v[..., 1] * w[..., 0]
+        return v[:, 0] * w[:, 1] - v[:, 1] * w[:, 0]
 
-    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a). J (m x n) has three
-    # nonzero columns' worth of entries: angle i depends on point 0 (g), on its own point i + 1
-    # (d) and on point n - 1 (h); every sum below is over those, in closed form
-    ui = u[1:-1]
-    d = cross(a, ui) / na2 - cross(b, ui) / nb2
-    g = -cross(a, u[0]) / na2
-    h = cross(b, u[-1]) / nb2
-    gc, hc = g - g.mean(), h - h.mean()  # the centred columns (C J)
-    gg, hh, gh = float(gc @ gc), float(hc @ hc), float(gc @ hc)
+    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a)
+    d = cross(a, um) / na2 - cross(b, um) / nb2
+    g = -cross(a, u[starts][run]) / na2
+    hh_ = cross(b, u[ends - 1][run]) / nb2
+    m = m_k.astype(np.float64)
+
+    def per_run(v):
+        return np.add.reduceat(v, off)
+
+    g_sum, h_sum = per_run(g), per_run(hh_)
+    gc, hc = g - (g_sum / m)[run], hh_ - (h_sum / m)[run]
+    gg, hh, gh = per_run(gc * gc), per_run(hc * hc), per_run(gc * hc)
     d2 = d * d
-    sd2 = float(d2.sum())
-    # tr(S) = |C J|_F^2 and tr(S^2) = |(C J)^T (C J)|_F^2, with (C J)^T (C J) = [[gg, d_i gc_i, gh], [.,
-    # d_i d_j (delta_ij - 1 / m), d_i hc_i], [., ., hh]]
+    sd2 = per_run(d2)
     tr = gg + hh + sd2 * (1.0 - 1.0 / m)
-    mean_sd = sigma * math.sqrt(float(g.sum()) ** 2 + sd2 + float(h.sum()) ** 2) / m
-    if tr <= 0.0:
-        return 0.0, mean_sd
-    tr2 = (gg * gg + hh * hh + 2.0 * gh * gh + 2.0 * float(d2 @ (gc * gc + hc * hc))
-           + float(d2 @ d2) * (1.0 - 2.0 / m) + sd2 * sd2 / (m * m))
-    nu = tr * tr / tr2
-    return sigma * sigma * tr / m * float(chi2_upper_over_dof(nu, NOISE_Z)), mean_sd
+    tr2 = (gg * gg + hh * hh + 2.0 * gh * gh + 2.0 * per_run(d2 * (gc * gc + hc * hc))
+           + per_run(d2 * d2) * (1.0 - 2.0 / m) + sd2 * sd2 / (m * m))
+    mean_sd = sigma * np.sqrt(g_sum * g_sum + sd2 + h_sum * h_sum) / m
+    pos = tr > 0.0
+    nu = np.where(pos, tr * tr / np.where(pos, tr2, 1.0), 1.0)
+    spread_sq = np.where(pos, sigma * sigma * tr / m * chi2_upper_over_dof(nu, NOISE_Z), 0.0)
+    return spread_sq, mean_sd
 
 
 class _Angles(NamedTuple):
@@ -703,8 +721,14 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool, algorithm: str = "
     ang = None
     if sel:
         ang = _batch_angles(runs, np.array(sel), np.array([ratio[k] < 0 for k in sel]) if t.hollow else None)
+        noise = None
+        if sigma > 0.0:  # the noise allowances of every selected run at once
+            first, stop = runs.starts[sel], runs.ends[sel]
+            spread_sq, mean_sd = _angle_noise_runs(runs.pts, first, stop, sigma)
+            noise = list(zip(spread_sq.tolist(), mean_sd.tolist(), _wider_than_noise(runs.pts, first, stop, sigma)
+                             .tolist(), strict=True))
         for j, k in enumerate(sel):
-            circle, v = _finish_circle(runs, geo, ang, j, k, t, sigma, widened.get(k))
+            circle, v = _finish_circle(runs, geo, ang, j, k, t, None if noise is None else noise[j], widened.get(k))
             verdict[k] = v
             if circle is not None:
                 circles.append(circle)
@@ -721,7 +745,13 @@ def _angle_limits(p: np.ndarray, sigma: float, mean_range: tuple[float, float], 
     ``sigma`` is 0."""
     if sigma <= 0.0:
         return mean_range, std_max, like_max
-    spread_sq, mean_sd = _angle_noise(p, sigma)
+    return _widen(*_angle_noise(p, sigma), mean_range, std_max, like_max)
+
+
+def _widen(spread_sq: float, mean_sd: float, mean_range: tuple[float, float], std_max: float | None,
+           like_max: float | None) -> tuple[tuple[float, float], float | None, float | None]:
+    """The limits of :func:`_angle_limits` for a run whose angles range noise spreads by
+    ``spread_sq`` and whose mean angle it moves by ``mean_sd`` (:func:`_angle_noise_runs`)."""
     w = NOISE_Z * mean_sd
     hi = min(mean_range[1] + w, max(math.pi - LINE_Z * mean_sd, mean_range[1]))
     cap = max(ARC_LIKE_STD_MAX, like_max or 0.0)
@@ -729,33 +759,36 @@ def _angle_limits(p: np.ndarray, sigma: float, mean_range: tuple[float, float], 
             None if like_max is None else min(math.sqrt(like_max ** 2 + spread_sq), cap))
 
 
-def _wider_than_noise(p: np.ndarray, sigma: float) -> bool:
-    """Whether the points ``p`` lie farther from their best circle (orthogonal fit) than range
-    noise ``sigma`` allows: the mean square distance per degree of freedom above the upper
-    ``NOISE_Z`` quantile of ``sigma^2 chi2(n - 3) / (n - 3)``. The inscribed angles of a room's
-    corner or a chair's back can pass the widened tests at a few centimetres of noise; their
-    points do not lie on one circle. (A beam's noise moves its point across the circle by at
-    most sigma, so true circles fail this less often than the quantile says.)"""
-    n = len(p)
-    if n <= 3:
-        return False
-    try:
-        fit = fit_circle(p, "geometric")
-    except ValueError:
-        return False
-    d = np.hypot(p[:, 0] - fit.center[0], p[:, 1] - fit.center[1]) - fit.radius
-    return float(d @ d) / (n - 3) > sigma * sigma * float(chi2_upper_over_dof(n - 3, NOISE_Z))
+def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigma: float) -> np.ndarray:
+    """Whether the points of each run ``pts[starts[k]:ends[k]]`` lie farther from their best
+    circle (orthogonal fit, :func:`labkit.fitting.fit_circles`) than range noise ``sigma``
+    allows: the mean square distance per degree of freedom above the upper ``NOISE_Z`` quantile
+    of ``sigma^2 chi2(n - 3) / (n - 3)``. The inscribed angles of a room's corner or a chair's
+    back can pass the widened tests at a few centimetres of noise; their points do not lie on
+    one circle. (A beam's noise moves its point across the circle by at most sigma, so true
+    circles fail this less often than the quantile says.) Runs of 3 points, and runs no finite
+    circle fits, are not."""
+    starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
+    out = np.zeros(len(starts), dtype=bool)
+    big = np.flatnonzero(ends - starts > 3)
+    if len(big):
+        fit = fit_circles(pts, starts[big], ends[big], "geometric")
+        dof = (ends[big] - starts[big] - 3).astype(np.float64)
+        with np.errstate(invalid="ignore"):  # (NaN where no circle fits: not wider)
+            out[big] = fit.rms ** 2 * (dof + 3) / dof > sigma * sigma * chi2_upper_over_dof(dof, NOISE_Z)
+    return out
 
 
 def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t: _CircleTest,
-                   sigma: float = 0.0, widened: dict | None = None) -> tuple[Circle | None, int]:
+                   noise: tuple | None = None, widened: dict | None = None) -> tuple[Circle | None, int]:
+    """The verdict on run ``k`` (``j``-th of the selected): with a noise allowance, ``noise`` is
+    its ``(spread_sq, mean_sd, wider)`` (:func:`_angle_noise_runs`, :func:`_wider_than_noise`)."""
     if ang.degenerate.item(j):
         return None, _DEGENERATE
     mean, std = ang.mean.item(j), ang.std.item(j)
     mean_range, std_max, like_max = t.mean_range, t.std_max, t.arc_like_std_max
-    if sigma > 0.0:
-        mean_range, std_max, like_max = _angle_limits(runs.pts[runs.starts.item(k):runs.ends.item(k)], sigma,
-                                                      mean_range, std_max, like_max)
+    if noise is not None:
+        mean_range, std_max, like_max = _widen(noise[0], noise[1], mean_range, std_max, like_max)
         if widened is not None:
             widened.update({_MEAN: mean_range, _STD: std_max if like_max is None else like_max,
                             _VCORNER: like_max, _ACCEPTED: std_max})
@@ -770,7 +803,7 @@ def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t:
         if is_v_corner(angles, t.v_corner_neighbours, stride):
             return None, _VCORNER
         kind, std_max = "arc-like", like_max
-    if sigma > 0.0 and _wider_than_noise(runs.pts[runs.starts.item(k):runs.ends.item(k)], sigma):
+    if noise is not None and noise[2]:
         return None, _RESIDUAL
     try:
         if t.center_method == "iav":

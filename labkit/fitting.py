@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,6 +34,8 @@ from .geometry import wrap_angle
 __all__ = [
     "LineFit",
     "CircleFit",
+    "CircleFits",
+    "fit_circles",
     "fit_line_polar",
     "fit_line_tls",
     "fit_line_ols",
@@ -453,60 +456,128 @@ def fit_circle(points, method: str = "algebraic", *, max_iterations: int = 50, t
         raise ValueError(f'method must be "algebraic" or "geometric", got {method!r}')
     p = _as_points(points)
     _check_count(len(p), 3, "points", "circle")
-    # centre and scale for conditioning: then the algebraic fit's columns (x, y, 1) are orthogonal
-    # to the last, and everything below is a few sums of the points (3 x 3 systems in closed form)
     n = len(p)
-    mean = p.sum(axis=0) / n
-    q = p - mean
-    sxx, sxy, _, syy = (q.T @ q).ravel().tolist()
-    scale = math.sqrt((sxx + syy) / n)
-    if scale == 0:
+    fit = fit_circles(p, np.array([0]), np.array([n]), method, max_iterations=max_iterations, tol=tol)
+    if fit.status.item(0) == 1:
         raise ValueError("points are all identical: a circle through them is undefined")
-    q = q / scale
-    sxx, sxy, syy = sxx / scale ** 2, sxy / scale ** 2, syy / scale ** 2  # sxx + syy = n
-    # the smallest singular value of [x y 1] is the root of the scatter's smaller eigenvalue: the
-    # sum of squares across the points' major axis, summed directly (no cancellation)
-    half = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
-    across = q[:, 1] * math.cos(half) - q[:, 0] * math.sin(half)
-    small = float(across @ across)
-    if small < 1e-18 * n:
+    if fit.status.item(0) == 2:
         raise ValueError("points are collinear: no finite circle fits them")
+    center = fit.centers[0].copy()
+    center.setflags(write=False)
+    return CircleFit(center, fit.radii.item(0), fit.rms.item(0), n, method, fit.iterations.item(0))
+
+
+class CircleFits(NamedTuple):
+    """Circles fitted to many runs of points at once (:func:`fit_circles`): per run, its centre,
+    radius, RMS orthogonal distance, Gauss-Newton iterations and ``status`` (0: fitted, 1: the
+    points are all identical, 2: collinear -- no finite circle; the other fields are then NaN)."""
+
+    centers: np.ndarray  # (K, 2)
+    radii: np.ndarray
+    rms: np.ndarray
+    iterations: np.ndarray
+    status: np.ndarray
+
+
+def fit_circles(points: np.ndarray, starts: np.ndarray, ends: np.ndarray, method: str = "algebraic", *,
+                max_iterations: int = 50, tol: float = 1e-12) -> CircleFits:
+    """:func:`fit_circle` on each run ``points[starts[k]:ends[k]]`` (at least 3 points each), all
+    runs at once: every step is a few sums per run, so many small fits cost about what one does.
+
+    Each run is centred and scaled (its mean square distance from its centroid is 1). Then the
+    algebraic fit's columns ``(x, y, 1)`` are orthogonal to the last, its normal equations are a
+    2 x 2 system, and the smallest singular value of ``[x y 1]`` (collinear points: 0) is the
+    root of the points' sum of squares across their major axis. Gauss-Newton solves its 3 x 3
+    normal equations in closed form, and a run stops when its step falls under ``tol``; a nearly
+    straight run (a huge radius), where the normal equations lose too many digits, takes its
+    steps by least squares instead.
+    """
+    p = np.asarray(points, dtype=np.float64)
+    starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
+    sizes = ends - starts
+    k_runs = len(starts)
+    if np.any(sizes < 3):
+        raise ValueError("every run needs at least 3 points to fit a circle")
+    n = sizes.astype(np.float64)
+    if k_runs == 1:  # (one run: plain sums, and its values broadcast over its points)
+        idx, off = slice(starts.item(0), ends.item(0)), np.zeros(1, np.int64)
+
+        def per_run(v):
+            return v.sum(axis=0, keepdims=True)
+
+        def spread(v):
+            return v
+    else:  # the runs' points back to back
+        off = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        idx = np.arange(sizes.sum()) + np.repeat(starts - off, sizes)
+        seg = np.repeat(np.arange(k_runs), sizes)
+
+        def per_run(v):  # the sum of v over each run
+            return np.add.reduceat(v, off)
+
+        def spread(v):  # each run's value at each of its points
+            return v[seg]
+
+    q = p[idx]
+    mean = per_run(q) / n[:, None]
+    q = q - spread(mean)
+    qx, qy = q[:, 0], q[:, 1]
+    sxx, sxy, syy = per_run(qx * qx), per_run(qx * qy), per_run(qy * qy)
+    scale = np.sqrt((sxx + syy) / n)
+    status = np.where(scale == 0, 1, 0)
+    scale[scale == 0] = 1.0
+    qx, qy = qx / spread(scale), qy / spread(scale)
+    sxx, sxy, syy = sxx / scale ** 2, sxy / scale ** 2, syy / scale ** 2  # sxx + syy = n
+    half = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    across = qy * spread(np.cos(half)) - qx * spread(np.sin(half))
+    small = per_run(across * across)
+    status[(status == 0) & (small < 1e-18 * n)] = 2
     det = small * (n - small)  # the product of the scatter's eigenvalues (they sum to n)
-    z = (q * q).sum(axis=1)
-    sxz, syz = (q.T @ z).tolist()
+    det[status != 0] = 1.0
+    z = qx * qx + qy * qy
+    sxz, syz = per_run(qx * z), per_run(qy * z)
     # minimise sum (z - 2 a x - 2 b y - c)^2: c = mean z, and a 2 x 2 system for (a, b)
     cx, cy = (syy * sxz - sxy * syz) / (2 * det), (sxx * syz - sxy * sxz) / (2 * det)
-    rad2 = float(z.sum()) / n + cx * cx + cy * cy
-    if not rad2 > 0 or math.hypot(cx, cy) > 1e6:
-        raise ValueError("points are collinear: no finite circle fits them")
-    radius = math.sqrt(rad2)
-    iterations = 0
-    if method == "geometric":  # Gauss-Newton on the orthogonal distances, normal equations in closed form
-        for iterations in range(1, max_iterations + 1):  # noqa: B007 - reported
-            dx, dy = q[:, 0] - cx, q[:, 1] - cy
+    rad2 = per_run(z) / n + cx * cx + cy * cy
+    status[(status == 0) & ~((rad2 > 0) & (np.hypot(cx, cy) <= 1e6))] = 2
+    ok = status == 0
+    radius = np.sqrt(np.where(ok, rad2, 1.0))
+    iterations = np.zeros(k_runs, np.int64)
+    if method == "geometric":  # Gauss-Newton on the orthogonal distances
+        active = ok.copy()
+        for it in range(1, max_iterations + 1):
+            dx, dy = qx - spread(cx), qy - spread(cy)
             dist = np.hypot(dx, dy)
             dist[dist == 0] = 1e-300
             ux, uy = dx / dist, dy / dist
-            res = dist - radius
+            res = dist - spread(radius)
             # J = -(ux, uy, 1); solve (J^T J) step = -J^T res
-            a11, a12, a22 = float(ux @ ux), float(ux @ uy), float(uy @ uy)
-            a13, a23 = float(ux.sum()), float(uy.sum())
-            b1, b2, b3 = float(ux @ res), float(uy @ res), float(res.sum())
+            a11, a12, a22 = per_run(ux * ux), per_run(ux * uy), per_run(uy * uy)
+            a13, a23 = per_run(ux), per_run(uy)
+            b1, b2, b3 = per_run(ux * res), per_run(uy * res), per_run(res)
             m11, m12, m13 = a22 * n - a23 * a23, a13 * a23 - a12 * n, a12 * a23 - a13 * a22
             m22, m23, m33 = a11 * n - a13 * a13, a12 * a13 - a11 * a23, a11 * a22 - a12 * a12
             d3 = a11 * m11 + a12 * m12 + a13 * m13
-            if d3 > 1e-8 * a11 * a22 * n:
-                s1 = (m11 * b1 + m12 * b2 + m13 * b3) / d3
-                s2 = (m12 * b1 + m22 * b2 + m23 * b3) / d3
-                s3 = (m13 * b1 + m23 * b2 + m33 * b3) / d3
-            else:  # a nearly straight run (a huge radius): the normal equations lose too many digits
-                s1, s2, s3 = np.linalg.lstsq(np.column_stack([ux, uy, np.ones(n)]), res, rcond=None)[0].tolist()
+            good = d3 > 1e-8 * a11 * a22 * n
+            d3 = np.where(good, d3, 1.0)
+            s1 = (m11 * b1 + m12 * b2 + m13 * b3) / d3
+            s2 = (m12 * b1 + m22 * b2 + m23 * b3) / d3
+            s3 = (m13 * b1 + m23 * b2 + m33 * b3) / d3
+            for k in np.flatnonzero(active & ~good).tolist():  # nearly straight: least squares
+                o, e = off[k], off[k] + sizes[k]
+                s1[k], s2[k], s3[k] = np.linalg.lstsq(np.column_stack([ux[o:e], uy[o:e], np.ones(e - o)]), res[o:e],
+                                                      rcond=None)[0].tolist()
+            s1, s2, s3 = np.where(active, s1, 0.0), np.where(active, s2, 0.0), np.where(active, s3, 0.0)
             cx, cy, radius = cx + s1, cy + s2, radius + s3
-            if s1 * s1 + s2 * s2 + s3 * s3 < tol * max(1.0, radius * radius):
+            iterations[active] = it
+            active &= s1 * s1 + s2 * s2 + s3 * s3 >= tol * np.maximum(1.0, radius * radius)
+            if not active.any():
                 break
-        radius = abs(radius)
-    center = np.array([cx * scale + mean[0], cy * scale + mean[1]])
-    radius *= scale
-    d = np.hypot(p[:, 0] - center[0], p[:, 1] - center[1]) - radius
-    center.setflags(write=False)
-    return CircleFit(center, float(radius), math.sqrt(float(d @ d) / n), n, method, iterations)
+        radius = np.abs(radius)
+    centers = np.stack([cx * scale + mean[:, 0], cy * scale + mean[:, 1]], axis=1)
+    radius = radius * scale
+    d = np.hypot(p[idx, 0] - spread(centers[:, 0]), p[idx, 1] - spread(centers[:, 1])) - spread(radius)
+    rms = np.sqrt(per_run(d * d) / n)
+    nan = status != 0
+    centers[nan], radius[nan], rms[nan] = np.nan, np.nan, np.nan
+    return CircleFits(centers, radius, rms, iterations, status)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 
-from labkit.fitting import fit_circle, fit_line_ols, fit_line_polar, fit_line_tls
+from labkit.fitting import fit_circle, fit_circles, fit_line_ols, fit_line_polar, fit_line_tls
 from labkit.geometry import angle_difference, normalize_line, rotation_matrix
 
 
@@ -237,6 +237,42 @@ def test_geometric_fit_minimises_orthogonal_distances():
     res = minimize(cost, [*fit.center, fit.radius], method="Nelder-Mead",
                    options={"xatol": 1e-12, "fatol": 1e-16, "maxiter": 5000})
     assert cost([*fit.center, fit.radius]) <= res.fun * (1 + 1e-7) + 1e-15
+
+
+def test_many_circles_at_once_are_each_runs_own_minimum():
+    # fit_circles on runs laid back to back: each run's circle minimises its own orthogonal
+    # distances (Nelder-Mead as the referee), noiseless arcs give their circles exactly, and a
+    # run with no finite circle is marked without spoiling the others
+    rng = np.random.default_rng(8)
+    runs, truth = [], []
+    for k in range(12):
+        c, radius = rng.uniform(-5, 5, 2), rng.uniform(0.05, 2.0)
+        t = np.sort(rng.uniform(0, rng.uniform(0.5, 6.0), int(rng.integers(4, 40))))
+        pts = np.c_[c[0] + radius * np.cos(t), c[1] + radius * np.sin(t)]
+        noisy = k % 2 == 1
+        runs.append(pts + (rng.normal(0, 0.01, pts.shape) if noisy else 0.0))
+        truth.append(None if noisy else (c, radius))
+    runs.insert(5, np.c_[np.arange(6.0), 0.5 * np.arange(6.0) - 1.0])  # collinear
+    truth.insert(5, "collinear")
+    sizes = np.array([len(r) for r in runs])
+    ends = np.cumsum(sizes)
+    fits = fit_circles(np.concatenate(runs), ends - sizes, ends, "geometric")
+    for k, (pts, true) in enumerate(zip(runs, truth, strict=True)):
+        if true == "collinear":
+            assert fits.status[k] == 2 and np.isnan(fits.radii[k])
+            continue
+        assert fits.status[k] == 0
+        centre, radius = fits.centers[k], fits.radii[k]
+        if true is not None:
+            assert np.allclose(centre, true[0], atol=1e-8) and radius == pytest.approx(true[1], abs=1e-8)
+
+        def cost(q, pts=pts):
+            return float(np.sum((np.hypot(pts[:, 0] - q[0], pts[:, 1] - q[1]) - q[2]) ** 2))
+
+        best = minimize(cost, [*centre, radius], method="Nelder-Mead",
+                        options={"xatol": 1e-12, "fatol": 1e-16, "maxiter": 5000}).fun
+        assert cost([*centre, radius]) <= best * (1 + 1e-7) + 1e-15
+        assert fits.rms[k] == pytest.approx(math.sqrt(cost([*centre, radius]) / len(pts)), rel=1e-9)
 
 
 @pytest.mark.parametrize("points, match", [
