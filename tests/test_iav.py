@@ -771,3 +771,47 @@ def test_with_a_noise_allowance_a_corner_is_not_a_circle_when_its_points_miss_on
     hit = sum(any(np.hypot(*(c.center - (0.3 + s.ranges[np.isfinite(s.ranges)].min(), 0.0))) < 0.15 for c in f)
               for f, s in zip(found, columns, strict=True))
     assert hit / len(columns) > 0.9, hit / len(columns)
+
+
+def test_the_residual_tests_early_decision_is_the_converged_fits():
+    # the residual test decides most runs after a few Gauss-Newton steps (labkit._iav.
+    # _wider_than_noise); the converged orthogonal fit is the referee: on the runs the circle test
+    # meets in the simulated hall at 5 mm to 3 cm, every decision is the converged one's, and the
+    # early mean square is never more than half the factor it relies on over its minimum
+    from labkit import Config, _iav, extract_features
+    from labkit.experiments import nguyen_lidar, world_scans
+    from labkit.fitting import fit_circles
+    from labkit.noise import AUTO_CONFIG, chi2_upper_over_dof
+
+    seen = []
+    real = _iav._wider_than_noise
+
+    def spy(pts, starts, ends, sigma):
+        seen.append((pts, np.asarray(starts), np.asarray(ends), sigma))
+        return real(pts, starts, ends, sigma)
+
+    config = Config().updated(AUTO_CONFIG)
+    rng = np.random.default_rng(4)
+    try:
+        _iav._wider_than_noise = spy
+        for noise in (0.005, 0.01, 0.02, 0.03):
+            for scan, _ in world_scans("hall", nguyen_lidar(722, noise), 25, rng):
+                extract_features(scan, config)
+    finally:
+        _iav._wider_than_noise = real
+    runs = worst = 0
+    for pts, starts, ends, sigma in seen:
+        big = ends - starts > 3
+        starts, ends = starts[big], ends[big]
+        if not len(starts):
+            continue
+        early = fit_circles(pts, starts, ends, "geometric", max_iterations=_iav._EARLY_STEPS)
+        full = fit_circles(pts, starts, ends, "geometric")
+        ok = full.status == 0
+        worst = max(worst, float(np.max(early.rms[ok] ** 2 / full.rms[ok] ** 2, initial=1.0)))
+        dof = (ends - starts - 3).astype(float)
+        limit = sigma * sigma * chi2_upper_over_dof(dof, _iav.NOISE_Z) * dof / (dof + 3)
+        with np.errstate(invalid="ignore"):
+            assert np.array_equal(real(pts, starts, ends, sigma), full.rms ** 2 > limit)
+        runs += len(starts)
+    assert runs > 200 and worst < _iav._EARLY_FACTOR / 2, (runs, worst)
