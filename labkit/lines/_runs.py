@@ -167,6 +167,7 @@ def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inli
     if labels is not None:
         lab = labels[beams[inliers]]
         cut |= lab[1:] != lab[:-1]
+    cut |= _seen_past(xy, inliers, max_gap_m)
     bounds = np.concatenate([[0], np.flatnonzero(cut) + 1, [inliers.size]]).tolist()
     out = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
@@ -183,6 +184,26 @@ def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inli
         if steps is not None:
             steps.verdict(seg, kept, min_length_m, "a run")
     return out
+
+
+def _seen_past(xy: np.ndarray, inliers: np.ndarray, margin: float) -> np.ndarray:
+    """For each pair of neighbouring inliers (positions into ``xy``, ascending), whether the
+    line was not seen between them: a point between them in scan order ends more than ``margin``
+    off the line along its own ray, behind it (its beam saw through the line: a doorway, a
+    window, a gap between shelves) or in front of it (something hid the stretch the line would
+    claim: a post, a chair leg, a person). A segment across it would claim what no beam saw, as
+    split-and-merge's merges may not (its ``"beam_between"`` test). The line is the
+    least-squares fit of all the inliers; a point whose ray does not meet it is no evidence."""
+    first, last = int(inliers[0]), int(inliers[-1])
+    if last - first + 1 == inliers.size:  # no point between the inliers
+        return np.zeros(inliers.size - 1, dtype=bool)
+    r, alpha = _fit(xy[inliers], np.ones(inliers.size))
+    q = xy[first:last + 1]
+    v = q[:, 0] * math.cos(alpha) + q[:, 1] * math.sin(alpha)  # = range * cos(beam - alpha)
+    far = (v > 0) & (np.abs(v - r) > margin * v / np.hypot(q[:, 0], q[:, 1]))  # (the margin along the ray)
+    far[inliers - first] = False
+    count = np.concatenate([[0], np.cumsum(far)])  # far points among the first k
+    return count[inliers[1:] - first] > count[inliers[:-1] - first + 1]
 
 
 def _noise(scan: Scan, threshold_m, range_sigma_m, sigmas: float) -> tuple[float, float | None]:

@@ -16,8 +16,9 @@ The algorithm as Nguyen et al. (2007) compare it, after Duda & Hart (1972):
 
 As with RANSAC, a Hough line is an infinite line that may gather collinear points of several
 walls, so each line's inliers are cut, in scan order, into runs with no gap wider than
-``max_gap_m``; every run of ``min_points`` points or more and at least ``min_length_m`` long
-becomes one :class:`~labkit.features.LineSegment`, fitted to that run's points alone.
+``max_gap_m`` and no beam between neighbours that ends more than ``max_gap_m`` off the line
+(as :func:`labkit.lines.ransac.ransac_lines`); every run of ``min_points`` points or more and
+at least ``min_length_m`` long becomes one :class:`~labkit.features.LineSegment`, fitted to that run's points alone.
 
 The accumulator uses labkit's normal form: ``x cos(alpha) + y sin(alpha) = r`` with ``r >= 0``
 and ``alpha`` in (-pi, pi]. Its directions are the full circle in steps of ``alpha_step``, and
@@ -75,7 +76,8 @@ class HoughParams(PlacingParams):
     min_votes: int = param(8, "fewest votes of a peak", lo=2)
     min_points: int = param(5, "fewest points of a line segment", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
-    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, nor across a beam ending this far off it, m",
+                             lo=0, strict=True)
 
 
 @takes_params(HoughParams)
@@ -137,8 +139,9 @@ def hough_lines(
         Shorter segments (between the projections of their first and last points) are
         dropped. Default 0.15 m, as for :func:`labkit.split_and_merge`.
     max_gap_m : float, metres
-        A segment never spans two neighbouring inliers (in scan order) farther apart than this:
-        the inliers of a line are cut there into separate segments. Default 0.3 m, as for
+        A segment never spans two neighbouring inliers (in scan order) farther apart than this,
+        nor a beam between them that ends more than this in front of or behind the line: the
+        inliers of a line are cut there into separate segments. Default 0.3 m, as for
         :func:`labkit.split_and_merge`.
     range_sigma_m : float, "auto" or None
         The range noise of the lines' covariances (and of ``threshold_m="auto"``), as for

@@ -13,9 +13,11 @@ The algorithm as Nguyen et al. (2007) compare it, after Fischler & Bolles (1981)
 A RANSAC line is an infinite line: its inliers may lie on several walls that happen to be
 collinear, or on a wall and a few points of whatever else crosses the line far away. So each
 accepted line's inliers are cut, in scan order, into runs with no gap wider than
-``max_gap_m`` between neighbouring inliers, and every run of ``min_points`` points or more and
-at least ``min_length_m`` long becomes one :class:`~labkit.features.LineSegment`, fitted to
-that run's points alone.
+``max_gap_m`` between neighbouring inliers and no beam between them that ends more than
+``max_gap_m`` in front of or behind the line (it saw through the line, or something hid the
+stretch: no beam saw the wall there), and every run of ``min_points`` points or more and at
+least ``min_length_m`` long becomes one :class:`~labkit.features.LineSegment`, fitted to that
+run's points alone.
 
 The draw (step 1) is *local* by default: the second point is one of the ``draw_window``
 remaining points on either side of the first, in scan order. Drawn over the whole scan, both
@@ -73,7 +75,8 @@ class RansacParams(PlacingParams):
                                  "(none: anywhere)", lo=1, optional=True)
     min_points: int = param(5, "fewest points of a line segment", lo=2)
     min_length_m: float = param(0.15, "shortest line kept, metres", lo=0)
-    max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
+    max_gap_m: float = param(0.3, "no line across a gap wider than this, nor across a beam ending this far off it, m",
+                             lo=0, strict=True)
 
 
 @takes_params(RansacParams)
@@ -137,8 +140,9 @@ def ransac_lines(
         Shorter segments (between the projections of their first and last points) are
         dropped. Default 0.15 m, as for :func:`labkit.split_and_merge`.
     max_gap_m : float, metres
-        A segment never spans two neighbouring inliers (in scan order) farther apart than this:
-        the inliers of a line are cut there into separate segments. Default 0.3 m, as for
+        A segment never spans two neighbouring inliers (in scan order) farther apart than this,
+        nor a beam between them that ends more than this in front of or behind the line: the
+        inliers of a line are cut there into separate segments. Default 0.3 m, as for
         :func:`labkit.split_and_merge`.
     range_sigma_m : float, "auto" or None
         The range noise of the lines' covariances, hence of the placing below. Default ``None``:
