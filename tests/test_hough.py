@@ -43,25 +43,6 @@ def test_room_walls_exact_with_fine_cells_and_a_tight_band():
     assert sum(ln.n_points for ln in lines) == scan.n_beams
 
 
-def test_the_line_survives_clutter_in_front_of_the_wall():
-    """Every third beam of the middle third sees clutter 0.5-2.5 m away in front of the wall at
-    3 m: the clutter's votes scatter over the accumulator while the wall's pile up in one cell,
-    and the wall's line is exact (its points are noiseless). No segment claims the wall behind
-    the clutter (no beam saw it there): the wall is the two stretches either side, and the
-    pieces of two beams between clutter are too short to be segments."""
-    scan = wall_scan(3.0, 0.2, fov=(-0.6, 1.0))
-    ranges = scan.ranges.copy()
-    n = scan.n_beams
-    clutter = np.arange(n // 3, 2 * n // 3, 3)
-    ranges[clutter] = np.random.default_rng(5).uniform(0.5, 2.5, clutter.size)
-    lines = [ln for ln in hough_lines(scan.replace(ranges=ranges)) if ln.n_points > 10]
-    assert len(lines) == 2
-    for wall in lines:
-        assert wall.r == pytest.approx(3.0, abs=1e-9) and wall.alpha == pytest.approx(0.2, abs=1e-9)
-        assert not np.any((clutter >= wall.first) & (clutter <= wall.last))
-    assert sum(wall.n_points for wall in lines) >= n - (2 * n // 3 - n // 3)
-
-
 def test_a_far_point_switches_to_the_sparse_accumulator():
     """One return 5 km away makes the dense accumulator 360 x 100,002 cells; only the cells that
     got votes are counted then. That point is on no line, so the lines are those of the scan
