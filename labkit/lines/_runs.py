@@ -186,6 +186,15 @@ def _segments(xy: np.ndarray, beams: np.ndarray, labels: np.ndarray | None, inli
     return out
 
 
+def _ends_off(rho: np.ndarray, c: np.ndarray, r: float, margin: float) -> np.ndarray:
+    """Which beams end more than ``margin`` off the line ``x cos(alpha) + y sin(alpha) = r``
+    along their own rays, in front of it or behind it: ``rho`` their ranges, ``c`` the cosine of
+    each beam's angle from the line's normal. A ray meets the line (at range ``r / c``) only
+    when ``c > 0``; a beam whose ray does not is no evidence. Split-and-merge's merges and the
+    global extractors' segments are cut at such a beam."""
+    return (c > 0) & (np.abs(rho * c - r) > margin * c)
+
+
 def _seen_past(xy: np.ndarray, inliers: np.ndarray, margin: float) -> np.ndarray:
     """For each pair of neighbouring inliers (positions into ``xy``, ascending), whether the
     line was not seen between them: a point between them in scan order ends more than ``margin``
@@ -199,8 +208,8 @@ def _seen_past(xy: np.ndarray, inliers: np.ndarray, margin: float) -> np.ndarray
         return np.zeros(inliers.size - 1, dtype=bool)
     r, alpha = _fit(xy[inliers], np.ones(inliers.size))
     q = xy[first:last + 1]
-    v = q[:, 0] * math.cos(alpha) + q[:, 1] * math.sin(alpha)  # = range * cos(beam - alpha)
-    far = (v > 0) & (np.abs(v - r) > margin * v / np.hypot(q[:, 0], q[:, 1]))  # (the margin along the ray)
+    rho = np.hypot(q[:, 0], q[:, 1])
+    far = _ends_off(rho, (q[:, 0] * math.cos(alpha) + q[:, 1] * math.sin(alpha)) / rho, r, margin)
     far[inliers - first] = False
     count = np.concatenate([[0], np.cumsum(far)])  # far points among the first k
     return count[inliers[1:] - first] > count[inliers[:-1] - first + 1]

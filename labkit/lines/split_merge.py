@@ -58,12 +58,12 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..fitting import _line_covariances, line_from_sums
-from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, scan_sigma
+from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
 from ..scan import Scan
 from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
 from ._params import AUTO, Params, param, takes_params
-from ._runs import _check_placing, _placed
+from ._runs import _check_placing, _ends_off, _placed
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -545,7 +545,7 @@ def split_and_merge(
                         threshold = worst / ratio
             misfit = None
             if noise_sigma and not failed and n > 2:  # "auto": the fit's residuals against the noise
-                rf, af = line_from_sums(*run.sums(a, b))
+                rf, af = (r, alpha) if fit else line_from_sums(*run.sums(a, b))
                 normal[0], normal[1] = math.cos(af), math.sin(af)
                 misfit = _misfit(xy[a:b].dot(normal), rho[a:b], rf, noise_sigma)
                 if misfit is not None and misfit[0] == "residual" and a < p < b - 1:
@@ -554,7 +554,7 @@ def split_and_merge(
                 if steps is not None:
                     if test == "residual":
                         reason = (f"residuals wider than range noise {noise_sigma:.3f} m allows "
-                                  f"(RMS {math.sqrt(_mean_square(run.sums(a, b))):.3f} m)")
+                                  f"(RMS {misfit[1]:.3f} m)")
                     elif threshold < split_threshold_m:
                         reason = (f"{worst:.3f} m > {threshold:.3f} m, {SPLIT_SIGMAS:g} sigma across the line "
                                   "at this point's incidence")
@@ -616,14 +616,6 @@ def split_and_merge(
 RESIDUAL_Z = 3.0
 
 
-def _mean_square(s) -> float:
-    """The weighted mean square residual of the weighted orthogonal fit with the sums ``s``:
-    the smaller eigenvalue of the weighted scatter matrix over ``sum w``."""
-    sw, sx, sy, sxx, syy, sxy = s
-    cxx, cyy, cxy = sxx - sx * sx / sw, syy - sy * sy / sw, sxy - sx * sy / sw
-    return max(0.5 * (cxx + cyy) - math.hypot(0.5 * (cxx - cyy), cxy), 0.0) / sw
-
-
 #: With ``split_threshold_m="auto"``, a run is split where a stretch of its points lies to one side
 #: of its fitted line: the sum of the residuals over some window of ``w`` consecutive points (``w`` =
 #: 4, 8, 16, ... up to half the run) exceeds this many ``sigma sqrt(w)``, its mean at least
@@ -655,10 +647,8 @@ def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
     np.maximum(sd, MIN_SPLIT_M / SPLIT_SIGMAS, out=sd)
     z = res / sd
     total = float(z @ z)
-    if total > n - 2:
-        k = 2.0 / (9.0 * (n - 2))  # the chi-square quantile as chi2_upper_over_dof, in scalars
-        if total > (n - 2) * max(1.0 - k + RESIDUAL_Z * math.sqrt(k), 0.0) ** 3:
-            return "residual", math.sqrt(float(res @ res) / n)
+    if total > n - 2 and total > (n - 2) * chi2_upper_over_dof(n - 2, RESIDUAL_Z):
+        return "residual", math.sqrt(float(res @ res) / n)
     if n < 8 or total <= SHIFT_Z * SHIFT_Z:  # (a shifted stretch's z squared is at most the total)
         return None
     c = np.zeros((n + 1, 2))
@@ -728,7 +718,7 @@ def _beam_between(line: _Line, after: int, before: int, ranges: np.ndarray, vali
     c = np.cos(angles.take(js) - line.alpha)  # the ray meets the line at r / c when c > 0
     rho = ranges.take(js)
     with np.errstate(invalid="ignore", divide="ignore"):
-        hit = valid.take(js) & (c > 0) & (np.abs(rho * c - line.r) > margin * c)
+        hit = valid.take(js) & _ends_off(rho, c, line.r, margin)
     k = np.flatnonzero(hit)
     return (int(js[k[0]]), float(line.r / c[k[0]] - rho[k[0]])) if len(k) else None
 
