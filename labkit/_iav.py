@@ -721,17 +721,27 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool, algorithm: str = "
     ang = None
     if sel:
         ang = _batch_angles(runs, np.array(sel), np.array([ratio[k] < 0 for k in sel]) if t.hollow else None)
-        noise = None
-        if sigma > 0.0:  # the noise allowances of every selected run at once
-            first, stop = runs.starts[sel], runs.ends[sel]
-            spread_sq, mean_sd = _angle_noise_runs(runs.pts, first, stop, sigma)
-            noise = list(zip(spread_sq.tolist(), mean_sd.tolist(), _wider_than_noise(runs.pts, first, stop, sigma)
-                             .tolist(), strict=True))
+        noise = [None] * len(sel)
+        if sigma > 0.0:  # the angle allowances of every selected run at once
+            spread_sq, mean_sd = _angle_noise_runs(runs.pts, runs.starts[sel], runs.ends[sel], sigma)
+            noise = list(zip(spread_sq.tolist(), mean_sd.tolist(), strict=True))
+        passed = []  # (j, k, kind, limits) of the runs whose inscribed angles pass
         for j, k in enumerate(sel):
-            circle, v = _finish_circle(runs, geo, ang, j, k, t, None if noise is None else noise[j], widened.get(k))
+            v, kind, limits = _angle_verdict(ang, j, t, noise[j], widened.get(k))
             verdict[k] = v
-            if circle is not None:
-                circles.append(circle)
+            if v == _ACCEPTED:
+                passed.append((j, k, kind, limits))
+        if sigma > 0.0 and passed:  # and their points must lie on a circle within the noise
+            ks = [k for _, k, _, _ in passed]
+            wider = _wider_than_noise(runs.pts, runs.starts[ks], runs.ends[ks], sigma).tolist()
+            for w, (_, k, _, _) in zip(wider, passed, strict=True):
+                if w:
+                    verdict[k] = _RESIDUAL
+        for j, k, kind, limits in passed:
+            if verdict[k] == _ACCEPTED:
+                circle, verdict[k] = _make_circle(runs, geo, ang, j, k, t, kind, limits)
+                if circle is not None:
+                    circles.append(circle)
     if not want_trace:
         return circles, []
     return circles, _trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, _circle_limits(t), circles,
@@ -775,20 +785,29 @@ def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sig
         return out
     dof = (ends[big] - starts[big] - 3).astype(np.float64)
     limit = sigma * sigma * chi2_upper_over_dof(dof, NOISE_Z) * dof / (dof + 3)  # on the mean square
+    # Any circle whose mean square is under the limit proves a run is not wider (the best circle can
+    # only do better): the algebraic circle decides most true circles with no Gauss-Newton step.
     # Gauss-Newton converges slowly on runs far from any circle (a wall's corner, a nearly straight
-    # run), and a few steps decide most runs: a circle whose mean square is under the limit proves
-    # the run is not wider (the best circle can only do better), and after _EARLY_STEPS steps the
-    # mean square was at most about 6 times its minimum on the runs of the simulated hall at 5 mm
-    # to 3 cm and of the Radish logs (tests/test_iav.py measures it), so a run _EARLY_FACTOR times
-    # over the limit is taken as wider. The few in between are fitted to convergence.
-    fit = fit_circles(pts, starts[big], ends[big], "geometric", max_iterations=_EARLY_STEPS)
-    ms = fit.rms ** 2
-    with np.errstate(invalid="ignore"):  # (NaN where no circle fits: not wider)
-        out[big] = ms > _EARLY_FACTOR * limit
-        unsure = np.flatnonzero((ms > limit) & (ms <= _EARLY_FACTOR * limit))
-        if len(unsure):
-            full = fit_circles(pts, starts[big[unsure]], ends[big[unsure]], "geometric")
-            out[big[unsure]] = full.rms ** 2 > limit[unsure]
+    # run), and a few steps decide most of the rest: after _EARLY_STEPS steps the mean square was at
+    # most about 6 times its minimum on the runs of the simulated hall at 5 mm to 3 cm and of the
+    # Radish logs (tests/test_iav.py measures it), so a run _EARLY_FACTOR times over the limit is
+    # taken as wider. The few in between are fitted to convergence.
+    todo = big
+    for steps in (0, _EARLY_STEPS, None):
+        fit = fit_circles(pts, starts[todo], ends[todo], "geometric",
+                          **({} if steps is None else {"max_iterations": steps}))
+        ms, lim = fit.rms ** 2, limit[np.searchsorted(big, todo)]
+        with np.errstate(invalid="ignore"):  # (NaN where no circle fits: not wider)
+            over = ms > lim
+            if steps is None:
+                out[todo] = over
+                break
+            if steps:
+                out[todo] = ms > _EARLY_FACTOR * lim
+                over &= ms <= _EARLY_FACTOR * lim
+        todo = todo[over]
+        if not len(todo):
+            break
     return out
 
 
@@ -796,32 +815,40 @@ _EARLY_STEPS = 5
 _EARLY_FACTOR = 16.0
 
 
-def _finish_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t: _CircleTest,
-                   noise: tuple | None = None, widened: dict | None = None) -> tuple[Circle | None, int]:
-    """The verdict on run ``k`` (``j``-th of the selected): with a noise allowance, ``noise`` is
-    its ``(spread_sq, mean_sd, wider)`` (:func:`_angle_noise_runs`, :func:`_wider_than_noise`)."""
-    if ang.degenerate.item(j):
-        return None, _DEGENERATE
-    mean, std = ang.mean.item(j), ang.std.item(j)
+def _angle_verdict(ang: _Angles, j: int, t: _CircleTest, noise: tuple | None = None,
+                   widened: dict | None = None) -> tuple[int, str, tuple]:
+    """The inscribed-angle tests of the ``j``-th selected run: its verdict (``_ACCEPTED`` if it
+    passes), its kind, and the limits it was held to ``(mean_range, std_max)``; with a noise
+    allowance, ``noise`` is its ``(spread_sq, mean_sd)`` (:func:`_angle_noise_runs`)."""
     mean_range, std_max, like_max = t.mean_range, t.std_max, t.arc_like_std_max
+    if ang.degenerate.item(j):
+        return _DEGENERATE, t.kind, (mean_range, std_max)
+    mean, std = ang.mean.item(j), ang.std.item(j)
     if noise is not None:
         mean_range, std_max, like_max = _widen(noise[0], noise[1], mean_range, std_max, like_max)
         if widened is not None:
             widened.update({_MEAN: mean_range, _STD: std_max if like_max is None else like_max,
                             _VCORNER: like_max, _ACCEPTED: std_max})
     if not (mean_range[0] <= mean <= mean_range[1]):
-        return None, _MEAN
+        return _MEAN, t.kind, (mean_range, std_max)
     kind = t.kind
     if std >= std_max:
         if like_max is None or std >= like_max:
-            return None, _STD
+            return _STD, kind, (mean_range, std_max)
         angles = ang.angles[ang.offsets[j]:ang.offsets[j] + ang.counts[j]]
         stride = t.v_corner_stride if t.v_corner_stride is not None else max(1, angles.size // 8)
         if is_v_corner(angles, t.v_corner_neighbours, stride):
-            return None, _VCORNER
+            return _VCORNER, kind, (mean_range, std_max)
         kind, std_max = "arc-like", like_max
-    if noise is not None and noise[2]:
-        return None, _RESIDUAL
+    return _ACCEPTED, kind, (mean_range, std_max)
+
+
+def _make_circle(runs: _Runs, geo: _Geometry, ang: _Angles, j: int, k: int, t: _CircleTest, kind: str,
+                 limits: tuple) -> tuple[Circle | None, int]:
+    """The circle of run ``k`` (``j``-th of the selected), which passed the tests with ``limits``
+    (:func:`_angle_verdict`), and its verdict (``_FIT`` when no circle fits it)."""
+    mean, std = ang.mean.item(j), ang.std.item(j)
+    mean_range, std_max = limits
     try:
         if t.center_method == "iav":
             side = ang.side.item(j)
