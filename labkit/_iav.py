@@ -731,17 +731,18 @@ def _test_runs(runs: _Runs, t: _CircleTest, want_trace: bool, algorithm: str = "
             verdict[k] = v
             if v == _ACCEPTED:
                 passed.append((j, k, kind, limits))
+        made = [_make_circle(runs, geo, ang, j, k, t, kind, limits) for j, k, kind, limits in passed]
         if sigma > 0.0 and passed:  # and their points must lie on a circle within the noise
             ks = [k for _, k, _, _ in passed]
-            wider = _wider_than_noise(runs.pts, runs.starts[ks], runs.ends[ks], sigma).tolist()
-            for w, (_, k, _, _) in zip(wider, passed, strict=True):
-                if w:
-                    verdict[k] = _RESIDUAL
-        for j, k, kind, limits in passed:
-            if verdict[k] == _ACCEPTED:
-                circle, verdict[k] = _make_circle(runs, geo, ang, j, k, t, kind, limits)
-                if circle is not None:
-                    circles.append(circle)
+            circle_of = [c for c, _ in made]
+            centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
+            radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
+            wider = _wider_than_noise(runs.pts, runs.starts[ks], runs.ends[ks], sigma, centers, radii).tolist()
+            made = [(None, _RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
+        for (_, k, _, _), (circle, v) in zip(passed, made, strict=True):
+            verdict[k] = v
+            if circle is not None:
+                circles.append(circle)
     if not want_trace:
         return circles, []
     return circles, _trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, _circle_limits(t), circles,
@@ -769,7 +770,8 @@ def _widen(spread_sq: float, mean_sd: float, mean_range: tuple[float, float], st
             None if like_max is None else min(math.sqrt(like_max ** 2 + spread_sq), cap))
 
 
-def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigma: float) -> np.ndarray:
+def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigma: float,
+                      centers: np.ndarray | None = None, radii: np.ndarray | None = None) -> np.ndarray:
     """Whether the points of each run ``pts[starts[k]:ends[k]]`` lie farther from their best
     circle (orthogonal fit, :func:`labkit.fitting.fit_circles`) than range noise ``sigma``
     allows: the mean square distance per degree of freedom above the upper ``NOISE_Z`` quantile
@@ -777,7 +779,8 @@ def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sig
     back can pass the widened tests at a few centimetres of noise; their points do not lie on
     one circle. (A beam's noise moves its point across the circle by at most sigma, so true
     circles fail this less often than the quantile says.) Runs of 3 points, and runs no finite
-    circle fits, are not."""
+    circle fits, are not. ``centers`` (K, 2) and ``radii`` (K,), if given, are a circle per run to
+    try first (the detector's own; NaN: none)."""
     starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
     out = np.zeros(len(starts), dtype=bool)
     big = np.flatnonzero(ends - starts > 3)
@@ -786,14 +789,27 @@ def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sig
     dof = (ends[big] - starts[big] - 3).astype(np.float64)
     limit = sigma * sigma * chi2_upper_over_dof(dof, NOISE_Z) * dof / (dof + 3)  # on the mean square
     # Any circle whose mean square is under the limit proves a run is not wider (the best circle can
-    # only do better): the algebraic circle decides most true circles with no Gauss-Newton step.
+    # only do better): the circle given (or else the algebraic one) decides most true circles with
+    # no Gauss-Newton step.
     # Gauss-Newton converges slowly on runs far from any circle (a wall's corner, a nearly straight
     # run), and a few steps decide most of the rest: after _EARLY_STEPS steps the mean square was at
     # most about 6 times its minimum on the runs of the simulated hall at 5 mm to 3 cm and of the
     # Radish logs (tests/test_iav.py measures it), so a run _EARLY_FACTOR times over the limit is
     # taken as wider. The few in between are fitted to convergence.
     todo = big
-    for steps in (0, _EARLY_STEPS, None):
+    if centers is not None:
+        k_big = len(big)
+        sizes = ends[big] - starts[big]
+        off = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        run = np.repeat(np.arange(k_big), sizes)
+        q = pts[np.arange(sizes.sum()) + np.repeat(starts[big] - off, sizes)]
+        c = centers[big][run]
+        d = np.hypot(q[:, 0] - c[:, 0], q[:, 1] - c[:, 1]) - radii[big][run]
+        with np.errstate(invalid="ignore"):
+            todo = big[~(np.add.reduceat(d * d, off) / sizes <= limit)]  # (NaN: no circle given)
+        if not len(todo):
+            return out
+    for steps in (_EARLY_STEPS, None) if centers is not None else (0, _EARLY_STEPS, None):
         fit = fit_circles(pts, starts[todo], ends[todo], "geometric",
                           **({} if steps is None else {"max_iterations": steps}))
         ms, lim = fit.rms ** 2, limit[np.searchsorted(big, todo)]

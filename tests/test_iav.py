@@ -786,9 +786,9 @@ def test_the_residual_tests_early_decision_is_the_converged_fits():
     seen = []
     real = _iav._wider_than_noise
 
-    def spy(pts, starts, ends, sigma):
-        seen.append((pts, np.asarray(starts), np.asarray(ends), sigma))
-        return real(pts, starts, ends, sigma)
+    def spy(pts, starts, ends, sigma, centers=None, radii=None):
+        seen.append((pts, np.asarray(starts), np.asarray(ends), sigma, centers, radii))
+        return real(pts, starts, ends, sigma, centers, radii)
 
     config = Config().updated(AUTO_CONFIG)
     rng = np.random.default_rng(4)
@@ -800,9 +800,10 @@ def test_the_residual_tests_early_decision_is_the_converged_fits():
     finally:
         _iav._wider_than_noise = real
     runs = worst = 0
-    for pts, starts, ends, sigma in seen:
+    for pts, starts, ends, sigma, centers, radii in seen:
         big = ends - starts > 3
         starts, ends = starts[big], ends[big]
+        centers, radii = (None, None) if centers is None else (centers[big], radii[big])
         if not len(starts):
             continue
         early = fit_circles(pts, starts, ends, "geometric", max_iterations=_iav._EARLY_STEPS)
@@ -813,5 +814,7 @@ def test_the_residual_tests_early_decision_is_the_converged_fits():
         limit = sigma * sigma * chi2_upper_over_dof(dof, _iav.NOISE_Z) * dof / (dof + 3)
         with np.errstate(invalid="ignore"):
             assert np.array_equal(real(pts, starts, ends, sigma), full.rms ** 2 > limit)
+            if centers is not None:  # the detector's own circles tried first: the same decisions
+                assert np.array_equal(real(pts, starts, ends, sigma, centers, radii), full.rms ** 2 > limit)
         runs += len(starts)
     assert runs > 200 and worst < _iav._EARLY_FACTOR / 2, (runs, worst)
