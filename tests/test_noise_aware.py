@@ -214,6 +214,51 @@ def test_the_shift_test_finds_a_shifted_stretch_and_rarely_noise():
     assert found >= 198 and by_shift >= 100
 
 
+def _shift_by_definition(res, sd):
+    # the shift test as documented (labkit.lines.split_merge.SHIFT_Z), every window written out
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    from labkit.lines.split_merge import SHIFT_MIN_M, SHIFT_Z
+
+    n, best, best_z, w = len(res), None, SHIFT_Z, 4
+    while 2 * w <= n:
+        sums = sliding_window_view(res, w).sum(axis=1)
+        zs = np.abs(sums) / np.sqrt(sliding_window_view(sd * sd, w).sum(axis=1))
+        k = int(np.flatnonzero(zs == zs.max())[0])  # the first of the largest
+        if zs[k] > best_z and abs(sums[k]) > SHIFT_MIN_M * w:
+            best, best_z = (k, w), zs[k]
+        w *= 2
+    return best
+
+
+def test_the_shift_test_is_its_definition_near_its_limits():
+    # _misfit skips the windows when no window of 4 has a mean over SHIFT_MIN_M (a window of 8,
+    # 16, ... is made of windows of 4); a brute-force referee over every window must agree,
+    # stretches shifted by 0.5-2.5 sigma (2.5 mm to 5 cm; the limit is 1 cm) on walls seen head-on and at a slant
+    from labkit.lines.split_merge import MIN_SPLIT_M, SPLIT_SIGMAS, _misfit
+
+    rng = np.random.default_rng(11)
+    shifts = 0
+    for trial in range(1500):
+        n = int(rng.integers(8, 200))
+        sigma = float(rng.choice([0.005, 0.01, 0.02]))
+        r = 2.0
+        rho = r / rng.uniform(0.2, 1.0, n)  # each point's cos(incidence) = r / rho
+        v = r + rng.normal(0.0, sigma, n) * rng.uniform(0.2, 1.0, n)
+        if trial % 4:
+            k, w = int(rng.integers(0, n - 4)), int(rng.integers(4, max(5, n // 2)))
+            v[k:k + w] += rng.choice([-1, 1]) * rng.uniform(0.5, 2.5) * sigma
+        sd = np.maximum(np.abs(v) * sigma / rho, MIN_SPLIT_M / SPLIT_SIGMAS)
+        got = _misfit(v, rho, r, sigma)
+        if got is not None and got[0] == "residual":
+            continue
+        z = (v - r) / sd
+        want = _shift_by_definition(v - r, sd) if float(z @ z) > 25 else None
+        assert (None if got is None else got[1][:2]) == want, trial
+        shifts += want is not None
+    assert shifts > 40, shifts
+
+
 # ----------------------------------------------------------------------------- placing lines
 def test_a_line_the_data_cannot_place_is_dropped_with_its_reason():
     # a long wall 3 m ahead and a 0.25 m stub, 12 beams, 6 m away: at 3 cm its angle is not known to 3 deg
