@@ -496,10 +496,6 @@ NOISE_Z = 2.0
 LINE_Z = 3.0
 
 
-def _cross(ax: float, ay: float, bx: float, by: float) -> float:
-    return ax * by - ay * bx
-
-
 def _ratio_sd(p0, p1, mid, chord: float, sigma: float) -> float:
     """Standard deviation of the middle-point ratio (signed distance from the chord over the
     chord) when the three points' ranges have noise ``sigma``, to first order: the middle
@@ -509,11 +505,12 @@ def _ratio_sd(p0, p1, mid, chord: float, sigma: float) -> float:
     if chord <= 0.0:
         return math.inf
     ex, ey = (x1 - x0) / chord, (y1 - y0) / chord
-    acc = 0.0
-    for (x, y), w in (((xm, ym), 1.0), ((x0, y0), 0.25), ((x1, y1), 0.25)):
-        h = math.hypot(x, y)
-        if h > 0.0:
-            acc += w * _cross(ex, ey, x / h, y / h) ** 2
+    acc = 0.0  # each beam's unit vector's component across the chord, squared and weighted
+    for x, y, w in ((xm, ym, 1.0), (x0, y0, 0.25), (x1, y1, 0.25)):
+        h2 = x * x + y * y
+        if h2 > 0.0:
+            across = ex * y - ey * x
+            acc += w * across * across / h2
     return sigma * math.sqrt(acc) / chord
 
 
