@@ -48,8 +48,9 @@ class LineSegment:
     covariance : ndarray (2, 2)
         Covariance of ``(r, alpha)``.
     start, end : ndarray (2,)
-        The first and last points projected onto the line (scan order); split-and-merge stops
-        a projection that would reach past the ray of the first or last beam at that ray.
+        The first and last points projected onto the line (scan order); split-and-merge,
+        incremental and line regression stop a projection that would reach past the ray of
+        the first or last beam at that ray.
     first, last : int
         First and last beam index (``first > last`` when the segment crosses the seam of a
         full-circle scan).

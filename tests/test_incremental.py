@@ -3,17 +3,12 @@ ground truth."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from labkit import Scan
-from labkit.evaluation import ray_errors
 from labkit.lines.incremental import incremental_lines
-from labkit.sim import Lidar, scan_at, scenario
 from tests.line_scans import wall_rates, wall_scan
-from tests.test_split_merge import _past_own_rays
 
 
 # ---------------------------------------------------------------------------- closed form cases
@@ -37,43 +32,6 @@ def test_a_smaller_max_error_splits_a_noisy_wall():
     rng = np.random.default_rng(5)
     scan = scan.replace(ranges=scan.ranges + rng.normal(0.0, 0.02, scan.n_beams))
     assert len(incremental_lines(scan, max_error_m=0.01, min_length_m=0.0)) > 3 * len(incremental_lines(scan))
-
-
-def test_a_segment_stops_at_the_ray_of_its_end_beam():
-    """The wall x = 1 m from -30 to 45 deg, its last beam reading 6 cm long (4.2 cm off the
-    wall, within max_error_m); past it, from 45.5 deg, the beams see the wall x = 3 m. The last
-    point's projection onto the line lies 4.2 cm along the wall from its ray, beyond the rays of
-    the next two beams (1.75 cm apart there): that segment would claim the near wall where they
-    saw the far one, 2.85 m behind. The segment ends where the last beam's ray meets the line,
-    and every far beam's ray meets the far wall first, at its measured range."""
-    theta = np.radians(np.arange(-30.0, 60.25, 0.5))
-    near = theta <= math.radians(45.0) + 1e-9
-    ranges = np.where(near, 1.0, 3.0) / np.cos(theta)
-    last = int(np.flatnonzero(near)[-1])
-    ranges[last] += 0.06
-    scan = Scan(ranges=ranges, angles=theta)
-    lines = incremental_lines(scan)
-    (wall,) = [ln for ln in lines if ln.first <= last <= ln.last]
-    assert wall.last == last and wall.r == pytest.approx(1.0, abs=0.01)
-    u = np.array([math.cos(theta[last]), math.sin(theta[last])])
-    assert np.allclose(wall.end, wall.r / math.cos(theta[last] - wall.alpha) * u, atol=1e-12)
-    errors = ray_errors(scan, lines)
-    far = errors.beams > last
-    assert far.sum() >= 25 and np.abs(errors.errors[far]).max() < 1e-9
-
-
-@pytest.mark.parametrize("noise", [0.01, 0.03])
-def test_lines_never_reach_past_the_rays_of_their_own_end_beams(noise):
-    """As split-and-merge's lines (``tests/test_split_merge.py``), on the simulated corridor seen
-    from 12 places: no segment end lies outside the wedge between its end beams' rays."""
-    rng = np.random.default_rng(7)
-    world = scenario("corridor").world
-    lidar = Lidar.from_fov("test", 270.0, 0.5, range_max=20.0, noise_std_m=noise)
-    past = []
-    for x in np.linspace(1.0, 20.0, 12):
-        scan = scan_at(world, lidar, (x, 0.0, 0.0), 0.0, rng=rng)[0]
-        past += [_past_own_rays(scan, ln) for ln in incremental_lines(scan)]
-    assert len(past) > 40 and max(past) < 1e-9, max(past)
 
 
 # ---------------------------------------------------------------------------- ground truth

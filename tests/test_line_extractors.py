@@ -13,10 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, line_segment, range_segments, segment_labels
+from labkit.evaluation import ray_errors
 from labkit.geometry import angle_difference
 from labkit.lines import LINE_EXTRACTORS
-from labkit.sim import Wall, World, simulate
+from labkit.sim import Lidar, Wall, World, scan_at, scenario, simulate
 from tests.line_scans import ROOM, doorway_scan, key, noiseless, room_scan, rounded, wall_scan
+from tests.test_split_merge import _past_own_rays
 
 #: the extractors this contract holds for, read from the registry (the others -- split-and-merge,
 #: angular segmentation, IAV lines -- have their own files: they keep part of it)
@@ -204,6 +206,53 @@ def test_the_same_scan_gives_the_same_lines(extract, world, seed):
     a, b = extract(scan), extract(scan.replace())
     assert a and rounded(a) == rounded(b)
     assert key(a) == key(b) and key(extract(scan)) == key(a)
+
+
+#: the extractors whose lines are runs of consecutive beams
+consecutive = pytest.mark.parametrize("extract", [incremental_lines, regression_lines],
+                                      ids=["incremental", "regression"])
+
+
+@pytest.mark.parametrize("extract, kwargs", [(incremental_lines, {}), (regression_lines, {"range_sigma_m": 0.02})],
+                         ids=["incremental", "regression"])
+def test_a_segment_stops_at_the_ray_of_its_end_beam(extract, kwargs):
+    """The wall x = 1 m from -30 to 45 deg, its last beam reading 6 cm long (4.2 cm off the
+    wall); past it, from 45.5 deg, the beams see the wall x = 3 m. The last point's projection
+    onto the line lies 4.2 cm along the wall from its ray, beyond the rays of the next two beams
+    (1.75 cm apart there): that segment would claim the near wall where they saw the far one,
+    2.85 m behind. The segment ends where the last beam's ray meets the line (as
+    split-and-merge's, ``tests/test_split_merge.py``), and every far beam's ray meets the far
+    wall first, at its measured range. (Line regression takes that point into the line only
+    within three sigmas of it: it is told sigma = 2 cm.)"""
+    theta = np.radians(np.arange(-30.0, 60.25, 0.5))
+    near = theta <= math.radians(45.0) + 1e-9
+    ranges = np.where(near, 1.0, 3.0) / np.cos(theta)
+    last = int(np.flatnonzero(near)[-1])
+    ranges[last] += 0.06
+    scan = Scan(ranges=ranges, angles=theta)
+    lines = extract(scan, **kwargs)
+    (wall,) = [ln for ln in lines if ln.first <= last <= ln.last]
+    assert wall.last == last and wall.r == pytest.approx(1.0, abs=0.01)
+    u = np.array([math.cos(theta[last]), math.sin(theta[last])])
+    assert np.allclose(wall.end, wall.r / math.cos(theta[last] - wall.alpha) * u, atol=1e-12)
+    errors = ray_errors(scan, lines)
+    far = errors.beams > last
+    assert far.sum() >= 25 and np.abs(errors.errors[far]).max() < 1e-9
+
+
+@consecutive
+@pytest.mark.parametrize("noise", [0.01, 0.03])
+def test_lines_never_reach_past_the_rays_of_their_own_end_beams(extract, noise):
+    """As split-and-merge's lines, on the simulated corridor seen from 12 places: no segment end
+    lies outside the wedge between its end beams' rays."""
+    rng = np.random.default_rng(7)
+    world = scenario("corridor").world
+    lidar = Lidar.from_fov("test", 270.0, 0.5, range_max=20.0, noise_std_m=noise)
+    past = []
+    for x in np.linspace(1.0, 20.0, 12):
+        scan = scan_at(world, lidar, (x, 0.0, 0.0), 0.0, rng=rng)[0]
+        past += [_past_own_rays(scan, ln) for ln in extract(scan)]
+    assert len(past) > 40 and max(past) < 1e-9, max(past)
 
 
 # ---------------------------------------------------------------------------- bad input

@@ -2,7 +2,8 @@
 
 * from the local extractors (:mod:`~labkit.lines.incremental`, :mod:`~labkit.lines.regression`):
   :func:`_runs` (the runs a line may not cross), :class:`_PrefixSums` (O(1) weighted sums of
-  any run) and :func:`_fitted` (the final fit of every line);
+  any run) and :func:`_fitted` (the final fit of every line, its segment stopped at its end
+  beams' rays by :func:`_on_rays`, which split-and-merge's segments follow too);
 * from the global extractors (:mod:`~labkit.lines.ransac`, :mod:`~labkit.lines.hough`):
   :func:`_taking_part` (the beams they use), :func:`_fit` (a weighted line in closed form)
   and :func:`_segments` (one line's inliers cut into segments);
@@ -14,12 +15,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
 from .._checks import check_positive
-from ..features import LineSegment, line_segment
+from ..features import LineSegment, _frozen, line_segment
 from ..fitting import line_from_sums, placement_probability
 from ..noise import auto_split_threshold, scan_sigma
 from ..scan import Scan
@@ -108,18 +110,46 @@ def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float,
             steps: _Trace | None = None, range_sigma: float | None = None) -> list[LineSegment]:
     """Step 7, shared with :mod:`labkit.lines.regression`: every line, the points ``a..b-1`` of
     ``xy`` (beams ``beams[a:b]``) for each ``(a, b)`` of ``spans``, fitted by
-    :func:`labkit.features.line_segment`; lines shorter than ``min_length_m`` are dropped
-    (each line's verdict is added to ``steps`` if given). ``range_sigma``: the range noise of
-    the lines' covariances (None: each line's own residuals)."""
+    :func:`labkit.features.line_segment`, its segment stopped at the rays of its first and last
+    beams (:func:`_on_rays`); lines shorter than ``min_length_m`` are dropped (each line's
+    verdict is added to ``steps`` if given). ``range_sigma``: the range noise of the lines'
+    covariances (None: each line's own residuals)."""
     lines = []
     for a, b in spans:
         line = line_segment(xy[a:b], beams[a:b], range_sigma=range_sigma)
+        start, end, moved = _on_rays(xy[a].tolist(), xy[b - 1].tolist(), line.r, line.alpha)
+        if moved:
+            line = dataclasses.replace(line, start=_frozen(start), end=_frozen(end))
         kept = line.length >= min_length_m
         if kept:
             lines.append(line)
         if steps is not None:
             steps.verdict(line, kept, min_length_m)
     return lines
+
+
+def _on_rays(p_first, p_last, r: float, alpha: float) -> tuple[tuple[float, float], tuple[float, float], bool]:
+    """The ends of the segment of the line ``(r, alpha)`` whose first and last points (sensor
+    frame; plain floats) are ``p_first`` and ``p_last``, and whether one of them was stopped.
+
+    Each end is its point projected onto the line, but never past the ray of its own beam (on
+    the side away from the other end): there it is where that ray meets the line. A noisy end
+    point seen at a grazing angle projects along the line, over the rays of the next beams, and
+    the segment would claim a surface where they saw another (a wall metres behind, a chair in
+    front). Every consecutive-run extractor's segments follow this rule (split-and-merge,
+    incremental, regression)."""
+    c, sn = math.cos(alpha), math.sin(alpha)
+    (x0, y0), (x1, y1) = p_first, p_last
+    d0, d1 = x0 * c + y0 * sn - r, x1 * c + y1 * sn - r
+    sx, sy, ex, ey = x0 - d0 * c, y0 - d0 * sn, x1 - d1 * c, y1 - d1 * sn
+    inside = x0 * y1 - y0 * x1  # the side of the first ray the last point is on (and - for the last ray)
+    moved = False
+    # past its ray: where the ray meets the line, at r / (r + d) of the point (if it meets it ahead)
+    if (x0 * sy - y0 * sx) * inside < 0 and r + d0 > 0:
+        sx, sy, moved = x0 * (r / (r + d0)), y0 * (r / (r + d0)), True
+    if (x1 * ey - y1 * ex) * inside > 0 and r + d1 > 0:
+        ex, ey, moved = x1 * (r / (r + d1)), y1 * (r / (r + d1)), True
+    return (sx, sy), (ex, ey), moved
 
 
 def _taking_part(scan: Scan, segments, max_range: float = math.inf):

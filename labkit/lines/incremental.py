@@ -55,21 +55,20 @@ noisy pieces: 0.09 false positives instead of 0.02).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
-import numpy as np
+import numpy as np  # noqa: F401 - used in doctests
 
 from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
-from ..features import LineSegment, _frozen, line_segment
+from ..features import LineSegment
 from ..fitting import line_from_sums
 from ..noise import GROW_SIGMAS
 from ..scan import Scan
 from ..steps import Step
 from ._params import AUTO, PlacingParams, param, takes_params
-from ._runs import _check_placing, _noise, _placed, _PrefixSums, _runs, _Trace
+from ._runs import _check_placing, _fitted, _noise, _placed, _PrefixSums, _runs, _Trace
 
 __all__ = ["incremental_lines"]
 
@@ -227,50 +226,9 @@ def incremental_lines(
         _hand_back_corners(run_spans, sums, xs, ys, min_points, steps, beams)  # step 6
         spans += run_spans
 
-    lines = _fitted_on_rays(xy, beams, spans, min_length_m, steps, sigma)  # step 7
+    lines = _fitted(xy, beams, spans, min_length_m, steps, sigma)  # step 7
     lines = _placed(lines, place_dr_m, place_dalpha, place_confidence, steps)  # step 8
     return (lines, list(steps)) if trace else lines
-
-
-def _fitted_on_rays(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float, steps: _Trace | None,
-                    sigma: float | None) -> list[LineSegment]:
-    """Step 7: every line ``(a, b)`` of ``spans`` fitted to the points ``xy[a:b]`` (beams
-    ``beams[a:b]``) by :func:`labkit.features.line_segment` (``sigma``: the range noise of its
-    covariance, None its own residuals), its segment stopped at the rays of its end beams
-    (:func:`_on_rays`); lines shorter than ``min_length_m`` after that are dropped, each line's
-    verdict added to ``steps`` if given (as :func:`labkit.lines._runs._fitted`)."""
-    lines = []
-    for a, b in spans:
-        line = _on_rays(line_segment(xy[a:b], beams[a:b], range_sigma=sigma), xy[a], xy[b - 1])
-        kept = line.length >= min_length_m
-        if kept:
-            lines.append(line)
-        if steps is not None:
-            steps.verdict(line, kept, min_length_m)
-    return lines
-
-
-def _on_rays(line: LineSegment, p_first, p_last) -> LineSegment:
-    """``line`` with its segment's ends stopped at the rays of its first and last beams.
-
-    ``p_first`` and ``p_last`` are the line's first and last points (sensor frame). An end is
-    the point's projection onto the line unless that projection lies beyond the point's own ray,
-    on the side away from the other end: then it is where that ray meets the line,
-    ``p r / (p . n)`` (``n`` the line's unit normal). A ray that does not meet the line
-    (``p . n <= 0``) leaves the projection as it is. The rule of split-and-merge's segments."""
-    c, sn, r = math.cos(line.alpha), math.sin(line.alpha), line.r
-    (x0, y0), (x1, y1) = p_first.tolist(), p_last.tolist()
-    (sx, sy), (ex, ey) = line.start.tolist(), line.end.tolist()
-    inside = x0 * y1 - y0 * x1  # the side of the first ray the last point is on (and - for the last ray)
-    moved = False
-    h0, h1 = x0 * c + y0 * sn, x1 * c + y1 * sn  # the points along the normal: the rays meet the line at r / h
-    if (x0 * sy - y0 * sx) * inside < 0 and h0 > 0:  # projected past the first ray
-        sx, sy, moved = x0 * r / h0, y0 * r / h0, True
-    if (x1 * ey - y1 * ex) * inside > 0 and h1 > 0:  # projected past the last ray
-        ex, ey, moved = x1 * r / h1, y1 * r / h1, True
-    if not moved:
-        return line
-    return dataclasses.replace(line, start=_frozen((sx, sy)), end=_frozen((ex, ey)))
 
 
 def _seed_step(steps: _Trace, beams, start: int, stop: int, xs, ys, r: float, alpha: float, max_error_m: float,

@@ -23,7 +23,10 @@ Where split-and-merge works top-down (fit, then split), line regression works bo
    with its neighbours, and so do the windows next to it: the corner point of each wall is
    in no cluster. Points in no cluster join the neighbouring line they lie within three
    ``sigma`` of (the nearer line if both), so that lines end at the corner.
-7. Fit every line to its points and drop those shorter than ``min_length_m``.
+7. Fit every line to its points, stop its segment at the rays of its first and last beams
+   (as :func:`labkit.split_and_merge` and :func:`labkit.lines.incremental.incremental_lines`
+   do: an end point off the line at a grazing angle would otherwise project over the next
+   beams' rays), and drop those shorter than ``min_length_m``.
 
 The distance. Each window's line has a covariance under a simple noise model: every point
 is moved across the line by independent noise of standard deviation ``sigma``. For an

@@ -63,7 +63,7 @@ from ..scan import Scan
 from ..segmentation import SegmentationParams, labels_from, segment_labels, segment_order
 from ..steps import Step
 from ._params import AUTO, Params, param, takes_params
-from ._runs import _check_placing, _ends_off, _placed
+from ._runs import _check_placing, _ends_off, _on_rays, _placed
 
 __all__ = ["split_and_merge", "lines_similar"]
 
@@ -136,18 +136,8 @@ class _Line:
         self.r, self.alpha = r, alpha = line_from_sums(*s)
         self.p_first, self.p_last = p_first, p_last
         # the first and last points projected onto the line, but never past the rays of the
-        # first and last beams: a noisy end point seen at a grazing angle projects along the
-        # line, over the rays of the next beams, whose ranges the line would then contradict
-        c, sn = math.cos(alpha), math.sin(alpha)
-        (x0, y0), (x1, y1) = p_first, p_last
-        d0, d1 = x0 * c + y0 * sn - r, x1 * c + y1 * sn - r
-        sx, sy, ex, ey = x0 - d0 * c, y0 - d0 * sn, x1 - d1 * c, y1 - d1 * sn
-        inside = x0 * y1 - y0 * x1  # the side of the first ray the last point is on (and - for the last ray)
-        if (x0 * sy - y0 * sx) * inside < 0:  # projected past the first ray: where that ray meets the line
-            sx, sy = x0 * (r / (r + d0)), y0 * (r / (r + d0))
-        if (x1 * ey - y1 * ex) * inside > 0:
-            ex, ey = x1 * (r / (r + d1)), y1 * (r / (r + d1))
-        self.start, self.end = (sx, sy), (ex, ey)
+        # first and last beams (a noisy end point at a grazing angle projects over the next rays)
+        self.start, self.end, _ = _on_rays(p_first, p_last, r, alpha)
         self.cov = None
 
     @property
