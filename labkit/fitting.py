@@ -280,7 +280,9 @@ def placement_probability(cov, max_dr_m: float, max_dalpha: float) -> np.ndarray
         slope = c_ra / np.where(var_a > 0, var_a, 1.0) * sd_a  # E[r | alpha = u sd] = slope u
         sd_r = np.sqrt(np.maximum(var_r - c_ra * c_ra / np.where(var_a > 0, var_a, 1.0), 1e-300))
         mu = slope[:, None] * u
-        inside = _normal_cdf((max_dr_m - mu) / sd_r[:, None]) - _normal_cdf((-max_dr_m - mu) / sd_r[:, None])
+        # Phi((max_dr - mu) / sd_r) - Phi((-max_dr - mu) / sd_r), both in one call
+        edges = _normal_cdf((np.array([max_dr_m, -max_dr_m])[:, None, None] - mu) / sd_r[:, None])
+        inside = edges[0] - edges[1]
         dens = np.exp(-0.5 * u * u) / math.sqrt(2 * math.pi)
         p = half * ((dens * inside) @ _GL_W)
     p = np.where(np.isfinite(p), np.clip(p, 0.0, 1.0), 0.0)

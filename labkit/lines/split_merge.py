@@ -642,13 +642,13 @@ def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
     if n < 8 or total <= SHIFT_Z * SHIFT_Z:  # (a shifted stretch's z squared is at most the total)
         return None
     c = np.zeros(n + 1)
-    np.cumsum(res, out=c[1:])
+    np.add.accumulate(res, out=c[1:])  # (= cumsum, with less overhead)
     # a window of w = 4, 8, ... points is w / 4 windows of 4: if none of those has a mean over
     # SHIFT_MIN_M, no window does (most runs at a few millimetres of noise end here)
     if float(np.abs(c[4:] - c[:-4]).max()) <= SHIFT_MIN_M * 4:
         return None
     v2 = np.zeros(n + 1)
-    np.cumsum(sd * sd, out=v2[1:])
+    np.add.accumulate(sd * sd, out=v2[1:])
     best, best_z = None, SHIFT_Z
     w = 4
     while 2 * w <= n:
