@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import subprocess
 import sys
@@ -104,7 +105,28 @@ def _config(args: argparse.Namespace):
     config = Config.load(args.config) if getattr(args, "config", None) else Config()
     if getattr(args, "method", None):
         config = config.updated({"lines.method": args.method})
-    return config
+    return _with_noise(config, args)
+
+
+def _with_noise(config, args: argparse.Namespace):
+    """``--range-noise``: every stage's noise-following setting (labkit.noise.noise_config)."""
+    from .noise import noise_config
+
+    noise = getattr(args, "range_noise", None)
+    return config if noise is None else config.updated(noise_config(noise))
+
+
+def _range_noise(text: str):
+    """``--range-noise``'s value: "auto" or a positive number of metres."""
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"expected auto or a positive number of metres, got {text!r}")
+    return value
 
 
 def _counts_line(counts: dict, n: int) -> str:
@@ -241,7 +263,7 @@ def _interrupted_many(exc: KeyboardInterrupt) -> int:
 def cmd_config(args: argparse.Namespace) -> int:
     from .pipeline import Config
 
-    config = Config.load(args.input) if args.input else Config()
+    config = _with_noise(Config.load(args.input) if args.input else Config(), args)
     if args.output:
         out = Path(args.output)
         config.save(out, overwrite=args.force)
@@ -433,7 +455,12 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     c.set_defaults(func=cmd_convert)
 
-    pipeline = argparse.ArgumentParser(add_help=False)  # what every command that runs the pipeline takes
+    noise = argparse.ArgumentParser(add_help=False)  # the noise-following thresholds
+    noise.add_argument("--range-noise", type=_range_noise, metavar="auto|M",
+                       help="make every threshold follow the sensor's range noise: auto (estimated from each "
+                       "scan) or the noise in metres (e.g. 0.03 for a cheap 360-degree scanner); sets the keys of "
+                       "labkit.noise.AUTO_CONFIG over the config (see the README, 'Unknown range noise')")
+    pipeline = argparse.ArgumentParser(add_help=False, parents=[noise])  # every command that runs the pipeline
     pipeline.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
     pipeline.add_argument("--config", help="TOML file of extractor parameters (write one with `labkit config -o`)")
     pipeline.add_argument("--method", choices=line_methods(),
@@ -466,7 +493,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--scans", type=int, default=None, help="use the first N scans (default: all)")
     b.set_defaults(func=cmd_bench)
 
-    g = sub.add_parser("config", help="print the default extractor config as TOML, or write it with -o")
+    g = sub.add_parser("config", parents=[common, noise],
+                       help="print the default extractor config as TOML, or write it with -o")
     g.add_argument("input", nargs="?", help="a config to check and print (default: the defaults)")
     g.add_argument("-o", "--output", help="write the TOML file here")
     g.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)

@@ -49,13 +49,13 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ._checks import check_nonneg
+from ._checks import check_nonneg, check_positive
 from ._params import AUTO
 from .scan import Scan
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "noise_sigma", "auto_split_threshold",
-           "chi2_upper_over_dof", "MIN_RESIDUALS", "AUTO_LINES", "AUTO_RANSAC", "AUTO_HOUGH", "AUTO_INCREMENTAL",
-           "AUTO_ANGULAR", "AUTO_CONFIG", "RANGE_SIGMA_M",
+           "chi2_upper_over_dof", "noise_config", "MIN_RESIDUALS", "AUTO_LINES", "AUTO_RANSAC", "AUTO_HOUGH",
+           "AUTO_INCREMENTAL", "AUTO_ANGULAR", "AUTO_CONFIG", "RANGE_SIGMA_M",
            "MIN_SIGMA_M", "SPLIT_SIGMAS", "MIN_SPLIT_M", "INLIER_SIGMAS", "GROW_SIGMAS"]
 
 #: Fewest usable residuals (beams with two valid neighbours) for an estimate; with fewer,
@@ -207,19 +207,39 @@ AUTO_HOUGH = {"threshold_m": "auto", "range_sigma_m": "auto", "place_confidence"
 #: the data can place are reported (:func:`labkit.lines.incremental.incremental_lines`).
 AUTO_INCREMENTAL = {"max_error_m": "auto", "range_sigma_m": "auto", "place_confidence": 0.8}
 
-#: The noise-following setting of the whole pipeline, not yet its default:
-#: ``Config().updated(AUTO_CONFIG)``, or the same keys in a TOML file for ``labkit extract
-#: --config``. Segmentation, split-and-merge (:data:`AUTO_LINES`), angular segmentation
-#: (:data:`AUTO_ANGULAR`, when ``lines.method = "angular"``), and the noise allowances of
-#: the IAV circle and leg tests (``range_sigma_m``, :func:`labkit.detect_circles`).
 #: The noise-following setting of angular segmentation (``[lines.angular]``), not yet its
 #: default: ``angular_segmentation(scan, **AUTO_ANGULAR)``. Local directions over as many beams
 #: as the noise needs, and only where those beams are straight (:func:`labkit.angular_segmentation`).
 AUTO_ANGULAR = {"direction_window": "auto", "range_sigma_m": "auto"}
 
+#: The noise-following setting of the whole pipeline, not yet its default:
+#: ``Config().updated(AUTO_CONFIG)``, the same keys in a TOML file for ``labkit extract
+#: --config``, or ``--range-noise auto`` on the command line (:func:`noise_config`). Segmentation,
+#: the line extractor ``lines.method`` names (split-and-merge: :data:`AUTO_LINES`; angular
+#: segmentation, incremental, RANSAC, Hough: :data:`AUTO_ANGULAR`, :data:`AUTO_INCREMENTAL`,
+#: :data:`AUTO_RANSAC`, :data:`AUTO_HOUGH`), and the noise allowances of the IAV circle and leg
+#: tests (``range_sigma_m``, :func:`labkit.detect_circles`).
 AUTO_CONFIG = {"segmentation.range_sigma_m": "auto", **{f"lines.{k}": v for k, v in AUTO_LINES.items()},
-               **{f"lines.angular.{k}": v for k, v in AUTO_ANGULAR.items()},
+               **{f"lines.{method}.{k}": v for method, setting in (
+                   ("angular", AUTO_ANGULAR), ("incremental", AUTO_INCREMENTAL), ("ransac", AUTO_RANSAC),
+                   ("hough", AUTO_HOUGH)) for k, v in setting.items()},
                "circles.range_sigma_m": "auto", "legs.range_sigma_m": "auto"}
+
+
+def noise_config(range_sigma_m: float | str = AUTO) -> dict:
+    """The changes to a :class:`labkit.Config` that make every stage follow the range noise:
+    :data:`AUTO_CONFIG` for ``"auto"`` (the noise estimated from each scan), or the same
+    thresholds derived from a noise you know, ``range_sigma_m`` metres (> 0; a datasheet's, or
+    :func:`estimate_range_noise` over a recording): every ``range_sigma_m`` of the config set to it.
+    ``labkit extract|view|bench|config --range-noise`` applies it.
+
+    >>> noise_config(0.03)["lines.range_sigma_m"], noise_config(0.03)["lines.split_threshold_m"]
+    (0.03, 'auto')
+    """
+    if range_sigma_m == AUTO:
+        return dict(AUTO_CONFIG)
+    sigma = check_positive("range_sigma_m", range_sigma_m)
+    return {k: sigma if k.endswith("range_sigma_m") else v for k, v in AUTO_CONFIG.items()}
 
 
 def scan_sigma(scan: Scan) -> float:

@@ -116,6 +116,46 @@ def test_extract_to_stdout_and_with_a_config_file(tmp_path):
     assert missing.returncode == 2 and "labkit config -o" in missing.stderr
 
 
+def test_range_noise_makes_every_stage_follow_the_noise(tmp_path):
+    """``--range-noise auto|M``: the features are extract_features' with the noise-following keys
+    (written out here as the README lists them), estimated from each scan or from the given
+    noise; ``labkit config --range-noise`` writes the same setting; a bad value is refused."""
+    from labkit import Config, extract_features, read_features
+
+    bag, out = tmp_path / "o.bag", tmp_path / "o.jsonl"
+    run("simulate", "office", "-o", bag, "--scans", "6")
+    scans = list(read_scans(bag))
+
+    def setting(sigma, method):
+        return Config().updated({
+            "lines.method": method, "segmentation.range_sigma_m": sigma, "circles.range_sigma_m": sigma,
+            "legs.range_sigma_m": sigma, "lines.split_threshold_m": "auto", "lines.range_sigma_m": sigma,
+            "lines.place_confidence": 0.8, "lines.ransac.threshold_m": "auto", "lines.ransac.range_sigma_m": sigma,
+            "lines.ransac.place_confidence": 0.8})
+
+    def features(records):
+        return [[(f["type"], f.get("first"), round(f.get("r", f.get("radius", 0.0)), 9)) for f in r["features"]]
+                for r in records]
+
+    for value, sigma in (("auto", "auto"), ("0.02", 0.02)):
+        for method in ("iepf", "ransac"):
+            run("extract", bag, "--range-noise", value, "--method", method, "-o", out, "-f")
+            got = features(read_features(out))
+            want = features(extract_features(s, setting(sigma, method)).as_record() for s in scans)
+            plain = features(extract_features(s, Config().updated({"lines.method": method})).as_record()
+                             for s in scans)
+            assert got == want and got != plain, (value, method)
+    run("config", "--range-noise", "0.02", "-o", tmp_path / "c.toml")
+    assert Config.load(tmp_path / "c.toml") == setting(0.02, "iepf").updated(
+        {"lines.angular.direction_window": "auto", "lines.angular.range_sigma_m": 0.02,
+         "lines.incremental.max_error_m": "auto", "lines.incremental.range_sigma_m": 0.02,
+         "lines.incremental.place_confidence": 0.8, "lines.hough.threshold_m": "auto",
+         "lines.hough.range_sigma_m": 0.02, "lines.hough.place_confidence": 0.8})
+    for bad in ("0", "-0.01", "loud", "nan"):
+        p = run("extract", bag, "--range-noise", bad, ok=False)
+        assert p.returncode == 2 and "--range-noise" in p.stderr.splitlines()[-1], bad
+
+
 def test_extract_from_a_truncated_bag_keeps_every_scan_before_the_fault(tmp_path):
     run("simulate", "hall", "-o", tmp_path / "h.bag", "--scans", "40")
     bag = tmp_path / "h.bag"
