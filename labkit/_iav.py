@@ -786,19 +786,18 @@ def _wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sig
     dof = (ends[big] - starts[big] - 3).astype(np.float64)
     limit = sigma * sigma * chi2_upper_over_dof(dof, NOISE_Z) * dof / (dof + 3)  # on the mean square
     # Any circle whose mean square is under the limit proves a run is not wider (the best circle can
-    # only do better): the circle given (or else the algebraic one) decides most true circles with
-    # no Gauss-Newton step.
-    # Gauss-Newton converges slowly on runs far from any circle (a wall's corner, a nearly straight
-    # run), and a few steps decide most of the rest: after _EARLY_STEPS steps the mean square was at
-    # most about 6 times its minimum on the runs of the simulated hall at 5 mm to 3 cm and of the
-    # Radish logs (tests/test_iav.py measures it), so a run _EARLY_FACTOR times over the limit is
-    # taken as wider. The few in between are fitted to convergence.
+    # only do better): the circle given (or else the algebraic one, Gauss-Newton's start) decides
+    # most true circles with no Gauss-Newton step. Gauss-Newton converges slowly on runs far from
+    # any circle (a wall's corner, a nearly straight run), and a few steps decide most of the rest:
+    # after _EARLY_STEPS steps the mean square was at most about 6 times its minimum on the runs of
+    # the simulated hall at 5 mm to 3 cm and of the Radish logs (tests/test_iav.py measures it), so
+    # a run _EARLY_FACTOR times over the limit is taken as wider. The few in between are fitted to
+    # convergence.
     todo = big
     if centers is not None:
-        k_big = len(big)
         sizes = ends[big] - starts[big]
-        off = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-        run = np.repeat(np.arange(k_big), sizes)
+        off = np.cumsum(sizes) - sizes
+        run = np.repeat(np.arange(len(big)), sizes)
         q = pts[np.arange(sizes.sum()) + np.repeat(starts[big] - off, sizes)]
         c = centers[big][run]
         d = np.hypot(q[:, 0] - c[:, 0], q[:, 1] - c[:, 1]) - radii[big][run]
