@@ -33,6 +33,7 @@ import dataclasses
 import functools
 import inspect
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -258,14 +259,17 @@ def _segmentation() -> tuple:
     return Scan, segment_labels
 
 
-def _default_segments(data, auto_noise: bool = False):
+def _default_segments(data, range_sigma_m=None):
     """The default range segmentation of a scan (None for anything else: the function says what
-    is wrong); with ``auto_noise`` (the detector's own ``range_sigma_m`` is ``"auto"``) its
-    breakpoints follow the scan's estimated range noise too, as the detector's thresholds do."""
+    is wrong). Its adaptive breakpoints follow the detector's own range noise when it has one,
+    ``"auto"`` (the scan's estimate) or a positive number of metres, as the detector's thresholds
+    do; otherwise (none, or 0: a detector's fixed tests) the segmentation's default noise."""
     scan_type, segment_labels = _segmentation()
     if not isinstance(data, scan_type):
         return None
-    return segment_labels(data, range_sigma_m=AUTO) if auto_noise else segment_labels(data)
+    own = range_sigma_m == AUTO or (isinstance(range_sigma_m, numbers.Real) and not isinstance(range_sigma_m, bool)
+                                    and range_sigma_m > 0)
+    return segment_labels(data, range_sigma_m=range_sigma_m) if own else segment_labels(data)
 
 
 _NONE: dict = {}  # no keyword passed as given (never written to)
@@ -340,7 +344,7 @@ def takes_params(record: type, *, positional: tuple[str, ...] = (), segmented: b
             if segments is not None and not takes_segments and on_segments is None:
                 raise TypeError(f"{fn.__name__}() takes no segments")
             if segmented and segments is None and not any(k in raw for k in own_segmentation):
-                segments = _default_segments(data, kw.get("range_sigma_m") == AUTO)
+                segments = _default_segments(data, kw.get("range_sigma_m"))
             if takes_segments:
                 kw["segments"] = segments
             if trace_kw is not None:

@@ -235,7 +235,8 @@ def detect_legs(
         10-25 cm piece cannot tell round from flat at that noise, and with no angle test
         (the paper has none for legs) a flat piece of leg width, such as a box's face,
         passes the widened band about half the time at 2 cm and a fifth at 5 mm (15 % and
-        1 % with the fixed band; ``tests/test_noise_aware.py``).
+        1 % with the fixed band; ``tests/test_noise_aware.py``). Without ``segments``, the
+        scan's own segmentation follows this noise too (not 0).
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments (:func:`labkit.segmentation.labels_from`).
     trace : bool
