@@ -33,7 +33,6 @@ import dataclasses
 import functools
 import inspect
 import math
-import numbers
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -267,9 +266,8 @@ def _default_segments(data, range_sigma_m=None):
     scan_type, segment_labels = _segmentation()
     if not isinstance(data, scan_type):
         return None
-    own = range_sigma_m == AUTO or (isinstance(range_sigma_m, numbers.Real) and not isinstance(range_sigma_m, bool)
-                                    and range_sigma_m > 0)
-    return segment_labels(data, range_sigma_m=range_sigma_m) if own else segment_labels(data)
+    # (the record has checked it: "auto", None or a number >= 0)
+    return segment_labels(data, range_sigma_m=range_sigma_m) if range_sigma_m else segment_labels(data)
 
 
 _NONE: dict = {}  # no keyword passed as given (never written to)

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import os
 import subprocess
 import sys
@@ -117,15 +116,14 @@ def _with_noise(config, args: argparse.Namespace):
 
 
 def _range_noise(text: str):
-    """``--range-noise``'s value: "auto" or a positive number of metres."""
-    if text == "auto":
-        return text
+    """``--range-noise``'s value: "auto" or a positive number of metres (as noise_config checks it)."""
+    from .noise import noise_config
+
     try:
-        value = float(text)
+        value = text if text == "auto" else float(text)
+        noise_config(value)
     except ValueError:
-        value = math.nan
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"expected auto or a positive number of metres, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected auto or a positive number of metres, got {text!r}") from None
     return value
 
 
