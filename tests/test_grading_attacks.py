@@ -104,7 +104,21 @@ CHEATS = {
     "delegate_by_path": (EX1, '''
         import importlib.util, inspect, site, sys
 
+        _found = []  # the search runs once, as a cheat after full marks would write it: run at every
+                     # call it took longer than the 5 s call limit on a loaded machine (graded
+                     # "timed out", not the verdict on what the search finds)
+
         def _labkit():
+            if not _found:
+                try:
+                    _found.append(_search())
+                except Exception as exc:
+                    _found.append(exc)
+            if isinstance(_found[0], Exception):
+                raise _found[0]
+            return _found[0]
+
+        def _search():
             for folder in ["{repo}", "/work/main", "{repo}/.venv/lib/python3.11/site-packages", *sys.path]:
                 try:
                     site.addsitedir(folder)
