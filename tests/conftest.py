@@ -39,3 +39,23 @@ def shared_datasets() -> Path:
 # labkit extract's "finished before Ctrl-C arrived" skips). Each test process gives it back its default.
 if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+# Slow steps: a test may record_property("slow_steps", ["cell 12: 45 s", ...]) (the notebook tests
+# do); the controller (under xdist too: user properties travel with the report) lists them at the
+# end of the run, so a stall that does not fail a test still shows where it happened.
+_SLOW_STEPS: list[tuple[str, list[str]]] = []
+
+
+def pytest_runtest_logreport(report):
+    if report.when == "call":
+        for name, value in report.user_properties:
+            if name == "slow_steps" and value:
+                _SLOW_STEPS.append((report.nodeid, list(value)))
+
+
+def pytest_terminal_summary(terminalreporter):
+    if _SLOW_STEPS:
+        terminalreporter.section("slow steps")
+        for nodeid, steps in _SLOW_STEPS:
+            terminalreporter.write_line(f"{nodeid}: {', '.join(steps)}")

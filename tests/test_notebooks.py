@@ -17,6 +17,7 @@ import json
 import os
 import re
 import sys
+import time
 from pathlib import Path
 
 import nbformat
@@ -35,6 +36,7 @@ STORED = NOTEBOOKS + EXERCISE_SOURCES
 
 KERNEL_NAME = "python3"
 CELL_TIMEOUT_S = 300  # per cell; a hung kernel fails its notebook, not the run
+SLOW_STEP_S = 30  # a cell (or the kernel's start or stop) this slow is listed at the end of the run
 
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 _PATH_TRICK = re.compile(
@@ -160,16 +162,20 @@ def _run_your_turn(client, nb, stub: int, check: int, fill) -> None:
         f"it printed {_output_text(nb.cells[check])!r}")
 
 
-def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict) -> None:
+def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict) -> list[str]:
     """Run ``nb`` top to bottom, cell by cell; every "your turn" pair is tried three ways
-    (:func:`_run_your_turn`) before the notebook goes on as shipped."""
+    (:func:`_run_your_turn`) before the notebook goes on as shipped. Returns its slow steps
+    (cells, the kernel's start or stop, over ``SLOW_STEP_S``) as "cell 12: 45 s"."""
     pairs = dict(your_turn_pairs(nb))
     checks = set(pairs.values())
     missing = [nb.cells[i].get("id") for i in pairs if nb.cells[i].get("id") not in fills]
     assert not missing, f"your-turn cells without a fill-in in tests/your_turn/: {missing}"
     client = NotebookClient(nb, timeout=CELL_TIMEOUT_S, kernel_name=kernel_name,
                             resources={"metadata": {"path": str(workdir)}})
+    steps = _timed(client)
+    started = time.monotonic()
     with client.setup_kernel():
+        steps.append(("kernel start", time.monotonic() - started))
         for i, cell in enumerate(nb.cells):
             if i in checks:
                 continue  # run with its stub
@@ -177,20 +183,40 @@ def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict) -> None:
                 _run_your_turn(client, nb, i, pairs[i], fills[cell.get("id")])
                 continue
             client.execute_cell(cell, i)
+        stopping = time.monotonic()
+    steps.append(("kernel stop", time.monotonic() - stopping))
+    return [f"{step}: {seconds:.0f} s" for step, seconds in steps if seconds > SLOW_STEP_S]
+
+
+def _timed(client) -> list[tuple[str, float]]:
+    """Time every ``client.execute_cell`` call: ("cell N", seconds) appended to the list returned."""
+    steps, execute = [], client.execute_cell
+
+    def execute_cell(cell, index, *args, **kwargs):
+        started = time.monotonic()
+        try:
+            return execute(cell, index, *args, **kwargs)
+        finally:
+            steps.append((f"cell {index}", time.monotonic() - started))
+
+    client.execute_cell = execute_cell
+    return steps
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path, monkeypatch):
+def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path, monkeypatch, record_property):
     """Every notebook runs as shipped; on the way, every "your turn" check fails a planted
-    mistake with its hint and passes a correct fill-in (tests/your_turn/)."""
+    mistake with its hint and passes a correct fill-in (tests/your_turn/). Its slow steps are
+    listed at the end of the run (conftest's ``slow_steps``): a notebook that takes 10 s alone
+    once took 300 s in the full suite without failing."""
     if SHARED_DATASETS.is_dir():  # the notebooks' real-data sections run too (they skip without it)
         monkeypatch.setenv("LABKIT_SHARED_DATASETS", str(SHARED_DATASETS.resolve()))
     nb = nbformat.read(path, as_version=4)
     workdir = tmp_path / "cwd"
     workdir.mkdir()
     try:
-        run_notebook(nb, workdir, this_python_kernel, _fills(path))
+        record_property("slow_steps", run_notebook(nb, workdir, this_python_kernel, _fills(path)))
         return
     except (CellExecutionError, CellTimeoutError, DeadKernelError, AssertionError) as exc:
         error = f"{type(exc).__name__}: {_ANSI.sub('', str(exc))}"
