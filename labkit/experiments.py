@@ -40,9 +40,12 @@ from .evaluation import (
     score_detections,
     score_lines,
 )
+from .features import LineSegment, line_segment
+from .fitting import placement_probability
 from .geometry import angle_difference
 from .lines import LINE_EXTRACTORS as REGISTRY
 from .lines.split_merge import split_and_merge
+from .noise import AUTO_LINES
 from .pipeline import Config, extract_features
 from .scan import Scan
 from .sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenario, simulate
@@ -60,6 +63,9 @@ __all__ = [
     "round_objects_on_logs",
     "sweep_split_and_merge",
     "false_positive_reasons",
+    "truth_lines",
+    "placement_frontier",
+    "PLACE_CONFIDENCES",
     "markdown_table",
 ]
 
@@ -352,6 +358,58 @@ def false_positive_reasons(data: Sequence[SimScan], noise_std_m: float, extract:
     return [{"reason": k, "lines": len(v), "median_length_m": float(np.median([a for a, _ in v])),
              "median_points": float(np.median([b for _, b in v]))}
             for k, v in sorted(found.items(), key=lambda kv: -len(kv[1]))]
+
+
+def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: float = 0.05,
+                place_dalpha: float = math.radians(3.0)) -> list[LineSegment]:
+    """The lines of an extractor that knew which beams hit which wall: for every visible wall of
+    ``item``'s truth, one line fitted (weighted polar least squares, as the extractors fit) to
+    exactly the valid beams that hit it, with the covariance of the true range noise; with
+    ``place_confidence`` > 0, only those the data can place, as the ``"auto"`` settings choose
+    (:func:`labkit.fitting.placement_probability` within ``place_dr_m`` and ``place_dalpha``).
+
+    No extractor knows the truth, so on the same scans none should find more walls with as few
+    false lines by that choice: its TruePos / FalsePos are a reference for what the data allows
+    (:func:`placement_frontier`). A fit to a wall's own beams misses the matching tolerance only
+    by noise, so its false positives are the lines the noise moved too far."""
+    scan, truth = item.scan, item.truth
+    lines = []
+    for wall in truth.walls:
+        beams = np.arange(wall.first, wall.last + 1) if wall.first <= wall.last else np.concatenate(
+            [np.arange(wall.first, scan.n_beams), np.arange(0, wall.last + 1)])  # (across the seam)
+        beams = beams[(truth.hits[beams] == wall.wall_id) & scan.valid[beams]]
+        if len(beams) < 2:
+            continue
+        line = line_segment(scan.points[beams], beams, range_sigma=item.noise_std_m)
+        if place_confidence > 0 and placement_probability(line.covariance, place_dr_m, place_dalpha) < place_confidence:
+            continue
+        lines.append(line)
+    return lines
+
+
+#: The confidences of :func:`placement_frontier`: every line, then tighter choices up to the
+#: ``"auto"`` settings' 0.8 and beyond.
+PLACE_CONFIDENCES = (0.0, 0.5, 0.6, 0.7, 0.8, 0.9)
+
+
+def placement_frontier(data: Sequence[SimScan], confidences: Sequence[float] = PLACE_CONFIDENCES, *,
+                       extract: Callable | None = None, progress: Callable | None = None) -> list[dict]:
+    """TruePos against FalsePos as the placing confidence varies, for :func:`truth_lines` (method
+    ``"walls' own beams"``) and for ``extract(scan, place_confidence=c)`` (default: split-and-merge
+    with :data:`labkit.noise.AUTO_LINES`; method ``"extractor"``): one row per noise level,
+    confidence and method, with :func:`compare_lines`' fields and ``place_confidence``.
+
+    Where the walls' own beams cannot reach a goal at any confidence, no extractor choosing its
+    lines the same way can: the data is what limits it."""
+    extract = partial(split_and_merge, **AUTO_LINES) if extract is None else extract
+    item_of = {id(item.scan): item for item in data}
+    rows = []
+    for c in confidences:
+        extractors = {"walls' own beams": lambda scan, c=c: truth_lines(item_of[id(scan)], place_confidence=c),
+                      "extractor": partial(extract, place_confidence=c)}
+        for row in compare_lines(data, extractors, progress=progress):
+            rows.append({**row, "place_confidence": c})
+    return sorted(rows, key=lambda r: (r["noise_std_m"], r["method"], r["place_confidence"]))
 
 
 #: Columns of the tables (row key -> ``header:format``), shared by the CLI, the benchmark and notebook 10.

@@ -11,6 +11,7 @@ import pytest
 from labkit import experiments as ex
 from labkit.cli import main
 from labkit.data import bundled_data
+from labkit.geometry import angle_difference
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +51,52 @@ def test_an_extractor_that_returns_the_truth_scores_perfectly(small_set):
     assert oracle["truth"] > 20 and oracle["tp_rate"] == 1.0 and oracle["fp_rate"] == 0.0
     assert oracle["sigma_dr_m"] == 0.0
     assert nothing["tp_rate"] == 0.0 and math.isnan(nothing["fp_rate"]) and nothing["lines_per_scan"] == 0
+
+
+def test_truth_lines_are_the_walls_fitted_to_their_own_beams():
+    """Nearly noise-free (0.1 um), each line lies on its wall (the simulator's closed-form
+    geometry), is fitted to beams that all hit that wall, and one comes for every wall seen by
+    two beams or more; the matching rule then finds every wall in the truth and no false line."""
+    data = ex.nguyen_set(3, noise_levels=(1e-7,))
+    for item in data:
+        hits = item.truth.hits
+        seen = [(w, np.flatnonzero(hits[w.first:w.last + 1] == w.wall_id) + w.first) for w in item.truth.walls]
+        seen = [(w, beams) for w, beams in seen if len(beams) >= 2]  # (a wall's visible pieces come one by one)
+        lines = ex.truth_lines(item)
+        assert len(lines) == len(seen) > 3
+        for line, (wall, beams) in zip(lines, seen, strict=True):
+            assert abs(line.r - wall.r) < 1e-4 and abs(float(angle_difference(line.alpha, wall.alpha))) < 1e-4
+            assert line.indices.tolist() == beams.tolist()
+    (row,) = ex.compare_lines(data, {"own beams": lambda scan: ex.truth_lines(next(d for d in data if d.scan is scan))})
+    assert row["tp_rate"] == 1.0 and row["fp_rate"] == 0.0
+
+
+def test_truth_lines_keep_what_the_data_can_place(small_set):
+    """With a confidence, the lines kept are those of every wall whose covariance places them
+    within 5 cm and 3 deg with that probability (checked here with the placement integral's
+    closed form for a diagonal covariance, on lines re-fitted to the same beams)."""
+    from labkit.fitting import placement_probability
+
+    item = next(s for s in small_set if s.noise_std_m == 0.02)
+    every = ex.truth_lines(item)
+    kept = ex.truth_lines(item, place_confidence=0.8)
+    p = [placement_probability(line.covariance, 0.05, math.radians(3.0)) for line in every]
+    assert [line.first for line in kept] == [line.first for line, q in zip(every, p, strict=True) if q >= 0.8]
+    assert 0 < len(kept) < len(every)  # some walls of this scan are too short or too far to place at 2 cm
+    # the integral on a diagonal covariance is a product of two normal probabilities
+    cov = np.diag([0.03 ** 2, math.radians(2.0) ** 2])
+    assert placement_probability(cov, 0.05, math.radians(3.0)) == pytest.approx(
+        math.erf(0.05 / 0.03 / math.sqrt(2)) * math.erf(1.5 / math.sqrt(2)), rel=1e-6)
+
+
+def test_placement_frontier_has_both_methods_at_every_confidence(small_set):
+    rows = ex.placement_frontier(small_set, (0.0, 0.8))
+    assert {(r["noise_std_m"], r["method"], r["place_confidence"]) for r in rows} == {
+        (n, m, c) for n in (0.005, 0.02) for m in ("walls' own beams", "extractor") for c in (0.0, 0.8)}
+    own = {(r["noise_std_m"], r["place_confidence"]): r for r in rows if r["method"] == "walls' own beams"}
+    for n in (0.005, 0.02):  # fewer lines, never more walls found (one line per wall: a subset)
+        assert own[n, 0.8]["tp_rate"] <= own[n, 0.0]["tp_rate"]
+        assert own[n, 0.8]["lines_per_scan"] < own[n, 0.0]["lines_per_scan"]
 
 
 def test_every_extractor_runs_and_the_sweep_has_a_row_per_threshold(small_set):
