@@ -155,6 +155,36 @@ def test_auto_does_not_shatter_a_straight_grazing_wall():
     assert one >= 28
 
 
+@pytest.mark.parametrize("sigma", [0.005, 0.02])
+def test_auto_finds_a_far_wall_the_breakpoints_cut_at_every_beam(sigma):
+    # a wall 1 m to the side from 7 to 14 m ahead: the beams meet it at 4-8 deg, the breakpoint
+    # detector (10 deg) cuts every pair, and each point is 0.3-0.6 m from the next
+    found = 0
+    for seed in range(20):
+        scan, piece = _polyline_scan([(7.2, 1.0), (14.0, 1.0)], sigma, seed)
+        # no segment of 5 points (at 2 cm the noise lets a pair through now and then)
+        assert (segment_labels(scan, range_sigma_m=sigma, min_points=5) == -1).all()
+        assert split_and_merge(scan) == []  # the defaults fit nothing to it
+        lines = split_and_merge(scan, split_threshold_m="auto", range_sigma_m=sigma)
+        found += len(lines) == 1 and _finds(lines, 1.0, 90.0) and lines[0].n_points >= 0.75 * piece.size
+    assert found >= 19
+
+
+def test_auto_joins_no_beams_the_breakpoints_did_not_cut_and_no_short_chains():
+    # a wall 2 m ahead at 0.5 deg steps; 21 of its beams carry no label, as the pipeline leaves the
+    # beams of a circle or a leg (their neighbours are 1.7 cm apart: never cut)
+    theta = np.radians(np.arange(-30.0, 30.25, 0.5))
+    scan = Scan(ranges=2.0 / np.cos(theta), angles=theta)
+    labels = segment_labels(scan, range_sigma_m=0.005)
+    labels[40:61] = -1
+    lines = split_and_merge(scan, split_threshold_m="auto", range_sigma_m=0.005, segments=labels)
+    assert lines and not any(np.isin(ln.indices, np.arange(40, 61)).any() for ln in lines)
+    # three lone points of a far wall seen at 4-5 deg: fewer than min_points, no line
+    scan, _ = _polyline_scan([(10.0, 1.0), (14.0, 1.0)], 0.005, 0)
+    assert 3 <= scan.n_beams < SplitMergeParams.min_points
+    assert split_and_merge(scan, split_threshold_m="auto", range_sigma_m=0.005, min_points=5) == []
+
+
 @pytest.mark.parametrize("bend_deg", [1.5, 2.0])
 def test_auto_splits_a_bend_no_single_point_shows(bend_deg):
     # two walls 3 m ahead meeting at a gentle bend, 1 cm of noise: the chord misses the apex by
