@@ -629,6 +629,18 @@ def _grazing_link(i: int, j: int, points: np.ndarray, ranges: np.ndarray, angles
     return gap <= limit.item(0)
 
 
+def _grazing_links(scan: Scan, k: np.ndarray, threshold_m: float, sigma: float) -> np.ndarray:
+    """Which pairs of neighbouring beams ``(k, k + 1)`` the breakpoint detector cut (its
+    ``incidence_deg``) though the line between their points makes :data:`GRAZING_DEG` or more
+    with the beams."""
+    p, r, a = scan.points, scan.ranges, scan.angles
+    gap = np.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
+    dphi = np.abs(a[k + 1] - a[k])
+    ra, rb = r[k], r[k + 1]
+    return (gap > _thresholds(ra, rb, dphi, threshold_m, SegmentationParams.incidence_deg, sigma)) & (
+        gap <= _thresholds(ra, rb, dphi, threshold_m, GRAZING_DEG, sigma))
+
+
 def _grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points: int,
                   sigma: float) -> tuple[np.ndarray, np.ndarray | None]:
     """``labels`` with the walls seen at a grazing angle that the breakpoint detector cut to
@@ -646,46 +658,47 @@ def _grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points
     what is not one line. (Beams without a label closer than the detector's threshold were not
     cut: the pipeline's beams of circles and legs. They stay out.)"""
     n = len(labels)
-    valid = scan.valid
-    same = (labels[:-1] == labels[1:]) & (labels[:-1] >= 0)  # pairs the segmentation joined
-    k = np.flatnonzero(valid[:-1] & valid[1:] & ~same)
-    if len(k) < min_points - 1:
+    free = scan.valid & (labels < 0)
+    k = np.flatnonzero(free[:-1] & free[1:])  # pairs of lone beams
+    m = min_points - 1  # pairs in a chain of min_points beams
+    if len(k) < m or not (k[m - 1:] - k[:len(k) - m + 1] == m - 1).any():  # (no m of them in a row)
         return labels, None
-    p, r, a = scan.points, scan.ranges, scan.angles
-    gap = np.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
-    dphi = np.abs(a[k + 1] - a[k])
-    cut = gap > _thresholds(r[k], r[k + 1], dphi, threshold_m, SegmentationParams.incidence_deg, sigma)
     link = np.zeros(n - 1, dtype=bool)
-    link[k[cut & (gap <= _thresholds(r[k], r[k + 1], dphi, threshold_m, GRAZING_DEG, sigma))]] = True
-    lone = labels < 0
-    chain = link & lone[:-1] & lone[1:]
-    edges = np.flatnonzero(np.diff(np.concatenate([[False], chain, [False]]).astype(np.int8)))
+    link[k[_grazing_links(scan, k, threshold_m, sigma)]] = True
+    edges = np.flatnonzero(np.diff(np.concatenate([[False], link, [False]]).astype(np.int8)))
     firsts, lasts = edges[0::2], edges[1::2]  # chain j: beams firsts[j] .. lasts[j]
     long = lasts - firsts + 1 >= min_points
     if not long.any():
         return labels, None
+    firsts, lasts = firsts[long], lasts[long]
+    # the pairs between a chain and the segment it continues, either side
+    ends = np.concatenate([firsts - 1, lasts])
+    ends = ends[(ends >= 0) & (ends < n - 1)]
+    ends = ends[scan.valid[ends] & scan.valid[ends + 1]]
+    link[ends[_grazing_links(scan, ends, threshold_m, sigma)]] = True
+    same = (labels[:-1] == labels[1:]) & (labels[:-1] >= 0)  # pairs the segmentation joined
     joined = np.zeros(n - 1, dtype=bool)
-    for f, e in zip(firsts[long].tolist(), lasts[long].tolist(), strict=True):
-        joined[f:e] = True
-        if f > 0 and link[f - 1]:  # the segment it continues
-            joined[f - 1] = True
-        if e < n - 1 and link[e]:
-            joined[e] = True
+    for f, e in zip(firsts.tolist(), lasts.tolist(), strict=True):
+        joined[max(f - 1, 0):e + 1] = link[max(f - 1, 0):e + 1]
     out = labels.copy()
     top = int(labels.max()) + 1
     runs = np.flatnonzero(np.diff(np.concatenate([[False], joined | same, [False]]).astype(np.int8)))
-    for j, (f, e) in enumerate(zip(runs[0::2].tolist(), runs[1::2].tolist(), strict=True)):
-        if joined[f:e].any():  # (a run with no new pair is a segment as it was)
-            out[f:e + 1] = top + j
+    firsts, lasts = runs[0::2], runs[1::2]
+    count = np.concatenate([[0], np.add.accumulate(joined)])
+    new = count[lasts] > count[firsts]  # (a run with no new pair is a segment as it was)
+    for j, (f, e) in enumerate(zip(firsts[new].tolist(), lasts[new].tolist(), strict=True)):
+        out[f:e + 1] = top + j
     if scan.is_full_circle and labels[0] >= 0 and labels[0] == labels[-1] and out[0] != out[-1]:
         out[out == out[-1]] = out[0]  # the segment across the seam stays one
-    # labels in scan order again (each segment is a run of beams; one crossing the seam starts at beam 0)
+    # labels in scan order again: each segment is a run of beams, numbered where it starts; one
+    # crossing the seam keeps the first number at its end too
     seen = out >= 0
-    ids, first_beam = np.unique(out[seen], return_index=True)
-    rank = np.empty(int(ids.max()) + 1, dtype=np.int64)
-    rank[ids] = np.argsort(np.argsort(np.flatnonzero(seen)[first_beam]))
-    out[seen] = rank[out[seen]]
-    return out, np.concatenate([joined & ~same, [False]])
+    start = seen.copy()
+    start[1:] &= out[1:] != out[:-1]
+    number = np.add.accumulate(start) - 1
+    if seen[0] and out[0] == out[-1]:
+        number[np.flatnonzero(start)[-1]:] = 0
+    return np.where(seen, number, -1), np.concatenate([joined & ~same, [False]])
 
 
 #: With ``split_threshold_m="auto"``, a run whose fit has residuals wider than the range noise
