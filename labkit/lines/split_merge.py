@@ -585,7 +585,8 @@ def split_and_merge(
 
     merge_args = dict(max_gap_m=max_gap_m, max_error_m=split_threshold_m, merge=merge, merge_dr_m=merge_dr_m,
                       merge_dalpha=merge_dalpha, merge_chi2=merge_chi2, ranges=ranges, angles=scan.angles,
-                      valid=scan.valid, weights=weights, sigma=range_sigma_m, noise_sigma=noise_sigma)
+                      valid=scan.valid, weights=weights, sigma=range_sigma_m, noise_sigma=noise_sigma,
+                      segment_threshold_m=segment_threshold_m)
     wrap = merge is not None and len(lines) > 1 and scan.is_full_circle
     if merge is not None and len(lines) > 1:
         lines = _merge(lines, points, wrap, steps, **merge_args)
@@ -616,24 +617,12 @@ def split_and_merge(
 GRAZING_DEG = 3.0
 
 
-def _grazing_link(i: int, j: int, points: np.ndarray, ranges: np.ndarray, angles: np.ndarray,
-                  sigma: float) -> bool:
-    """Whether beams ``i`` and ``j`` are neighbours whose points are joined by a line at least
-    :data:`GRAZING_DEG` from the beams (:func:`_grazing_runs`' link): no beam between them saw
-    anything, so what lies between is the same surface seen at a grazing angle, not a hole."""
-    if j != i + 1:
-        return False
-    gap = math.hypot(points[j, 0] - points[i, 0], points[j, 1] - points[i, 1])
-    limit = _thresholds(ranges[i:i + 1], ranges[j:j + 1], np.abs(angles[j:j + 1] - angles[i:i + 1]), 0.0,
-                        GRAZING_DEG, sigma)
-    return gap <= limit.item(0)
-
-
-def _grazing_links(scan: Scan, k: np.ndarray, threshold_m: float, sigma: float) -> np.ndarray:
-    """Which pairs of neighbouring beams ``(k, k + 1)`` the breakpoint detector cut (its
-    ``incidence_deg``) though the line between their points makes :data:`GRAZING_DEG` or more
-    with the beams."""
-    p, r, a = scan.points, scan.ranges, scan.angles
+def _grazing_links(p: np.ndarray, r: np.ndarray, a: np.ndarray, k: np.ndarray, threshold_m: float,
+                   sigma: float) -> np.ndarray:
+    """Which pairs of neighbouring beams ``(k, k + 1)`` (points ``p``, ranges ``r``, angles ``a``
+    of the scan) the breakpoint detector cut (its ``incidence_deg``) though the line between their
+    points makes :data:`GRAZING_DEG` or more with the beams: the same surface seen at a grazing
+    angle, nothing between them (no beam)."""
     gap = np.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
     dphi = np.abs(a[k + 1] - a[k])
     ra, rb = r[k], r[k + 1]
@@ -664,7 +653,7 @@ def _grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points
     if len(k) < m or not (k[m - 1:] - k[:len(k) - m + 1] == m - 1).any():  # (no m of them in a row)
         return labels, None
     link = np.zeros(n - 1, dtype=bool)
-    link[k[_grazing_links(scan, k, threshold_m, sigma)]] = True
+    link[k[_grazing_links(scan.points, scan.ranges, scan.angles, k, threshold_m, sigma)]] = True
     edges = np.flatnonzero(np.diff(np.concatenate([[False], link, [False]]).astype(np.int8)))
     firsts, lasts = edges[0::2], edges[1::2]  # chain j: beams firsts[j] .. lasts[j]
     long = lasts - firsts + 1 >= min_points
@@ -675,7 +664,7 @@ def _grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points
     ends = np.concatenate([firsts - 1, lasts])
     ends = ends[(ends >= 0) & (ends < n - 1)]
     ends = ends[scan.valid[ends] & scan.valid[ends + 1]]
-    link[ends[_grazing_links(scan, ends, threshold_m, sigma)]] = True
+    link[ends[_grazing_links(scan.points, scan.ranges, scan.angles, ends, threshold_m, sigma)]] = True
     same = (labels[:-1] == labels[1:]) & (labels[:-1] >= 0)  # pairs the segmentation joined
     joined = np.zeros(n - 1, dtype=bool)
     for f, e in zip(firsts.tolist(), lasts.tolist(), strict=True):
@@ -820,11 +809,14 @@ def _beam_between(line: _Line, after: int, before: int, ranges: np.ndarray, vali
 
 
 def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_error_m, merge, merge_dr_m,
-           merge_dalpha, merge_chi2, ranges, angles, valid, weights, sigma, noise_sigma) -> list[_Line]:
+           merge_dalpha, merge_chi2, ranges, angles, valid, weights, sigma, noise_sigma,
+           segment_threshold_m) -> list[_Line]:
     """Merge neighbouring similar lines, refitting from the summed weighted sums.
 
-    Neighbours are consecutive lines whose facing ends are at most ``max_gap_m`` apart; on a
-    full-circle scan the last and first lines are neighbours too. A merge is undone when the
+    Neighbours are consecutive lines whose facing ends are at most ``max_gap_m`` apart (with
+    ``noise_sigma`` > 0, or neighbouring beams the breakpoint detector cut only for a grazing
+    angle, :func:`_grazing_links`; ``segment_threshold_m`` is its floor); on a full-circle scan
+    the last and first lines are neighbours too. A merge is undone when the
     refitted line's worst point is farther than ``max_error_m`` from it, when (``noise_sigma``
     > 0, the ``"auto"`` split test) it fails the split loop's noise tests, or when a beam
     between the two lines ends more than ``max_gap_m`` off the merged line: behind it, the beam
@@ -835,7 +827,8 @@ def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_erro
     def attempt(a: _Line, b: _Line) -> _Line | None:
         first, last = a.first, b.last
         gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
-        if gap > max_gap_m and not (noise_sigma and _grazing_link(a.last, b.first, points, ranges, angles, sigma)):
+        if gap > max_gap_m and not (noise_sigma and b.first == a.last + 1 and _grazing_links(
+                points, ranges, angles, np.array([a.last]), segment_threshold_m, sigma).item(0)):
             if steps is not None:
                 steps.add("keep", first, last, at=a.last, value=gap, threshold=max_gap_m, test="max_gap_m",
                           reason=f"facing ends {gap:.3f} m apart > max_gap_m")
