@@ -41,10 +41,10 @@ from .evaluation import (
     score_lines,
 )
 from .features import LineSegment, line_segment
-from .fitting import placement_probability
 from .geometry import angle_difference
 from .lines import LINE_EXTRACTORS as REGISTRY
-from .lines.split_merge import split_and_merge
+from .lines._runs import _placed
+from .lines.split_merge import SplitMergeParams, split_and_merge
 from .noise import AUTO_LINES
 from .pipeline import Config, extract_features
 from .scan import Scan
@@ -360,8 +360,12 @@ def false_positive_reasons(data: Sequence[SimScan], noise_std_m: float, extract:
             for k, v in sorted(found.items(), key=lambda kv: -len(kv[1]))]
 
 
-def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: float = 0.05,
-                place_dalpha: float = math.radians(3.0)) -> list[LineSegment]:
+#: What a user trusts, as the extractors' placing defaults: within 5 cm and 3 deg of the true line.
+PLACE_DR_M, PLACE_DALPHA = SplitMergeParams.place_dr_m, math.radians(SplitMergeParams.place_dalpha_deg)
+
+
+def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: float = PLACE_DR_M,
+                place_dalpha: float = PLACE_DALPHA) -> list[LineSegment]:
     """The lines of an extractor that knew which beams hit which wall: for every visible wall of
     ``item``'s truth, one line fitted (weighted polar least squares, as the extractors fit) to
     exactly the valid beams that hit it, with the covariance of the true range noise; with
@@ -380,11 +384,8 @@ def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: flo
         beams = beams[(truth.hits[beams] == wall.wall_id) & scan.valid[beams]]
         if len(beams) < 2:
             continue
-        line = line_segment(scan.points[beams], beams, range_sigma=item.noise_std_m)
-        if place_confidence > 0 and placement_probability(line.covariance, place_dr_m, place_dalpha) < place_confidence:
-            continue
-        lines.append(line)
-    return lines
+        lines.append(line_segment(scan.points[beams], beams, range_sigma=item.noise_std_m))
+    return _placed(lines, place_dr_m, place_dalpha, place_confidence, None)  # (the extractors' own rule)
 
 
 #: The confidences of :func:`placement_frontier`: every line, then tighter choices up to the
@@ -395,19 +396,28 @@ PLACE_CONFIDENCES = (0.0, 0.5, 0.6, 0.7, 0.8, 0.9)
 def placement_frontier(data: Sequence[SimScan], confidences: Sequence[float] = PLACE_CONFIDENCES, *,
                        extract: Callable | None = None, progress: Callable | None = None) -> list[dict]:
     """TruePos against FalsePos as the placing confidence varies, for :func:`truth_lines` (method
-    ``"walls' own beams"``) and for ``extract(scan, place_confidence=c)`` (default: split-and-merge
-    with :data:`labkit.noise.AUTO_LINES`; method ``"extractor"``): one row per noise level,
-    confidence and method, with :func:`compare_lines`' fields and ``place_confidence``.
+    ``"walls' own beams"``) and for ``extract`` (default: split-and-merge with
+    :data:`labkit.noise.AUTO_LINES`; method ``"extractor"``): one row per noise level, confidence
+    and method, with :func:`compare_lines`' fields (but ``scans_per_s``) and ``place_confidence``.
+
+    Placing is the last step of every extractor that has it, a filter on the lines' covariances
+    (:func:`labkit.fitting.placement_probability`): each method runs once per scan with
+    ``place_confidence=0`` and its lines are placed at each confidence in turn.
 
     Where the walls' own beams cannot reach a goal at any confidence, no extractor choosing its
     lines the same way can: the data is what limits it."""
     extract = partial(split_and_merge, **AUTO_LINES) if extract is None else extract
-    item_of = {id(item.scan): item for item in data}
+    every = {"walls' own beams": {id(item.scan): truth_lines(item) for item in data},
+             "extractor": {id(item.scan): extract(item.scan, place_confidence=0.0) for item in data}}
+
+    def placed(lines: dict, c: float) -> Callable:
+        return lambda scan: _placed(lines[id(scan)], PLACE_DR_M, PLACE_DALPHA, c, None)
+
     rows = []
     for c in confidences:
-        extractors = {"walls' own beams": lambda scan, c=c: truth_lines(item_of[id(scan)], place_confidence=c),
-                      "extractor": partial(extract, place_confidence=c)}
+        extractors = {name: placed(lines, c) for name, lines in every.items()}
         for row in compare_lines(data, extractors, progress=progress):
+            row.pop("scans_per_s")
             rows.append({**row, "place_confidence": c})
     return sorted(rows, key=lambda r: (r["noise_std_m"], r["method"], r["place_confidence"]))
 

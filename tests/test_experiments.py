@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import json
 import math
+from functools import partial
 
 import numpy as np
 import pytest
 
 from labkit import experiments as ex
+from labkit import split_and_merge
 from labkit.cli import main
 from labkit.data import bundled_data
 from labkit.geometry import angle_difference
+from labkit.noise import AUTO_LINES
 
 
 @pytest.fixture(scope="module")
@@ -97,6 +100,16 @@ def test_placement_frontier_has_both_methods_at_every_confidence(small_set):
     for n in (0.005, 0.02):  # fewer lines, never more walls found (one line per wall: a subset)
         assert own[n, 0.8]["tp_rate"] <= own[n, 0.0]["tp_rate"]
         assert own[n, 0.8]["lines_per_scan"] < own[n, 0.0]["lines_per_scan"]
+    # the extractor placed afterwards scores as split-and-merge run with that confidence itself
+    direct = ex.compare_lines(small_set, {"AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
+                                          "AUTO_LINES, every line": partial(split_and_merge,
+                                                                            **{**AUTO_LINES, "place_confidence": 0})})
+    placed = {(r["noise_std_m"], r["place_confidence"]): r for r in rows if r["method"] == "extractor"}
+    for r in direct:
+        c = 0.0 if r["method"].endswith("every line") else AUTO_LINES["place_confidence"]
+        got = placed[r["noise_std_m"], c]
+        assert (got["tp_rate"], got["fp_rate"], got["lines_per_scan"]) == (r["tp_rate"], r["fp_rate"],
+                                                                         r["lines_per_scan"])
 
 
 def test_every_extractor_runs_and_the_sweep_has_a_row_per_threshold(small_set):
