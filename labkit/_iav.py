@@ -553,10 +553,12 @@ def _angle_noise_runs(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     def cross(v, w):
         return v[:, 0] * w[:, 1] - v[:, 1] * w[:, 0]
 
-    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a)
-    d = cross(a, um) / na2 - cross(b, um) / nb2
-    g = -cross(a, u[starts][run]) / na2
-    hh_ = cross(b, u[ends - 1][run]) / nb2
+    # d arg(v) = cross(v, dv) / |v|^2, and the angle is arg(b) - arg(a); a point on an end point
+    # (a degenerate run, which the angle test rejects) gives NaN, not a warning
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = cross(a, um) / na2 - cross(b, um) / nb2
+        g = -cross(a, u[starts][run]) / na2
+        hh_ = cross(b, u[ends - 1][run]) / nb2
     m = m_k.astype(np.float64)
 
     def per_run(v):

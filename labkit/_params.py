@@ -262,12 +262,19 @@ def _default_segments(data, range_sigma_m=None):
     """The default range segmentation of a scan (None for anything else: the function says what
     is wrong). Its adaptive breakpoints follow the detector's own range noise when it has one,
     ``"auto"`` (the scan's estimate) or a positive number of metres, as the detector's thresholds
-    do; otherwise (none, or 0: a detector's fixed tests) the segmentation's default noise."""
+    do; 0 (a detector's fixed tests, the papers') the fixed settings' noise
+    (:data:`labkit.noise.RANGE_SIGMA_M`); none: the segmentation's default."""
     scan_type, segment_labels = _segmentation()
     if not isinstance(data, scan_type):
         return None
     # (the record has checked it: "auto", None or a number >= 0)
-    return segment_labels(data, range_sigma_m=range_sigma_m) if range_sigma_m else segment_labels(data)
+    if range_sigma_m is None:
+        return segment_labels(data)
+    if range_sigma_m == 0:
+        from .noise import RANGE_SIGMA_M  # noqa: PLC0415 - lazily: noise imports this module
+
+        range_sigma_m = RANGE_SIGMA_M
+    return segment_labels(data, range_sigma_m=range_sigma_m)
 
 
 _NONE: dict = {}  # no keyword passed as given (never written to)

@@ -116,14 +116,14 @@ def _with_noise(config, args: argparse.Namespace):
 
 
 def _range_noise(text: str):
-    """``--range-noise``'s value: "auto" or a positive number of metres (as noise_config checks it)."""
+    """``--range-noise``'s value: "auto", "fixed" or a positive number of metres (as noise_config checks it)."""
     from .noise import noise_config
 
     try:
-        value = text if text == "auto" else float(text)
+        value = text if text in ("auto", "fixed") else float(text)
         noise_config(value)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected auto or a positive number of metres, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected auto, fixed or a positive number of metres, got {text!r}") from None
     return value
 
 
@@ -454,10 +454,11 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=cmd_convert)
 
     noise = argparse.ArgumentParser(add_help=False)  # the noise-following thresholds
-    noise.add_argument("--range-noise", type=_range_noise, metavar="auto|M",
-                       help="make every threshold follow the sensor's range noise: auto (estimated from each "
-                       "scan) or the noise in metres (e.g. 0.03 for a cheap 360-degree scanner); sets the keys of "
-                       "labkit.noise.AUTO_CONFIG over the config (see the README, 'Unknown range noise')")
+    noise.add_argument("--range-noise", type=_range_noise, metavar="auto|M|fixed",
+                       help="how the thresholds follow the sensor's range noise: auto (estimated from each scan, "
+                       "the default), the noise in metres (e.g. 0.03 for a cheap 360-degree scanner), or fixed "
+                       "(the papers' fixed thresholds, labkit.noise.FIXED_CONFIG); sets those keys over the "
+                       "config (see the README, 'Unknown range noise')")
     pipeline = argparse.ArgumentParser(add_help=False, parents=[noise])  # every command that runs the pipeline
     pipeline.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
     pipeline.add_argument("--config", help="TOML file of extractor parameters (write one with `labkit config -o`)")

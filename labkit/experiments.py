@@ -45,7 +45,7 @@ from .geometry import angle_difference
 from .lines import LINE_EXTRACTORS as REGISTRY
 from .lines._runs import _placed
 from .lines.split_merge import SplitMergeParams, split_and_merge
-from .noise import AUTO_LINES
+from .noise import AUTO_LINES, FIXED_LINES
 from .pipeline import Config, extract_features
 from .scan import Scan
 from .sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenario, simulate
@@ -322,8 +322,11 @@ def sweep_split_and_merge(data: Sequence[SimScan], thresholds: Sequence[float] =
                           by: Sequence[str] = ("noise_std_m",), progress: Callable | None = None, repeat: int = 1,
                           **fixed) -> list[dict]:
     """True- and false-positive rates of :func:`labkit.split_and_merge` for each
-    ``split_threshold_m`` in ``thresholds`` (other arguments: ``fixed``), per group."""
-    extractors = {f"{t:g}": partial(split_and_merge, split_threshold_m=t, **fixed) for t in thresholds}
+    ``split_threshold_m`` in ``thresholds``, per group: the papers' fixed setting
+    (:data:`labkit.noise.FIXED_LINES`: 1 cm of assumed range noise, every line reported) with that
+    threshold, other arguments ``fixed`` over it."""
+    setting = {**FIXED_LINES, **fixed}
+    extractors = {f"{t:g}": partial(split_and_merge, **{**setting, "split_threshold_m": t}) for t in thresholds}
     rows = compare_lines(data, extractors, by=by, progress=progress, repeat=repeat)
     for row in rows:
         row["split_threshold_m"] = float(row.pop("method"))

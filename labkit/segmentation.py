@@ -55,8 +55,8 @@ class SegmentationParams(Params):
     adaptive: bool = param(True, "grow the threshold with range and angular step (Borges & Aldon)")
     incidence_deg: float = param(10.0, "grazing angle lambda of the adaptive threshold, degrees",
                                  lo=0, strict=True, hi=89.9)
-    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (adaptive threshold); auto: "
-                                                "estimated from each scan (labkit.noise)", lo=0, finite=True, auto=True)
+    range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (adaptive threshold); auto: "
+                                       "estimated from each scan (labkit.noise)", lo=0, finite=True, auto=True)
     min_points: int = param(2, "smallest segment kept; isolated points are dropped", lo=1)
 
     @classmethod
@@ -166,7 +166,8 @@ def segment_labels(
         used to default to False: pass ``adaptive=False`` for the paper's fixed threshold).
     incidence_deg, range_sigma_m : float
         The adaptive detector's grazing angle ``lambda`` (default 10 deg) and range noise
-        (default 0.01 m; ``"auto"`` estimates it from the scan, :func:`labkit.noise.scan_sigma`).
+        (default ``"auto"``: estimated from the scan, :func:`labkit.noise.scan_sigma`; the
+        fixed settings' 0.01 m before).
 
     Returns
     -------

@@ -17,10 +17,22 @@ from labkit.lines.angular import (
     EPS_THETA,
     MIN_PTS,
     AngularSteps,
-    angular_arrays,
-    angular_segmentation,
     local_directions,
 )
+from labkit.lines.angular import angular_arrays as _angular_arrays
+from labkit.lines.angular import angular_segmentation as _angular_segmentation
+from labkit.noise import FIXED_ANGULAR
+
+
+# The paper's method, as these tests check it against Meglicki's algorithm: three-beam directions
+# and no straightness test (labkit's default follows the range noise: tests/test_noise_aware.py).
+def angular_segmentation(scan, *args, **kwargs):
+    return _angular_segmentation(scan, *args, **{**FIXED_ANGULAR, **kwargs})
+
+
+def angular_arrays(scan, *args, **kwargs):
+    return _angular_arrays(scan, *args, **{**FIXED_ANGULAR, **kwargs})
+
 
 DR_TOL = 0.05  # metres
 DA_TOL = math.radians(3.0)

@@ -117,9 +117,10 @@ def test_extract_to_stdout_and_with_a_config_file(tmp_path):
 
 
 def test_range_noise_makes_every_stage_follow_the_noise(tmp_path):
-    """``--range-noise auto|M``: the features are extract_features' with the noise-following keys
-    (written out here as the README lists them), estimated from each scan or from the given
-    noise; ``labkit config --range-noise`` writes the same setting; a bad value is refused."""
+    """``--range-noise auto|M|fixed``: the features are extract_features' with the noise-following
+    keys (written out here as the README lists them), estimated from each scan (also with no
+    flag: the default) or from the given noise, or with the papers' fixed thresholds; ``labkit
+    config --range-noise`` writes the same setting; a bad value is refused."""
     from labkit import Config, extract_features, read_features
 
     bag, out = tmp_path / "o.bag", tmp_path / "o.jsonl"
@@ -137,14 +138,21 @@ def test_range_noise_makes_every_stage_follow_the_noise(tmp_path):
         return [[(f["type"], f.get("first"), round(f.get("r", f.get("radius", 0.0)), 9)) for f in r["features"]]
                 for r in records]
 
-    for value, sigma in (("auto", "auto"), ("0.02", 0.02)):
-        for method in ("iepf", "ransac"):
-            run("extract", bag, "--range-noise", value, "--method", method, "-o", out, "-f")
+    def fixed(method):  # the papers' thresholds, the defaults before "auto"
+        return Config().updated({
+            "lines.method": method, "segmentation.range_sigma_m": 0.01, "circles.range_sigma_m": 0.0,
+            "legs.range_sigma_m": 0.0, "lines.split_threshold_m": 0.05, "lines.range_sigma_m": 0.01,
+            "lines.place_confidence": 0.0, "lines.ransac.threshold_m": 0.03, "lines.ransac.range_sigma_m": None,
+            "lines.ransac.place_confidence": 0.0})
+
+    for method in ("iepf", "ransac"):
+        old = features(extract_features(s, fixed(method)).as_record() for s in scans)
+        for value, sigma in ((None, "auto"), ("auto", "auto"), ("0.02", 0.02), ("fixed", None)):
+            run("extract", bag, *(("--range-noise", value) if value else ()), "--method", method, "-o", out, "-f")
             got = features(read_features(out))
-            want = features(extract_features(s, setting(sigma, method)).as_record() for s in scans)
-            plain = features(extract_features(s, Config().updated({"lines.method": method})).as_record()
-                             for s in scans)
-            assert got == want and got != plain, (value, method)
+            want = old if value == "fixed" else features(
+                extract_features(s, setting(sigma, method)).as_record() for s in scans)
+            assert got == want and (got == old) == (value == "fixed"), (value, method)
     run("config", "--range-noise", "0.02", "-o", tmp_path / "c.toml")
     assert Config.load(tmp_path / "c.toml") == setting(0.02, "iepf").updated(
         {"lines.angular.direction_window": "auto", "lines.angular.range_sigma_m": 0.02,

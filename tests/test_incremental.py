@@ -8,6 +8,7 @@ import pytest
 
 from labkit import Scan
 from labkit.lines.incremental import incremental_lines
+from labkit.noise import FIXED_INCREMENTAL
 from tests.line_scans import wall_rates, wall_scan
 
 
@@ -15,10 +16,10 @@ from tests.line_scans import wall_rates, wall_scan
 @pytest.mark.parametrize("step_m, n_lines", [(0.02, 1), (0.04, 1), (0.08, 2), (0.15, 2)])
 def test_the_line_condition_is_max_error_m(step_m, n_lines):
     """Two parallel walls x = 2 and x = 2 + step, met at the beam straight ahead: a step
-    smaller than max_error_m (0.05 m) keeps one line, a larger one starts a new line there."""
+    smaller than max_error_m (the fixed 0.05 m) keeps one line, a larger one starts a new line there."""
     theta = np.radians(np.arange(-30.0, 30.25, 0.5))
     ranges = np.where(theta < 0, 2.0, 2.0 + step_m) / np.cos(theta)
-    lines = incremental_lines(Scan(ranges=ranges, angles=theta))
+    lines = incremental_lines(Scan(ranges=ranges, angles=theta), **FIXED_INCREMENTAL)
     assert len(lines) == n_lines
     if n_lines == 2:
         assert [ln.r for ln in lines] == pytest.approx([2.0, 2.0 + step_m], abs=1e-9)
@@ -26,12 +27,13 @@ def test_the_line_condition_is_max_error_m(step_m, n_lines):
 
 
 def test_a_smaller_max_error_splits_a_noisy_wall():
-    """On a wall with 2 cm noise (points up to 6 cm off the line) the default keeps few lines;
+    """On a wall with 2 cm noise (points up to 6 cm off the line) the fixed 5 cm keeps few lines;
     a 1 cm tolerance, below the noise, shatters the wall."""
     scan = wall_scan(2.0, 0.3, fov=(-0.5, 1.1))
     rng = np.random.default_rng(5)
     scan = scan.replace(ranges=scan.ranges + rng.normal(0.0, 0.02, scan.n_beams))
-    assert len(incremental_lines(scan, max_error_m=0.01, min_length_m=0.0)) > 3 * len(incremental_lines(scan))
+    fixed = incremental_lines(scan, **FIXED_INCREMENTAL)
+    assert len(incremental_lines(scan, **{**FIXED_INCREMENTAL, "max_error_m": 0.01}, min_length_m=0.0)) > 3 * len(fixed)
 
 
 # ---------------------------------------------------------------------------- ground truth

@@ -111,7 +111,7 @@ def test_people_are_paired_legs_of_one_person(hall):
 def _reference_legs(scan, pad=1.0):
     """detect_legs as a plain loop over range_segments and the public functions."""
     out = []
-    for seg in range_segments(scan, 0.08):
+    for seg in range_segments(scan, 0.08, range_sigma_m=0.01):  # (the fixed settings' segmentation)
         p = seg.points
         if len(p) < 3:
             continue
@@ -135,7 +135,7 @@ def _reference_legs(scan, pad=1.0):
 def test_batch_detector_matches_the_plain_loop(pad):
     n_legs = 0
     for scan, _ in sim.simulate("hall", 1, n_scans=60):
-        got = detect_legs(scan, chord_padding_beams=pad)
+        got = detect_legs(scan, chord_padding_beams=pad, range_sigma_m=0)  # the paper's test, as the loop
         want = _reference_legs(scan, pad)
         n_legs += len(got)
         assert [(g.first, g.last, g.n_points) for g in got] == [w[:3] for w in want]

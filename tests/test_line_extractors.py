@@ -16,6 +16,7 @@ from labkit import Scan, line_segment, range_segments, segment_labels, split_and
 from labkit.evaluation import ray_errors
 from labkit.geometry import angle_difference
 from labkit.lines import LINE_EXTRACTORS
+from labkit.noise import FIXED_INCREMENTAL, scan_sigma
 from labkit.sim import Lidar, Wall, World, scan_at, scenario, simulate
 from tests.line_scans import ROOM, doorway_scan, key, noiseless, room_scan, rounded, wall_scan
 from tests.test_split_merge import _past_own_rays
@@ -186,14 +187,18 @@ def test_range_segment_records_work_too(extract):
 # ---------------------------------------------------------------------------- how lines are built
 @extractors
 def test_lines_are_built_by_line_segment_from_the_scan_points(extract):
+    # the covariance of the scan's estimated range noise where the extractor's default is "auto"
+    # (incremental, RANSAC, Hough), of each line's own residuals where it is none (regression)
     scan = next(iter(simulate("office", 3, n_scans=1)))[0]
     lines = extract(scan)
+    auto = LINE_EXTRACTORS[CONTRACT[EXTRACTORS.index(extract)]].params_cls().range_sigma_m == "auto"
+    sigma = scan_sigma(scan) if auto else None
     assert lines
     assert [ln.first for ln in lines] == sorted(ln.first for ln in lines)
     for line in lines:
         idx = line.indices
         assert np.all(np.diff(idx) > 0) and np.all(scan.valid[idx])
-        ref = line_segment(scan.points[idx], idx)
+        ref = line_segment(scan.points[idx], idx, range_sigma=sigma)
         assert (line.r, line.alpha, line.error) == (ref.r, ref.alpha, ref.error)
         assert np.array_equal(line.covariance, ref.covariance)
         assert line.n_points >= 5 and line.length >= 0.15
@@ -208,16 +213,17 @@ def test_the_same_scan_gives_the_same_lines(extract, world, seed):
     assert key(a) == key(b) and key(extract(scan)) == key(a)
 
 
-@pytest.mark.parametrize("extract, kwargs", [(incremental_lines, {}), (regression_lines, {"range_sigma_m": 0.02})],
+@pytest.mark.parametrize("extract, kwargs", [(incremental_lines, FIXED_INCREMENTAL),
+                                             (regression_lines, {"range_sigma_m": 0.02})],
                          ids=["incremental", "regression"])
 def test_a_segment_stops_at_the_ray_of_its_end_beam(extract, kwargs):
     """The wall x = 1 m from -30 to 45 deg, its last beam reading 6 cm long (4.2 cm off the
     wall); past it, from 45.5 deg, the beams see the wall x = 3 m. The last point's projection
     onto the line lies 4.2 cm along the wall from its ray, beyond the rays of the next two beams
     (1.75 cm apart there): that segment would claim the near wall where they saw the far one,
-    2.85 m behind. The segment ends where the last beam's ray meets the line (as
-    split-and-merge's, ``tests/test_split_merge.py``), and every far beam's ray meets the far
-    wall first, at its measured range. (Line regression takes that point into the line only
+    2.85 m behind (incremental's fixed 5 cm takes the point in). The segment ends where the last
+    beam's ray meets the line (as split-and-merge's, ``tests/test_split_merge.py``), and every far
+    beam's ray meets the far wall first, at its measured range. (Line regression takes that point into the line only
     within three sigmas of it: it is told sigma = 2 cm.)"""
     theta = np.radians(np.arange(-30.0, 60.25, 0.5))
     near = theta <= math.radians(45.0) + 1e-9

@@ -6,6 +6,7 @@ the simulator's known noise for the thresholds, closed-form geometry for the lin
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -14,7 +15,19 @@ import pytest
 from labkit import Config, Scan, extract_features, split_and_merge
 from labkit.fitting import placement_probability
 from labkit.lines.split_merge import SplitMergeParams
-from labkit.noise import AUTO_LINES, MIN_SPLIT_M, auto_split_threshold, scan_sigma
+from labkit.noise import (
+    AUTO_CONFIG,
+    AUTO_LINES,
+    FIXED_CONFIG,
+    FIXED_HOUGH,
+    FIXED_INCREMENTAL,
+    FIXED_LINES,
+    FIXED_RANSAC,
+    MIN_SPLIT_M,
+    auto_split_threshold,
+    noise_config,
+    scan_sigma,
+)
 from labkit.segmentation import SegmentationParams, segment_labels
 
 
@@ -50,9 +63,17 @@ def test_placement_probability_closed_form_and_edge_cases():
 
 # ----------------------------------------------------------------------------- "auto" in the records
 def test_auto_is_accepted_and_a_number_still_wins():
-    # not the default yet (the Radish logs with 1 deg steps get worse: see the README)
-    assert SplitMergeParams().split_threshold_m == 0.05 and SplitMergeParams().place_confidence == 0
-    assert SplitMergeParams(**AUTO_LINES).split_threshold_m == "auto"
+    # the default since issue 16, for every record the pipeline holds; the papers' fixed setting
+    # is one update away and changes every noise-dependent key
+    assert SplitMergeParams() == SplitMergeParams(**AUTO_LINES) and SplitMergeParams().split_threshold_m == "auto"
+    assert Config() == Config().updated(AUTO_CONFIG) and SegmentationParams().range_sigma_m == "auto"
+    fixed = Config().updated(FIXED_CONFIG)
+    assert set(FIXED_CONFIG) == set(AUTO_CONFIG) and fixed.lines.split_threshold_m == 0.05
+    def at(cfg, key):
+        return functools.reduce(getattr, key.split("."), cfg)
+
+    assert all(at(fixed, k) != at(Config(), k) for k in FIXED_CONFIG), "a fixed key left at its auto default"
+    assert noise_config("fixed") == FIXED_CONFIG and noise_config() == AUTO_CONFIG
     assert SegmentationParams(range_sigma_m="auto").range_sigma_m == "auto"
     assert SplitMergeParams(split_threshold_m=0.07).split_threshold_m == 0.07
     for bad in ("Auto", "", None, True):
@@ -164,7 +185,7 @@ def test_auto_finds_a_far_wall_the_breakpoints_cut_at_every_beam(sigma):
         scan, piece = _polyline_scan([(7.2, 1.0), (14.0, 1.0)], sigma, seed)
         # no segment of 5 points (at 2 cm the noise lets a pair through now and then)
         assert (segment_labels(scan, range_sigma_m=sigma, min_points=5) == -1).all()
-        assert split_and_merge(scan) == []  # the defaults fit nothing to it
+        assert split_and_merge(scan, **FIXED_LINES) == []  # the fixed thresholds fit nothing to it
         lines = split_and_merge(scan, split_threshold_m="auto", range_sigma_m=sigma)
         found += len(lines) == 1 and _finds(lines, 1.0, 90.0) and lines[0].n_points >= 0.75 * piece.size
     assert found >= 19
@@ -332,7 +353,7 @@ def test_a_noise_given_as_a_number_reaches_the_detectors_own_segmentation():
         assert _keys(split_and_merge(scan, **{**AUTO_LINES, "range_sigma_m": sigma})) == \
             _keys(split_and_merge(scan, **AUTO_LINES))
         own = segment_labels(scan, range_sigma_m=0.03)
-        assert not np.array_equal(own, segment_labels(scan))  # (the test means something)
+        assert not np.array_equal(own, segment_labels(scan, range_sigma_m=0.01))  # (the test means something)
         for detect in (split_and_merge, detect_circles, detect_legs):
             assert _keys(detect(scan, range_sigma_m=0.03)) == _keys(detect(scan, range_sigma_m=0.03, segments=own))
 
@@ -353,7 +374,7 @@ def test_the_placing_probability_is_what_happens():
     hits, claimed = [], []
     for _ in range(400):
         scan = Scan(ranges=ranges + rng.normal(0.0, 0.03, stub.size), angles=stub)
-        (line,) = split_and_merge(scan, range_sigma_m=0.03, split_threshold_m=0.15)
+        (line,) = split_and_merge(scan, range_sigma_m=0.03, split_threshold_m=0.15, place_confidence=0)
         hits.append(abs(line.r - 6.0) <= 0.05
                     and abs(float(angle_difference(line.alpha, math.radians(41.5)))) <= math.radians(3.0))
         claimed.append(placement_probability(line.covariance, 0.05, math.radians(3.0)))
@@ -362,14 +383,16 @@ def test_the_placing_probability_is_what_happens():
 
 
 def test_a_detector_told_auto_segments_with_the_estimated_noise_too():
-    # the wall 1 m ahead under 5 cm of noise: the default breakpoints (1 cm) cut it into five or
-    # more segments; split-and-merge with AUTO_LINES and no segments given sees one or two
+    # the wall 1 m ahead under 5 cm of noise: the fixed setting's breakpoints (1 cm) cut it into
+    # five or more segments; split-and-merge with AUTO_LINES (the defaults) and no segments given
+    # sees one or two
     theta = np.radians(np.arange(-40.0, 40.25, 0.5))
     rng = np.random.default_rng(1)
     scan = Scan(ranges=1.0 / np.cos(theta) + rng.normal(0, 0.05, theta.size), angles=theta)
     _, steps = split_and_merge(scan, trace=True, **AUTO_LINES)
     assert sum(s.kind == "segment" for s in steps) <= 2
-    _, steps = split_and_merge(scan, trace=True)
+    assert split_and_merge(scan, trace=True)[1] == steps
+    _, steps = split_and_merge(scan, trace=True, **FIXED_LINES)
     assert sum(s.kind == "segment" for s in steps) >= 5
 
 
@@ -431,10 +454,8 @@ def _hall_scores(noise, n, config):
 
 
 def test_circles_and_legs_follow_the_noise_at_2_cm():
-    from labkit.noise import AUTO_CONFIG
-
-    fixed = _hall_scores(0.02, 120, None)
-    auto = _hall_scores(0.02, 120, Config().updated(AUTO_CONFIG))
+    fixed = _hall_scores(0.02, 120, Config().updated(FIXED_CONFIG))
+    auto = _hall_scores(0.02, 120, None)  # the defaults
     # issue 16's goals, on the simulator's truth (120 scans: each rate has a standard error under 1.5 %)
     assert auto["circles"]["precision"] >= 0.95 and auto["circles"]["recall"] >= 0.9, auto["circles"]
     assert auto["legs"]["precision"] >= 0.9 and auto["legs"]["recall"] >= 0.85, auto["legs"]
@@ -443,10 +464,8 @@ def test_circles_and_legs_follow_the_noise_at_2_cm():
 
 
 def test_the_allowances_lose_nothing_at_5_mm():
-    from labkit.noise import AUTO_CONFIG
-
-    fixed = _hall_scores(0.005, 60, None)
-    auto = _hall_scores(0.005, 60, Config().updated(AUTO_CONFIG))
+    fixed = _hall_scores(0.005, 60, Config().updated(FIXED_CONFIG))
+    auto = _hall_scores(0.005, 60, None)  # the defaults
     for kind in ("circles", "legs"):
         assert auto[kind]["recall"] >= fixed[kind]["recall"]
         assert auto[kind]["precision"] >= fixed[kind]["precision"] - 0.01
@@ -478,11 +497,11 @@ def test_flat_pieces_of_leg_width_the_leg_allowance_lets_through(sigma, fixed_ma
     # it: a leg has no angle test (Xavier et al.), and 3-7 points of a 10-25 cm piece at 2 cm of
     # noise cannot tell round from flat -- the widened prerequisite band takes in about 49 % of
     # flat pieces at 2 cm and 18 % at 5 mm (measured, 400 pieces), the fixed band 15 % and 0.8 %.
-    # That is why the allowances are opt-in (labkit.noise.AUTO_CONFIG), not the default.
+    # That is the price of the allowances, the default (range_sigma_m=0 or FIXED_CONFIG: the paper's test).
     from labkit import detect_legs
 
     pieces = list(_flat_pieces(sigma))
-    fixed = sum(len(detect_legs(s, reject_occluded=False)) for s in pieces) / len(pieces)
+    fixed = sum(len(detect_legs(s, range_sigma_m=0, reject_occluded=False)) for s in pieces) / len(pieces)
     allowed = sum(len(detect_legs(s, range_sigma_m=sigma, reject_occluded=False)) for s in pieces) / len(pieces)
     assert fixed <= fixed_max and fixed < allowed <= allowed_max, (fixed, allowed)
 
@@ -492,7 +511,7 @@ def test_auto_is_the_scans_estimate_a_number_wins_and_zero_is_the_paper():
     from labkit.circles.iav import CircleParams
     from labkit.circles.legs import LegsParams
 
-    assert CircleParams().range_sigma_m == 0 and LegsParams().range_sigma_m == 0  # opt-in, as AUTO_LINES
+    assert CircleParams().range_sigma_m == "auto" and LegsParams().range_sigma_m == "auto"  # the default
     world = sim.World("demo", circles=(sim.Column((3.0, 0.5), 0.3), sim.Column((2.0, -0.8), 0.07)))
     lidar = dataclasses_replace_noise(sim.LIDARS["lms200"], 0.02)
     scan, _ = sim.scan_at(world, lidar, (0.0, 0.0, 0.0), rng=np.random.default_rng(2))
@@ -514,7 +533,7 @@ def test_the_trace_shows_the_widened_limit():
     lidar = dataclasses_replace_noise(sim.LIDARS["lms200"], 0.02)
     for seed in range(40):
         scan, _ = sim.scan_at(world, lidar, (0.0, 0.0, 0.0), rng=np.random.default_rng(seed))
-        _, fixed = detect_circles(scan, trace=True)
+        _, fixed = detect_circles(scan, trace=True, range_sigma_m=0)
         circles, steps = detect_circles(scan, range_sigma_m=0.02, trace=True)
         accepted = [s for s in steps if s.kind == "accept"]
         if circles and not any(s.kind == "accept" for s in fixed):  # a circle only the allowance finds
@@ -612,10 +631,10 @@ def test_auto_angular_follows_the_noise_and_loses_nothing_at_5_mm():
 
     from labkit import angular_segmentation
     from labkit.experiments import SENSOR_NOISE_LEVELS_M, compare_lines, nguyen_set
-    from labkit.noise import AUTO_ANGULAR
+    from labkit.noise import FIXED_ANGULAR
 
     rows = compare_lines(nguyen_set(30, noise_levels=SENSOR_NOISE_LEVELS_M),
-                         {"paper": angular_segmentation, "auto": partial(angular_segmentation, **AUTO_ANGULAR)})
+                         {"paper": partial(angular_segmentation, **FIXED_ANGULAR), "auto": angular_segmentation})
     by = {(r["method"], r["noise_std_m"]): r for r in rows}
     for noise in SENSOR_NOISE_LEVELS_M:
         paper, auto = by["paper", noise], by["auto", noise]
@@ -630,7 +649,7 @@ def test_angular_auto_in_the_config_and_its_errors():
     from labkit.lines.angular import AngularParams, auto_direction_window
     from labkit.noise import AUTO_CONFIG
 
-    assert AngularParams().direction_window == 1 and AngularParams().range_sigma_m == 0  # the paper, by default
+    assert AngularParams().direction_window == "auto" and AngularParams().range_sigma_m == "auto"  # the default
     config = Config().updated({**AUTO_CONFIG, "lines.method": "angular"})
     assert config.lines.angular.direction_window == "auto"
     scan = _wall_scan(0.02, seed=4, step_deg=0.5)
@@ -663,19 +682,20 @@ def _key(lines):
 
 
 _OTHERS = ("ransac", "hough", "incremental")
+_FIXED = {"ransac": FIXED_RANSAC, "hough": FIXED_HOUGH, "incremental": FIXED_INCREMENTAL}
 
 
 @pytest.mark.parametrize("name", _OTHERS)
 def test_the_other_extractors_auto_setting_has_fewer_false_lines_at_2_cm(name):
     # the simulator's ground truth, matched by labkit.evaluation (Nguyen et al.'s 5 cm / 3 deg rule);
-    # at 2 cm the defaults report many short pieces whose angle the data cannot place (0.36-0.41 of
-    # their lines false on 408 scans), the auto settings 0.05-0.07
+    # at 2 cm the fixed settings report many short pieces whose angle the data cannot place (0.36-0.41
+    # of their lines false on 408 scans), the auto settings (the defaults) 0.05-0.07
     from functools import partial
 
     from labkit.experiments import compare_lines, nguyen_set
 
     fn, _, auto, _ = _others()[name]
-    rows = compare_lines(nguyen_set(12, noise_levels=(0.02,)), {"default": fn, "auto": partial(fn, **auto)})
+    rows = compare_lines(nguyen_set(12, noise_levels=(0.02,)), {"default": partial(fn, **_FIXED[name]), "auto": fn})
     by = {r["method"]: r for r in rows}
     assert by["default"]["fp_rate"] > 0.25, by["default"]
     assert by["auto"]["fp_rate"] < by["default"]["fp_rate"] / 3, (by["auto"], by["default"])
@@ -683,15 +703,17 @@ def test_the_other_extractors_auto_setting_has_fewer_false_lines_at_2_cm(name):
 
 
 @pytest.mark.parametrize("name", _OTHERS)
-def test_the_other_extractors_defaults_are_the_fixed_values(name):
-    # the default call is the fixed threshold, each line's covariance from its own residuals, and every line
+def test_the_other_extractors_fixed_settings_are_the_fixed_values(name):
+    # the fixed setting is the fixed threshold, each line's covariance from its own residuals, and
+    # every line; the default call is the auto setting
     from labkit.features import line_segment
 
-    fn, key, _, _ = _others()[name]
+    fn, key, auto, _ = _others()[name]
     scan = _wall_scan(0.02, seed=6)
     explicit = fn(scan, **{key: 0.05 if key == "max_error_m" else 0.03}, range_sigma_m=None, place_confidence=0.0,
                   place_dr_m=0.05, place_dalpha_deg=3.0)
-    default = fn(scan)
+    assert _key(fn(scan)) == _key(fn(scan, **auto))
+    default = fn(scan, **_FIXED[name])
     assert default and _key(default) == _key(explicit)
     for ln in default:
         own = line_segment(scan.points[ln.indices], ln.indices)

@@ -71,7 +71,7 @@ from .._iav import (  # the shared machinery; the public names are documented he
     is_v_corner,
     middle_point_offset,
 )
-from .._params import Params, param, takes_params
+from .._params import AUTO, Params, param, takes_params
 from ..features import Circle, LineSegment
 from ..noise import noise_sigma
 from ..scan import Scan
@@ -125,7 +125,7 @@ class CircleParams(Params):
     arc_like_std_max_deg: float = param(math.degrees(ARC_LIKE_STD_MAX), "arc-like: largest IAV standard deviation, "
                                                                         "degrees", lo=0, strict=True)
     v_corner_neighbours: int = param(4, "arc-like: neighbours whose angles must grow for a V-corner", lo=1)
-    range_sigma_m: float = param(0.0, "range noise the tests allow for, metres (0: the paper's fixed tests); "
+    range_sigma_m: float = param(AUTO, "range noise the tests allow for, metres (0: the paper's fixed tests); "
                                       "auto: estimated from each scan (labkit.noise)", lo=0, auto=True)
 
 
@@ -234,8 +234,8 @@ def detect_circles(
         irregular trunks (16-gons, corners 10-15 % off the circle) 22 and 26 were kept
         as "arc-like".
     range_sigma_m : float or "auto", metres
-        Range noise the tests allow for (:data:`labkit.circles.iav.NOISE_Z` below). 0: the
-        paper's fixed thresholds. Given sigma, each test asks whether the segment *could* be
+        Range noise the tests allow for (:data:`labkit.circles.iav.NOISE_Z` below). Default
+        ``"auto"``; 0: the paper's fixed thresholds. Given sigma, each test asks whether the segment *could* be
         a circle seen through that noise: the prerequisite band, the mean range and the
         spread limit are widened by what sigma does to the segment's own points (first-order
         propagation along the beams; the spread limit becomes ``sqrt(std_max^2 + q)`` with

@@ -78,7 +78,7 @@ from .._iav import (
     _trace,
     circle_from_iav,
 )
-from .._params import Params, param, takes_params
+from .._params import AUTO, Params, param, takes_params
 from ..features import Leg, Person
 from ..fitting import fit_circle
 from ..noise import noise_sigma
@@ -157,7 +157,7 @@ class LegsParams(Params):
     reject_occluded: bool = param(True, "drop segments partly hidden behind a nearer object")
     center_method: str = param("ray", "centre: ray (middle point pushed back by the radius), iav, algebraic, "
                                       "geometric", choices=("ray", "iav", "algebraic", "geometric"))
-    range_sigma_m: float = param(0.0, "range noise the tests allow for, metres (0: the paper's fixed tests); "
+    range_sigma_m: float = param(AUTO, "range noise the tests allow for, metres (0: the paper's fixed tests); "
                                       "auto: estimated from each scan (labkit.noise)", lo=0, auto=True)
     pair_max_distance_m: float = param(0.6, "two legs closer than this are one person, metres (pair_legs)",
                                        lo=0, strict=True)
@@ -228,7 +228,8 @@ def detect_legs(
     range_sigma_m : float or "auto", metres
         Range noise the tests allow for, as :func:`labkit.detect_circles`: the prerequisite
         band (and the IAV bounds, when given) widened by what that noise does to the
-        segment's own points. 0: the paper's fixed test; ``"auto"``: estimated from the scan.
+        segment's own points. Default ``"auto"``: estimated from the scan; 0: the paper's
+        fixed test.
         With 2 cm of noise, the 2 cm on a 10 cm leg's middle point alone moves its
         prerequisite ratio by 0.2, and the fixed test misses a third of the legs (hall,
         300 scans: recall 0.69 fixed, 0.99 with the allowance). The price: 3-7 points of a

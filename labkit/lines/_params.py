@@ -17,14 +17,14 @@ class PlacingParams(Params):
     trusts; a line is reported only if it is likely within ``place_dr_m`` and
     ``place_dalpha_deg`` of the true line."""
 
-    range_sigma_m: float = param(None, "range noise of the lines' covariances (placing), metres; none: each "
+    range_sigma_m: float = param(AUTO, "range noise of the lines' covariances (placing), metres; none: each "
                                        "line's own residuals; auto: estimated from each scan (labkit.noise)",
                                  lo=0, strict=True, optional=True, kind=float, auto=True)
     place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
                               lo=0, strict=True)
     place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
-    place_confidence: float = param(0.0, "with at least this probability by its covariance (0: report every "
-                                         "line; 0.8 in the extractor's labkit.noise.AUTO_ setting)", lo=0, hi=1)
+    place_confidence: float = param(0.8, "with at least this probability by its covariance (0: report every "
+                                         "line, the papers)", lo=0, hi=1)
 
 
 @dataclass(frozen=True)

@@ -49,7 +49,8 @@ simulator's LMS200, LMS111 and XV-11 scans (tests/test_angular.py):
   and ``eps_dist = 4 cm`` raise that to 82 %. For a dense, precise scanner
   (0.25 deg, 1 mm) the paper's 2 deg and 1 cm work as well as the defaults.
 
-Following the range noise (opt-in, ``labkit.noise.AUTO_ANGULAR``): the three-beam direction is
+Following the range noise (the default, ``labkit.noise.AUTO_ANGULAR``; the paper is
+``labkit.noise.FIXED_ANGULAR``): the three-beam direction is
 the method's weak point. A wider window steadies it, and a direction fitted to ``2 h + 1`` beams
 at spacing ``s`` tilts by about ``sigma / (s sqrt(h (h + 1) (2 h + 1) / 3))``.
 ``direction_window="auto"`` takes the narrowest window that keeps this below ``eps_theta`` at
@@ -286,9 +287,9 @@ class AngularParams(Params):
     min_points: int = param(MIN_PTS, "DBSCAN1D min_pts of both clusterings", lo=2)
     split_gap_m: float = param(0.3, "split collinear clusters at gaps wider than this, metres (inf: never)", lo=0,
                                strict=True, optional=True)
-    direction_window: int = param(1, "half-width of the local directions' window, beams (1: the paper's three "
-                                     "beams); auto: the narrowest the range noise allows", lo=1, auto=True)
-    range_sigma_m: float = param(0.0, "range noise, metres: a local direction only where its window is straight at "
+    direction_window: int = param(AUTO, "half-width of the local directions' window, beams (1: the paper's three "
+                                     "beams); auto: the narrowest the range noise allows", lo=1, auto=True, kind=int)
+    range_sigma_m: float = param(AUTO, "range noise, metres: a local direction only where its window is straight at "
                                       "that noise (0: no test, the paper); auto: estimated from each scan", lo=0,
                                  auto=True)
 
@@ -352,13 +353,13 @@ def angular_segmentation(
         farther apart than this (e.g. 0.3 for walls on either side of a door). Default
         0.3 m, as in the pipeline; None or inf: no split, as in the paper.
     direction_window : int or "auto"
-        Half-width of the window of the local directions, beams. Default 1 (three beams, the
-        paper); ``"auto"``: :func:`auto_direction_window` for the range noise (``range_sigma_m``
-        when it is set, else the scan's estimate).
+        Half-width of the window of the local directions, beams. Default ``"auto"``:
+        :func:`auto_direction_window` for the range noise (``range_sigma_m``
+        when it is set, else the scan's estimate); 1: three beams, the paper.
     range_sigma_m : float or "auto", metres
         When > 0, a beam gets a local direction only if its window is straight at this range
-        noise (:func:`local_directions`). Default 0 (no test, the paper); ``"auto"``: the scan's
-        estimate (:func:`labkit.noise.scan_sigma`).
+        noise (:func:`local_directions`). Default ``"auto"``: the scan's estimate
+        (:func:`labkit.noise.scan_sigma`); 0: no test, the paper.
     trace : bool
         Also return the steps, as :class:`labkit.Step` records (``algorithm="angular"``; ``beams``
         holds each step's beams, spread over the scan): ``"directions"`` (step 1: ``value`` beams
@@ -391,12 +392,20 @@ def angular_segmentation(
 
     >>> angles = np.radians(np.arange(-40.0, 40.5, 0.5))
     >>> ranges = np.where(angles < np.radians(30), 2.0 / np.cos(angles), 3.0 / np.cos(angles))
-    >>> segs = angular_segmentation(Scan(ranges=ranges, angles=angles))
+    >>> from labkit.noise import FIXED_ANGULAR
+    >>> segs = angular_segmentation(Scan(ranges=ranges, angles=angles), **FIXED_ANGULAR)
     >>> [(round(s.r, 3), abs(round(float(np.degrees(s.alpha)), 1)), s.first, s.last) for s in segs]
     [(2.0, 0.0, 1, 138), (3.0, 0.0, 141, 159)]
 
     The end beams and the beams next to the jump have no local direction (one of their
-    neighbours is missing or on the other wall) and are left out.
+    neighbours is missing or on the other wall) and are left out. That is the paper's
+    three-beam direction (``FIXED_ANGULAR``); the default fits each direction to as many beams as
+    the noise needs (five here, at the 2 mm that a noise-free scan is taken to have), so one more
+    beam at each end has none:
+
+    >>> segs = angular_segmentation(Scan(ranges=ranges, angles=angles))
+    >>> [(s.first, s.last) for s in segs]
+    [(2, 137), (142, 158)]
     """
     segments, _, steps = _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, direction_window, range_sigma_m,
                                   trace)
@@ -421,7 +430,7 @@ def angular_arrays(
     Examples
     --------
     >>> angles = np.radians(np.arange(-40.0, 40.5, 0.5))
-    >>> a = angular_arrays(Scan(ranges=2.0 / np.cos(angles), angles=angles))
+    >>> a = angular_arrays(Scan(ranges=2.0 / np.cos(angles), angles=angles), direction_window=1, range_sigma_m=0)
     >>> np.degrees(a.directions).round(1).tolist(), int((a.labels == 0).sum())
     ([90.0], 159)
     """

@@ -71,7 +71,7 @@ class HoughParams(PlacingParams):
 
     r_step_m: float = param(0.05, "accumulator cell size in r, metres", lo=0, strict=True)
     alpha_step_deg: float = param(1.0, "accumulator cell size in alpha, degrees", lo=0, strict=True, hi=90)
-    threshold_m: float = param(0.03, "a point belongs to a peak's line within this distance, metres; auto: "
+    threshold_m: float = param(AUTO, "a point belongs to a peak's line within this distance, metres; auto: "
                                      "max(2.5 sigma, 2 cm) of the scan's range noise", lo=0, strict=True, auto=True)
     min_votes: int = param(8, "fewest votes of a peak", lo=2)
     min_points: int = param(5, "fewest points of a line segment", lo=2)
@@ -120,12 +120,13 @@ def hough_lines(
         of the cell each point voted for (2.1 MB as int64), kept to take votes back.
     threshold_m : float, metres
         A point is an inlier of a refined line when it is at most this far from it.
-        Default 0.03 m, as for :func:`labkit.lines.ransac.ransac_lines` (see there why): 2 sigma
+        Default ``"auto"``, as for :func:`labkit.lines.ransac.ransac_lines`; the fixed setting's
+        0.03 m (see there why) is 2 sigma
         of the 15 mm noise of cheap sensors, 6 sigma of the LMS200's 5 mm; at 0.05 m, 86 %
         of the simulated corridor's walls are found (99 % at 0.03 m).
         ``"auto"``: ``max(2.5 sigma, 2 cm)`` of the scan's range noise sigma
         (:data:`labkit.noise.INLIER_SIGMAS`, which says why 2.5), worked out per scan; a number
-        given is used as it is. Not the default yet: see ``place_confidence`` for its effect.
+        given is used as it is.
     min_votes : int
         The peak is accepted as a line only with at least this many votes. Default 8, as
         ``min_inliers`` of :func:`labkit.lines.ransac.ransac_lines`: the shortest wall worth a line
@@ -145,12 +146,13 @@ def hough_lines(
         :func:`labkit.split_and_merge`.
     range_sigma_m : float, "auto" or None
         The range noise of the lines' covariances (and of ``threshold_m="auto"``), as for
-        :func:`labkit.lines.ransac.ransac_lines`. Default ``None``: each line's own residuals.
+        :func:`labkit.lines.ransac.ransac_lines`. Default ``"auto"``; ``None``: each line's own
+        residuals.
     place_dr_m, place_dalpha, place_confidence : float
         Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
-        ``place_confidence`` 0: every line; 0.8 in :data:`labkit.noise.AUTO_HOUGH`). On the 408
+        ``place_confidence`` 0.8; 0: every line, as in :data:`labkit.noise.FIXED_HOUGH`). On the 408
         simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
-        :data:`labkit.noise.AUTO_HOUGH` reports 0.05 false lines instead of the default's 0.37, and
+        :data:`labkit.noise.AUTO_HOUGH` reports 0.05 false lines instead of the fixed setting's 0.37, and
         finds 0.85 of the walls instead of 0.90.
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere (for instance with the beams of circles and

@@ -78,7 +78,7 @@ class IncrementalParams(PlacingParams):
     """Parameters of :func:`incremental_lines` and the ``[lines.incremental]`` table of
     :class:`labkit.Config`, each default once: lengths in metres."""
 
-    max_error_m: float = param(0.05, "a point joins the line while within this distance of the refitted line, "
+    max_error_m: float = param(AUTO, "a point joins the line while within this distance of the refitted line, "
                                      "metres; auto: max(4 sigma, 2 cm) of the scan's range noise",
                                lo=0, strict=True, auto=True)
     min_points: int = param(5, "points of a seed, and fewest points of a line", lo=2)
@@ -109,13 +109,14 @@ def incremental_lines(
         Invalid beams (NaN, inf, 0, out of range) are masked: skipped, never raised.
     max_error_m : float, metres
         The line condition: a new point joins the line while it is within this distance of
-        the line refitted with it. Default 0.05 m, split-and-merge's ``split_threshold_m``
-        (ten times the LMS200's 5 mm range noise), so that the two extractors are compared
-        at the same tolerance. 0.04 m scores about the same on the simulated worlds; 0.06 m
+        the line refitted with it. Default ``"auto"`` (below). The fixed setting
+        (:data:`labkit.noise.FIXED_INCREMENTAL`) has 0.05 m, split-and-merge's fixed
+        ``split_threshold_m`` (ten times the LMS200's 5 mm range noise), so that the two
+        extractors are compared at the same tolerance. 0.04 m scores about the same on the simulated worlds; 0.06 m
         loses more short walls of the corridor (0.88 found instead of 0.93).
         ``"auto"``: ``max(4 sigma, 2 cm)`` of the scan's range noise sigma
         (:data:`labkit.noise.GROW_SIGMAS`, which says why 4), worked out per scan; a number
-        given is used as it is. Not the default yet: see ``place_confidence`` for its effect.
+        given is used as it is.
     min_points : int
         Points of a seed, and fewest points of a line. Default 5 (Xavier et al.'s
         ``line_min_pts``, split-and-merge's ``min_points``): fewer points fix a line's
@@ -127,12 +128,13 @@ def incremental_lines(
         as split-and-merge.
     range_sigma_m : float, "auto" or None
         The range noise of the lines' covariances (and of ``max_error_m="auto"``), as for
-        :func:`labkit.lines.ransac.ransac_lines`. Default ``None``: each line's own residuals.
+        :func:`labkit.lines.ransac.ransac_lines`. Default ``"auto"``; ``None``: each line's own
+        residuals.
     place_dr_m, place_dalpha, place_confidence : float
         Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
-        ``place_confidence`` 0: every line; 0.8 in :data:`labkit.noise.AUTO_INCREMENTAL`). On the 408
+        ``place_confidence`` 0.8; 0: every line, as in :data:`labkit.noise.FIXED_INCREMENTAL`). On the 408
         simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
-        :data:`labkit.noise.AUTO_INCREMENTAL` reports 0.07 false lines instead of the default's 0.36, and
+        :data:`labkit.noise.AUTO_INCREMENTAL` reports 0.07 false lines instead of the fixed setting's 0.36, and
         finds 0.84 of the walls instead of 0.92.
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere (e.g. shared by a pipeline, with the beams

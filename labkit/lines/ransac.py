@@ -67,7 +67,7 @@ class RansacParams(PlacingParams):
     :class:`labkit.Config`, each default once: lengths in metres (the random generator is
     seeded with :data:`DEFAULT_SEED`; pass ``rng=`` to the function for another)."""
 
-    threshold_m: float = param(0.03, "a point is an inlier within this distance of the line, metres; auto: "
+    threshold_m: float = param(AUTO, "a point is an inlier within this distance of the line, metres; auto: "
                                      "max(2.5 sigma, 2 cm) of the scan's range noise", lo=0, strict=True, auto=True)
     min_inliers: int = param(8, "fewest inliers of a line", lo=2)
     max_trials: int = param(50, "random pairs drawn per line", lo=1)
@@ -105,16 +105,17 @@ def ransac_lines(
     scan : Scan
         Invalid beams (NaN, inf, 0, out of range) are masked: they take no part.
     threshold_m : float, metres
-        A point is an inlier of a line when it is at most this far from it. Default 0.03 m:
-        2 sigma of the 15 mm range noise of cheap sensors (XV-11), 6 sigma of the LMS200's
-        5 mm. A wider band lets a line take the first points of the next wall past a corner,
+        A point is an inlier of a line when it is at most this far from it. Default
+        ``"auto"`` (below); the fixed setting's 0.03 m (:data:`labkit.noise.FIXED_RANSAC`) is
+        2 sigma of the 15 mm range noise of cheap sensors (XV-11), 6 sigma of the LMS200's 5 mm.
+        A wider band lets a line take the first points of the next wall past a corner,
         which tilts short walls such as the backs of door recesses: at 0.05 m, 85 % of the
         simulated corridor's walls are found (98 % at 0.03 m). A narrower band leaves noisy
         points out of their wall's line: at 0.02 m the lines of the simulated XV-11 office hold
         87 % of its wall points (96 % at 0.03 m). Measured over 20 scans, seed 0.
         ``"auto"``: ``max(2.5 sigma, 2 cm)`` of the scan's range noise sigma
         (:data:`labkit.noise.INLIER_SIGMAS`, which says why 2.5), worked out per scan; a number
-        given is used as it is. Not the default yet: see ``place_confidence`` for its effect.
+        given is used as it is.
     min_inliers : int
         The best hypothesis is accepted as a line only with at least this many inliers, and
         the search stops when fewer points remain. Default 8: the shortest wall worth a line
@@ -145,22 +146,22 @@ def ransac_lines(
         inliers of a line are cut there into separate segments. Default 0.3 m, as for
         :func:`labkit.split_and_merge`.
     range_sigma_m : float, "auto" or None
-        The range noise of the lines' covariances, hence of the placing below. Default ``None``:
-        each line's covariance is worked out from its own residuals, as before
-        (:func:`labkit.features.line_segment`); ``"auto"``: the scan's estimate
-        (:func:`labkit.noise.scan_sigma`); a number: that noise. With ``threshold_m="auto"`` it is
+        The range noise of the lines' covariances, hence of the placing below. Default
+        ``"auto"``: the scan's estimate; ``None``: each line's covariance is worked out from its
+        own residuals (:func:`labkit.features.line_segment`); a number: that noise
+        (:func:`labkit.noise.scan_sigma`). With ``threshold_m="auto"`` it is
         also the noise the threshold follows (the scan's estimate when ``None``).
     place_dr_m, place_dalpha, place_confidence : float
         What a user trusts, as in :func:`labkit.split_and_merge`: a line is reported only if, by its
         covariance, it lies within ``place_dr_m`` (default 5 cm) in ``r`` and ``place_dalpha``
         (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the true line with
-        probability ``place_confidence`` (default 0: every line is reported; 0.8 in
-        :data:`labkit.noise.AUTO_RANSAC`): :func:`labkit.fitting.placement_probability`. A short
+        probability ``place_confidence`` (default 0.8; 0: every line is reported, as in
+        :data:`labkit.noise.FIXED_RANSAC`): :func:`labkit.fitting.placement_probability`. A short
         piece whose angle the data cannot fix to a few degrees is dropped (a ``"reject"`` step
         with ``test="place_confidence"``). On the 408 simulated scans of
         :func:`labkit.experiments.nguyen_set` at 2 cm of range noise, :data:`labkit.noise.AUTO_RANSAC`
-        reports 0.06 false lines instead of the default's 0.41, and finds 0.84 of the walls
-        instead of 0.91.
+        reports 0.06 false lines instead of the fixed setting's 0.41, and finds 0.84 of the
+        walls instead of 0.91.
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere (for instance with the beams of circles and
         legs set to -1). Beams labelled -1 then take no part, and a segment never spans two

@@ -24,11 +24,12 @@ A line's segment runs between its first and last points projected onto it, but n
 rays of its first and last beams: a noisy end point seen at a grazing angle projects along the
 line over the next beams' rays, and the segment would claim a surface where they saw another.
 
-The thresholds that depend on the sensor's range noise can follow it: with ``"auto"``,
+The thresholds that depend on the sensor's range noise follow it by default (``"auto"``):
 ``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split test measures
 each point against its own noise across the line, five times ``sigma |cos(incidence)|`` (at least
-2 cm), and the fit's residuals against ``sigma`` (:data:`labkit.noise.AUTO_LINES` is the whole
-setting, placing included).
+2 cm), and the fit's residuals against ``sigma``; lines the data cannot place are dropped
+(``place_confidence`` 0.8). :data:`labkit.noise.FIXED_LINES` gives the papers' fixed 5 cm
+threshold instead, with every line reported.
 
 ``method="fit"`` measures the worst point from the least-squares line (the slides);
 ``method="endpoints"`` from the chord through the list's first and last points -- the
@@ -58,7 +59,7 @@ from .._cache import remembered
 from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..fitting import _line_covariances, line_from_sums
-from ..noise import MIN_SPLIT_M, RANGE_SIGMA_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
+from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
 from ..scan import Scan
 from ..segmentation import SegmentationParams, _thresholds, labels_from, segment_labels, segment_order
 from ..steps import Step
@@ -263,7 +264,7 @@ class SplitMergeParams(Params):
     registry, and the ``[lines]`` table of :class:`labkit.Config`), each default once: lengths
     in metres (``_m``), angles in degrees (``_deg``)."""
 
-    split_threshold_m: float = param(0.05, "split when the worst point is farther than this from the line, metres; "
+    split_threshold_m: float = param(AUTO, "split when the worst point is farther than this from the line, metres; "
                                            "auto: each point against 5 sigma of the scan's range noise across the "
                                            "line (at least 2 cm), and the fit's residuals against sigma",
                                      lo=0, strict=True, auto=True)
@@ -276,14 +277,14 @@ class SplitMergeParams(Params):
     merge_dr_m: float = param(0.2, "merge when |dr| is under this, metres", lo=0, strict=True)
     merge_dalpha_deg: float = param(10.0, "and |dalpha| under this, degrees", lo=0, strict=True)
     merge_chi2: float = param(9.21, "chi-square merge threshold (2 dof, 99 %)", lo=0, strict=True)
-    range_sigma_m: float = param(RANGE_SIGMA_M, "range noise of the sensor, metres (breakpoints, line covariances, "
+    range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (breakpoints, line covariances, "
                                                 "chi2 merge, placing); auto: estimated from each scan (labkit.noise)",
                                  lo=0, strict=True, auto=True)
     place_dr_m: float = param(0.05, "report a line only if it is likely within this of the true r, metres",
                               lo=0, strict=True)
     place_dalpha_deg: float = param(3.0, "and within this of the true alpha, degrees", lo=0, strict=True)
-    place_confidence: float = param(0.0, "with at least this probability by its covariance (0: report every "
-                                         "line; 0.8 with the auto thresholds)",
+    place_confidence: float = param(0.8, "with at least this probability by its covariance (0: report every "
+                                         "line, the papers)",
                                     lo=0, hi=1)
     weights: str = param("inverse_range", "point weights of the fits: inverse_range (1/rho, the slides) or uniform",
                          choices=("inverse_range", "uniform"), optional=True)
@@ -330,11 +331,11 @@ def split_and_merge(
         line is pulled towards the longer of two walls meeting at a corner, so the worst
         point often sits near the end of the short wall and "fit" peels it off a few points
         at a time, losing short walls; the chord passes through both ends and finds the
-        corner. Over 30 scans of the simulated corridor the default finds every wall of 10 beams
-        or more, "fit" 0.87 of them (``tests/test_split_merge.py``).
+        corner. Over 30 scans of the simulated corridor with the fixed 5 cm threshold the chord
+        finds every wall of 10 beams or more, "fit" 0.87 of them (``tests/test_split_merge.py``).
     split_threshold_m : float or "auto"
-        Split when the worst point is farther than this from the line. Default 0.05 m.
-        A fixed threshold suits one sensor only: 5 cm is ten times an LMS200's 5 mm and
+        Split when the worst point is farther than this from the line; default ``"auto"``.
+        A fixed threshold (the papers' 0.05 m) suits one sensor only: 5 cm is ten times an LMS200's 5 mm and
         shatters walls at the 3 cm of cheap scanners (on the simulated sets of
         ``benchmarks/evaluation.py`` its FalsePos grows from 0.06 at 5 mm to 0.80 at 3 cm).
         ``"auto"`` follows the scan's range noise sigma (``range_sigma_m``) with two tests. A
@@ -352,8 +353,8 @@ def split_and_merge(
         breakpoint detector cuts at every beam, is joined again (:func:`_grazing_runs`): lone
         beams in a row, each cut from the next at :data:`GRAZING_DEG` or more from the beams.
         :func:`labkit.noise.auto_split_threshold` (``max(5 sigma, 2 cm)``, a point seen head-on)
-        is the threshold the trace and the merge's worst-point test report.
-        ``"auto"`` is not the default yet (see README, "Unknown range noise").
+        is the threshold the trace and the merge's worst-point test report. A number gives the
+        papers' single threshold, without the per-point and residual tests.
     min_points : int
         ``minPointsPerLine``: runs with fewer points make no line, and the worst point is
         never among the first or last ``min_points // 2`` of a run. Default 5 (Xavier et
@@ -378,14 +379,14 @@ def split_and_merge(
         the adaptive breakpoint detector on.
     range_sigma_m : float or "auto"
         Range noise, for the adaptive breakpoints, the lines' covariances and the ``"auto"``
-        split threshold. Default 0.01 m; ``"auto"``: estimated from the scan
-        (:func:`labkit.noise.scan_sigma`).
+        split threshold. Default ``"auto"``: estimated from the scan
+        (:func:`labkit.noise.scan_sigma`); a number: that noise (the fixed settings' 0.01 m).
     place_dr_m, place_dalpha, place_confidence : float
         What a user trusts: a line is reported only if, by its covariance (from
         ``range_sigma_m``), it lies within ``place_dr_m`` (default 5 cm) in ``r`` and
         ``place_dalpha`` (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the
-        true line with probability ``place_confidence`` (default 0: every line is reported;
-        0.8 with the ``"auto"`` thresholds):
+        true line with probability ``place_confidence`` (default 0.8; 0: every line is
+        reported, as in the papers):
         :func:`labkit.fitting.placement_probability`. A short piece seen from afar, whose angle
         the data cannot fix to a few degrees, is dropped (a ``"reject"`` step with
         ``test="place_confidence"``). The defaults are Nguyen et al.'s tolerance of a correct
