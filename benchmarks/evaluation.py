@@ -6,18 +6,20 @@ Four parts, every number computed here by :mod:`labkit.experiments` (the same co
 (a) every line extractor at its defaults on ``--scans`` simulated scans of 722 beams per noise
     level (5 mm, 1 cm, 2 cm, 3 cm), a third each from the office, corridor and random-polygon
     worlds: TruePos, FalsePos, sigma dr, sigma dalpha, lines per scan and scans per second --
-    then the same by world, and every extractor's noise-following setting (``AUTO_LINES``,
-    ``AUTO_ANGULAR``, ``AUTO_RANSAC``, ``AUTO_HOUGH``, ``AUTO_INCREMENTAL``);
+    then the same by world, and every extractor with the papers' fixed thresholds, its defaults
+    before "auto" (``FIXED_LINES``, ``FIXED_ANGULAR``, ``FIXED_RANSAC``, ``FIXED_HOUGH``,
+    ``FIXED_INCREMENTAL``);
 (b) circles and legs of the pipeline on 300 scans of the ``hall`` world at each noise level, with
-    the default configuration and with ``labkit.noise.AUTO_CONFIG``;
+    the default configuration (every threshold following the noise) and with
+    ``labkit.noise.FIXED_CONFIG``;
 (c) ray-axis RMSE (Schaefer et al. 2018) and lines per scan of every extractor (and of
-    the noise-following settings) on the
+    the fixed settings) on the
     first 100 scans of each Radish log in ``../shared/datasets/carmen`` (skipped when absent),
-    and the circles and legs per scan there with the default configuration and ``AUTO_CONFIG``
+    and the circles and legs per scan there with the default configuration and ``FIXED_CONFIG``
     (no truth: a count, to see how many more shapes the noise allowances let through on real
     clutter);
 (d) split-and-merge's true- against false-positive rate as a fixed split threshold varies (with
-    the old fixed range noise of 1 cm and every line reported), against its opt-in ``AUTO_LINES``;
+    the fixed range noise of 1 cm and every line reported), against its default (``AUTO_LINES``);
 (e) what the data allows: the lines of an extractor that knew which beams hit which wall
     (``labkit.experiments.truth_lines``) against ``AUTO_LINES``, both keeping the lines they can
     place with a confidence from 0 to 0.9 (``placement_frontier``).
@@ -43,14 +45,14 @@ from labkit import experiments as ex
 from labkit.lines.hough import hough_lines
 from labkit.lines.incremental import incremental_lines
 from labkit.lines.ransac import ransac_lines
-from labkit.noise import AUTO_ANGULAR, AUTO_CONFIG, AUTO_HOUGH, AUTO_INCREMENTAL, AUTO_LINES, AUTO_RANSAC
+from labkit.noise import FIXED_ANGULAR, FIXED_CONFIG, FIXED_HOUGH, FIXED_INCREMENTAL, FIXED_LINES, FIXED_RANSAC
 
 #: Every extractor with a noise-following setting, at that setting.
-AUTO_EXTRACTORS = {"split_and_merge AUTO_LINES": partial(split_and_merge, **AUTO_LINES),
-                   "angular AUTO_ANGULAR": partial(angular_segmentation, **AUTO_ANGULAR),
-                   "ransac AUTO_RANSAC": partial(ransac_lines, **AUTO_RANSAC),
-                   "hough AUTO_HOUGH": partial(hough_lines, **AUTO_HOUGH),
-                   "incremental AUTO_INCREMENTAL": partial(incremental_lines, **AUTO_INCREMENTAL)}
+FIXED_EXTRACTORS = {"split_and_merge FIXED_LINES": partial(split_and_merge, **FIXED_LINES),
+                    "angular FIXED_ANGULAR": partial(angular_segmentation, **FIXED_ANGULAR),
+                    "ransac FIXED_RANSAC": partial(ransac_lines, **FIXED_RANSAC),
+                    "hough FIXED_HOUGH": partial(hough_lines, **FIXED_HOUGH),
+                    "incremental FIXED_INCREMENTAL": partial(incremental_lines, **FIXED_INCREMENTAL)}
 
 DATASETS = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
 
@@ -74,14 +76,14 @@ def main() -> None:
     by_world = ex.compare_lines(data, by=("noise_std_m", "world"))
     print("\nBy world:\n")
     print(ex.markdown_table(by_world, {"world": "world", **ex.LINE_COLUMNS}))
-    print("\nThe noise-following settings of the extractors (opt-in):\n")
-    print(ex.markdown_table(ex.compare_lines(data, AUTO_EXTRACTORS, repeat=args.repeat), ex.LINE_COLUMNS))
+    print("\nThe papers' fixed thresholds (the defaults before \"auto\"):\n")
+    print(ex.markdown_table(ex.compare_lines(data, FIXED_EXTRACTORS, repeat=args.repeat), ex.LINE_COLUMNS))
 
     print("\n## (b) Circles and legs of the pipeline on 300 scans of the hall\n")
-    auto_config = Config().updated(AUTO_CONFIG)
+    fixed_config = Config().updated(FIXED_CONFIG)
     round_table, round_by = [], {}
     for noise in ex.SENSOR_NOISE_LEVELS_M:
-        for setting, config in (("default", None), ("AUTO_CONFIG", auto_config)):
+        for setting, config in (("default", None), ("FIXED_CONFIG", fixed_config)):
             scores = ex.score_round_objects(300, noise_std_m=noise, config=config)
             round_by[noise, setting] = scores
             round_table += [{"noise_std_m": noise, "setting": setting, **r} for r in scores.values()]
@@ -91,26 +93,26 @@ def main() -> None:
     print(f"\n## (c) Ray-axis RMSE on the first {args.log_scans} scans of each Radish log\n")
     logs = sorted(args.logs.glob("*.log*")) if args.logs.is_dir() else []
     if logs:
-        extractors = {**ex.LINE_EXTRACTORS, **AUTO_EXTRACTORS}
+        extractors = {**ex.LINE_EXTRACTORS, **FIXED_EXTRACTORS}
         print(ex.markdown_table(ex.compare_on_logs(logs, extractors, n_scans=args.log_scans, repeat=args.repeat),
                                 ex.LOG_COLUMNS))
         print("\nCircles and legs per scan (no truth):\n")
-        print(ex.markdown_table(ex.round_objects_on_logs(logs, {"default": None, "AUTO_CONFIG": auto_config},
+        print(ex.markdown_table(ex.round_objects_on_logs(logs, {"default": None, "FIXED_CONFIG": fixed_config},
                                                          n_scans=args.log_scans), ex.ROUND_LOG_COLUMNS))
     else:
         print(f"(skipped: no CARMEN logs in {args.logs})")
 
     print("\n## (d) Split-and-merge (IEPF): true against false positives by split threshold\n")
-    sweep = ex.sweep_split_and_merge(data, range_sigma_m=0.01, place_confidence=0.0)
-    auto = ex.compare_lines(data, {"auto": partial(split_and_merge, **AUTO_LINES)})
+    sweep = ex.sweep_split_and_merge(data)  # (the fixed setting with each threshold)
+    auto = ex.compare_lines(data, {"auto": split_and_merge})  # the default
     for r in auto:
-        r["split_threshold_m"] = "auto"
+        r["split_threshold_m"] = "auto (default)"
     print(ex.markdown_table(sorted(sweep + auto, key=lambda r: r["noise_std_m"]),
                             {**ex.SWEEP_COLUMNS, "split_threshold_m": "split threshold (m)"}))
 
     print("\nWhat the false positives at 2 cm are (split threshold 0.12 m): each unmatched line against the wall most"
           " of its beams hit.\n")
-    print(ex.markdown_table(ex.false_positive_reasons(data, 0.02, split_threshold_m=0.12),
+    print(ex.markdown_table(ex.false_positive_reasons(data, 0.02, **{**FIXED_LINES, "split_threshold_m": 0.12}),
                             {"reason": "fails", "lines": "lines", "median_length_m": "median length (m):.2f",
                              "median_points": "median points:.0f"}))
 
@@ -135,9 +137,9 @@ def main() -> None:
                       "yes" if best is not None and best["tp_rate"] >= 0.9 else "no"))
     for r in auto:
         ok = r["tp_rate"] >= 0.9 and r["fp_rate"] <= 0.05
-        goals.append((f"issue 16: split-and-merge with AUTO_LINES TruePos >= 0.9, FalsePos <= 0.05, noise "
+        goals.append((f"issue 16: split-and-merge at its defaults TruePos >= 0.9, FalsePos <= 0.05, noise "
                       f"{r['noise_std_m']} m", f"{r['tp_rate']:.3f}, {r['fp_rate']:.3f}", "met" if ok else "not met"))
-    for setting in ("default", "AUTO_CONFIG"):
+    for setting in ("default", "FIXED_CONFIG"):
         c2, g2 = round_by[0.02, setting]["circles"], round_by[0.02, setting]["legs"]
         goals.append((f"issue 16: circles precision >= 0.95, recall >= 0.9 at 2 cm ({setting})",
                       f"{c2['precision']:.3f}, {c2['recall']:.3f}",
