@@ -78,6 +78,8 @@ def _check_value(section: str, f: dataclasses.Field, value):
         return value
     if value is None and meta["optional"]:
         return None
+    if value == "none" and meta["optional"] and meta["kind"] is not str:  # (TOML has no null)
+        return None
     if meta.get("auto") and isinstance(value, str):
         if value != AUTO:
             raise ValueError(f'{name} must be a number or "auto", got {value!r}')

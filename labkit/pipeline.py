@@ -314,8 +314,10 @@ class Config:
                 value = getattr(section, f.name)
                 if f.metadata.get("record"):
                     nested.append((f"{name}.{f.name}", value, f.metadata["doc"]))
-                elif value is None:  # TOML has no null: left out, so the default (None) is read back
+                elif value is None and f.default is None:  # TOML has no null: left out, the default is read back
                     out.append(f"# {f.name} =  (none)  # {f.metadata['doc']}")
+                elif value is None:  # (a default that is not None: the word, which the record reads as None)
+                    out.append(f'{f.name} = "none"  # {f.metadata["doc"]}')
                 else:
                     out.append(f"{f.name} = {_toml_value(value)}  # {f.metadata['doc']}")
             out.append("")

@@ -85,6 +85,18 @@ def test_auto_is_accepted_and_a_number_still_wins():
         SplitMergeParams(place_confidence=1.5)
 
 
+def test_the_fixed_config_round_trips_through_toml():
+    # RANSAC's, Hough's and incremental's fixed range_sigma_m is None (each line's own residuals)
+    # under a default of "auto": TOML has no null, so the file says "none" (a left-out key would
+    # read back as "auto")
+    fixed = Config().updated(FIXED_CONFIG)
+    assert fixed.lines.ransac.range_sigma_m is None and Config().lines.ransac.range_sigma_m == "auto"
+    assert Config.from_toml(fixed.to_toml()) == fixed
+    assert Config.from_toml(Config().to_toml()) == Config()
+    with pytest.raises(ValueError, match="split_threshold_m"):  # a field that cannot be None
+        Config().updated({"lines.split_threshold_m": "none"})
+
+
 def test_config_round_trips_auto_through_toml():
     cfg = Config().updated({"lines": {**AUTO_LINES, "split_threshold_m": 0.04}, "segmentation.range_sigma_m": "auto"})
     back = Config.from_toml(cfg.to_toml())
