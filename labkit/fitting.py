@@ -276,15 +276,22 @@ def placement_probability(cov, max_dr_m: float, max_dalpha: float) -> np.ndarray
         sd_a = np.sqrt(var_a)
         # alpha in units of its standard deviation, integrated over +-min(max_dalpha / sd, 8)
         half = np.minimum(max_dalpha / sd_a, 8.0)
-        u = half[:, None] * _GL_U[None, :]  # (K, nodes)
         slope = c_ra / np.where(var_a > 0, var_a, 1.0) * sd_a  # E[r | alpha = u sd] = slope u
         sd_r = np.sqrt(np.maximum(var_r - c_ra * c_ra / np.where(var_a > 0, var_a, 1.0), 1e-300))
-        mu = slope[:, None] * u
+        # With r and alpha strongly correlated (a short wall far away) the probability that r is
+        # within max_dr given alpha drops from 1 to 0 within sd_r where |slope u| passes max_dr: a
+        # step one set of nodes misses. The interval is cut there, +-b, and each piece integrated.
+        b = np.minimum(max_dr_m / np.abs(slope), half)
+        lo = np.stack([-half, -b, b], axis=1)  # (K, 3) pieces [lo, hi]
+        hi = np.stack([-b, b, half], axis=1)
+        mid, rad = (hi + lo) / 2, (hi - lo) / 2
+        u = mid[:, :, None] + rad[:, :, None] * _GL_U  # (K, 3, nodes)
+        mu = slope[:, None, None] * u
         # Phi((max_dr - mu) / sd_r) - Phi((-max_dr - mu) / sd_r), both in one call
-        edges = _normal_cdf((np.array([max_dr_m, -max_dr_m])[:, None, None] - mu) / sd_r[:, None])
+        edges = _normal_cdf((np.array([max_dr_m, -max_dr_m])[:, None, None, None] - mu) / sd_r[:, None, None])
         inside = edges[0] - edges[1]
         dens = np.exp(-0.5 * u * u) / math.sqrt(2 * math.pi)
-        p = half * ((dens * inside) @ _GL_W)
+        p = ((dens * inside) @ _GL_W * rad).sum(axis=1)
     p = np.where(np.isfinite(p), np.clip(p, 0.0, 1.0), 0.0)
     return float(p[0]) if one else p
 

@@ -50,6 +50,21 @@ def test_placement_probability_matches_monte_carlo(seed):
     assert placement_probability(cov, 0.05, math.radians(3.0)) == pytest.approx(mc, abs=0.005)
 
 
+@pytest.mark.parametrize("seed", range(8))
+def test_placement_probability_of_strongly_correlated_lines_matches_monte_carlo(seed):
+    # a short wall far away: its r and alpha correlate to 0.99-0.9999 (a turn about the wall's
+    # centroid moves r by the distance to it). The probability that r is within 5 cm given alpha
+    # then falls from 1 to 0 at a step narrower than the integral's nodes were apart: it said
+    # 0.72 for a line Monte Carlo places with 0.85, and such lines were dropped at 0.8.
+    rng = np.random.default_rng(100 + seed)
+    sr, sa = 10 ** rng.uniform(-1.8, -1.3), math.radians(10 ** rng.uniform(-0.3, 0.5))
+    rho = rng.choice([-1.0, 1.0]) * (1.0 - 10 ** rng.uniform(-4.0, -2.0))
+    cov = np.array([[sr * sr, rho * sr * sa], [rho * sr * sa, sa * sa]])
+    z = rng.multivariate_normal([0.0, 0.0], cov, 400_000)
+    mc = np.mean((np.abs(z[:, 0]) <= 0.05) & (np.abs(z[:, 1]) <= math.radians(3.0)))
+    assert placement_probability(cov, 0.05, math.radians(3.0)) == pytest.approx(mc, abs=0.004)
+
+
 def test_placement_probability_closed_form_and_edge_cases():
     # uncorrelated: the product of two one-dimensional probabilities, (2 Phi(k) - 1)
     cov = np.diag([0.02 ** 2, math.radians(1.5) ** 2])
