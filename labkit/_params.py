@@ -78,7 +78,7 @@ def _check_value(section: str, f: dataclasses.Field, value):
         return value
     if value is None and meta["optional"]:
         return None
-    if value == "none" and meta["optional"] and meta["kind"] is not str:  # (TOML has no null)
+    if isinstance(value, str) and value == "none" and meta["optional"] and meta["kind"] is not str:  # (no null in TOML)
         return None
     if meta.get("auto") and isinstance(value, str):
         if value != AUTO:

@@ -110,6 +110,10 @@ def test_the_fixed_config_round_trips_through_toml():
     assert Config.from_toml(Config().to_toml()) == Config()
     with pytest.raises(ValueError, match="split_threshold_m"):  # a field that cannot be None
         Config().updated({"lines.split_threshold_m": "none"})
+    # reading the word must not hide the clear error for a value that is no number at all
+    for key in ("lines.merge_dr_m", "lines.ransac.range_sigma_m"):
+        with pytest.raises(ValueError, match=f"{key.rsplit('.', 1)[1]} must be a number"):
+            Config().updated({key: np.array([0.1, 0.2])})
 
 
 def test_config_round_trips_auto_through_toml():
