@@ -117,10 +117,10 @@ def _with_noise(config, args: argparse.Namespace):
 
 def _range_noise(text: str):
     """``--range-noise``'s value: "auto", "fixed" or a positive number of metres (as noise_config checks it)."""
-    from .noise import noise_config
+    from .noise import AUTO, FIXED, noise_config
 
     try:
-        value = text if text in ("auto", "fixed") else float(text)
+        value = text if text in (AUTO, FIXED) else float(text)
         noise_config(value)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected auto, fixed or a positive number of metres, got {text!r}") from None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from functools import partial
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from hypothesis import strategies as st
 
 from labkit import Scan, read_scans, sim
 from labkit.geometry import angle_difference
+from labkit.lines import angular
 from labkit.lines.angular import (
     EPS_DIST,
     EPS_THETA,
@@ -19,19 +21,13 @@ from labkit.lines.angular import (
     AngularSteps,
     local_directions,
 )
-from labkit.lines.angular import angular_arrays as _angular_arrays
-from labkit.lines.angular import angular_segmentation as _angular_segmentation
 from labkit.noise import FIXED_ANGULAR
 
-
 # The paper's method, as these tests check it against Meglicki's algorithm: three-beam directions
-# and no straightness test (labkit's default follows the range noise: tests/test_noise_aware.py).
-def angular_segmentation(scan, *args, **kwargs):
-    return _angular_segmentation(scan, *args, **{**FIXED_ANGULAR, **kwargs})
-
-
-def angular_arrays(scan, *args, **kwargs):
-    return _angular_arrays(scan, *args, **{**FIXED_ANGULAR, **kwargs})
+# and no straightness test (labkit's default follows the range noise: tests/test_noise_aware.py);
+# a keyword given in a call still wins over the partial's.
+angular_segmentation = partial(angular.angular_segmentation, **FIXED_ANGULAR)
+angular_arrays = partial(angular.angular_arrays, **FIXED_ANGULAR)
 
 
 DR_TOL = 0.05  # metres

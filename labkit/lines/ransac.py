@@ -147,9 +147,9 @@ def ransac_lines(
         :func:`labkit.split_and_merge`.
     range_sigma_m : float, "auto" or None
         The range noise of the lines' covariances, hence of the placing below. Default
-        ``"auto"``: the scan's estimate; ``None``: each line's covariance is worked out from its
-        own residuals (:func:`labkit.features.line_segment`); a number: that noise
-        (:func:`labkit.noise.scan_sigma`). With ``threshold_m="auto"`` it is
+        ``"auto"``: the scan's estimate (:func:`labkit.noise.scan_sigma`); ``None``: each line's
+        covariance is worked out from its own residuals (:func:`labkit.features.line_segment`); a
+        number: that noise. With ``threshold_m="auto"`` it is
         also the noise the threshold follows (the scan's estimate when ``None``).
     place_dr_m, place_dalpha, place_confidence : float
         What a user trusts, as in :func:`labkit.split_and_merge`: a line is reported only if, by its
