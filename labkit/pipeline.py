@@ -52,7 +52,6 @@ from time import perf_counter
 
 import numpy as np
 
-from ._params import param
 from ._safe import OutputKind, safe_output
 from .circles.iav import ArcParams, CircleParams, detect_arcs, detect_circles
 from .circles.legs import LegsParams, detect_legs, pair_legs
@@ -67,6 +66,7 @@ from .lines import (
     RegressionParams,
     SplitMergeParams,
 )
+from .params import param
 from .scan import Scan
 from .segmentation import SegmentationParams, segment_labels
 
@@ -404,8 +404,9 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
         t = now
 
     # Each stage is its detector called with its config section (which is its parameter
-    # record): the same call as the detector alone, given the segments the stages before left.
-    labels = segment_labels(scan, seg)
+    # record, checked when the Config was built): the same call as the detector alone, given the
+    # segments the stages before left.
+    labels = segment_labels.unchecked(scan, **seg.kwargs())
     lap("segmentation")
     legs, people = [], []
     if lg.enabled:
@@ -431,7 +432,7 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
     lap("lines")
     corners = []
     if cfg.corners.enabled and len(lines) > 1:
-        corners = find_corners(lines, cfg.corners, wrap=scan.is_full_circle)
+        corners = find_corners.unchecked(lines, **cfg.corners.kwargs(), wrap=scan.is_full_circle)
     lap("corners")
     arcs = []
     if cfg.arcs.enabled:

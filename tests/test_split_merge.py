@@ -183,11 +183,11 @@ def test_merge_angle_difference_is_taken_across_the_wrap():
 
     a, b = piece(179.0, -1.0), piece(-179.0, 1.0)
     assert float(angle_difference(a.alpha, b.alpha)) == pytest.approx(math.radians(-2.0), abs=1e-9)
-    assert lines_similar(a, b, merge_dalpha=math.radians(5))[0]
+    assert lines_similar(a, b, merge_dalpha_deg=5.0)[0]
     c, d = piece(170.0, -1.0), piece(-170.0, 1.0)
-    ok, stat = lines_similar(c, d, merge_dr_m=1.0, merge_dalpha=math.radians(5))
+    ok, stat = lines_similar(c, d, merge_dr_m=1.0, merge_dalpha_deg=5.0)
     assert not ok and stat == pytest.approx(4.0, rel=1e-6)  # 20 deg apart, not 340
-    assert lines_similar(c, d, merge_dr_m=1.0, merge_dalpha=math.radians(25))[0]
+    assert lines_similar(c, d, merge_dr_m=1.0, merge_dalpha_deg=25.0)[0]
 
 
 def test_lines_through_the_origin_with_opposite_normals_are_similar():

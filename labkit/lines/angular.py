@@ -78,14 +78,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_int, check_nonneg, check_positive
+from .._checks import check_int, check_nonneg
 from ..dbscan import dbscan1d
 from ..features import LineSegment, line_segment
 from ..geometry import circular_mean, signed_distance_to_line
 from ..noise import chi2_upper_over_dof, noise_sigma, scan_sigma
+from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, Params, param, takes_params
 
 __all__ = ["AngularSteps", "local_directions", "auto_direction_window", "angular_segmentation", "angular_arrays"]
 
@@ -245,19 +245,6 @@ def auto_direction_window(scan: Scan, sigma: float, eps_theta: float = EPS_THETA
     return largest
 
 
-def _check_params(scan, eps_theta, eps_dist, min_pts, split_gap_m):
-    if not isinstance(scan, Scan):
-        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    eps_theta = check_positive("eps_theta", eps_theta)
-    if eps_theta >= math.pi / 2:
-        raise ValueError(f"eps_theta must be < pi/2 radians, got {eps_theta!r}")
-    eps_dist = check_positive("eps_dist", eps_dist)
-    min_pts = check_int("min_pts", min_pts, 2)
-    if split_gap_m is not None:
-        split_gap_m = check_positive("split_gap_m", split_gap_m)
-    return eps_theta, eps_dist, min_pts, split_gap_m
-
-
 def _split_collinear(beams: np.ndarray, pts: np.ndarray, direction: float, gap: float) -> list[np.ndarray]:
     """Split where consecutive points along the line are more than ``gap`` apart."""
     along = pts[:, 0] * math.cos(direction) + pts[:, 1] * math.sin(direction)
@@ -286,7 +273,7 @@ class AngularParams(Params):
     eps_dist_m: float = param(EPS_DIST, "DBSCAN1D radius in line offset, metres", lo=0, strict=True)
     min_points: int = param(MIN_PTS, "DBSCAN1D min_pts of both clusterings", lo=2)
     split_gap_m: float = param(0.3, "split collinear clusters at gaps wider than this, metres (inf: never)", lo=0,
-                               strict=True, optional=True)
+                               strict=True, optional=True, finite=False)
     direction_window: int = param(AUTO, "half-width of the local directions' window, beams (1: the paper's three "
                                      "beams); auto: the narrowest the range noise allows", lo=1, auto=True, kind=int)
     range_sigma_m: float = param(AUTO, "range noise, metres: a local direction only where its window is straight at "
@@ -295,13 +282,7 @@ class AngularParams(Params):
 
     @classmethod
     def renamed(cls) -> dict:
-        return {"eps_dist_m": "eps_dist", "min_points": "min_pts"}
-
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
-        gap = kw["split_gap_m"]
-        kw["split_gap_m"] = None if gap is None or math.isinf(gap) else gap
-        return kw
+        return {"eps_dist": "eps_dist_m", "min_pts": "min_points"}
 
 
 def _outside(scan: Scan, lines: list[LineSegment], segments) -> list[LineSegment]:
@@ -314,16 +295,17 @@ def _outside(scan: Scan, lines: list[LineSegment], segments) -> list[LineSegment
     return [ln for ln in lines if not outside[ln.indices].mean() > 0.5]
 
 
-@takes_params(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"), on_segments=_outside)
+@checked_by(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
 def angular_segmentation(
     scan: Scan,
     *,
-    eps_theta: float,
-    eps_dist: float,
-    min_pts: int,
-    split_gap_m: float | None,
-    direction_window: int | str,
-    range_sigma_m: float | str,
+    eps_theta_deg: float = AngularParams.eps_theta_deg,
+    eps_dist_m: float = AngularParams.eps_dist_m,
+    min_points: int = AngularParams.min_points,
+    split_gap_m: float | None = AngularParams.split_gap_m,
+    direction_window: int | str = AngularParams.direction_window,
+    range_sigma_m: float | str = AngularParams.range_sigma_m,
+    segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Line segments of a scan by angular segmentation (Meglicki 2021, Algorithm 5).
@@ -333,21 +315,15 @@ def angular_segmentation(
     scan : Scan
         Invalid beams are skipped (they also leave their neighbours without a local
         direction).
-    params : AngularParams, optional
-        The parameters, in degrees and metres (default: its defaults); any of its fields may
-        be given as a keyword (``eps_theta_deg=5``), and so may the radian names below,
-        also by position as before.
-    segments : labels or list of RangeSegment, optional
-        Keep only the lines with most of their beams in a segment (the whole scan is
-        clustered all the same).
-    eps_theta : float, radians
-        DBSCAN radius on local directions (circular, period pi), in (0, pi/2). Default
-        3 degrees.
-    eps_dist : float, metres
-        DBSCAN radius on the offsets that separate parallel lines. Default 0.03.
-    min_pts : int
-        DBSCAN neighbourhood size for both clusterings, the point itself included,
-        >= 2. Default 8. It is also the smallest segment.
+    eps_theta_deg : float, degrees
+        DBSCAN radius on local directions (circular, period 180 degrees; the paper's
+        ``eps_theta``), in (0, 89.9]. Default 3 degrees.
+    eps_dist_m : float, metres
+        DBSCAN radius on the offsets that separate parallel lines (the paper's ``eps_dist``).
+        Default 0.03.
+    min_points : int
+        DBSCAN neighbourhood size for both clusterings, the point itself included (the
+        paper's ``min_pts``), >= 2. Default 8. It is also the smallest segment.
     split_gap_m : float, optional, metres
         Also split collinear pieces wherever consecutive points along the line are
         farther apart than this (e.g. 0.3 for walls on either side of a door). Default
@@ -360,6 +336,9 @@ def angular_segmentation(
         When > 0, a beam gets a local direction only if its window is straight at this range
         noise (:func:`local_directions`). Default ``"auto"``: the scan's estimate
         (:func:`labkit.noise.scan_sigma`); 0: no test, the paper.
+    segments : labels or list of RangeSegment, optional
+        Keep only the lines with most of their beams in a segment (the whole scan is
+        clustered all the same).
     trace : bool
         Also return the steps, as :class:`labkit.Step` records (``algorithm="angular"``; ``beams``
         holds each step's beams, spread over the scan): ``"directions"`` (step 1: ``value`` beams
@@ -407,21 +386,23 @@ def angular_segmentation(
     >>> [(s.first, s.last) for s in segs]
     [(2, 137), (142, 158)]
     """
-    segments, _, steps = _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, direction_window, range_sigma_m,
-                                  trace)
-    return (segments, steps) if trace else segments
+    lines, _, steps = _angular(scan, eps_theta_deg, eps_dist_m, min_points, split_gap_m, direction_window,
+                               range_sigma_m, trace)
+    if segments is not None:
+        lines = _outside(scan, lines, segments)
+    return (lines, steps) if trace else lines
 
 
-@takes_params(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
+@checked_by(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
 def angular_arrays(
     scan: Scan,
     *,
-    eps_theta: float,
-    eps_dist: float,
-    min_pts: int,
-    split_gap_m: float | None,
-    direction_window: int | str,
-    range_sigma_m: float | str,
+    eps_theta_deg: float = AngularParams.eps_theta_deg,
+    eps_dist_m: float = AngularParams.eps_dist_m,
+    min_points: int = AngularParams.min_points,
+    split_gap_m: float | None = AngularParams.split_gap_m,
+    direction_window: int | str = AngularParams.direction_window,
+    range_sigma_m: float | str = AngularParams.range_sigma_m,
 ) -> AngularSteps:
     """The intermediate arrays of :func:`angular_segmentation` (same parameters), one per
     stage, per beam: local directions, angular labels, the clusters' mean directions, offsets
@@ -434,12 +415,17 @@ def angular_arrays(
     >>> np.degrees(a.directions).round(1).tolist(), int((a.labels == 0).sum())
     ([90.0], 159)
     """
-    return _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, direction_window, range_sigma_m, False)[1]
+    return _angular(scan, eps_theta_deg, eps_dist_m, min_points, split_gap_m, direction_window, range_sigma_m,
+                    False)[1]
 
 
-def _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, window, range_sigma_m, trace: bool):
+def _angular(scan, eps_theta_deg, eps_dist, min_pts, split_gap_m, window, range_sigma_m, trace: bool):
     """(segments, AngularSteps, list of Step or None): :func:`angular_segmentation`."""
-    eps_theta, eps_dist, min_pts, split_gap_m = _check_params(scan, eps_theta, eps_dist, min_pts, split_gap_m)
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+    eps_theta = math.radians(eps_theta_deg)
+    if split_gap_m is not None and math.isinf(split_gap_m):
+        split_gap_m = None
     sigma = noise_sigma(scan, range_sigma_m)
     if window == AUTO:
         window = auto_direction_window(scan, sigma if sigma > 0 else scan_sigma(scan), eps_theta)
