@@ -142,7 +142,6 @@ __all__ = [
     "lines",
     "circles",
     "iav",
-    "legs",
     "inscribed_angles",
     "iav_stats",
     "IAVStats",

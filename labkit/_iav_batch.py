@@ -28,6 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import _iav_noise
+from ._checks import check_positive
 from ._iav_noise import angle_limits, angle_noise_runs, ratio_sd, widen
 from .features import Circle, Leg, LineSegment, line_segment
 from .fitting import fit_circle
@@ -117,11 +118,8 @@ def scan_runs(scan: Scan, segments, seg_threshold_m: float | None) -> Runs:
         if runs.idx.size and (runs.idx.min() < 0 or runs.idx.max() >= scan.n_beams):
             raise ValueError(f"segments has beam indices outside the scan's 0..{scan.n_beams - 1}")
         return runs
-    if isinstance(seg_threshold_m, bool) or not isinstance(seg_threshold_m, (int, float, np.integer, np.floating)) \
-            or not (0 < seg_threshold_m < math.inf):
-        raise ValueError(f"seg_threshold_m must be a positive finite number or None, got {seg_threshold_m!r}")
-    return _runs_from_labels(scan, segment_labels.unchecked(scan, threshold_m=float(seg_threshold_m), min_points=2,
-                                                            adaptive=False))
+    threshold = check_positive("seg_threshold_m", seg_threshold_m)
+    return _runs_from_labels(scan, segment_labels.unchecked(scan, threshold_m=threshold, min_points=2, adaptive=False))
 
 
 class Geometry(NamedTuple):

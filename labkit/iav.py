@@ -113,8 +113,9 @@ class IAVStats(NamedTuple):
         engine takes it for every segment of a scan at once (``np.bincount``); numpy's own
         ``mean`` adds in another order, which can change the last bit.
 
-        >>> IAVStats.from_angles(np.radians([80.0, 100.0]))
-        IAVStats(mean=1.5707963267948966, std=0.17453292519943295, n_angles=2)
+        >>> mean, std, n = IAVStats.from_angles(np.radians([80.0, 100.0]))
+        >>> round(float(np.degrees(mean)), 9), round(float(np.degrees(std)), 9), n
+        (90.0, 10.0, 2)
         """
         a = np.asarray(angles, dtype=np.float64)
         if a.ndim != 1 or a.size == 0:

@@ -125,6 +125,11 @@ def test_iav_stats_is_a_named_mean_and_population_std():
     assert isinstance(stats, IAVStats)
     mean, std, n = stats
     assert n == 4 and mean == pytest.approx(ang.mean()) and std == pytest.approx(ang.std(ddof=0))
+    assert stats == IAVStats.from_angles(ang)  # the statistics of the angles themselves
+    mirrored = IAVStats.from_angles(2 * np.pi - ang)  # (a hollow arc's angles, as detect_arcs takes them)
+    assert mirrored.mean == pytest.approx(2 * np.pi - mean) and mirrored.std == pytest.approx(std)
+    with pytest.raises(ValueError, match="angles"):
+        IAVStats.from_angles([])
 
 
 @pytest.mark.parametrize("points", [

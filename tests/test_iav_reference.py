@@ -28,7 +28,6 @@ import contextlib
 import dataclasses
 import itertools
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -41,7 +40,6 @@ from labkit.circles import iav_circles, legs
 from labkit.experiments import nguyen_lidar, world_scans
 from labkit.lines import iav_lines
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 RADISH = ("aces", "csail", "freiburg-079", "infinite-corridor", "intel", "orebro")
 
 #: each detector with the settings that take different paths through it
@@ -223,21 +221,16 @@ def test_the_hall_bag_with_its_walking_people():
 
 
 # ---------------------------------------------------------------------------- real scans
-def _need_shared():
-    if not SHARED.is_dir():
-        pytest.skip(f"{SHARED} is absent (the real recordings live beside the project, see DESIGN.md)")
-
-
-def test_the_peers_json_scans():
-    _need_shared()
+@pytest.mark.shared
+def test_the_peers_json_scans(shared_datasets):
     for k in range(1, 7):
-        all_faces(labkit.read_json_scan(SHARED / "single_scans" / f"laser_scan_{k}.json"))
+        all_faces(labkit.read_json_scan(shared_datasets / "single_scans" / f"laser_scan_{k}.json"))
 
 
+@pytest.mark.shared
 @pytest.mark.parametrize("log", RADISH)
-def test_the_radish_logs(log):
-    _need_shared()
-    path = SHARED / "carmen" / f"{log}-corrected.log.gz"
+def test_the_radish_logs(shared_datasets, log):
+    path = shared_datasets / "carmen" / f"{log}-corrected.log.gz"
     if not path.is_file():
         pytest.skip(f"{path} is absent")
     for scan in itertools.islice(labkit.read_scans(path), 0, 24, 4):
