@@ -286,9 +286,11 @@ def detect_circles(
     check_scan(scan)
     if v_corner_stride is not None:
         v_corner_stride = check_int("v_corner_stride", v_corner_stride, 1)
-    test = CircleTest(min_points, (min_chord_m, max_chord_m), middle_range, _radians(mean_range_deg),
-                      math.radians(std_max_deg), math.radians(arc_like_std_max_deg) if arc_like else None,
-                      v_corner_neighbours, v_corner_stride, False, center_method, "circle")
+    test = CircleTest(min_points=min_points, chord_range=(min_chord_m, max_chord_m), middle_range=middle_range,
+                      mean_range=_radians(mean_range_deg), std_max=math.radians(std_max_deg),
+                      arc_like_std_max=math.radians(arc_like_std_max_deg) if arc_like else None,
+                      v_corner_neighbours=v_corner_neighbours, v_corner_stride=v_corner_stride, hollow=False,
+                      center_method=center_method, kind="circle")
     runs = _segments(scan, segments, seg_threshold_m, range_sigma_m)
     sigma = noise_sigma(scan, range_sigma_m)
     if not trace:  # the engine: every segment at once, the same circles
@@ -297,6 +299,7 @@ def detect_circles(
 
 
 def _radians(pair: tuple[float, float]) -> tuple[float, float]:
+    """A pair of angles in degrees, in radians."""
     return tuple(math.radians(v) for v in pair)
 
 
@@ -565,8 +568,10 @@ def detect_arcs(
     ([2.2, 2.2], 0.8, 'arc')
     """
     check_scan(scan)
-    test = CircleTest(min_points, (min_chord_m, max_chord_m), middle_range, _radians(mean_range_deg),
-                      math.radians(std_max_deg), None, 4, None, True, center_method, "arc")
+    test = CircleTest(min_points=min_points, chord_range=(min_chord_m, max_chord_m), middle_range=middle_range,
+                      mean_range=_radians(mean_range_deg), std_max=math.radians(std_max_deg), arc_like_std_max=None,
+                      v_corner_neighbours=4, v_corner_stride=None, hollow=True, center_method=center_method,
+                      kind="arc")
     if line_params is not None:
         if lines is not None:
             raise ValueError("line_params is only used when lines is None")

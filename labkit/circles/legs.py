@@ -236,9 +236,11 @@ def detect_legs(
     check_scan(scan)
     no_mean_test = iav_mean_range_deg is None or iav_mean_range_deg == (0.0, 180.0)
     no_std_test = iav_std_max_deg is None or math.isinf(iav_std_max_deg)
-    test = LegTest(min_points, chord_range_m, chord_padding_beams, middle_range,
-                   None if no_mean_test else tuple(math.radians(v) for v in iav_mean_range_deg),
-                   None if no_std_test else math.radians(iav_std_max_deg), reject_occluded, center_method)
+    test = LegTest(min_points=min_points, chord_range=chord_range_m, chord_padding_beams=chord_padding_beams,
+                   middle_range=middle_range,
+                   iav_mean_range=None if no_mean_test else tuple(math.radians(v) for v in iav_mean_range_deg),
+                   iav_std_max=None if no_std_test else math.radians(iav_std_max_deg),
+                   reject_occluded=reject_occluded, center_method=center_method)
     runs = _segments(scan, segments, seg_threshold_m, range_sigma_m)
     sigma = noise_sigma(scan, range_sigma_m)
     if not trace:  # the engine: every segment at once, the same legs

@@ -113,7 +113,8 @@ def detect_lines_iav(
     (2.0, True, 107)
     """
     check_scan(scan)
-    test = LineTest(min_points, min_length_m, math.radians(mean_tolerance_deg), math.radians(std_max_deg))
+    test = LineTest(min_points=min_points, min_length_m=min_length_m, mean_tolerance=math.radians(mean_tolerance_deg),
+                    std_max=math.radians(std_max_deg))
     if segments is None and seg_threshold_m is None:
         segments = detector_labels(scan, None)
     runs = scan_runs(scan, segments, seg_threshold_m)
