@@ -20,7 +20,7 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.experiments` the evaluation experiments (simulated sets, comparisons, sweeps)
 - :mod:`labkit.pipeline` one :class:`Config` and :func:`extract_features` for every feature
 - :mod:`labkit.tracking` people and moving circles followed over time (Kalman filters, gating,
-  assignment, a track life cycle)
+  assignment, a track life cycle); :mod:`labkit.tracking_metrics` CLEAR MOT and IDF1
 - :mod:`labkit.sim` the simulator with ground truth (worlds, people, lidar, truth files)
 - :mod:`labkit.poses` SE(2) poses: composition, interpolation to a scan's stamp, frame trees
 - :mod:`labkit.io` bags, CARMEN logs, JSON (and the poses they carry)
@@ -31,7 +31,7 @@ The library's public names are re-exported here; modules:
 """
 
 
-from . import circles, evaluation, geometry, lines, poses, sim, tracking
+from . import circles, evaluation, geometry, lines, poses, sim, tracking, tracking_metrics
 from .circles import (
     ArcParams,
     CircleParams,
@@ -90,6 +90,7 @@ from .segmentation import RangeSegment, SegmentationParams, breakpoint_threshold
 from .steps import Step
 from .tables import features_table, read_table
 from .tracking import Tracker, TrackingParams, TrackTable, track
+from .tracking_metrics import clear_mot
 
 __version__ = "0.1.0"
 
@@ -188,10 +189,12 @@ __all__ = [
     "features_table",
     "read_table",
     "tracking",
+    "tracking_metrics",
     "TrackingParams",
     "Tracker",
     "TrackTable",
     "track",
     "track_scans",
+    "clear_mot",
     "__version__",
 ]
