@@ -20,11 +20,13 @@ constant-velocity Kalman filter over ``(x, y, vx, vy)`` with an identity and a l
    outside every gate of its kind (a single leg never starts a track: a leg alone is too weak a
    cue for a person, and a detection inside a gate belongs to a target already followed);
 6. **confirm** a tentative track detected in ``confirm_hits`` (M) of its first
-   ``confirm_scans`` (N) scans, the birth scan included. It is confirmed as ``"static"`` while its
-   estimate lies within ``min_travel_m`` of where it was first seen (the mean of its first M
-   detections, which a single noisy detection cannot move far), and becomes ``"confirmed"`` (a
-   moving target) once it has travelled further; it stays so when the target stops. A column, a
-   bench foot or a bin is thus recognised as static and never confirmed as a moving track;
+   ``confirm_scans`` (N) scans, the birth scan included. It is confirmed as ``"static"`` until it
+   has moved: until M updates in a row have put its estimate further than ``min_travel_m`` from
+   where it was first seen (the mean of its first M detections). Then it becomes ``"confirmed"``
+   (a moving target), and stays so when the target stops. A single wrong detection cannot make a
+   track move, and a static track only takes detections within about ``min_travel_m`` of it (its
+   gate does not grow past that while it is hidden). A column, a bench foot or a bin is thus
+   recognised as static and never confirmed as a moving track;
 7. **delete** a tentative track as soon as M detections in its first N scans can no longer be
    reached (more than N - M misses), and any track not detected for more than ``max_coast_s``
    seconds (scan stamps in integer nanoseconds, so "more than" is exact).
@@ -149,8 +151,9 @@ class TrackingParams(Params):
     confirm_hits: int = param(3, "M: a track is confirmed when detected in M of its first N scans", lo=1)
     confirm_scans: int = param(5, "N: the scans, from its birth, in which a track must be detected M times", lo=1)
     max_coast_s: float = param(1.5, "delete a track not detected for longer than this, seconds", lo=0)
-    min_travel_m: float = param(0.3, "a confirmed track is static until its estimate moves this far from where it "
-                                     "was first seen (the mean of its first M detections), metres", lo=0)
+    min_travel_m: float = param(0.3, "a confirmed track is static until M updates in a row put its estimate this "
+                                     "far from where it was first seen (the mean of its first M detections), metres",
+                                lo=0, strict=True)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -570,6 +573,7 @@ class Tracker:
         self._P = np.zeros((0, 4, 4))
         self._anchor = np.zeros((0, 2))  # where it was first seen
         self._moved = np.zeros(0, dtype=bool)
+        self._far = np.zeros(0, dtype=np.int64)
         self._hits = np.zeros(0, dtype=np.int64)
         self._scans = np.zeros(0, dtype=np.int64)
         self._born = np.zeros(0, dtype=np.int64)
@@ -657,7 +661,7 @@ class Tracker:
         n_tracks, n_dets = len(self._ids), len(detections)
         if n_tracks == 0 or n_dets == 0:
             return np.full((n_tracks, n_dets), np.inf)
-        nu, S = innovation(self._x[:, None, :], self._P[:, None, :, :], detections.positions[None],
+        nu, S = innovation(self._x[:, None, :], self._static_gate_P()[:, None, :, :], detections.positions[None],
                            detections.covariances[None])
         d2, logdet = mahalanobis2(nu, S)
         det_kind = np.array([_TRACK_KIND_OF[k] for k in detections.kinds])
@@ -674,6 +678,21 @@ class Tracker:
                                   f"{'<=' if ok else '>'} {self._gate:.2f}"))
         return np.where(inside, d2 + logdet, np.inf)
 
+    def _static_gate_P(self) -> np.ndarray:
+        """The covariances the gate reads: a static track's position covariance scaled down so that
+        it alone spans no more than ``min_travel_m`` (its largest eigenvalue at most
+        ``min_travel_m^2 / gate``): a column hidden for a while takes no detection from across the room."""
+        static = self._status == _STATIC
+        if not static.any():
+            return self._P
+        P = self._P.copy()
+        a, b, d = P[static, 0, 0], P[static, 0, 1], P[static, 1, 1]
+        largest = 0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + b * b)
+        cap = self.params.min_travel_m**2 / self._gate
+        scale = np.minimum(1.0, cap / np.maximum(largest, 1e-300))
+        P[static, :2, :2] *= scale[:, None, None]
+        return P
+
     # ------------------------------------------------------------------ 4. update
     def _update(self, tracks: np.ndarray, dets: np.ndarray, detections: Detections, steps) -> None:
         """Each assigned track with its detection (:func:`kalman_update`)."""
@@ -687,8 +706,9 @@ class Tracker:
         first = self._hits[tracks] <= self.params.confirm_hits  # the anchor: the mean of its first M detections
         self._anchor[tracks[first]] += (detections.positions[dets[first]] - self._anchor[tracks[first]]) \
             / self._hits[tracks[first], None]
-        travel = np.hypot(*(x[:, :2] - self._anchor[tracks]).T)
-        self._moved[tracks] |= travel > self.params.min_travel_m
+        far = np.hypot(*(x[:, :2] - self._anchor[tracks]).T) > self.params.min_travel_m
+        self._far[tracks] = np.where(far, self._far[tracks] + 1, 0)  # updates in a row beyond min_travel_m
+        self._moved[tracks] |= self._far[tracks] >= self.params.confirm_hits
         if steps is not None:
             for i, j in zip(tracks.tolist(), dets.tolist(), strict=True):
                 steps.append(Step("tracking", "update", int(detections.first[j]), int(detections.last[j]),
@@ -719,6 +739,7 @@ class Tracker:
         self._P = np.concatenate([self._P, P])
         self._anchor = np.concatenate([self._anchor, z])
         self._moved = np.concatenate([self._moved, np.zeros(len(new), dtype=bool)])
+        self._far = np.concatenate([self._far, np.zeros(len(new), dtype=np.int64)])
         self._hits = np.concatenate([self._hits, np.ones(len(new), dtype=np.int64)])
         self._scans = np.concatenate([self._scans, np.ones(len(new), dtype=np.int64)])
         self._born = np.concatenate([self._born, stamp])
@@ -734,7 +755,7 @@ class Tracker:
     # ------------------------------------------------------------------ 6. confirm
     def _confirm(self, steps) -> list:
         """Tentative tracks detected ``confirm_hits`` times become static or confirmed; static
-        tracks that have travelled ``min_travel_m`` become confirmed."""
+        tracks that have moved (``min_travel_m``, M updates in a row) become confirmed."""
         p = self.params
         events = []
         ready = (self._status == _TENTATIVE) & (self._hits >= p.confirm_hits)
@@ -754,7 +775,8 @@ class Tracker:
                 else:
                     steps.append(Step("tracking", "confirm", center=tuple(self._x[i, :2].tolist()), value=travel,
                                       threshold=p.min_travel_m, test="min_travel_m", track=tid,
-                                      reason=f"static track {tid} moves: {travel:.2f} m from where it was born"))
+                                      reason=f"static track {tid} moves: {travel:.2f} m from where it was first "
+                                             f"seen, beyond min_travel_m at {p.confirm_hits} updates in a row"))
         return events
 
     # ------------------------------------------------------------------ 7. delete
@@ -791,7 +813,7 @@ class Tracker:
     def _keep(self, keep: np.ndarray) -> None:
         if keep.all():
             return
-        for name in ("_ids", "_kind", "_status", "_x", "_P", "_anchor", "_moved", "_hits", "_scans", "_born",
+        for name in ("_ids", "_kind", "_status", "_x", "_P", "_anchor", "_moved", "_far", "_hits", "_scans", "_born",
                      "_seen"):
             setattr(self, name, getattr(self, name)[keep])
 

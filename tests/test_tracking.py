@@ -290,6 +290,22 @@ def test_a_static_circle_is_never_confirmed_as_moving_and_a_moving_one_is():
     assert any(("confirm", 1) in t.events for t in tables)
 
 
+def test_a_hidden_column_takes_no_far_detection_and_one_stray_detection_does_not_make_it_move():
+    """A column seen for 1 s, hidden for 1.4 s (its track coasts, its covariance grows), then:
+    a circle 0.9 m away is not taken (it starts a track of its own), and a stray detection
+    0.32 m off, which the column's track does take, does not make it a moving track: the next
+    detections are on the column again."""
+    rng = np.random.default_rng(2)
+    col = np.array([4.0, 5.0])
+    seen = [[col + rng.normal(scale=0.02, size=2)] for _ in range(10)] + [None] * 14
+    far = _run(seen + [[[4.4, 4.2]]], kinds="circle")
+    assert far[-1].detection.tolist() == [-1, -1] and far[-1].status.tolist() == ["static", "tentative"]
+    stray = _run(seen + [[[4.31, 4.90]]] + [[col]] * 10, kinds="circle")
+    assert stray[24].detection.tolist() == [0] and stray[24].ids.tolist() == [1]
+    assert np.hypot(*(stray[24].states[0, :2] - col)) > 0.3  # it did jump ...
+    assert {str(s) for t in stray for s in t.status} == {"tentative", "static"}  # ... and stayed static
+
+
 def test_two_crossing_people_keep_their_identities():
     """Two people crossing in an X, passing 0.3 m apart at the crossing, 2 cm noise: each keeps
     the track it was given."""
