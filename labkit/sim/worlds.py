@@ -161,7 +161,7 @@ def _hall() -> World:
 #: anybody: anna and ben cross each other's paths at 0.59 m (centre to centre); carl and dora pass each
 #: other in opposite directions on lanes 0.6 m apart in front of the others (the nearer hides the
 #: farther from the lidar, and both hide the people behind); emil and fay walk to and from the ends
-#: of those lanes, and pass carl and dora at 0.71-0.94 m; nobody comes within 0.72 m of the cylinder's
+#: of those lanes, and pass carl and dora at 0.69-0.94 m; nobody comes within 0.72 m of the cylinder's
 #: centre or 0.67 m of a column's. Everybody stays within 6 m of the lidar of the ``crossing``
 #: scenario, where its 0.5 deg beams still put 3 or more on a leg.
 CROSSING_WALKERS = (
