@@ -862,7 +862,8 @@ def track(
     Parameters
     ----------
     stream : iterable
-        :class:`labkit.Features` (sensor frame only), or ``(scan, features)`` pairs whose
+        :class:`labkit.Features` (which carry no pose: the sensor frame; with ``frame="map"``
+        nothing could be placed), or ``(scan, features)`` pairs whose
         :attr:`labkit.Scan.pose` places the scan in the map (``frame="map"``, or ``"auto"`` when
         the first scan has one); :class:`Detections` work too, alone or as ``(pose, detections)``.
         :func:`labkit.pipeline.track_scans` runs the pipeline and this together.
