@@ -471,6 +471,10 @@ class TrackTable:
         static), ``("delete", id)``, in the order they happened.
     seconds : float
         The time the tracker took for this scan.
+    late : bool
+        The scan came with a stamp older than the last one tracked and was not tracked: the
+        tracks are listed as they were (a recording whose stamps go back; see
+        :attr:`Tracker.late_scans`).
     """
 
     stamp_ns: int
@@ -488,6 +492,7 @@ class TrackTable:
     detections: Detections
     events: tuple = ()
     seconds: float = 0.0
+    late: bool = False
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -565,6 +570,8 @@ class Tracker:
         self._max_coast_ns = round(max_coast_s * 1e9)
         self._next_id = 1
         self._stamp: int | None = None
+        #: scans older than the last one tracked, which were not tracked (see :meth:`step`)
+        self.late_scans = 0
         # the live tracks, one row each
         self._ids = np.zeros(0, dtype=np.int64)
         self._kind = np.zeros(0, dtype=np.int64)
@@ -586,10 +593,15 @@ class Tracker:
     def step(self, observed: Features | Detections, *, pose=None, trace: bool = False):
         """Take one scan's detections (its :class:`labkit.Features`, or :class:`Detections`),
         in the sensor frame, with the scan's ``pose`` in the map (or None); returns the
-        :class:`TrackTable` after the scan, and with ``trace=True`` also the steps taken."""
+        :class:`TrackTable` after the scan, and with ``trace=True`` also the steps taken.
+
+        Scans must come in time order: one stamped before the last one tracked is not tracked
+        (its table has ``late=True``, the tracks as they were; :attr:`late_scans` counts them)."""
         t_start = perf_counter()
         steps: list[Step] | None = [] if trace else None
         detections, pose = self._detections(observed, pose)
+        if self._stamp is not None and detections.stamp_ns < self._stamp:
+            return self._late(detections, pose, steps, t_start)
         dt = self._advance_clock(detections.stamp_ns)
         self._predict(dt, steps)                                      # 1
         cost = self._gate_all(detections, steps)                      # 2
@@ -634,9 +646,17 @@ class Tracker:
                                        np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)), None
         return observed.in_frame(pose), pose
 
+    def _late(self, detections: Detections, pose, steps, t_start: float):
+        """A scan older than the last one tracked (a recording whose stamps go back): not tracked.
+        Its table lists the tracks as they are, with ``late=True``; :attr:`late_scans` counts them."""
+        self.late_scans += 1
+        table = self._table(detections, pose, np.zeros(len(self._ids), dtype=bool),
+                            np.full(len(self._ids), -1, dtype=np.int64), ())
+        object.__setattr__(table, "late", True)
+        table = _with_seconds(table, perf_counter() - t_start)
+        return (table, steps) if steps is not None else table
+
     def _advance_clock(self, stamp_ns: int) -> float:
-        if self._stamp is not None and stamp_ns < self._stamp:
-            raise ValueError(f"scans must come in time order: stamp {stamp_ns} is before the last one, {self._stamp}")
         dt = 0.0 if self._stamp is None else (stamp_ns - self._stamp) * 1e-9
         self._stamp = stamp_ns
         self._scans += 1

@@ -405,14 +405,19 @@ def test_track_scans_follows_the_simulated_walkers():
     assert np.median(errors) < 0.06
 
 
-def test_the_stream_takes_features_or_pairs_and_refuses_time_travel():
+def test_the_stream_takes_features_or_pairs_and_does_not_track_scans_that_go_back_in_time():
     scans = [s for s, _ in sim.simulate("crossing_1", seed=0, n_scans=6)]
     features = list(labkit.extract_all(scans))
     assert next(track(features)).frame == "sensor"
     assert next(track(zip(scans, features, strict=True))).frame == "map"
     assert next(track(zip(scans, features, strict=True), frame="sensor")).frame == "sensor"
-    with pytest.raises(ValueError, match="time order"):
-        list(track(features[::-1]))
+    backwards = list(track(features[::-1]))  # stamps going back: only the first scan is tracked
+    assert [t.late for t in backwards] == [False] + [True] * 5
+    assert [t.stamp_ns for t in backwards] == [f.stamp_ns for f in features[::-1]]
+    tracker = Tracker()
+    for f in (features[0], features[2], features[1], features[3]):
+        table = tracker.step(f)
+    assert tracker.late_scans == 1 and not table.late and table.hits.sum() > 0
     with pytest.raises(ValueError, match="stream items"):
         list(track([3]))
     with pytest.raises(ValueError, match="Features or labkit.tracking.Detections"):
