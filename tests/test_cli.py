@@ -62,7 +62,7 @@ def test_view_of_a_truncated_bag_writes_the_rrd_and_fails(tmp_path):
     bag.write_bytes(bag.read_bytes()[: bag.stat().st_size // 2])
     p = run("view", bag, "-o", tmp_path / "h.rrd", ok=False)
     assert p.returncode == 1
-    assert "h.bag is damaged at byte" in p.stderr and "cut off" in p.stderr and "Traceback" not in p.stderr
+    assert "h.bag is damaged at byte" in p.stderr and "the file ends" in p.stderr and "Traceback" not in p.stderr
     assert (tmp_path / "h.rrd").exists() and "wrote" in p.stdout
 
 

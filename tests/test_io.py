@@ -77,27 +77,41 @@ def test_truncated_bag_yields_every_scan_before_the_fault(tmp_path, office_scans
         assert len(got) >= int(fraction * N_SCANS) - 2
 
 
-def test_garbled_ros1_bag_stops_with_the_offset(tmp_path, office_scans):
-    """A garbled record header (not just garbled float values, which no ROS1 reader can
-    detect: the format has no checksums) stops reading at that message."""
-    from labkit.io.salvage import _ROS1_MAGIC, _ros1_records
+def _message_offsets(data: bytes) -> list[int]:
+    """File offsets of the message records (op 2) of an uncompressed ROS1 bag, found by the
+    test's own reading of the format: every record header holding the field ``op=\\x02``."""
+    offsets, pos = [], 13
+    while pos + 8 <= len(data):
+        hlen = int.from_bytes(data[pos : pos + 4], "little")
+        header = data[pos + 4 : pos + 4 + hlen]
+        dlen = int.from_bytes(data[pos + 4 + hlen : pos + 8 + hlen], "little")
+        if b"op=\x05" in header:  # a chunk: its records follow in the file (no compression)
+            pos += 8 + hlen
+            continue
+        if b"op=\x02" in header:
+            offsets.append(pos)
+        pos += 8 + hlen + dlen
+    return offsets
 
+
+def test_a_garbled_ros1_record_header_costs_that_message_only(tmp_path, office_scans):
+    """A garbled record header (not just garbled float values, which no ROS1 reader can
+    detect: the format has no checksums) costs that message; reading resumes at the next."""
     path = tmp_path / "g.bag"
-    write_bag(office_scans, path)
+    write_bag(office_scans, path, pose_topic=None)
     data = bytearray(path.read_bytes())
-    (chunk_at, fields, chunk, _), *_ = [r for r in _ros1_records(data, len(_ROS1_MAGIC), len(data))
-                                        if r[1]["op"] == b"\x05"]
-    chunk_data_start = chunk_at + 4 + int.from_bytes(data[chunk_at:chunk_at + 4], "little") + 4
-    messages = [off for off, f, _, _ in _ros1_records(bytes(chunk), 0, len(chunk)) if f["op"] == b"\x02"]
-    target = chunk_data_start + messages[N_SCANS // 2]
+    offsets = _message_offsets(bytes(data))
+    assert len(offsets) == N_SCANS
+    target = offsets[N_SCANS // 2]
     data[target : target + 4] = b"\xff\xff\xff\x7f"  # an absurd header length
     path.write_bytes(bytes(data))
     got = []
-    with pytest.raises(CorruptFileError, match="g.bag"):
+    with pytest.raises(CorruptFileError, match=f"g.bag is damaged at byte {target}") as info:
         for scan in read_scans(path):
             got.append(scan)
-    assert 0 < len(got) < N_SCANS
-    assert_same_scans(office_scans[: len(got)], got)
+    assert info.value.n_read == N_SCANS - 1 and info.value.n_lost == 1 and info.value.lost_exact
+    assert f"{N_SCANS - 1} scans kept, 1 lost" in str(info.value)
+    assert_same_scans([s for k, s in enumerate(office_scans) if k != N_SCANS // 2], got)
 
 
 def test_convert_a_damaged_bag_keeps_every_readable_scan(tmp_path, office_scans):

@@ -133,6 +133,7 @@ class ScanStream:
         self.poses = poses
         self.pose_plan = pose_plan
         self.pose_sources: dict[str, str] = {}
+        self.pose_count: int | None = None  # pose messages the bag's index lists
 
     def __iter__(self) -> Iterator[Scan]:
         scans = FORMATS[self.format].read(self)
@@ -323,9 +324,11 @@ def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
 def _read_bag(stream: ScanStream) -> Iterator[Scan]:
     poses = None
     if stream.pose_plan is not None:
-        poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict)
+        poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict,
+                               expected=stream.pose_count)
         stream.pose_sources = poses.sources  # filled in as scan frames are met
-    yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses)
+    yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses,
+                             expected=stream.count if stream.readable else None)
 
 
 def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | bool | None) -> ScanStream:
@@ -333,7 +336,10 @@ def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | b
     chosen = bags.resolve_topic(p, topics, topic)
     count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
     plan = plan_poses(p, topics, None if poses is True else poses)
-    return ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
+    stream = ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
+    if plan is not None and readable:
+        stream.pose_count = sum(c for name, _t, c in topics if name in plan.msgtypes and c is not None)
+    return stream
 
 
 def _write_bag(fmt: str):

@@ -1,9 +1,13 @@
 """ROS bags in and out: ROS1 ``.bag``, ROS2 sqlite3 folders and MCAP, through rosbags.
 
-Reading goes through ``rosbags.highlevel.AnyReader``. When rosbags cannot open a file
-(a recording cut short has no index, footer or intact database), labkit falls back to a
-sequential reader (:mod:`labkit.io.salvage`) that recovers every complete scan and then
-raises :class:`~labkit.io.CorruptFileError` saying where the file broke.
+Reading: ROS1 bags and MCAP files are read front to back by labkit's walkers
+(:mod:`labkit.io.salvage`), which keep every message that can be read and resynchronise past
+damage; rosbags opens their index only to list the topics and how many messages each holds, the
+count against which the scans read are checked (a scan the index lists but the walk did not find
+is a scan lost, and said so). ROS2 sqlite3 folders are read through rosbags'
+``AnyReader``; a database it cannot read is read row by row. Either way a damaged file yields
+every scan that could be read and then raises :class:`~labkit.io.CorruptFileError` saying where
+the damage is, how many scans were kept and how many were lost.
 """
 
 from __future__ import annotations
@@ -50,10 +54,16 @@ def _topics_via_rosbags(path: Path) -> list[tuple[str, str, int | None]]:
 
 
 def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None]]:
-    """The topics a damaged bag declares before its damage; a bag too damaged to declare any
-    is a :class:`CorruptFileError` (0 scans read), not an empty bag."""
+    """The topics a damaged bag declares (with the messages found intact, for ROS1 and MCAP); a
+    bag too damaged to declare any is a :class:`CorruptFileError` (0 scans read), not an empty bag."""
+    if fmt in salvage.WALKERS:
+        walker, faults = salvage.walk_topics(path, fmt)
+        seen = {c.topic: c.msgtype for c in walker.connections.values()}
+        if not seen and faults:
+            raise CorruptFileError(path, faults[0].where, 0, faults[0].reason, lost_exact=False)
+        return sorted((name, msgtype, None) for name, msgtype in seen.items())
     seen: dict[str, str] = {}
-    gen = _salvager(fmt)(path, None, want_topics=True)
+    gen = salvage.salvage_sqlite3(path, None, want_topics=True)
     first_fault = None
     while True:
         try:
@@ -67,12 +77,8 @@ def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None
             name, _stamp, msgtype = item
             seen.setdefault(name, msgtype)
     if not seen and first_fault is not None:
-        raise CorruptFileError(path, first_fault.where, 0, first_fault.reason, n_skipped=first_fault.count)
+        raise CorruptFileError(path, first_fault.where, 0, first_fault.reason, lost_exact=False)
     return sorted((name, msgtype, None) for name, msgtype in seen.items())
-
-
-def _salvager(fmt: str):
-    return {"ros1": salvage.salvage_ros1, "mcap": salvage.salvage_mcap, "ros2": salvage.salvage_sqlite3}[fmt]
 
 
 def _storage_file(path: Path, fmt: str) -> Path:
@@ -142,28 +148,29 @@ def _scan_from(msg, receive_ns: int, poses=None) -> Scan:
     return scan.replace(stamp_ns=receive_ns) if scan.stamp_ns == 0 and receive_ns else scan
 
 
-def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False, poses=None) -> Iterator[Scan]:
+def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False, poses=None,
+             expected: int | None = None) -> Iterator[Scan]:
     """Yield the scans of ``topic``; a message that does not decode or holds impossible
     fields (``angle_increment`` 0, ...) is skipped and counted; after the last good scan,
-    raise :class:`CorruptFileError` if anything was skipped (``strict``: stop at the first).
+    raise :class:`CorruptFileError` if anything was skipped or lost (``strict``: stop at the
+    first damage).
 
-    Bags rosbags can open are read through it; if rosbags stops part-way (a garbled chunk
-    or page), the rest is read by labkit's sequential reader (:mod:`labkit.io.salvage`),
-    which walks past the damage where the file's framing allows.
+    ``expected`` is how many scans the bag's index lists (when it is intact): the scans lost are
+    then counted exactly, and a scan the index lists that the walk did not find is a loss too.
 
     ``poses`` (a :class:`labkit.io.poses.BagPoses`, read beforehand) gives every scan its
     sensor pose, and brings the faults met while reading the poses: they count with the
     scans' own (once each), and with ``strict`` reading stops at the first scan after the
     last pose read before a fault.
     """
-    faults = Faults(path, strict)
+    faults = Faults(path, strict, expected)
     n_read = 0
     messages = read_messages(path, fmt, {topic: _MSGTYPE}, readable, faults, lambda _t, stamp, msg: _scan_from(
         msg, stamp, poses), salvage_topic=topic)
     try:
         for scan in messages:
             if poses is not None and poses.stops_before(scan.stamp_ns):
-                faults.skip(*poses.first_fault)
+                faults.skip(*poses.first_fault, count=0)
                 break
             yield scan
             n_read += 1
@@ -178,13 +185,19 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
                   convert: Callable, *, salvage_topic: str | frozenset[str] | None = None) -> Iterator:
     """``convert(topic, receive_ns, message)`` for every message on ``topics`` (name -> message
     type), in the bag's order; a message that does not decode, or that ``convert`` refuses (any
-    exception), is skipped and noted in ``faults`` (whose strictness decides whether to read on).
+    exception), is skipped and noted in ``faults`` (whose strictness decides whether to read on),
+    and so is every damaged place of the file.
 
-    Bags rosbags can open are read through it; if rosbags stops part-way, the rest is read by the
-    sequential reader (:mod:`labkit.io.salvage`; ``salvage_topic`` tells it what to yield, by
-    default the names of ``topics``), skipping what rosbags already gave.
+    ROS1 and MCAP: labkit's walker (:mod:`labkit.io.salvage`), in file order. ROS2 sqlite3:
+    rosbags, in time order; if rosbags stops part-way, the rest is read row by row
+    (``salvage_topic`` tells it what to yield, by default the names of ``topics``), skipping what
+    rosbags already gave.
     """
     what = next(iter(topics)) if len(topics) == 1 else ", ".join(sorted(topics))
+    if fmt in salvage.WALKERS:
+        yield from _walk_messages(path, fmt, topics, faults, convert, what,
+                                  frozenset(topics) if salvage_topic is None else salvage_topic)
+        return
     done: Counter[tuple[str, int]] = Counter()  # messages read through rosbags, not to be read twice
     if readable:
         reader = _open(path)
@@ -209,9 +222,10 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
                 done[conn.topic, stamp] += 1
         finally:
             reader.close()
-        if failure is None or not faults.skip(*failure, count=0):
+        if failure is None or not faults.skip(*failure, count=0, known=False):
             return
-    gen = _salvager(fmt)(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None else salvage_topic)
+    gen = salvage.salvage_sqlite3(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None
+                                  else salvage_topic)
     k = 0
     try:
         while True:
@@ -219,10 +233,10 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
                 item = next(gen)
             except StopIteration as stop:
                 if stop.value is not None:
-                    faults.skip(stop.value.where, stop.value.reason, stop.value.count)
+                    faults.skip(stop.value.where, stop.value.reason, 0, open_end=stop.value.open_end, known=False)
                 return
             if isinstance(item, salvage.Fault):
-                if not faults.skip(item.where, item.reason, item.count):
+                if not faults.skip(item.where, item.reason, 0, known=False, open_end=item.open_end):
                     return
                 continue
             name, stamp, raw = item
@@ -239,6 +253,32 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
             yield item
     finally:
         gen.close()
+
+
+def _walk_messages(path: Path, fmt: str, topics: dict[str, str], faults: Faults, convert: Callable, what: str,
+                   chosen) -> Iterator:
+    """:func:`read_messages` for ROS1 and MCAP: the walker's messages and faults, then its books."""
+    walker = salvage.WALKERS[fmt](_storage_file(path, fmt), chosen)
+    k = 0
+    messages = walker.messages()
+    try:
+        for item in messages:
+            if isinstance(item, salvage.Fault):
+                if not faults.skip(item.where, item.reason, item.count, known=False, open_end=item.open_end):
+                    return
+                continue
+            name, stamp, raw = item
+            k += 1
+            try:
+                item = convert(name, stamp, _deserialize(fmt, raw, topics.get(name, _MSGTYPE)))
+            except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
+                if not faults.skip(f"in message {k} of {what}", _why(exc)):
+                    return
+                continue
+            yield item
+    finally:
+        messages.close()
+    faults.lose(sum(walker.lost[name] for name in topics))
 
 
 def _why(exc: Exception) -> str:
