@@ -328,17 +328,18 @@ def _read_bag(stream: ScanStream) -> Iterator[Scan]:
                                expected=stream.pose_count)
         stream.pose_sources = poses.sources  # filled in as scan frames are met
     yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses,
-                             expected=stream.count if stream.readable else None)
+                             expected=stream.count)
 
 
 def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | bool | None) -> ScanStream:
     topics, readable = bags.list_topics(p, fmt)
     chosen = bags.resolve_topic(p, topics, topic)
-    count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
+    count = next((c for name, _t, c in topics if name == chosen), None)  # the index's, when it can be read
     plan = plan_poses(p, topics, None if poses is True else poses)
     stream = ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
-    if plan is not None and readable:
-        stream.pose_count = sum(c for name, _t, c in topics if name in plan.msgtypes and c is not None)
+    pose_counts = [c for name, _t, c in topics if plan is not None and name in plan.msgtypes]
+    if pose_counts and None not in pose_counts:
+        stream.pose_count = sum(pose_counts)
     return stream
 
 

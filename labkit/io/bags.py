@@ -93,12 +93,28 @@ def _storage_file(path: Path, fmt: str) -> Path:
 
 
 def list_topics(path: str | Path, fmt: str) -> tuple[list[tuple[str, str, int | None]], bool]:
-    """Topics ``(name, msgtype, count)`` of a bag and whether rosbags could open it."""
+    """Topics ``(name, msgtype, count)`` of a bag and whether rosbags could open it. The counts
+    are the index's (None when it cannot be read; a ROS2 folder's metadata.yaml says them even
+    when its database is damaged)."""
     path = Path(path)
     try:
         return _topics_via_rosbags(path), True
     except Exception:  # noqa: BLE001 - any failure to open means: try the sequential reader
-        return _topics_via_salvage(_storage_file(path, fmt), fmt), False
+        topics = _topics_via_salvage(_storage_file(path, fmt), fmt)
+    counts = _metadata_counts(path) if path.is_dir() else {}
+    return [(name, msgtype, counts.get(name)) for name, msgtype, _ in topics], False
+
+
+def _metadata_counts(folder: Path) -> dict[str, int]:
+    """Messages per topic as a ROS2 bag folder's metadata.yaml lists them ({} if it cannot be read)."""
+    from ruamel.yaml import YAML  # rosbags reads metadata.yaml with it
+
+    try:
+        info = YAML(typ="safe").load((folder / "metadata.yaml").read_text(encoding="utf-8"))
+        return {t["topic_metadata"]["name"]: int(t["message_count"])
+                for t in info["rosbag2_bagfile_information"]["topics_with_message_count"]}
+    except Exception:  # noqa: BLE001 - a missing or damaged metadata.yaml: no counts
+        return {}
 
 
 def resolve_topic(path: Path, topics, topic: str | None) -> str:
