@@ -110,11 +110,14 @@ class CorruptFileError(ValueError):
         if stopped:
             unread = f", {n_unread} not read" if n_unread else ""
             counts = f"reading stopped there (strict): {n_read} scans kept{unread}"
-        elif lost_exact:
-            counts = f"{n_read} scans kept, {n_skipped or 'none'} lost"
-        elif n_skipped:
-            counts = f"{n_read} scans kept, at least {n_skipped} lost"
         else:
-            counts = f"{n_read} scans kept, an unknown number lost"
+            counts = f"{n_read} scans kept, {self.lost_text}"
         other = f"; also {n_other} record{'s' if n_other > 1 else ''} of other topics lost" if n_other else ""
         super().__init__(f"{head}; {counts}{other}")
+
+    @property
+    def lost_text(self) -> str:
+        """``"3 lost"``, ``"none lost"``, ``"at least 2 lost"`` or ``"an unknown number lost"``."""
+        if self.lost_exact:
+            return f"{self.n_lost or 'none'} lost"
+        return f"at least {self.n_lost} lost" if self.n_lost else "an unknown number lost"

@@ -182,7 +182,9 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         Unknown format (the message lists the supported ones); no LaserScan topic (it
         lists the bag's topics); several LaserScan topics and no ``topic`` (it lists them);
         ``poses`` names no pose topic, or a bag has several odometry topics and no tf.
-        :class:`EmptyRecordingError` (a ValueError) for a bag without any topic.
+        :class:`EmptyRecordingError` (a ValueError) for an input that holds no scans at all: a
+        file of 0 bytes, a bag without any topic, a log without laser messages, a ``.jsonl``
+        without a line (the command line's exit status 2).
     CorruptFileError
         While iterating, after the last scan that could be read from a damaged file: every
         record that could not be decoded was skipped and counted.
@@ -196,6 +198,8 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
     """
     p = Path(path)
     fmt = detect_format(p)
+    if p.is_file() and p.stat().st_size == 0:
+        raise EmptyRecordingError(f"{p} is empty (0 bytes): there is nothing to read")
     if poses is not None and not isinstance(poses, (bool, str)):
         raise ValueError(f"poses must be None, True, False or a topic name, got {poses!r}")
     row = FORMATS[fmt]

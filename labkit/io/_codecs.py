@@ -31,7 +31,8 @@ __all__ = ["decompress", "salvage_chunk"]
 
 _BLOCK_MAGIC = 0x314159265359
 _END_MAGIC = 0x177245385090
-_FEED = 1024  # compressed bytes fed at a time to an lz4 or zstd decoder after a fault
+_FEED = 16  # compressed bytes fed at a time to an lz4 or zstd decoder after a fault (a block decoded in
+# the call that fails is lost with it)
 
 
 def decompress(data, compression: str) -> bytes:

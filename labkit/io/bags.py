@@ -63,7 +63,7 @@ def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None
             raise CorruptFileError(path, faults[0].where, 0, faults[0].reason, lost_exact=False)
         return sorted((name, msgtype, None) for name, msgtype in seen.items())
     seen: dict[str, str] = {}
-    gen = salvage.salvage_sqlite3(path, None, want_topics=True)
+    gen = salvage.salvage_sqlite3(path, None, want_topics=True, known=_metadata_topics(path.parent))
     first_fault = None
     while True:
         try:
@@ -107,14 +107,24 @@ def list_topics(path: str | Path, fmt: str) -> tuple[list[tuple[str, str, int | 
 
 def _metadata_counts(folder: Path) -> dict[str, int]:
     """Messages per topic as a ROS2 bag folder's metadata.yaml lists them ({} if it cannot be read)."""
+    return {name: count for name, _type, count in _metadata(folder)}
+
+
+def _metadata_topics(folder: Path) -> list[tuple[str, str]]:
+    return [(name, msgtype) for name, msgtype, _count in _metadata(folder)]
+
+
+def _metadata(folder: Path) -> list[tuple[str, str, int]]:
+    """``(topic, type, message count)`` as a ROS2 bag folder's metadata.yaml lists them, in its
+    order ([] if it cannot be read)."""
     from ruamel.yaml import YAML  # rosbags reads metadata.yaml with it
 
     try:
         info = YAML(typ="safe").load((folder / "metadata.yaml").read_text(encoding="utf-8"))
-        return {t["topic_metadata"]["name"]: int(t["message_count"])
-                for t in info["rosbag2_bagfile_information"]["topics_with_message_count"]}
-    except Exception:  # noqa: BLE001 - a missing or damaged metadata.yaml: no counts
-        return {}
+        return [(t["topic_metadata"]["name"], t["topic_metadata"]["type"], int(t["message_count"]))
+                for t in info["rosbag2_bagfile_information"]["topics_with_message_count"]]
+    except Exception:  # noqa: BLE001 - a missing or damaged metadata.yaml: none
+        return []
 
 
 def resolve_topic(path: Path, topics, topic: str | None) -> str:
@@ -148,10 +158,30 @@ def _stamp_of(msg) -> int:
     return int(stamp.secs if sec is None else sec) * 1_000_000_000 + int(stamp.nsecs if nsec is None else nsec)
 
 
+def _check_span(msg) -> None:
+    """A LaserScan whose beam count disagrees with its angle span is refused (a skipped, counted
+    record), not read with ``angle_max`` silently changed: ``angle_min + (n - 1) * angle_increment``
+    must be ``angle_max`` to within one beam (drivers differ on whether ``angle_max`` is the last
+    beam or the end of its sector)."""
+    try:
+        n, inc = len(msg.ranges), float(msg.angle_increment)
+        span = float(msg.angle_max) - float(msg.angle_min)
+    except (AttributeError, TypeError):
+        return  # not a LaserScan: Scan.from_ros says so
+    if n < 2 or inc == 0 or not np.isfinite(span) or not np.isfinite(inc):
+        return  # Scan.from_ros refuses an impossible increment itself
+    implied = span / inc + 1
+    if abs(implied - n) > 1.001:
+        raise ValueError(f"the scan has {n} ranges but its angles span {np.degrees(span):.6g} deg in steps of "
+                         f"{np.degrees(inc):.6g} deg ({implied:.6g} beams)")
+
+
 def _scan_from(msg, receive_ns: int, poses=None) -> Scan:
     """The scan of a LaserScan message the bag received at ``receive_ns``. A header stamp of 0
     (drivers that leave it empty) is replaced by the receive time. ``poses`` (see
-    :func:`iter_bag`) gives the sensor's pose at the scan's stamp."""
+    :func:`iter_bag`) gives the sensor's pose at the scan's stamp. A message whose beam count
+    disagrees with its angle span is refused (:func:`_check_span`)."""
+    _check_span(msg)
     if poses is None:
         scan = Scan.from_ros(msg, receive_ns=receive_ns)
         return scan.replace(stamp_ns=receive_ns) if scan.stamp_ns == 0 and receive_ns else scan
@@ -241,7 +271,7 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
         if failure is None or not faults.skip(*failure, count=0, known=False):
             return
     gen = salvage.salvage_sqlite3(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None
-                                  else salvage_topic)
+                                  else salvage_topic, known=_metadata_topics(path) if path.is_dir() else ())
     k = 0
     try:
         while True:
@@ -283,18 +313,20 @@ def _walk_messages(path: Path, fmt: str, topics: dict[str, str], faults: Faults,
                 if not faults.skip(item.where, item.reason, item.count, known=False, open_end=item.open_end):
                     return
                 continue
-            name, stamp, raw = item
+            name, stamp, raw, where = item
             k += 1
             try:
                 item = convert(name, stamp, _deserialize(fmt, raw, topics.get(name, _MSGTYPE)))
             except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
-                if not faults.skip(f"in message {k} of {what}", _why(exc)):
+                if not faults.skip(f"{where} (message {k} of {what})", _why(exc)):
                     return
                 continue
             yield item
     finally:
         messages.close()
     faults.lose(sum(walker.lost[name] for name in topics))
+    if walker.index_counts is not None:  # the file's own index, as the walker read it (rosbags counts the
+        faults.expected = sum(walker.index_counts[name] for name in topics)  # chunks it could open, if any)
 
 
 def _why(exc: Exception) -> str:

@@ -150,6 +150,8 @@ class Walker:
         Connection id -> :class:`Connection`, as declared so far.
     found, lost : Counter
         Per topic: messages found intact; messages known lost.
+    index_counts : Counter or None
+        Per topic: messages the file's index lists (None when it has none, or it is damaged).
     complete : bool
         The walk reached the file's proper end (its index, its footer).
     """
@@ -167,13 +169,15 @@ class Walker:
         self.found: Counter[str] = Counter()
         self.lost: Counter[str] = Counter()
         self.complete = False
+        self.index_counts: Counter[str] | None = None  # messages per topic, as the file's index lists them
         self._chunk_found: Counter[int] = Counter()  # per connection, found in the current chunk
         self._chunk_cut: Counter[int] = Counter()  # per connection, counted lost as cut off in it
         self._after_index = False
+        self._footer = False  # MCAP: the footer is read; what follows is the closing magic
 
     # -------------------------------------------------------------- the walk
     def messages(self) -> Iterator[tuple[str, int, bytes] | Fault]:
-        """``(topic, receive_ns, raw)`` for every wanted message found intact, in file order, and
+        """``(topic, receive_ns, raw, where)`` for every wanted message found intact, in file order, and
         a :class:`Fault` for every damaged place (the last one, when the file ends early, with
         ``open_end``)."""
         with open(self.path, "rb") as fh:
@@ -187,6 +191,8 @@ class Walker:
                 if buf[: len(self.magic)] != self.magic:
                     yield Fault("at byte 0", f"not a {self.kind} (its magic is missing)", 0, open_end=True)
                     return
+                with contextlib.suppress(Exception):  # a damaged index: connections come as they are met
+                    self._seed(buf, fh)
                 for item in self._walk(buf, len(self.magic), size, base=0, inner=False):
                     ended = ended or (isinstance(item, Fault) and item.open_end)
                     yield item
@@ -210,7 +216,7 @@ class Walker:
                 pos = self._resync(buf, pos + 1, end, inner)
                 if pos is None:
                     return
-        while pos < end and not (self.complete and not inner):
+        while pos < end and not (self._footer and not inner):
             try:
                 rec = self._record(buf, pos, end, inner)
             except _Bad as bad:
@@ -273,7 +279,7 @@ class Walker:
         return None
 
     # -------------------------------------------------------------- the books
-    def _message(self, conn_id: int, stamp: int, raw) -> Iterator:
+    def _message(self, conn_id: int, stamp: int, raw, where: str) -> Iterator:
         conn = self.connections.get(conn_id)
         if self._after_index:  # the first record after a chunk's index: a new chunk's worth begins
             self._chunk_found.clear()
@@ -284,7 +290,7 @@ class Walker:
             return
         self.found[conn.topic] += 1
         if wanted(conn.topic, conn.msgtype, self.topic):
-            yield conn.topic, stamp, bytes(raw)
+            yield conn.topic, stamp, bytes(raw), where
 
     def _cut_message(self, conn_id: int) -> None:
         conn = self.connections.get(conn_id)
@@ -326,7 +332,10 @@ class Walker:
                 inner = _codecs.decompress(data, compression)
             except Exception:  # noqa: BLE001 - every codec raises its own kind
                 inner = None
-            if inner is not None and len(inner) == head.size and (not head.crc or zlib.crc32(inner) == head.crc):
+            if inner is not None and len(inner) == head.size:
+                if head.crc and zlib.crc32(inner) != head.crc:
+                    yield Fault(where, "its data decompress but fail their checksum (values in the messages read "
+                                "from it may be garbled)", 0)
                 yield from self._walk(inner, 0, len(inner), base=None, inner=True, where=where)
                 return
         pieces, what = _codecs.salvage_chunk(data, compression)
@@ -339,6 +348,10 @@ class Walker:
                                   resync_first=k > 0)
 
     # -------------------------------------------------------------- per framing
+    def _seed(self, buf, fh) -> None:
+        """Learn the connections from the file's index at its end, if it can be read, so that a
+        message whose connection record is damaged still has a topic."""
+
     def _record(self, buf, pos: int, end: int, inner: bool) -> tuple:
         raise NotImplementedError
 
@@ -441,12 +454,29 @@ class Ros1Walker(Walker):
                 raise _Bad("a connection record is garbled (no type)")
         return op, fields, start, start + dlen
 
+    def _seed(self, buf, fh) -> None:
+        op, fields, _start, _stop = self._record(buf, len(_ROS1_MAGIC), len(buf), False)
+        if op != b"\x03":
+            return
+        (pos,) = struct.unpack("<Q", fields["index_pos"])
+        counts: Counter[int] = Counter()
+        while pos and pos < len(buf):
+            op, fields, start, stop = self._record(buf, pos, len(buf), False)
+            if op == b"\x07":
+                self._connection(fields, buf[start:stop])
+            elif op == b"\x06":
+                for conn, n in struct.iter_unpack("<II", buf[start:stop]):
+                    counts[conn] += n
+            pos = stop
+        if pos == len(buf) and counts:
+            self.index_counts = Counter({self.connections[c].topic: n for c, n in counts.items()})
+
     def _handle(self, buf, pos: int, rec: tuple, *, base, inner: bool, where: str) -> Iterator:
         op, fields, start, stop = rec
         if op == b"\x02":
             (conn,) = struct.unpack("<I", fields["conn"])
             sec, nsec = struct.unpack("<II", fields["time"])
-            yield from self._message(conn, sec * 1_000_000_000 + nsec, buf[start:stop])
+            yield from self._message(conn, sec * 1_000_000_000 + nsec, buf[start:stop], self._where(pos, base, where))
         elif op == b"\x07":
             self._connection(fields, buf[start:stop])
         elif op == b"\x05":
@@ -528,6 +558,25 @@ class McapWalker(Walker):
             raise _Bad("a message index record is garbled (unknown channel)")
         return op, record, start, stop
 
+    def _seed(self, buf, fh) -> None:
+        from mcap.reader import make_reader
+
+        summary = make_reader(fh).get_summary()
+        if summary is None:
+            return
+        self.schemas.update(summary.schemas)
+        for channel in summary.channels.values():
+            self._channel(channel)
+        if summary.statistics is not None:
+            self.index_counts = Counter({self.connections[c].topic: n
+                                         for c, n in summary.statistics.channel_message_counts.items()})
+
+    def _channel(self, record) -> None:
+        schema = self.schemas.get(record.schema_id)
+        self.connections[record.id] = Connection(
+            record.id, record.topic, schema.name if schema else "", schema.data.decode("utf-8", "replace")
+            if schema else "", schema.encoding if schema else "", "", dict(record.metadata))
+
     def _chunk_head(self, buf, start: int, stop: int, end: int) -> _ChunkHead:
         head_end = start + _CHUNK_HEAD.size
         if head_end > end:
@@ -550,19 +599,17 @@ class McapWalker(Walker):
     def _handle(self, buf, pos: int, rec: tuple, *, base, inner: bool, where: str) -> Iterator:
         op, record, _start, _stop = rec
         if op == 0x05:
-            yield from self._message(record.channel_id, record.log_time, record.data)
+            yield from self._message(record.channel_id, record.log_time, record.data, self._where(pos, base, where))
         elif op == 0x03:
             self.schemas[record.id] = record
         elif op == 0x04:
-            schema = self.schemas.get(record.schema_id)
-            self.connections[record.id] = Connection(
-                record.id, record.topic, schema.name if schema else "", schema.data.decode("utf-8", "replace")
-                if schema else "", schema.encoding if schema else "", "", dict(record.metadata))
+            self._channel(record)
         elif op == 0x06:
             yield from self._chunk(buf, pos, record, base=base, cut=False)
         elif op == 0x07:
             self._chunk_index(record.channel_id, len(record.records))
         elif op == 0x02:  # the footer, and the magic after it: the file is whole
+            self._footer = True
             self.complete = bytes(buf[rec[-1] : rec[-1] + len(_MCAP_MAGIC)]) == _MCAP_MAGIC
 
 
@@ -578,12 +625,16 @@ def walk_topics(path: Path, fmt: str) -> tuple[Walker, list[Fault]]:
 
 
 # ============================================================================ sqlite3
-def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics: bool = False) -> Salvage:
+def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics: bool = False,
+                    known: list[tuple[str, str]] = ()) -> Salvage:
     """Read the rows of a damaged rosbag2 sqlite3 database one by one.
 
     A truncated database file still carries its original page count; sqlite then refuses
     the whole file. A temporary copy with the page count set to what is really there opens,
     and each message row is then read on its own, so a garbled page costs only the rows on it.
+    ``known``: the topics ``(name, type)`` the folder's metadata.yaml lists, in order; when the
+    topics table itself is unreadable, topic ids 1, 2, ... are taken to be those (the order in
+    which rosbag2 writers number them; a row given a wrong type does not decode and is counted).
     """
     data = Path(path).read_bytes()
     if len(data) < 100 or not data.startswith(b"SQLite format 3\x00"):
@@ -603,7 +654,10 @@ def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics:
             try:
                 topics = {row[0]: (row[1], row[2]) for row in con.execute("SELECT id, name, type FROM topics")}
             except sqlite3.DatabaseError as exc:
-                return Fault("in its topics table", str(exc), 0, open_end=True)
+                if not known:
+                    return Fault("in its topics table", str(exc), 0, open_end=True)
+                topics = {k: tuple(t) for k, t in enumerate(known, start=1)}
+                yield Fault("in its topics table", f"{exc} (the topics are taken from metadata.yaml)", 0)
             if want_topics:
                 for name, msgtype in topics.values():
                     yield name, 0, msgtype
