@@ -564,16 +564,17 @@ def test_garbled_bytes_cost_only_the_records_they_hit(rec, tmp_path, fmt):
         assert len(kept) >= N // 3, f"{fmt}: only {len(kept)} of {N} scans kept"
 
 
-@pytest.mark.parametrize("name, status", [("e.bag", 1), ("e.mcap", 1), ("e.jsonl", 0), ("e.json", 1),
-                                          ("e.log", 2), ("e.log.gz", 2)])
-def test_empty_files(tmp_path, name, status):
+@pytest.mark.parametrize("name", ["e.bag", "e.mcap", "e.jsonl", "e.json", "e.log", "e.log.gz", "blank.jsonl"])
+def test_empty_inputs_are_refused_with_one_status(tmp_path, name):
+    """An input that holds no scan at all is exit 2, whatever its format (it was 0 for .jsonl,
+    1 for bags and .json, 2 for logs)."""
     path = tmp_path / name
-    path.write_bytes(b"")
+    path.write_bytes(b"\n\n" if name.startswith("blank") else b"")
     p, kept = _read_through_cli(path, tmp_path)
-    assert p.returncode == status, p.stderr
-    assert kept == []
-    if status:
-        one_error_line(p)
+    assert p.returncode == 2, p.stderr
+    assert kept == [] and not (tmp_path / "kept.jsonl").exists()
+    line = one_error_line(p)
+    assert "empty" in line or "no scans" in line or "no laser messages" in line, line
 
 
 def test_an_empty_bag_says_it_is_empty(tmp_path):
@@ -581,7 +582,7 @@ def test_an_empty_bag_says_it_is_empty(tmp_path):
     writer.open()
     writer.close()
     p = labkit("info", tmp_path / "empty.bag")
-    assert p.returncode == 0
+    assert p.returncode == 2 and "is an empty bag" in one_error_line(p)  # as every command says it
     p = labkit("convert", tmp_path / "empty.bag", tmp_path / "x.jsonl")
     assert p.returncode == 2 and "is an empty bag" in one_error_line(p)
 

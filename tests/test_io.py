@@ -214,6 +214,46 @@ def test_json_errors(tmp_path):
     assert len(got) == 2 and info.value.n_read == 2
 
 
+def test_a_json_scan_without_range_max_refuses_absurd_readings(tmp_path):
+    """A reading of 1e30 m (a placeholder for "no return") is invalid; it counted as a wall."""
+    from labkit.io.jsonscan import DEFAULT_RANGE_MAX_M
+
+    p = tmp_path / "s.json"
+    p.write_text('{"ranges": [1.0, 1e30, 999.0, 1001.0], "bearings": [0.0, 0.1, 0.2, 0.3]}')
+    scan = read_json_scan(p)
+    assert scan.range_max == DEFAULT_RANGE_MAX_M == 1000.0
+    assert scan.valid.tolist() == [True, False, True, False]
+    p.write_text('{"ranges": [1.0, 1e30], "bearings": [0.0, 0.1], "range_max": 2.0}')
+    assert read_json_scan(p).valid.tolist() == [True, False]
+    p.write_text('{"ranges": [1.0, 1e30], "bearings": [0.0, 0.1], "range_max": null}')  # null: no limit
+    assert read_json_scan(p).valid.tolist() == [True, True]
+
+
+def test_a_laserscan_whose_beams_disagree_with_its_span_is_skipped_and_counted(tmp_path):
+    """20 LaserScans, one of which holds 90 ranges for a span of 181 beams: it is not read with its
+    angle_max quietly changed, it is a lost scan of the error."""
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    t = ts.types
+    path = tmp_path / "span.bag"
+    with rosbag1.Writer(path) as writer:
+        conn = writer.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        for k in range(20):
+            n = 90 if k == 7 else 181
+            header = t["std_msgs/msg/Header"](seq=k, stamp=t["builtin_interfaces/msg/Time"](sec=10 + k, nanosec=0),
+                                              frame_id="laser")
+            msg = t["sensor_msgs/msg/LaserScan"](
+                header=header, angle_min=-np.pi / 2, angle_max=np.pi / 2, angle_increment=np.pi / 180,
+                time_increment=0.0, scan_time=0.0, range_min=0.0, range_max=10.0,
+                ranges=np.full(n, 2.0, np.float32), intensities=np.zeros(0, np.float32))
+            writer.write(conn, (10 + k) * 10**9, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    got = []
+    with pytest.raises(CorruptFileError, match="has 90 ranges but its angles span 180 deg") as info:
+        got.extend(read_scans(path))
+    assert [s.stamp_ns // 10**9 for s in got] == [10 + k for k in range(20) if k != 7]
+    assert info.value.n_lost == 1 and info.value.lost_exact and "19 scans kept, 1 lost" in str(info.value)
+    assert all(s.n_beams == 181 and np.isclose(s.angles[-1], np.pi / 2) for s in got)
+
+
 # ---------------------------------------------------------------- CARMEN
 def _flaser(ranges, x=1.0, y=2.0, th=0.5, t=100.25):
     r = " ".join(f"{v:g}" for v in ranges)
