@@ -344,19 +344,37 @@ def test_unreadable_input(rec, open_tmp, command):
     assert "Permission denied" in one_error_line(p)
 
 
-def test_disk_full_leaves_no_half_file(rec, tmp_path):
+DISK_FULL = {  # every writer of a recording or a table: arguments, given the output folder
+    "convert-jsonl": lambda r, d: ["convert", r.bag, f"{d}/o.jsonl"],
+    "convert-bag": lambda r, d: ["convert", r.mcap, f"{d}/o.bag"],
+    "convert-mcap": lambda r, d: ["convert", r.bag, f"{d}/o.mcap"],
+    "convert-ros2": lambda r, d: ["convert", r.bag, f"{d}/o_ros2"],
+    "extract-jsonl": lambda r, d: ["extract", r.bag, "-o", f"{d}/o.jsonl"],
+    "extract-parquet": lambda r, d: ["extract", r.bag, "-o", f"{d}/o.parquet"],
+}
+
+
+def test_disk_full_is_exit_3_with_one_line_and_leaves_nothing(rec, tmp_path):
+    """Each writer on a full disk (a 24 KiB tmpfs, smaller than every output): exit 3, one line
+    saying no space is left, no traceback, nothing left behind. A ROS2 folder gave exit 70 and
+    sqlite's traceback ("database or disk is full")."""
     if os.geteuid() != 0 or not shutil.which("unshare"):
         pytest.skip("a full disk is made with a tiny tmpfs in a private mount namespace, which needs root")
     small = tmp_path / "small"
     small.mkdir()
-    script = (f"mount -t tmpfs -o size=64k none {small} && "
-              f"{' '.join(map(str, LABKIT))} -q convert {rec.bag} {small}/out.jsonl; echo rc=$?; ls -a {small}")
-    p = subprocess.run(["unshare", "--mount", "sh", "-c", script], capture_output=True, text=True, timeout=120)
+    runs = "; ".join(f"echo '== {name}'; {' '.join(map(str, LABKIT))} -q {' '.join(map(str, args(rec, small)))}; "
+                     f"echo rc=$?; ls -A {small} | wc -l" for name, args in DISK_FULL.items())
+    script = f"mount -t tmpfs -o size=24k none {small} && {{ {runs}; }}"
+    p = subprocess.run(["unshare", "--mount", "sh", "-c", script], capture_output=True, text=True, timeout=600)
     if "mount" in p.stderr and "rc=" not in p.stdout:
         pytest.skip(f"cannot mount a tmpfs here: {p.stderr.strip()}")
-    assert "Traceback" not in p.stderr and "rc=3" in p.stdout, p.stdout + p.stderr
-    assert "No space left on device" in p.stderr
-    assert p.stdout.split("rc=3")[1].split() == [".", ".."]  # no output, no temporary left
+    assert "Traceback" not in p.stderr, p.stderr
+    results = dict(part.split("\n", 1) for part in p.stdout.split("== ")[1:])
+    assert set(results) == set(DISK_FULL)
+    for name, out in results.items():
+        assert out.split() == ["rc=3", "0"], f"{name}: {out} {p.stderr}"  # exit 3, and the folder is empty
+    errors = [ln for ln in p.stderr.splitlines() if ln.startswith("labkit: error:")]
+    assert len(errors) == len(DISK_FULL) and all("No space left on device" in ln for ln in errors), p.stderr
 
 
 # -- Ctrl-C in the middle of a run

@@ -554,7 +554,7 @@ def write_bag(
             raise ValueError(f"{name} must start with '/', got {value!r}")
     if pose_topic == topic:
         raise ValueError(f"pose_topic and topic must differ, both are {topic!r}")
-    with safe_output(path, output_kind(path, fmt), overwrite=overwrite, inputs=inputs) as tmp:
+    with safe_output(path, output_kind(path, fmt), overwrite=overwrite, inputs=inputs) as tmp, _system_errors(path):
         if fmt == "ros1":
             return _write_ros1(scans, tmp, topic, pose_topic)
         if fmt == "mcap" and path.name.lower().endswith(".mcap"):
@@ -569,6 +569,30 @@ def write_bag(
                     written.replace(tmp)
         plugin = rosbag2.StoragePlugin.MCAP if fmt == "mcap" else rosbag2.StoragePlugin.SQLITE3
         return _write_ros2(scans, tmp, topic, plugin, fmt, pose_topic)
+
+
+@contextlib.contextmanager
+def _system_errors(path: Path):
+    """What the system refused while a bag was written, as the OSError it is: sqlite says "database
+    or disk is full" (a ROS2 folder on a full disk), rosbags wraps an OSError in its WriterError.
+    The command line then exits 3 with one line, and safe_output removes the temporary output."""
+    import errno
+    import sqlite3
+
+    try:
+        yield
+    except sqlite3.Error as exc:
+        text = str(exc).lower()
+        if "full" in text:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path)) from exc
+        if "readonly" in text or "read-only" in text or "unable to open" in text or "disk i/o" in text:
+            raise OSError(errno.EIO, f"the database could not be written ({exc})", str(path)) from exc
+        raise
+    except (rosbag1.WriterError, rosbag2.WriterError) as exc:
+        cause = exc.__cause__ or exc.__context__
+        if isinstance(cause, OSError):
+            raise cause from exc
+        raise
 
 
 def _odometry(typestore, scan: Scan, seq: int, ros1: bool):
