@@ -38,7 +38,7 @@ from . import __version__, sim
 from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with
 from .errors import CorruptFileError, RefusedError
 from .grading import add_grade_parser
-from .io import FORMATS, convert, detect_format, read_scans
+from .io import FORMATS, detect_format, read_scans
 from .io.formats import writable_formats
 
 EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
@@ -92,9 +92,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    n = convert(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
-                progress=not args.quiet, strict=args.strict, poses=_poses(args))
-    print(f"wrote {n} scans to {args.output}")
+    from .io import convert_recording
+
+    done = convert_recording(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
+                             progress=not args.quiet, strict=args.strict, poses=_poses(args),
+                             only_scans=args.only_scans)
+    if done.messages:
+        print(f"wrote {sum(done.messages.values())} messages of {len(done.messages)} topics ({done.scans} scans) "
+              f"to {args.output}")
+    else:
+        print(f"wrote {done.scans} scans to {args.output}")
     return 0
 
 
@@ -493,12 +500,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_simulate)
 
     c = sub.add_parser("convert", parents=[common, reading],
-                       help="convert between bag formats, CARMEN logs and JSON")
+                       help="convert between bag formats (every topic, names kept), CARMEN logs and JSON (the scans)")
     c.add_argument("input", help=f"recording ({_readable_help()})")
     c.add_argument("output", help=_either([f.label for f in FORMATS.values() if f.writable]))
     c.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
     c.add_argument("--format", choices=writable_formats(),
                    help="output format (default: from the name; must agree with it)")
+    c.add_argument("--only-scans", action="store_true",
+                   help="between bags, copy the scans alone (the LaserScan topic as /scan, their poses as /odom) "
+                   "instead of every topic under its own name")
     c.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     c.set_defaults(func=cmd_convert)
 

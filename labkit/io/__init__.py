@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
@@ -280,11 +281,16 @@ def __getattr__(name: str):
 
 def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
             overwrite: bool = False, progress: bool = False, strict: bool = False,
-            poses: str | bool | None = None) -> int:
-    """Copy the scans of ``src`` into ``dst`` (formats from the names); return the count.
+            poses: str | bool | None = None, only_scans: bool = False) -> int:
+    """Copy the recording ``src`` into ``dst`` (formats from the names); return the scans copied.
 
-    The scans keep their poses (``poses`` as in :func:`read_scans`): a bag written gets them as
-    ``nav_msgs/Odometry`` on ``/odom``, JSON lines as ``pose`` fields.
+    Between bags (ROS1 ``.bag``, ROS2 folder, MCAP) the whole recording is copied: every topic,
+    under its own name, converted between ROS1 and ROS2 definitions (:mod:`labkit.io.bagcopy`;
+    a topic whose type does not convert is left out with a :class:`~labkit.io.bagcopy.TopicsSkippedWarning`);
+    ``topic`` and ``poses`` do not apply then. With ``only_scans=True``, and whenever either
+    side is not a bag, the scans alone are copied: the LaserScan topic (``topic``) as ``/scan``,
+    with their poses (``poses`` as in :func:`read_scans`) as ``nav_msgs/Odometry`` on ``/odom``
+    in a bag, as ``pose`` fields in JSON lines.
 
     A damaged ``src`` still produces a complete ``dst`` holding every readable scan, then
     the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar. ``dst``
@@ -295,8 +301,40 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     negative stamps, or garbage) are changed on purpose, as :func:`labkit.io.bags.plan_stamps`
     describes, and a :class:`StampsChangedWarning` says how.
     """
+    return convert_recording(src, dst, topic=topic, format=format, overwrite=overwrite, progress=progress,
+                             strict=strict, poses=poses, only_scans=only_scans).scans
+
+
+@dataclass(frozen=True)
+class Conversion:
+    """What :func:`convert_recording` wrote: the scans, and for a whole-bag copy every message
+    per topic (empty for a scans-only copy)."""
+
+    scans: int
+    messages: dict = field(default_factory=dict)
+
+
+def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
+                      overwrite: bool = False, progress: bool = False, strict: bool = False,
+                      poses: str | bool | None = None, only_scans: bool = False) -> Conversion:
+    """:func:`convert`, saying what it wrote (:class:`Conversion`)."""
     src, dst = Path(src), Path(dst)
     fmt = output_format(dst, format)
+    src_fmt = detect_format(src)
+    if not only_scans and src_fmt in bags.BAG_FORMATS and fmt in bags.BAG_FORMATS:
+        if topic is not None or poses not in (None, True):
+            raise RefusedError("topic and poses choose what a scans-only copy holds; a bag-to-bag copy carries every "
+                               "topic as it is (only_scans=True for the scans alone)",
+                               "--topic and --poses choose what --only-scans copies; without it a bag-to-bag copy "
+                               "carries every topic as it is")
+        if src.is_file() and src.stat().st_size == 0:
+            raise EmptyRecordingError(f"{src} is empty (0 bytes): there is nothing to read")
+        bags.list_topics(src, src_fmt)  # an empty bag, or one too damaged to declare a topic: refused here
+        check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])
+        from .bagcopy import copy_bag
+
+        n_scans, _n, written = copy_bag(src, src_fmt, dst, fmt, overwrite=overwrite, strict=strict, progress=progress)
+        return Conversion(n_scans, dict(written))
     stream = read_scans(src, topic=topic, strict=strict, poses=poses)
     check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
     restamp = None
@@ -314,7 +352,7 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
         from tqdm.auto import tqdm
 
         scans = tqdm(scans, total=stream.count, unit="scan", desc=f"convert {src.name}")
-    return write_scans(scans, dst, fmt, overwrite=overwrite, inputs=[src])
+    return Conversion(write_scans(scans, dst, fmt, overwrite=overwrite, inputs=[src]))
 
 
 def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
