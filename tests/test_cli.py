@@ -33,7 +33,7 @@ def test_simulate_convert_info_view(tmp_path):
     assert (tmp_path / "office.truth.jsonl").exists()
     assert len(list(read_scans(tmp_path / "office.bag"))) == 20
     out = run("convert", tmp_path / "office.bag", tmp_path / "office.mcap").stdout
-    assert "wrote 20 scans" in out
+    assert "wrote 40 messages of 2 topics (20 scans)" in out  # the scans and their odometry
     info = run("info", tmp_path / "office.mcap").stdout
     assert "/scan" in info and "sensor_msgs/msg/LaserScan" in info and "20 messages" in info
     out = run("view", tmp_path / "office.bag", "-o", tmp_path / "office.rrd").stdout

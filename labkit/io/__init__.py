@@ -199,7 +199,7 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
     """
     p = Path(path)
     fmt = detect_format(p)
-    if p.is_file() and p.stat().st_size == 0:
+    if fmt in _BUILT_IN and p.is_file() and p.stat().st_size == 0:
         raise EmptyRecordingError(f"{p} is empty (0 bytes): there is nothing to read")
     if poses is not None and not isinstance(poses, (bool, str)):
         raise ValueError(f"poses must be None, True, False or a topic name, got {poses!r}")
@@ -473,3 +473,4 @@ register_format(FileFormat("json", (".json",), "one scan as JSON {ranges, bearin
                            count=_count_one, write=_write_json, output_kind=JSON_SCAN, in_folders=False))
 register_format(FileFormat("jsonl", (".jsonl",), "scans as JSON lines, one per line (.jsonl)", read=_read_jsonl,
                            write=_write_jsonl, output_kind=JSON_LINES, in_folders=False))
+_BUILT_IN = frozenset(FORMATS)  # the formats above (an empty file of a format registered later is its own affair)
