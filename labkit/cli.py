@@ -6,10 +6,10 @@ Run ``labkit --help`` or ``labkit COMMAND --help``. Every expected problem print
 ====  ==========================================================================================
 0     done
 1     done, but an input was damaged: the output holds every record that could be read, and
-      the line says how many records were skipped and where the first one was
+      the line says where the first damage is and how many scans were kept and lost
 2     nothing was done: the command line or an input was refused (unknown format, missing
-      file, an output that exists without ``-f`` or is not labkit's kind of file, an output
-      that is the input, a wrong suffix, a bad value)
+      file, an input without any scan, an output that exists without ``-f`` or is not labkit's
+      kind of file, an output that is the input, a wrong suffix, a bad value)
 3     nothing was done: the system refused (permission denied, disk full, read-only folder)
 70    a bug in labkit: the traceback is shown; please report it with the command line
 130   interrupted (Ctrl-C): the output is unchanged; what was written so far is kept as
