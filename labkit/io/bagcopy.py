@@ -200,7 +200,8 @@ def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: boo
                         skipped[topic] += 1
                         reasons.setdefault(topic, f"a message does not convert ({exc})")
                     continue
-                writer.write(conn, stamp, data)
+                with bags.whole_writes():
+                    writer.write(conn, stamp, data)
                 written[topic] += 1
         finally:
             writer.close()

@@ -572,6 +572,27 @@ def write_bag(
 
 
 @contextlib.contextmanager
+def whole_writes():
+    """Ctrl-C waits until the message being written is written whole: rosbags notes a message in
+    the bag's index before it writes its data, so an interruption in between leaves a partial
+    bag whose index lists a message that is not there (readers then count it lost)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pressed: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, _frame: pressed.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if pressed:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
 def _system_errors(path: Path):
     """What the system refused while a bag was written, as the OSError it is: sqlite says "database
     or disk is full" (a ROS2 folder on a full disk), rosbags wraps an OSError in its WriterError.
@@ -633,11 +654,15 @@ def _write_all(writer, conn, scans, typestore, serialize, fmt: str, pose_topic: 
             if last is not None and receive < last:
                 receive, raised = last, raised + 1
             _check_stamps(fmt, scan, receive, count)
-            writer.write(conn, receive, serialize(_message(typestore, scan, count, ros1), _MSGTYPE))
+            message = serialize(_message(typestore, scan, count, ros1), _MSGTYPE)
+            with whole_writes():
+                writer.write(conn, receive, message)
             if scan.pose is not None and pose_topic is not None:
                 if poses is None:
                     poses = writer.add_connection(pose_topic, _ODOMETRY, typestore=typestore)
-                writer.write(poses, receive, serialize(_odometry(typestore, scan, count, ros1), _ODOMETRY))
+                message = serialize(_odometry(typestore, scan, count, ros1), _ODOMETRY)
+                with whole_writes():
+                    writer.write(poses, receive, message)
             last = receive
             count += 1
     except BaseException:
