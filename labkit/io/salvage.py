@@ -251,7 +251,12 @@ class Walker:
                 if not quiet:
                     yield Fault(self._where(pos, base, where), str(cut), 0, open_end=base is not None and not inner)
                 return
-            yield from self._handle(buf, pos, rec, base=base, inner=inner, where=where)
+            if rec[0] == self._message_op:  # most records: no generator of their own
+                item = self._message_record(buf, pos, rec, base, where)
+                if item is not None:
+                    yield item
+            else:
+                yield from self._handle(buf, pos, rec, base=base, inner=inner, where=where)
             pos = rec[-1]
 
     def _where(self, pos: int, base: int | None, where: str) -> str:
@@ -279,7 +284,8 @@ class Walker:
         return None
 
     # -------------------------------------------------------------- the books
-    def _message(self, conn_id: int, stamp: int, raw, where: str) -> Iterator:
+    def _message(self, conn_id: int, stamp: int, buf, start: int, stop: int, pos: int, base, where: str):
+        """Count a message found intact; ``(topic, stamp, raw, where)`` when it is wanted, else None."""
         conn = self.connections.get(conn_id)
         if self._after_index:  # the first record after a chunk's index: a new chunk's worth begins
             self._chunk_found.clear()
@@ -287,10 +293,11 @@ class Walker:
             self._after_index = False
         self._chunk_found[conn_id] += 1
         if conn is None:
-            return
+            return None
         self.found[conn.topic] += 1
-        if wanted(conn.topic, conn.msgtype, self.topic):
-            yield conn.topic, stamp, bytes(raw), where
+        if not wanted(conn.topic, conn.msgtype, self.topic):
+            return None
+        return conn.topic, stamp, bytes(buf[start:stop]), self._where(pos, base, where)
 
     def _cut_message(self, conn_id: int) -> None:
         conn = self.connections.get(conn_id)
@@ -352,7 +359,12 @@ class Walker:
         """Learn the connections from the file's index at its end, if it can be read, so that a
         message whose connection record is damaged still has a topic."""
 
+    _message_op: object = None
+
     def _record(self, buf, pos: int, end: int, inner: bool) -> tuple:
+        raise NotImplementedError
+
+    def _message_record(self, buf, pos: int, rec: tuple, base, where: str):
         raise NotImplementedError
 
     def _handle(self, buf, pos: int, rec: tuple, *, base, inner: bool, where: str) -> Iterator:
@@ -370,24 +382,36 @@ _ROS1_FIELDS = {  # op -> the header fields it must have, and their sizes (0: an
     b"\x07": {"conn": 4, "topic": 0},
 }
 _ROS1_HEADER_MAX = 1 << 16
-_ROS1_NAME = re.compile(rb"[a-z0-9_]{1,32}")
 
 
-def _ros1_fields(header) -> dict[str, bytes]:
+_NAME_CHARS = b"abcdefghijklmnopqrstuvwxyz0123456789_"
+_NAMES = {name.encode(): name for fields in _ROS1_FIELDS.values() for name in fields} | {
+    b"op": "op", b"type": "type", b"md5sum": "md5sum", b"message_definition": "message_definition",
+    b"callerid": "callerid", b"latching": "latching"}
+_U32 = struct.Struct("<I")
+# a message record's header of exactly the fields op (2), conn and time, each once, in any order
+_MESSAGE_HEADER = re.compile(rb"(?s)(?:(\x04\x00\x00\x00op=\x02)|\x09\x00\x00\x00conn=(.{4})"
+                             rb"|\x0d\x00\x00\x00time=(.{8})){3}")
+
+
+def _ros1_fields(header: bytes) -> dict[str, bytes]:
     """The ``name=value`` fields of a ROS1 record header (ValueError if they do not hold)."""
     fields, pos, n_bytes = {}, 0, len(header)
+    unpack = _U32.unpack_from
     while pos < n_bytes:
         if pos + 4 > n_bytes:
             raise ValueError("a header field length is cut off")
-        (n,) = struct.unpack_from("<I", header, pos)
+        (n,) = unpack(header, pos)
         pos += 4
-        if pos + n > n_bytes:
+        end = pos + n
+        if end > n_bytes:
             raise ValueError("a header field runs past its header")
-        name, sep, value = bytes(header[pos : pos + n]).partition(b"=")
-        if not sep or not _ROS1_NAME.fullmatch(name):
+        eq = header.find(b"=", pos, end)
+        name = header[pos:eq]
+        if eq < 0 or not name or len(name) > 32 or name.strip(_NAME_CHARS):
             raise ValueError("a header field is garbled")
-        fields[name.decode("ascii")] = value
-        pos += n
+        fields[_NAMES.get(name) or name.decode("ascii")] = header[eq + 1 : end]
+        pos = end
     return fields
 
 
@@ -413,10 +437,14 @@ class Ros1Walker(Walker):
             raise _Bad("a record header is garbled (impossible length)")
         if pos + 8 + hlen > end:
             raise _Cut("a record header is cut off")
-        try:
-            fields = _ros1_fields(buf[pos + 4 : pos + 4 + hlen])
-        except ValueError as exc:
-            raise _Bad(f"a record header is garbled ({exc})") from None
+        fast = _MESSAGE_HEADER.fullmatch(buf, pos + 4, pos + 4 + hlen) if hlen == 38 else None
+        if fast is not None and fast[1]:  # the usual message header: op, conn and time, in any order
+            fields = {"op": b"\x02", "conn": fast[2], "time": fast[3]}
+        else:
+            try:
+                fields = _ros1_fields(buf[pos + 4 : pos + 4 + hlen])
+            except ValueError as exc:
+                raise _Bad(f"a record header is garbled ({exc})") from None
         op = fields.get("op", b"")
         allowed = self._inner_ops if inner else self._top_ops
         if op not in allowed:
@@ -471,13 +499,17 @@ class Ros1Walker(Walker):
         if pos == len(buf) and counts:
             self.index_counts = Counter({self.connections[c].topic: n for c, n in counts.items()})
 
+    _message_op = b"\x02"
+
+    def _message_record(self, buf, pos: int, rec: tuple, base, where: str):
+        _op, fields, start, stop = rec
+        (conn,) = struct.unpack("<I", fields["conn"])
+        sec, nsec = struct.unpack("<II", fields["time"])
+        return self._message(conn, sec * 1_000_000_000 + nsec, buf, start, stop, pos, base, where)
+
     def _handle(self, buf, pos: int, rec: tuple, *, base, inner: bool, where: str) -> Iterator:
         op, fields, start, stop = rec
-        if op == b"\x02":
-            (conn,) = struct.unpack("<I", fields["conn"])
-            sec, nsec = struct.unpack("<II", fields["time"])
-            yield from self._message(conn, sec * 1_000_000_000 + nsec, buf[start:stop], self._where(pos, base, where))
-        elif op == b"\x07":
+        if op == b"\x07":
             self._connection(fields, buf[start:stop])
         elif op == b"\x05":
             yield from self._chunk(buf, pos, fields, base=base, cut=False)
@@ -596,11 +628,15 @@ class McapWalker(Walker):
             raise _Cut("the file ends in the middle of a chunk", chunk=head, credible=not compression)
         return head
 
+    _message_op = 0x05
+
+    def _message_record(self, buf, pos: int, rec: tuple, base, where: str):
+        record = rec[1]
+        return self._message(record.channel_id, record.log_time, record.data, 0, len(record.data), pos, base, where)
+
     def _handle(self, buf, pos: int, rec: tuple, *, base, inner: bool, where: str) -> Iterator:
         op, record, _start, _stop = rec
-        if op == 0x05:
-            yield from self._message(record.channel_id, record.log_time, record.data, self._where(pos, base, where))
-        elif op == 0x03:
+        if op == 0x03:
             self.schemas[record.id] = record
         elif op == 0x04:
             self._channel(record)
