@@ -6,9 +6,11 @@ One entry point reads them all::
         ...
 
 The format is told from the path (see :func:`detect_format`). A damaged file yields every
-scan that could be read -- a record that does not decode is skipped and counted, and reading
-goes on -- and then raises :class:`CorruptFileError` naming the file, how many records were
-skipped and where the first was (``strict=True``: reading stops at the first bad record).
+scan that could be read -- a record that does not decode is skipped and counted, ROS1 bags and
+MCAP files are read record by record and pick up again after a garbled stretch
+(:mod:`labkit.io.salvage`) -- and then raises :class:`CorruptFileError` naming the file, where
+the first damage is, and the scans kept and lost (exactly when the file's index says how many it
+held; ``strict=True``: reading stops at the first damage).
 
 Writers never lose data (:mod:`labkit._safe`): they write under a temporary name and
 rename when complete, replace an existing output only when asked and only when it is their
@@ -115,7 +117,8 @@ class ScanStream:
     count : int or None
         How many scans the file says it holds (for progress bars), when known up front.
     readable : bool
-        False when the file is damaged and is being read sequentially.
+        Whether rosbags could open the file's index (bags); False for a bag whose index or
+        database is damaged (labkit reads it all the same, record by record or row by row).
     strict : bool
         Stop at the first bad record instead of skipping it.
     poses : str or None
