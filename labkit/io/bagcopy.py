@@ -214,6 +214,9 @@ def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: boo
                           TopicsSkippedWarning, stacklevel=2)
         n_scans = sum(written[t] for t in scan_topics)
         walker = faults.walker
+        if walker is not None and walker.index_counts is not None:  # the file's own index, as the walker read
+            listed = walker.index_counts  # it (rosbags counts what the chunks it could open say)
+            faults.expected = sum(listed[t] for t in scan_topics)
         others = [t for t in {c.topic for c in connections} if t not in scan_topics]
         if listed is not None:
             faults.other = sum(max(listed[t] - written[t] - skipped[t], 0) for t in others)
