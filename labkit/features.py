@@ -27,7 +27,8 @@ from .params import Params, checked_by, param
 __all__ = ["LineSegment", "Corner", "Circle", "Leg", "Person", "Features", "line_segment", "find_corners"]
 
 
-def _frozen(a) -> np.ndarray:
+def frozen_array(a) -> np.ndarray:
+    """``a`` as a read-only float array (the records' arrays never change once built)."""
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a
@@ -117,7 +118,7 @@ def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None)
     fit = fit_line_polar(rho, theta, weights, range_sigma=range_sigma)
     ends = project_onto_line(p[[0, -1]], fit.r, fit.alpha)
     idx.setflags(write=False)
-    return LineSegment(fit.r, fit.alpha, _frozen(fit.covariance), _frozen(ends[0]), _frozen(ends[1]),
+    return LineSegment(fit.r, fit.alpha, frozen_array(fit.covariance), frozen_array(ends[0]), frozen_array(ends[1]),
                        int(idx[0]), int(idx[-1]), len(p), fit.rms, idx)
 
 
@@ -235,7 +236,7 @@ def find_corners(
         side_origin = _side(a_start, b_end, (0.0, 0.0))
         side_corner = _side(a_start, b_end, p)
         kind = "concave" if side_origin * side_corner < 0 else "convex"
-        out.append(Corner(_frozen(p), angle, kind, extension > allowed, (i, j), a.last, b.first))
+        out.append(Corner(frozen_array(p), angle, kind, extension > allowed, (i, j), a.last, b.first))
     return out
 
 

@@ -1,6 +1,6 @@
 """The line extractors: one module per method, and the one registry of them.
 
-* :mod:`~labkit.lines.split_merge` split-and-merge and IEPF
+* :mod:`~labkit.lines.split_merge` split-and-merge and IEPF (:func:`iepf`, the bare split of the slides)
 * :mod:`~labkit.lines.angular` angular segmentation (Meglicki 2021)
 * :mod:`~labkit.lines.incremental`, :mod:`~labkit.lines.regression`,
   :mod:`~labkit.lines.ransac`, :mod:`~labkit.lines.hough` the other extractors Nguyen et al. compared
@@ -28,9 +28,9 @@ from .placing import PlacingParams
 from .ransac import RansacParams, ransac_lines
 from .registry import LINE_EXTRACTORS, LineExtractor, register, unregister
 from .regression import RegressionParams, regression_lines
-from .split_merge import SplitMergeParams, lines_similar, split_and_merge
+from .split_merge import SplitMergeParams, iepf, lines_similar, split_and_merge
 
-__all__ = ["split_and_merge", "lines_similar", "angular_segmentation", "angular_arrays", "AngularSteps",
+__all__ = ["split_and_merge", "iepf", "lines_similar", "angular_segmentation", "angular_arrays", "AngularSteps",
            "local_directions",
            "incremental_lines", "regression_lines", "ransac_lines", "hough_lines", "detect_lines_iav",
            "LINE_EXTRACTORS", "LineExtractor", "Params", "register", "unregister", "SplitMergeParams",

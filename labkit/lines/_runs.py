@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from ..features import LineSegment, _frozen, line_segment
+from ..features import LineSegment, frozen_array, line_segment
 from ..fitting import line_from_sums
 from ..noise import auto_split_threshold, scan_sigma
 from ..params import AUTO
@@ -119,7 +119,7 @@ def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float,
         line = line_segment(xy[a:b], beams[a:b], range_sigma=range_sigma)
         start, end, moved = _on_rays(xy[a].tolist(), xy[b - 1].tolist(), line.r, line.alpha)
         if moved:
-            line = dataclasses.replace(line, start=_frozen(start), end=_frozen(end))
+            line = dataclasses.replace(line, start=frozen_array(start), end=frozen_array(end))
         kept = line.length >= min_length_m
         if kept:
             lines.append(line)

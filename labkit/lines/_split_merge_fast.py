@@ -23,9 +23,9 @@ import math
 import numpy as np
 
 from ..features import LineSegment
-from ..fitting import _line_covariances, line_from_sums
+from ..fitting import line_covariances_rms, line_from_sums
 from ..scan import Scan
-from ..segmentation import SegmentationParams, _thresholds
+from ..segmentation import SegmentationParams, breakpoint_thresholds
 from ._runs import _on_rays
 
 __all__ = ["Runs", "Line", "wide_gaps", "grazing_links", "grazing_runs", "shifted_stretch", "line_segments",
@@ -133,8 +133,9 @@ def grazing_links(p: np.ndarray, r: np.ndarray, a: np.ndarray, k: np.ndarray, th
     gap = np.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
     dphi = np.abs(a[k + 1] - a[k])
     ra, rb = r[k], r[k + 1]
-    return (gap > _thresholds(ra, rb, dphi, threshold_m, SegmentationParams.incidence_deg, sigma)) & (
-        gap <= _thresholds(ra, rb, dphi, threshold_m, GRAZING_DEG, sigma))
+    return (gap > breakpoint_thresholds(ra, rb, dphi, threshold_m, incidence_deg=SegmentationParams.incidence_deg,
+                                        range_sigma_m=sigma)) & (
+        gap <= breakpoint_thresholds(ra, rb, dphi, threshold_m, incidence_deg=GRAZING_DEG, range_sigma_m=sigma))
 
 
 def grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points: int,
@@ -217,10 +218,10 @@ def shifted_stretch(res: np.ndarray, sd: np.ndarray, z_limit: float, min_mean_m:
 def covariances(idx: np.ndarray, starts: np.ndarray, alpha: np.ndarray, p: np.ndarray, ranges: np.ndarray, weights,
                 sigma: float, r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Covariances of lines whose beams ``idx[starts[k]:starts[k + 1]]`` have the points ``p``
-    (and, given the lines' ``r``, their RMS errors: :func:`labkit.fitting._line_covariances`)."""
+    (and, given the lines' ``r``, their RMS errors: :func:`labkit.fitting.line_covariances_rms`)."""
     w = np.ones(len(idx)) if weights == "uniform" else 1.0 / ranges.take(idx)
     var = np.full(len(idx), sigma * sigma)
-    return _line_covariances(p[:, 0], p[:, 1], w, starts, alpha, var, r=r)
+    return line_covariances_rms(p[:, 0], p[:, 1], w, starts, alpha, var, r=r)
 
 
 def line_segments(lines: list[Line], points, ranges, weights, sigma: float) -> list[LineSegment]:
