@@ -27,9 +27,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import _iav_noise
 from ._checks import check_positive
-from ._iav_noise import angle_limits, angle_noise_runs, ratio_sd, widen
+from ._iav_noise import angle_limits, angle_noise_runs, ratio_sd, widen, wider_than_noise
 from .features import Circle, Leg, LineSegment, line_segment
 from .fitting import fit_circle
 from .iav import NOISE_Z, circle_confidence, circle_from_iav, is_v_corner
@@ -392,8 +391,7 @@ def circle_engine(runs: Runs, t: CircleTest, sigma: float = 0.0, *, want_trace: 
             circle_of = [c for c, _ in made]
             centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
             radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
-            wider = _iav_noise.wider_than_noise(runs.pts, runs.starts[ks], runs.ends[ks], sigma, centers,
-                                                radii).tolist()
+            wider = wider_than_noise(runs.pts, runs.starts[ks], runs.ends[ks], sigma, centers, radii).tolist()
             made = [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
         for (_, k, _, _), (circle, v) in zip(passed, made, strict=True):
             verdict[k] = v

@@ -625,6 +625,20 @@ def test_detect_lines_iav_validates_its_arguments(kwargs, match):
         detect_lines_iav(Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1), **kwargs)
 
 
+@pytest.mark.parametrize("detect, old, value, new", [
+    (detect_lines_iav, "mean_tolerance", 0.0, "mean_tolerance_deg"),
+    (detect_lines_iav, "std_max", -0.1, "std_max_deg"),
+    (detect_circles, "std_max", math.nan, "std_max_deg"),
+])
+def test_an_old_name_still_works_for_a_release_and_a_bad_value_under_it_is_refused(detect, old, value, new):
+    # the old name (an angle in radians) warns, naming the new one, and its value is then checked
+    # under the new name as any other
+    scan = Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1)
+    with pytest.warns(DeprecationWarning, match=rf"\({old}=\.\.\.\) is deprecated: use {new}="), \
+            pytest.raises(ValueError, match=new):
+        detect(scan, **{old: value})
+
+
 # ============================================================================ arcs in lines
 def _room(radius):
     """A 6 m x 5 m room whose two far corners are rounded with ``radius``."""
@@ -779,12 +793,12 @@ def test_with_a_noise_allowance_a_corner_is_not_a_circle_when_its_points_miss_on
     assert hit / len(columns) > 0.9, hit / len(columns)
 
 
-def test_the_residual_tests_early_decision_is_the_converged_fits():
+def test_the_residual_tests_early_decision_is_the_converged_fits(monkeypatch):
     # the residual test decides most runs after a few Gauss-Newton steps (labkit._iav_noise.
     # wider_than_noise); the converged orthogonal fit is the referee: on the runs the circle test
     # meets in the simulated hall at 5 mm to 3 cm, every decision is the converged one's, and the
     # early mean square is never more than half the factor it relies on over its minimum
-    from labkit import Config, _iav_noise, extract_features
+    from labkit import Config, _iav_batch, _iav_noise, extract_features
     from labkit.experiments import nguyen_lidar, world_scans
     from labkit.fitting import fit_circles
     from labkit.iav import NOISE_Z
@@ -799,13 +813,11 @@ def test_the_residual_tests_early_decision_is_the_converged_fits():
 
     config = Config().updated(AUTO_CONFIG)
     rng = np.random.default_rng(4)
-    try:
-        _iav_noise.wider_than_noise = spy
-        for noise in (0.005, 0.01, 0.02, 0.03):
-            for scan, _ in world_scans("hall", nguyen_lidar(722, noise), 25, rng):
-                extract_features(scan, config)
-    finally:
-        _iav_noise.wider_than_noise = real
+    monkeypatch.setattr(_iav_batch, "wider_than_noise", spy)  # the name the batch engine calls
+    for noise in (0.005, 0.01, 0.02, 0.03):
+        for scan, _ in world_scans("hall", nguyen_lidar(722, noise), 25, rng):
+            extract_features(scan, config)
+    monkeypatch.undo()
     runs = worst = 0
     for pts, starts, ends, sigma, centers, radii in seen:
         big = ends - starts > 3
