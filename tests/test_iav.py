@@ -837,3 +837,16 @@ def test_the_residual_tests_early_decision_is_the_converged_fits(monkeypatch):
                 assert np.array_equal(real(pts, starts, ends, sigma, centers, radii), full.rms ** 2 > limit)
         runs += len(starts)
     assert runs > 200 and worst < _iav_noise.EARLY_FACTOR / 2, (runs, worst)
+
+
+@pytest.mark.parametrize("name", ["IAVStats", "circle_from_iav", "iav_stats", "inscribed_angles",
+                                  "middle_point_offset"])
+def test_the_geometry_labkit_circles_used_to_export_still_imports_for_a_release(name):
+    import labkit.circles
+    import labkit.iav
+
+    with pytest.warns(DeprecationWarning, match=rf"labkit\.circles\.{name} is deprecated: use labkit\.iav\.{name}"):
+        moved = getattr(labkit.circles, name)
+    assert moved is getattr(labkit.iav, name)
+    with pytest.raises(AttributeError):
+        labkit.circles.no_such_name  # noqa: B018
