@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+from contextvars import ContextVar
 from pathlib import Path
 
 from ..errors import CorruptFileError, EmptyRecordingError
 
 __all__ = ["CorruptFileError", "EmptyRecordingError", "Faults"]
+
+#: While set (to a list), every :class:`Faults` made is appended to it: a reader stopped before
+#: its end (a scan range, :func:`labkit.read_scans`) can still say what it skipped on the way.
+WATCHED: ContextVar[list | None] = ContextVar("labkit_watched_faults", default=None)
 
 
 class Faults:
@@ -38,6 +43,9 @@ class Faults:
         self.count = 0
         self.first: tuple[str, str] | None = None
         self.wheres: set[str] = set()
+        watched = WATCHED.get()
+        if watched is not None:
+            watched.append(self)
 
     def skip(self, where: str, reason: str, count: int = 1) -> bool:
         """Note ``count`` unreadable records at ``where`` (``count=0``: the file is damaged
