@@ -227,7 +227,13 @@ def split_ranges(sizes: Sequence[int | None], n_workers: int, *,
 
 # ---------------------------------------------------------------------------- one task
 def _peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: KiB
+    """This process's peak resident memory, MiB: its own high-water mark (Linux ``VmHWM``; getrusage's
+    ``ru_maxrss`` also counts the parent's memory at the fork that started it)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            return next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:")) / 1024.0
+    except (OSError, StopIteration, ValueError):
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: KiB; macOS: bytes
 
 
 class _Stop:
@@ -702,8 +708,12 @@ def _one_per_input(paths, outs, ranges, common, *, overwrite, n_workers, split, 
             result = _merged(path, [r for _, r in mine])
             results.append(result)
             if result.status in ("done", "damaged"):
-                _join_lines([job.out for job, _ in mine], outs[k], FEATURES_FILE, overwrite, path)
-                result.output = str(outs[k])
+                try:
+                    _join_lines([job.out for job, _ in mine], outs[k], FEATURES_FILE, overwrite, path)
+                    result.output = str(outs[k])
+                except OSError as exc:  # joining the parts failed (a full disk): nothing of it is in place
+                    result.status, result.output = "system", None
+                    result.error = f"{exc.filename or outs[k]}: {exc.strerror or exc}"
             elif result.status == "interrupted":
                 parts = [p for job, _ in mine for p in (job.out, _partial_of(job.out)) if p.exists()]
                 result.output = None

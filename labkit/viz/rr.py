@@ -108,7 +108,8 @@ INVALID_RAY_M = 0.4  # length of the grey ray drawn for an invalid beam
 # radii in UI points (negative in rerun): dots keep their size on screen at any zoom
 POINT_RADIUS_UI = -1.5
 SEGMENT_RADIUS_UI = -2.5
-_BATCH = 256  # scans per send_columns call
+_BATCH = 128  # scans per send_columns call: memory in flight grows with it, the file's footer with 1 / _BATCH
+_PEEK = 256  # scans looked at before writing: do they carry poses, do their stamps advance?
 #: Map decimation: every MAP_EVERY-th scan with a pose adds to the accumulated map, one point per
 #: MAP_CELL_M grid cell; the path keeps a point every PATH_STEP_M.
 MAP_EVERY = 10
@@ -278,7 +279,7 @@ def _log_frames(rec, frames: Iterable[tuple[Scan, np.ndarray | None, Features | 
     map (``world_map``) those that have a pose."""
 
     def send(batch, k: int) -> None:
-        _send_batch(rec, batch, start_index + k, show_invalid)
+        _send_batch(rec, batch, start_index + k, show_invalid, k == 0)
         if world_map is not None:
             world_map.send(batch, start_index + k)
 
@@ -295,6 +296,7 @@ class _Map:
             raise ValueError(f"map_every must be >= 1, got {every}")
         self.rec, self.every, self.thin = rec, int(every), GridThinning(cell_m)
         self.n_posed = 0
+        self.labels_hidden = False
         self.path: list[tuple[float, float]] = []
         rec.log("map", rr.Transform3D(mat3x3=_Y_UP), static=True)
         rec.log("map/sensor/marker", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[_MAP_COLORS["pose"]],
@@ -329,7 +331,9 @@ class _Map:
         if items[0][2] is not None:
             feats = [f if s.pose is not None else Features(f.stamp_ns, f.n_beams, f.labels)
                      for s, (_, _, f) in zip(scans, items, strict=True)]
-            _send_features(self.rec, times, feats, "map/sensor", None, segment_count=False)
+            _send_features(self.rec, times, feats, "map/sensor", None, segment_count=False,
+                           hide_labels=not self.labels_hidden)
+            self.labels_hidden = True
         keys = []
         for k in posed:
             if self.n_posed % self.every == 0:
@@ -414,7 +418,7 @@ def _scalars(rec, path: str, times, values) -> None:
 
 
 def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]], first_index: int,
-                show_invalid) -> None:
+                show_invalid, first_batch: bool = True) -> None:
     batch = [scan for scan, _, _ in items]
     idx = np.arange(first_index, first_index + len(batch))
     stamps = np.array([s.stamp_ns for s in batch], dtype=np.int64)
@@ -424,7 +428,7 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
     rec.send_columns(
         "world/scan/points",
         indexes=times,
-        columns=rr.Points2D.columns(positions=pts, colors=np.tile(COLORS["points"], (len(pts), 1)),
+        columns=rr.Points2D.columns(positions=pts, colors=_colors("points", len(pts)),
                                     radii=np.full(len(pts), POINT_RADIUS_UI, dtype=np.float32)).partition(lengths),
     )
     _scalars(rec, "metrics/valid_beams", times, lengths)
@@ -435,7 +439,7 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
             indexes=times,
             columns=rr.LineStrips2D.columns(
                 strips=np.concatenate(rays),
-                colors=np.tile(COLORS["invalid"], (sum(map(len, rays)), 1)),
+                colors=_colors("invalid", sum(map(len, rays))),
             ).partition([len(r) for r in rays]),
         )
     if items[0][1] is not None:
@@ -454,7 +458,8 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
         )
         _scalars(rec, "metrics/count/segments", times, n_segments)
     if items[0][2] is not None:
-        _send_features(rec, times, [f for _, _, f in items], "world", "metrics", segment_count=False)
+        _send_features(rec, times, [f for _, _, f in items], "world", "metrics", segment_count=False,
+                       hide_labels=first_batch)
 
 
 def _forever(value):
@@ -470,13 +475,17 @@ def _colors_rgb(rgb, n: int) -> np.ndarray:
     return np.tile(np.array(rgb, dtype=np.uint8), (n, 1))
 
 
-def _send_features(rec, times, feats: list[Features], world: str, metrics: str | None, segment_count: bool) -> None:
+def _send_features(rec, times, feats: list[Features], world: str, metrics: str | None, segment_count: bool,
+                   hide_labels: bool = True) -> None:
     """Every feature layer of a batch of scans, as one ``send_columns`` call per layer (and,
-    under ``metrics``, their counts and stage times)."""
+    under ``metrics``, their counts and stage times). ``hide_labels``: also log the layers' static
+    draw order and label visibility (once per recording: every static log is a chunk of its own,
+    and every chunk costs the file's footer memory until the file is closed)."""
 
     # the layers' draw order and labels, only where features are logged: an entity that names an archetype
     # without its required component (Ellipses2D without half_sizes) shows an error badge in the viewer
-    _hide_labels(rec, world)
+    if hide_labels:
+        _hide_labels(rec, world)
 
     def send(layer: str, archetype, colour: str, size_ui: float, **columns) -> None:
         per_scan = [getattr(f, layer) for f in feats]
@@ -534,7 +543,7 @@ def log_features(
     def send(batch: list[Features], k: int) -> None:
         k0 = start_index + k
         times = _time_columns(np.arange(k0, k0 + len(batch)), np.array([f.stamp_ns for f in batch], np.int64))
-        _send_features(rec, times, batch, world, metrics, segment_count=True)
+        _send_features(rec, times, batch, world, metrics, segment_count=True, hide_labels=k == 0)
 
     return _batched(features, send)
 
@@ -713,7 +722,7 @@ def record_scans(
     first: list[Scan] = []  # a look at the first batch: poses? stamps?
     damage = None
     try:
-        first.extend(itertools.islice(scans, _BATCH))
+        first.extend(itertools.islice(scans, _PEEK))
     except CorruptFileError as exc:  # logged, as any damage, after the scans before it
         damage = exc
     if with_map is None:
@@ -859,7 +868,7 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
     def send(batch, k: int) -> None:
         nonlocal n_truth
         first = start_index + k
-        _send_batch(rec, batch, first, True)
+        _send_batch(rec, batch, first, True, k == 0)
         if the_map is not None:
             the_map.send(batch, first)
         if feed is not None:
