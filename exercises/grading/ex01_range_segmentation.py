@@ -138,7 +138,8 @@ def test_hidden_random(segment, adaptive_threshold, rng):
         beams = random_wall_beams(rng)
         threshold_m = float(rng.uniform(0.03, 0.3))
         min_points = int(rng.integers(1, 7))
-        reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m, min_points=min_points, adaptive=False)
+        reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m=threshold_m, min_points=min_points,
+                                           adaptive=False)
         ranges, angles = beams["ranges"], beams["angles"]
         result = segment(ranges, angles, threshold_m, min_points)
         try:
@@ -171,7 +172,8 @@ def test_hidden_edges(segment, adaptive_threshold, rng):
     cases += [(random_wall_beams(rng, max_beams=200), 1e9, 1) for _ in range(3)]
     cases += [(random_wall_beams(rng, max_beams=30), 0.5, 1000) for _ in range(2)]
     for case, (beams, threshold_m, min_points) in enumerate(cases):
-        reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m, min_points=min_points, adaptive=False)
+        reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m=threshold_m, min_points=min_points,
+                                           adaptive=False)
         for as_list in (False, True):
             ranges, angles = beams["ranges"], beams["angles"]
             if as_list:
@@ -226,7 +228,8 @@ def test_own_work(segment, adaptive_threshold, rng):
     for _ in range(5):
         beams = random_wall_beams(rng)
         threshold_m, min_points = float(rng.uniform(0.03, 0.3)), int(rng.integers(1, 7))
-        reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m, min_points=min_points, adaptive=False)
+        reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m=threshold_m, min_points=min_points,
+                                           adaptive=False)
         args = beams["ranges"], beams["angles"], threshold_m, min_points
         assert_labels_result(segment(*args), reference)
     for _ in range(5):
@@ -241,7 +244,7 @@ import labkit
 
 def segment(ranges, angles, threshold_m, min_points):
     scan = labkit.Scan(ranges=ranges, angles=angles)
-    return labkit.segment_labels(scan, threshold_m, min_points=min_points, adaptive=False)
+    return labkit.segment_labels(scan, threshold_m=threshold_m, min_points=min_points, adaptive=False)
 ''', "adaptive_threshold": '''
 import labkit
 

@@ -7,6 +7,8 @@ the graded cell with that grade id; it gets the student's functions (calls into 
 worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
 """
 
+import math
+
 import numpy as np
 
 import labkit
@@ -47,7 +49,7 @@ def _as_segment(r, alpha):
 
 def _check_similar(similar, r1, alpha1, r2, alpha2, dr_max, dalpha_max):
     expected, _ = labkit.lines_similar(_as_segment(r1, alpha1), _as_segment(r2, alpha2), merge="thresholds",
-                                       merge_dr_m=dr_max, merge_dalpha=dalpha_max)
+                                       merge_dr_m=dr_max, merge_dalpha_deg=math.degrees(dalpha_max))
     result = similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max)
     assert isinstance(result, (bool, np.bool_)), f"similar must return True or False, got {result!r}"
     assert result == expected, (
@@ -184,7 +186,8 @@ def similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max):
         return labkit.LineSegment(r=r, alpha=alpha, covariance=np.eye(2), start=np.zeros(2), end=np.ones(2),
                                   first=0, last=1, n_points=2, error=0.0, indices=np.arange(2))
 
-    return labkit.lines_similar(line(r1, alpha1), line(r2, alpha2), merge_dr_m=dr_max, merge_dalpha=dalpha_max)[0]
+    return labkit.lines_similar(line(r1, alpha1), line(r2, alpha2), merge_dr_m=dr_max,
+                                merge_dalpha_deg=math.degrees(dalpha_max))[0]
 ''',
 }
 
