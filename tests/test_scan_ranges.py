@@ -5,6 +5,8 @@ recording, read no further than the range's end, and a record skipped on the way
 from __future__ import annotations
 
 import json
+import shutil
+import sqlite3
 import subprocess
 import sys
 from pathlib import Path
@@ -147,6 +149,71 @@ def test_a_damaged_carmen_log_in_ranges_strict_and_not(tmp_path):
             with pytest.raises(CorruptFileError, match=f"at line {2 * 12 + 1}"):
                 got.extend(s.stamp_ns for s in read_scans(path, scans=sl, strict=strict))
             assert got == whole[sl]
+
+
+def _read_all(path: Path, **kw) -> tuple[list[int], CorruptFileError | None]:
+    got: list[int] = []
+    try:
+        got.extend(s.stamp_ns for s in read_scans(path, **kw))
+    except CorruptFileError as error:
+        return got, error
+    return got, None
+
+
+@pytest.fixture(scope="module")
+def damaged_bags(recordings, tmp_path_factory):
+    """The 12-scan ROS1 and MCAP bags (with odometry) with 4 KB of garbage at half their length
+    (the framing of some scans is hit; the index at the end is intact), and the ROS2 folder with
+    one scan's row garbled."""
+    d = tmp_path_factory.mktemp("damaged")
+    out = {}
+    for fmt, name in (("ros1", "d1.bag"), ("mcap", "d2.mcap")):
+        data = bytearray(recordings[fmt].read_bytes())
+        at = len(data) // 2
+        data[at:at + 4000] = np.random.default_rng(0).integers(0, 256, 4000, dtype=np.uint8).tobytes()
+        out[fmt] = d / f"bad-{name}"
+        out[fmt].write_bytes(bytes(data))
+    out["ros2"] = d / "bad-s2"  # ROS2 sqlite3: the sixth scan's row holds 8 bytes that are no LaserScan
+    shutil.copytree(recordings["ros2"], out["ros2"])
+    with sqlite3.connect(next(out["ros2"].glob("*.db3"))) as db:
+        (row,) = db.execute("SELECT id FROM messages WHERE topic_id = (SELECT id FROM topics WHERE name = '/scan') "
+                            "ORDER BY timestamp LIMIT 1 OFFSET 5").fetchone()
+        db.execute("UPDATE messages SET data = ? WHERE id = ?", (b"\x00\x01\x00\x00\xff\xff\xff\xff", row))
+    db.close()
+    return out
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "mcap", "ros2"])
+def test_a_range_of_a_damaged_bag_counts_its_losses_against_the_file(damaged_bags, fmt):
+    """A range read to the file's end reports the loss the whole read reports (the index counts the
+    file's scans, not the range's); a range that ends past the damage reports at least the scans
+    noted lost, at the same place; one that ends before it reads cleanly."""
+    whole, error = _read_all(damaged_bags[fmt])
+    assert error is not None and error.lost_exact and error.n_lost >= 1 and len(whole) == 12 - error.n_lost
+    if fmt == "ros2":
+        assert error.n_lost == 1  # the one row the fixture garbled
+    # a range no longer than the scans read: an index count taken for the range's would say "none lost"
+    start = error.n_lost
+    got, to_end = _read_all(damaged_bags[fmt], scans=slice(start, None))
+    assert got == whole[start:] and to_end is not None
+    assert (to_end.n_lost, to_end.lost_exact, to_end.where) == (error.n_lost, True, error.where)
+    got, past = _read_all(damaged_bags[fmt], scans=slice(2, 10))
+    assert got == whole[2:10] and past is not None
+    assert past.where == error.where and 1 <= past.n_lost <= error.n_lost
+    assert _read_all(damaged_bags[fmt], scans=slice(0, 3)) == (whole[:3], None)
+
+
+def test_convert_a_range_between_bags_is_a_scans_only_copy(recordings, tmp_path):
+    """A whole-recording copy (every topic) has no scan range: refused before anything is written;
+    with only_scans the range's scans are copied."""
+    from labkit.io import convert
+
+    bag = recordings["ros1"]
+    with pytest.raises(RefusedError, match="only_scans"):
+        convert(bag, tmp_path / "r.mcap", scans=slice(2, 5))
+    assert not (tmp_path / "r.mcap").exists()
+    assert convert(bag, tmp_path / "r.mcap", scans=slice(2, 5), only_scans=True) == 3
+    assert [s.stamp_ns for s in read_scans(tmp_path / "r.mcap")] == [s.stamp_ns for s in read_scans(bag)][2:5]
 
 
 def labkit_cli(*args, cwd=None):
