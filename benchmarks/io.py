@@ -13,7 +13,9 @@ feature, write the ``.rrd`` with the ground truth beside the recording) of the f
 all 100,000 scans of one simulated recording (the corridor, 541 beams), each in a fresh process,
 beside the floor (a process that has only imported what ``view`` imports). The goal (issue 30):
 <= 300 MB at 100,000 scans and flat in the number of scans. ``--memory-scans 0`` skips it (the
-100,000-scan recording takes minutes to simulate and to view).
+100,000-scan recording takes minutes to simulate and to view on idle cores, hours on a loaded
+machine: ``--memory-scans 1000 4000`` prints the growth per scan between the two and what it gives
+at 100,000 scans).
 """
 
 from __future__ import annotations
@@ -90,6 +92,11 @@ def view_memory(counts: list[int], bag: Path | None = None) -> None:
     for n, mb, dt, size in rows:
         label = f"{n:,}" if n else "none (imports only: the floor)"
         print(f"| {label} | {mb:,.0f} | {mb - floor:,.0f} | {size:,.0f} | {dt:,.0f} |")
+    if len(rows) > 2:  # the growth per scan between the smallest and the largest count, and where it leads
+        (n0, mb0, _, _), (n1, mb1, _, _) = rows[1], rows[-1]
+        slope = (mb1 - mb0) / (n1 - n0)
+        print(f"\nslope: {slope * 1024:+.2f} KiB per scan between {n0:,} and {n1:,} scans; at 100,000 scans that "
+              f"gives {mb1 + slope * (100_000 - n1):,.0f} MiB (goal <= 300 MB)")
 
 
 def main() -> None:

@@ -121,7 +121,10 @@ def test_evaluate_on_dask_gives_the_serial_rows(recordings, client):
         return [{k: v for k, v in row.items() if k != "scans_per_s"} for r in results for row in r.rows]
 
     assert rows(on_dask) == rows(serial) and len(rows(serial)) == 10
-    assert [r.status for r in on_dask] == ["done"] * 5  # 15 scans: never read as far as the cut
+    # 15 scans lie before the cut, but the bag's one chunk says at its header that it runs past the
+    # file's end: the walker knows the file is damaged before its first scan, and says so
+    assert [r.status for r in on_dask] == [r.status for r in serial] == ["done"] * 4 + ["damaged"]
+    assert "e-cut.bag is damaged" in on_dask[-1].error and on_dask[-1].n_scans == 15
 
 
 def test_cli_on_an_existing_scheduler_and_on_its_own_cluster(recordings, client, tmp_path):
