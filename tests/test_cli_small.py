@@ -18,7 +18,10 @@ def labkit_cli(capsys):
     """The command line in this process (a process of its own costs seconds of imports each)."""
 
     def run(*args):
-        code = main(["-q", *map(str, args)])
+        try:
+            code = main(["-q", *map(str, args)])
+        except SystemExit as exit_:  # argparse refuses the command line
+            code = exit_.code
         out, err = capsys.readouterr()
         assert "Traceback" not in err, err
         return SimpleNamespace(returncode=code, stdout=out, stderr=err)

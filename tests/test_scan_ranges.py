@@ -7,9 +7,8 @@ from __future__ import annotations
 import json
 import shutil
 import sqlite3
-import subprocess
-import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -18,8 +17,6 @@ from labkit import CorruptFileError, Scan, read_scans, sim, write_scans
 from labkit.data import write_simulation
 from labkit.errors import RefusedError
 from labkit.io import FileFormat, register_format, unregister_format
-
-LABKIT = [str(Path(sys.executable).parent / "labkit")]
 
 # Python's slices the readers must agree with (the oracle is list slicing of the whole read)
 SLICES = [slice(3, 9), slice(0, 4), slice(7, None), slice(None, 5), slice(-4, None), slice(-6, -2), slice(9, 3),
@@ -216,17 +213,28 @@ def test_convert_a_range_between_bags_is_a_scans_only_copy(recordings, tmp_path)
     assert [s.stamp_ns for s in read_scans(tmp_path / "r.mcap")] == [s.stamp_ns for s in read_scans(bag)][2:5]
 
 
-def labkit_cli(*args, cwd=None):
-    p = subprocess.run([*LABKIT, "-q", *map(str, args)], capture_output=True, text=True, timeout=300, cwd=cwd)
-    assert "Traceback" not in p.stderr, p.stderr
-    return p
+@pytest.fixture
+def labkit_cli(capsys):
+    """The command line in this process (a process of its own costs seconds of imports each)."""
+    from labkit.cli import main
+
+    def run(*args):
+        try:
+            code = main(["-q", *map(str, args)])
+        except SystemExit as exit_:  # argparse refuses the command line
+            code = exit_.code
+        out, err = capsys.readouterr()
+        assert "Traceback" not in err, err
+        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
+
+    return run
 
 
 def _records(path: Path) -> list[dict]:
     return [{k: v for k, v in json.loads(line).items() if k != "timings_ms"} for line in path.read_text().splitlines()]
 
 
-def test_cli_extract_convert_and_evaluate_take_a_range(recordings, tmp_path):
+def test_cli_extract_convert_and_evaluate_take_a_range(recordings, tmp_path, labkit_cli):
     bag = recordings["ros1"]
     assert labkit_cli("extract", bag, "-o", tmp_path / "all.jsonl").returncode == 0
     assert labkit_cli("extract", bag, "--scans", "3:8", "-o", tmp_path / "r.jsonl").returncode == 0
@@ -249,7 +257,7 @@ def test_cli_extract_convert_and_evaluate_take_a_range(recordings, tmp_path):
     assert p.returncode == 2 and "expected N" in p.stderr
 
 
-def test_cli_time_range(recordings, tmp_path):
+def test_cli_time_range(recordings, tmp_path, labkit_cli):
     """The office scenario scans at 5 Hz: 0.6 s to 1.4 s after the first scan are the scans 3 to 6."""
     bag = recordings["ros1"]
     stamps = np.array([s.stamp_ns for s in read_scans(bag)])
