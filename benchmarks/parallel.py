@@ -35,6 +35,7 @@ import argparse
 import json
 import logging
 import os
+import shutil
 import tempfile
 import time
 from pathlib import Path
@@ -96,13 +97,20 @@ def best_of(repeat: int, run) -> tuple[float, list]:
 
 
 def main() -> None:
+    tmp = Path(tempfile.mkdtemp(prefix="labkit-bench-parallel-"))
+    try:
+        run(tmp)
+    finally:  # also on Ctrl-C: the simulated bags and every output are this run's own
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def run(tmp: Path) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scans", type=int, default=300, help="scans per simulated bag")
     ap.add_argument("--no-alone", action="store_true", help="skip Part 2 (each Radish log alone)")
     args = ap.parse_args()
     logging.getLogger("distributed").setLevel(logging.ERROR)  # the scheduler runs in this process: no INFO lines
-    tmp = Path(tempfile.mkdtemp(prefix="labkit-bench-parallel-"))
     sets = {"simulated": simulated_set(tmp / "sim", args.scans)}
     logs = sorted((SHARED / "carmen").glob("*.log.gz"))
     if logs:
