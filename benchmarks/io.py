@@ -1,17 +1,28 @@
-"""Reading and writing speed of labkit's I/O against rosbags itself, in one run.
+"""Reading and writing speed of labkit's I/O against rosbags itself, and the memory of ``labkit view``.
 
-    .venv/bin/python benchmarks/io.py [--repeat 3] [--scans 2000]
+    .venv/bin/python benchmarks/io.py [--repeat 3] [--scans 2000] [--memory-scans 10000 100000]
 
 For each bag format, a simulated recording (LMS111-like, 541 beams) is written with
 labkit, then read three ways: rosbags alone (AnyReader + deserialize, the floor labkit
 builds on), labkit's ``read_scans`` (which also builds a validated ``Scan`` per message),
 and the CARMEN/JSON-lines readers for scale. The ratio column is labkit's time over
 rosbags' time for the same file: the cost of turning messages into Scans.
+
+Memory: the peak resident memory of ``labkit view`` (``labkit.viz.rr.record``: read, extract every
+feature, write the ``.rrd`` with the ground truth beside the recording) of the first 10,000 and of
+all 100,000 scans of one simulated recording (the corridor, 541 beams), each in a fresh process,
+beside the floor (a process that has only imported what ``view`` imports). The goal (issue 30):
+<= 300 MB at 100,000 scans and flat in the number of scans. ``--memory-scans 0`` skips it (the
+100,000-scan recording takes minutes to simulate and to view on idle cores, hours on a loaded
+machine: ``--memory-scans 1000 4000`` prints the growth per scan between the two and what it gives
+at 100,000 scans).
 """
 
 from __future__ import annotations
 
 import argparse
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -41,10 +52,61 @@ def rosbags_only(path: Path) -> int:
     return n
 
 
+# The peak is this process's own high-water mark (VmHWM): getrusage's ru_maxrss of a child counts the
+# parent's resident memory at the fork as well.
+VIEW = """
+import sys
+from labkit.viz import rr as lkrr
+n = int(sys.argv[3])
+if n:
+    summary = lkrr.record(sys.argv[1], sys.argv[2], scans=slice(0, n))
+    assert (summary.n_scans, summary.n_truth) == (n, n), summary
+with open("/proc/self/status") as fh:
+    print(next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:")) / 1024)
+"""
+
+
+def view_memory(counts: list[int], bag: Path | None = None) -> None:
+    """Peak RSS of labkit view of the first n scans of one simulated recording (``bag``, else
+    simulated here: the corridor, with its ground truth), each in a fresh process."""
+    from labkit.data import write_simulation
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        if bag is None:
+            t0 = time.perf_counter()
+            bag, _, _ = write_simulation("corridor", tmp / "long.bag", "ros1", seed=0, n_scans=max(counts))
+            print(f"\nsimulated {max(counts):,} scans of 541 beams (and their ground truth) in "
+                  f"{time.perf_counter() - t0:.0f} s")
+        rows = []
+        for n in [0, *counts]:
+            t0 = time.perf_counter()
+            out = subprocess.run([sys.executable, "-c", VIEW, str(bag), str(tmp / f"v{n}.rrd"), str(n)],
+                                 capture_output=True, text=True, check=True)
+            rows.append((n, float(out.stdout.split()[-1]), time.perf_counter() - t0,
+                         (tmp / f"v{n}.rrd").stat().st_size / 1e6 if n else 0.0))
+    print("\n## Peak resident memory of labkit view (features and ground truth), a fresh process each\n")
+    print("| scans | peak RSS (MiB) | above the floor (MiB) | .rrd (MB) | seconds |")
+    print("|---|---|---|---|---|")
+    floor = rows[0][1]
+    for n, mb, dt, size in rows:
+        label = f"{n:,}" if n else "none (imports only: the floor)"
+        print(f"| {label} | {mb:,.0f} | {mb - floor:,.0f} | {size:,.0f} | {dt:,.0f} |")
+    if len(rows) > 2:  # the growth per scan between the smallest and the largest count, and where it leads
+        (n0, mb0, _, _), (n1, mb1, _, _) = rows[1], rows[-1]
+        slope = (mb1 - mb0) / (n1 - n0)
+        print(f"\nslope: {slope * 1024:+.2f} KiB per scan between {n0:,} and {n1:,} scans; at 100,000 scans that "
+              f"gives {mb1 + slope * (100_000 - n1):,.0f} MiB (goal <= 300 MB)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scans", type=int, default=2000)
+    ap.add_argument("--memory-scans", type=int, nargs="+", default=[10000, 100000],
+                    help="view this many scans for the memory table (0: skip it)")
+    ap.add_argument("--memory-bag", type=Path, help="a recording of at least that many scans, with its ground truth "
+                    "(`labkit simulate corridor -o long.bag --scans 100000`; default: simulated here)")
     args = ap.parse_args()
 
     sc = sim.scenario("corridor")
@@ -72,6 +134,9 @@ def main() -> None:
         print(f"{label:14s} {w:10,.0f} {peer:15,.0f} {ours:14,.0f} {ratio:15.2f}")
     print(f"\nbag -> .rrd (labkit view, with range segments): {n / t_rrd:,.0f} scans/s")
     print(f"(reads: best of {args.repeat} runs)")
+    counts = [n for n in args.memory_scans if n > 0]
+    if counts:
+        view_memory(sorted(counts), args.memory_bag)
 
 
 if __name__ == "__main__":

@@ -40,6 +40,7 @@ class BenchResult:
     total_s: float = 0.0
     stages: dict[str, np.ndarray] = field(default_factory=dict)
     error: CorruptFileError | None = None
+    kind: str = "recording"  # what was read, for the report: ".bag", "CARMEN .log/.gz", ...
 
     @property
     def log_s(self) -> float:
@@ -64,15 +65,18 @@ class BenchResult:
                          f"{v.sum() / total:7.1%}")
         r = self.rates()
         lines.append(f"read {r['read']:,.0f} scans/s | extract {r['extract']:,.0f} scans/s | "
-                     f"log .rrd {r['log']:,.0f} scans/s | bag -> features -> .rrd {r['all']:,.0f} scans/s")
+                     f"log .rrd {r['log']:,.0f} scans/s | {self.kind} -> features -> .rrd {r['all']:,.0f} scans/s")
         return "\n".join(lines)
 
 
 def time_recording(source: str | Path, config: Config | None = None, *, topic: str | None = None,
-                   strict: bool = False, n_scans: int | None = None, warmup: int = 20) -> BenchResult:
+                   strict: bool = False, n_scans: int | None = None, warmup: int = 20,
+                   scans: slice | None = None) -> BenchResult:
     """Read ``source``, extract every scan's features and log both to a temporary .rrd, timing each phase.
 
-    The first ``warmup`` scans are also extracted once untimed (caches, lazy imports).
+    ``n_scans``: only the first so many; ``scans``: only this range (a slice, as
+    :func:`labkit.read_scans` takes it). The first ``warmup`` scans are also extracted once
+    untimed (caches, lazy imports).
     Raises :class:`RefusedError` when the recording holds no scans; a damaged recording is
     timed on what could be read and its error kept in ``result.error``.
     """
@@ -80,17 +84,20 @@ def time_recording(source: str | Path, config: Config | None = None, *, topic: s
 
     config = config or Config()
     source = Path(source)
-    scans = iter(read_scans(source, topic=topic, strict=strict))
+    from .io import FORMATS
+
+    stream = read_scans(source, topic=topic, strict=strict, scans=scans)
+    items = iter(stream)
     if n_scans is not None:
-        scans = itertools.islice(scans, n_scans)
-    result = BenchResult(source, config.lines.method)
+        items = itertools.islice(items, n_scans)
+    result = BenchResult(source, config.lines.method, kind=FORMATS[stream.format].label)
     stages: dict[str, list[float]] = {}
 
     def timed():  # one streaming pass: read a scan, extract its features, hand both to the logger
         warm = 0
         while True:
             t0 = time.perf_counter()
-            scan = next(scans, None)
+            scan = next(items, None)
             t1 = time.perf_counter()
             if scan is None:
                 return
@@ -111,7 +118,7 @@ def time_recording(source: str | Path, config: Config | None = None, *, topic: s
         for_scans, for_features = itertools.tee(timed())  # zipped in step: tee holds one pair at a time
         t0 = time.perf_counter()
         summary = lkrr.record_scans((scan for scan, _ in for_scans), Path(tmp) / "bench.rrd", name=source.name,
-                                    features=(f for _, f in for_features))
+                                    features=(f for _, f in for_features), start_index=stream.first)
         result.total_s = time.perf_counter() - t0
     result.n_scans = summary.n_scans
     result.error = summary.error

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import subprocess
 import sys
@@ -73,6 +74,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .data import generate_bundled, write_simulation
 
     if args.bundled:
+        if args.sensor or args.beams:
+            raise RefusedError("--bundled regenerates data/ as it is; --sensor and --beams are for one WORLD")
         out = Path(args.output or "data")
         paths = generate_bundled(out, progress=not args.quiet, overwrite=args.force)
         for p in paths:
@@ -81,7 +84,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if not args.world or not args.output:
         raise RefusedError("give a WORLD and -o OUTPUT (or --bundled); worlds: hall, corridor, office, "
                            "random_polygons_<seed>")
-    sc = sim.scenario(args.world)
+    sc = _with_sensor(sim.scenario(args.world), args.sensor, args.beams)
     n = args.scans or sc.n_scans
     bag, truth, count = write_simulation(
         sc, args.output, args.format, seed=args.seed, n_scans=n, overwrite=args.force,
@@ -91,12 +94,29 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _with_sensor(sc: sim.Scenario, sensor: str | None, beams: int | None) -> sim.Scenario:
+    """The scenario with another lidar (``--sensor``, a :data:`labkit.sim.LIDARS` preset) and/or
+    another number of beams over the same field of view (``--beams``)."""
+    import dataclasses
+
+    lidar = sim.LIDARS[sensor] if sensor else sc.lidar
+    if beams is not None:
+        if beams < 2:
+            raise RefusedError(f"--beams must be at least 2, got {beams}")
+        if lidar.is_full_circle:  # the last beam one step short of the first, as before
+            step = 2 * math.pi / beams
+        else:  # the same first and last beam directions
+            step = (lidar.n_beams - 1) * lidar.angle_increment / (beams - 1)
+        lidar = dataclasses.replace(lidar, name=f"{lidar.name}-{beams}", angle_increment=step, n_beams=beams)
+    return dataclasses.replace(sc, lidar=lidar)
+
+
 def cmd_convert(args: argparse.Namespace) -> int:
     from .io import convert_recording
 
     done = convert_recording(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
                              progress=not args.quiet, strict=args.strict, poses=_poses(args),
-                             only_scans=args.only_scans)
+                             only_scans=args.only_scans, scans=_chosen_scans(args, [args.input]))
     if done.messages:
         print(f"wrote {sum(done.messages.values())} messages of {len(done.messages)} topics ({done.scans} scans) "
               f"to {args.output}")
@@ -134,6 +154,74 @@ def _range_noise(text: str):
     return value
 
 
+def _scan_range(text: str):
+    """``--scans``' value: ``N`` (the first N scans, as an int) or ``A:B`` (a slice, as Python
+    slices: ``100:200``, ``100:``, ``:500``, ``-100:`` for the last 100)."""
+    text = text.strip()
+    try:
+        if ":" not in text:
+            n = int(text)
+            if n < 0:
+                raise ValueError
+            return n
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise ValueError
+        start, stop = (int(x) if x.strip() else None for x in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected N (the first N scans) or A:B (scans A to B-1, as Python slices "
+                                         f"them; -100: the last 100), got {text!r}") from None
+    return slice(start, stop)
+
+
+def _time_range(text: str) -> tuple[float | None, float | None]:
+    """``--time``'s value: ``T0:T1`` seconds from the recording's first scan (either may be left out)."""
+    try:
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise ValueError
+        t0, t1 = (float(x) if x.strip() else None for x in parts)
+        if any(t is not None and not math.isfinite(t) for t in (t0, t1)):
+            raise ValueError
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected T0:T1, seconds from the first scan (e.g. 60:120, 60:, :30), "
+                                         f"got {text!r}") from None
+    return t0, t1
+
+
+def _scans_of_time(path, topic: str | None, t0: float | None, t1: float | None) -> slice:
+    """The scans from the first whose stamp is at least ``t0`` seconds after the recording's first
+    scan up to, not including, the first at least ``t1`` after it (one pass over the stamps)."""
+    first_ns = start = None
+    k = -1
+    stream = read_scans(path, topic=topic, poses=False)
+    try:
+        for k, scan in enumerate(stream):
+            if first_ns is None:
+                first_ns = scan.stamp_ns
+            t = (scan.stamp_ns - first_ns) / 1e9
+            if start is None and (t0 is None or t >= t0):
+                start = k
+            if start is not None and t1 is not None and t >= t1:
+                return slice(start, k)
+    except CorruptFileError:  # the stamps that could be read; reading the range reports the damage
+        pass
+    return slice(start if start is not None else k + 1, None)
+
+
+def _chosen_scans(args: argparse.Namespace, inputs) -> slice | None:
+    """The scan range of ``--scans`` (``N``: the first N) or ``--time`` (one recording only)."""
+    value = getattr(args, "scans", None)
+    times = getattr(args, "time", None)
+    if times is not None:
+        if len(inputs) != 1:
+            raise RefusedError("--time takes one recording (its stamps place the range); use --scans A:B for several")
+        return _scans_of_time(inputs[0], getattr(args, "topic", None), *times)
+    if isinstance(value, int):
+        return slice(0, value)
+    return value
+
+
 def _counts_line(counts: dict, n: int) -> str:
     return ", ".join(f"{k} {v / max(n, 1):.1f}" for k, v in counts.items())
 
@@ -144,13 +232,14 @@ def cmd_view(args: argparse.Namespace) -> int:
     config = None if args.no_features else _config(args)
     summary = lkrr.record(args.input, args.output, topic=args.topic, config=config,
                           features=not args.no_features, progress=not args.quiet, overwrite=args.force,
-                          strict=args.strict, poses=_poses(args))
+                          strict=args.strict, poses=_poses(args), scans=_chosen_scans(args, [args.input]))
     extra = f" and ground truth for {summary.n_truth}" if summary.n_truth else ""
     print(f"wrote {summary.n_scans} scans{extra} to {summary.path}")
     if summary.counts:
         print(f"  per scan: {_counts_line(summary.counts, summary.n_scans)}")
     if args.spawn:
-        subprocess.Popen([sys.executable, "-m", "rerun", str(summary.path)])
+        env = {k: v for k, v in os.environ.items() if not (k == "RUST_LOG" and v == _RERUN_QUIET)}
+        subprocess.Popen([sys.executable, "-m", "rerun", str(summary.path)], env=env)
     else:
         print(f"open it with: {_rerun_command()} {summary.path}")
     if summary.error is not None:
@@ -172,15 +261,16 @@ def cmd_extract(args: argparse.Namespace) -> int:
     from .tables import PARQUET_FILE, write_features_table
 
     inputs = recordings_in(args.inputs)
+    chosen = _chosen_scans(args, inputs)
     if len(inputs) > 1 or args.workers is not None or args.scheduler:
-        return _extract_many(args, inputs)
+        return _extract_many(args, inputs, chosen)
     source = inputs[0]
     to_stdout = args.output == "-"
     table = args.output.lower().endswith(".parquet")
     if not to_stdout:
         check_output(args.output, PARQUET_FILE if table else FEATURES_FILE, overwrite=args.force, inputs=[source])
     config = _config(args)
-    stream = read_scans(source, topic=args.topic, strict=args.strict, poses=_poses(args))
+    stream = read_scans(source, topic=args.topic, strict=args.strict, poses=_poses(args), scans=chosen)
     scans = iter(stream)
     if not args.quiet:
         scans = _progress(stream.count, f"extract {source.name}")(scans)
@@ -196,9 +286,10 @@ def cmd_extract(args: argparse.Namespace) -> int:
 
     if table:
         n, n_rows = write_features_table(tallied(), args.output, recording=source.name, method=config.lines.method,
-                                         overwrite=args.force, inputs=[source])
+                                         overwrite=args.force, inputs=[source], first_scan=stream.first)
     else:
-        n = write_features((f for _, f in tallied()), args.output, overwrite=args.force, inputs=[source])
+        n = write_features((f for _, f in tallied()), args.output, overwrite=args.force, inputs=[source],
+                           first_scan=stream.first)
     dt = time.perf_counter() - t0
     report = sys.stderr if to_stdout else sys.stdout
     where = "standard output" if to_stdout else args.output + (f" ({n_rows} rows)" if table else "")
@@ -208,7 +299,7 @@ def cmd_extract(args: argparse.Namespace) -> int:
     return 0
 
 
-def _extract_many(args: argparse.Namespace, inputs: list[Path]) -> int:
+def _extract_many(args: argparse.Namespace, inputs: list[Path], chosen: slice | None) -> int:
     """``labkit extract`` of several recordings (or with --workers/--scheduler): on Dask."""
     from . import parallel
 
@@ -222,8 +313,8 @@ def _extract_many(args: argparse.Namespace, inputs: list[Path]) -> int:
     try:
         results = parallel.extract_many(inputs, out, config=config, topic=args.topic, poses=_poses(args),
                                         strict=args.strict, overwrite=args.force, workers=args.workers,
-                                        scheduler=args.scheduler, progress=None if args.quiet else _set_bar(
-                                            f"extract {len(inputs)} recordings"))
+                                        scheduler=args.scheduler, scans=chosen, progress=None if args.quiet else
+                                        _set_bar(f"extract {len(inputs)} recording(s)"))
     except KeyboardInterrupt as exc:
         return _interrupted_many(exc)
     dt = time.perf_counter() - t0
@@ -283,7 +374,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from .data import bundled_data
 
     source = Path(args.input) if args.input else bundled_data("hall.bag")
-    result = time_recording(source, _config(args), topic=args.topic, strict=args.strict, n_scans=args.scans)
+    result = time_recording(source, _config(args), topic=args.topic, strict=args.strict,
+                            scans=_chosen_scans(args, [source]))
     print(result.report())
     if result.error is not None:
         raise result.error
@@ -398,18 +490,24 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
         inputs = parallel.recordings_in(args.inputs)
         alone = len(inputs) == 1 and args.workers is None and not args.scheduler  # one file: no Dask
+        chosen = _chosen_scans(args, inputs) if isinstance(args.scans, slice) or args.time else None
         try:
             results = parallel.evaluate_many(
-                inputs, extractors, n_scans=args.scans or 100, topic=args.topic, strict=args.strict,
-                workers=0 if alone else args.workers, scheduler=args.scheduler,
+                inputs, extractors, n_scans=args.scans if isinstance(args.scans, int) else 100, topic=args.topic,
+                strict=args.strict, workers=0 if alone else args.workers, scheduler=args.scheduler, scans=chosen,
                 progress=None if args.quiet else _set_bar(f"evaluate {len(inputs)} recording(s)"))
         except KeyboardInterrupt as exc:
             return _interrupted_many(exc)
         rows = [row for r in results for row in r.rows]
         report["recordings"] = rows
-        print(f"## Ray-axis RMSE on {len(inputs)} recording(s), first {args.scans or 100} scans each\n")
+        which = (f"first {args.scans if isinstance(args.scans, int) else 100} scans" if chosen is None else
+                 f"scans {'' if chosen.start is None else chosen.start}:{'' if chosen.stop is None else chosen.stop}")
+        print(f"## Ray-axis RMSE on {len(inputs)} recording(s), {which} each\n")
         print(ex.markdown_table(rows, ex.LOG_COLUMNS))
     else:
+        if isinstance(args.scans, slice) or args.time:
+            raise RefusedError("--scans A:B and --time choose scans of recordings (IN ...); the simulated sets take "
+                               "--scans N")
         n = args.scans or 102
         data = ex.nguyen_set(n, noise_levels=args.noise or ex.SENSOR_NOISE_LEVELS_M)
         rows = ex.compare_lines(data, extractors, progress=progress)
@@ -449,6 +547,11 @@ def _bar(items, total=None, desc=None):
 
 
 FORCE_HELP = "replace an existing output, if it is labkit's own kind of output (never another file or folder)"
+SCANS_HELP = ("only these scans, counted from 0 as Python slices them: 100:200 the scans 100 to 199, 100: from 100 on, "
+              ":500 or 500 the first 500, --scans=-100: the last 100 (write = before a leading minus); the scan "
+              "numbers in the output stay the recording's")
+TIME_HELP = ("only the scans from T0 to T1 seconds after the recording's first scan: from the first scan at or after "
+             "T0 up to the first at or after T1 (60:120, 60:, :30); its stamps are read once to place the range")
 
 
 def _either(labels: list[str]) -> str:
@@ -479,13 +582,17 @@ def build_parser() -> argparse.ArgumentParser:
     reading.add_argument("--poses", metavar="TOPIC",
                          help="where a bag's sensor poses come from: a nav_msgs/Odometry or tf topic, or 'none' "
                          "(default: /tf if it moves the laser, else the one odometry topic; CARMEN logs: the log's)")
+    ranged = argparse.ArgumentParser(add_help=False)  # commands that can read a range of a recording
+    choose = ranged.add_mutually_exclusive_group()
+    choose.add_argument("--scans", type=_scan_range, metavar="A:B", help=SCANS_HELP)
+    choose.add_argument("--time", type=_time_range, metavar="T0:T1", help=TIME_HELP)
     many = argparse.ArgumentParser(add_help=False)  # commands that run many recordings on Dask
     many.add_argument("--workers", type=int, metavar="N",
                       help="run the recordings on a local Dask cluster of N worker processes (default: one per "
                       "core when there are several recordings; 0: one after another in this process)")
     many.add_argument("--scheduler", metavar="ADDRESS",
-                      help="run the recordings on an existing Dask cluster (tcp://host:8786); its workers must see "
-                      "the inputs and outputs under the same paths")
+                      help="run the recordings on an existing Dask cluster (tcp://host:8786); paths are made absolute "
+                      "here, and every worker must see the inputs and outputs under those same paths")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     sub.add_parser = partial(sub.add_parser, parents=[common])  # every command takes -q
 
@@ -495,11 +602,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--format", choices=["ros1", "ros2", "mcap"], help="bag format (default: from the name)")
     s.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     s.add_argument("--scans", type=int, help="number of scans (default: the scenario's duration)")
+    s.add_argument("--sensor", choices=sorted(sim.LIDARS),
+                   help="the lidar (labkit.sim.LIDARS; default: the scenario's): lms200 180 deg/361 beams, "
+                   "lms111 270 deg/541 beams, xv11 360 deg/360 beams")
+    s.add_argument("--beams", type=int, metavar="N",
+                   help="N beams over the sensor's field of view (e.g. --sensor lms200 --beams 722: the 722-beam "
+                   "180-degree scanner of the evaluation)")
     s.add_argument("--bundled", action="store_true", help="regenerate every bundled recording into -o (data/)")
     s.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     s.set_defaults(func=cmd_simulate)
 
-    c = sub.add_parser("convert", parents=[common, reading],
+    c = sub.add_parser("convert", parents=[common, reading, ranged],
                        help="convert between bag formats (every topic, names kept), CARMEN logs and JSON (the scans)")
     c.add_argument("input", help=f"recording ({_readable_help()})")
     c.add_argument("output", help=_either([f.label for f in FORMATS.values() if f.writable]))
@@ -525,7 +638,7 @@ def build_parser() -> argparse.ArgumentParser:
                           help="line extractor (overrides the config's lines.method; the names of "
                           "labkit.lines.LINE_EXTRACTORS, or none)")
 
-    e = sub.add_parser("extract", parents=[common, pipeline, reading, many],
+    e = sub.add_parser("extract", parents=[common, pipeline, reading, many, ranged],
                        help="extract every feature of every scan into JSON lines (one record per scan) or a "
                        "Parquet table (one row per feature); several recordings run in parallel on Dask")
     e.add_argument("inputs", nargs="+", metavar="IN",
@@ -536,7 +649,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     e.set_defaults(func=cmd_extract)
 
-    v = sub.add_parser("view", parents=[common, pipeline, reading],
+    v = sub.add_parser("view", parents=[common, pipeline, reading, ranged],
                        help="write a recording's scans and features to a rerun .rrd file")
     v.add_argument("input", help=f"recording ({_readable_help()})")
     v.add_argument("-o", "--output", required=True, help="the .rrd file to write")
@@ -545,10 +658,9 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--spawn", action="store_true", help="open the rerun viewer on the result")
     v.set_defaults(func=cmd_view)
 
-    b = sub.add_parser("bench", parents=[common, pipeline, reading],
+    b = sub.add_parser("bench", parents=[common, pipeline, reading, ranged],
                        help="time every pipeline stage on a recording (default: the bundled hall.bag)")
     b.add_argument("input", nargs="?", help="recording (default: the bundled hall.bag)")
-    b.add_argument("--scans", type=int, default=None, help="use the first N scans (default: all)")
     b.set_defaults(func=cmd_bench)
 
     g = sub.add_parser("config", parents=[common, noise],
@@ -571,8 +683,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="recordings (or folders of them) to score by ray-axis RMSE, in parallel on Dask when "
                     "there are several (default: the simulated sets with ground truth)")
     ev.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN) of the recordings")
-    ev.add_argument("--scans", type=int, help="scans per noise level (simulated, default 102) or per recording"
-                    " (default 100)")
+    choose = ev.add_mutually_exclusive_group()
+    choose.add_argument("--scans", type=_scan_range, metavar="N|A:B",
+                        help="scans per noise level (simulated, default 102) or the first N of each recording (default "
+                        "100); A:B a range of each recording, as for extract")
+    choose.add_argument("--time", type=_time_range, metavar="T0:T1", help=TIME_HELP)
     ev.add_argument("--noise", type=float, nargs="+", metavar="M",
                     help="range noise levels of the simulated sets, metres (default: 5 mm, 1 cm, 2 cm and 3 cm, "
                          "labkit.experiments.SENSOR_NOISE_LEVELS_M)")
@@ -615,9 +730,16 @@ def _error(message: str) -> None:
     print(f"labkit: error: {message}", file=sys.stderr)
 
 
+#: rerun's own log lines that would repeat, as a Rust log line, an error labkit reports in its one line
+#: (a file writer that stopped: a full disk). Set as RUST_LOG for the command line unless the user set one.
+_RERUN_QUIET = "warn,re_log_encoding::rrd=off,re_sdk::recording_stream=off"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (see the module docstring)."""
     args = build_parser().parse_args(argv)
+    if "rerun" not in sys.modules:  # read when rerun is first imported
+        os.environ.setdefault("RUST_LOG", _RERUN_QUIET)
     debug = args.debug or bool(os.environ.get("LABKIT_DEBUG"))
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning

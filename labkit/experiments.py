@@ -237,10 +237,12 @@ def score_round_objects(n_scans: int = 300, *, seed: int = 0, config: Config | N
 
 def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable] | None = None, *,
                     n_scans: int = 100, progress: Callable | None = None, repeat: int = 1, topic: str | None = None,
-                    strict: bool = False, on_damage: Callable[[Exception], None] | None = None) -> list[dict]:
+                    strict: bool = False, on_damage: Callable[[Exception], None] | None = None,
+                    scans: slice | None = None) -> list[dict]:
     """Ray-axis RMSE, median error, share of errors over 10 cm, coverage and lines per scan
     of every extractor on the first ``n_scans`` scans of each recording (any format
-    :func:`labkit.read_scans` reads; ``topic`` and ``strict`` as there).
+    :func:`labkit.read_scans` reads; ``topic`` and ``strict`` as there), or on the range
+    ``scans`` of each (a slice, as :func:`labkit.read_scans` takes it).
 
     A damaged recording is scored on the scans that could be read; its
     :class:`labkit.CorruptFileError` goes to ``on_damage`` (default: raised after every
@@ -251,40 +253,40 @@ def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable]
     rows = []
     damage: list[Exception] = []
     for path in paths:
-        scans = _first_scans(path, n_scans, topic, strict, damage, on_damage)
+        chosen = _first_scans(path, n_scans, topic, strict, damage, on_damage, scans)
         for name, extract in extractors.items():
             bar = None if progress is None else partial(progress, desc=f"{Path(path).name} {name}")
-            lines, spent = _timed(extract, scans, bar, repeat)
+            lines, spent = _timed(extract, chosen, bar, repeat)
             total = RayErrors(np.empty(0), 0)
-            for scan, found in zip(scans, lines, strict=False):
+            for scan, found in zip(chosen, lines, strict=False):
                 total = total + ray_errors(scan, found)
-            rows.append({"log": Path(path).name, "method": name, "scans": len(scans),
-                         "beams": int(np.median([s.n_beams for s in scans])) if scans else 0,
+            rows.append({"log": Path(path).name, "method": name, "scans": len(chosen),
+                         "beams": int(np.median([s.n_beams for s in chosen])) if chosen else 0,
                          "rmse_m": total.rmse, "median_abs_m": total.median_abs,
                          "over_10cm": total.share_over(0.1), "coverage": total.coverage,
-                         "lines_per_scan": sum(map(len, lines)) / max(len(scans), 1),
-                         "scans_per_s": len(scans) / spent if spent else math.nan})
+                         "lines_per_scan": sum(map(len, lines)) / max(len(chosen), 1),
+                         "scans_per_s": len(chosen) / spent if spent else math.nan})
     if damage and on_damage is None:
         raise damage[0]
     return rows
 
 
-def _first_scans(path, n_scans: int, topic, strict: bool, damage: list, on_damage) -> list[Scan]:
-    """The first ``n_scans`` scans of a recording; a :class:`labkit.CorruptFileError` goes to
-    ``damage`` and to ``on_damage`` (if given), and the scans read before it are kept."""
+def _first_scans(path, n_scans: int, topic, strict: bool, damage: list, on_damage,
+                 scans: slice | None = None) -> list[Scan]:
+    """The first ``n_scans`` scans of a recording (or the range ``scans``); a
+    :class:`labkit.CorruptFileError` goes to ``damage`` and to ``on_damage`` (if given), and the
+    scans read before it are kept. A record skipped among them is reported although reading
+    stops after them (:func:`labkit.read_scans`' ``scans``)."""
     from .io import CorruptFileError, read_scans  # I/O stays out of the algorithm imports above
 
-    scans: list[Scan] = []
+    chosen: list[Scan] = []
     try:
-        for scan in read_scans(path, topic=topic, strict=strict):
-            scans.append(scan)
-            if len(scans) >= n_scans:
-                break
+        chosen.extend(read_scans(path, topic=topic, strict=strict, scans=scans or slice(0, n_scans)))
     except CorruptFileError as exc:
         damage.append(exc)
         if on_damage is not None:
             on_damage(exc)
-    return scans
+    return chosen
 
 
 def round_objects_on_logs(paths: Iterable[str | Path], configs: Mapping[str, Config | None], *, n_scans: int = 100,

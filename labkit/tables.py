@@ -222,14 +222,16 @@ def _to_pandas(table):
 
 def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path, *, recording: str | None = None,
                          method: str | None = None, overwrite: bool = False, inputs: Iterable[str | Path] = (),
-                         chunk_scans: int = 2000) -> tuple[int, int]:
+                         chunk_scans: int = 2000, first_scan: int = 0) -> tuple[int, int]:
     """Stream ``(scan, features)`` pairs into a Parquet table at ``out``; returns ``(scans, rows)``.
 
     The rows are :func:`features_table`'s, written ``chunk_scans`` scans at a time (one row group
-    each). The file is written through :mod:`labkit._safe`: under a temporary name, renamed when
-    complete; if iterating ``pairs`` raises :class:`labkit.CorruptFileError` (a damaged recording)
-    the table holds every scan before it and the error propagates; interrupted, what was written
-    so far is a valid ``<name>.partial.parquet``. ``overwrite`` replaces only a Parquet file.
+    each); column ``scan`` counts from ``first_scan`` (where the pairs start in the recording,
+    e.g. a scan range's first scan). The file is written through :mod:`labkit._safe`: under a
+    temporary name, renamed when complete; if iterating ``pairs`` raises
+    :class:`labkit.CorruptFileError` (a damaged recording) the table holds every scan before it and
+    the error propagates; interrupted, what was written so far is a valid ``<name>.partial.parquet``.
+    ``overwrite`` replaces only a Parquet file.
     """
     pq = _need("pyarrow.parquet")
     schema = _schema(recording is not None, method is not None)
@@ -240,7 +242,7 @@ def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path
         rows: list[tuple] = []
         try:
             for scan, f in pairs:
-                rows.extend(feature_rows(n_scans, f, scan.pose))
+                rows.extend(feature_rows(first_scan + n_scans, f, scan.pose))
                 n_scans += 1
                 if n_scans % chunk_scans == 0:
                     writer.write_table(_arrow(rows, schema, constants))

@@ -16,6 +16,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -120,7 +121,10 @@ def test_evaluate_on_dask_gives_the_serial_rows(recordings, client):
         return [{k: v for k, v in row.items() if k != "scans_per_s"} for r in results for row in r.rows]
 
     assert rows(on_dask) == rows(serial) and len(rows(serial)) == 10
-    assert [r.status for r in on_dask] == ["done"] * 5  # 15 scans: never read as far as the cut
+    # 15 scans lie before the cut, but the bag's one chunk says at its header that it runs past the
+    # file's end: the walker knows the file is damaged before its first scan, and says so
+    assert [r.status for r in on_dask] == [r.status for r in serial] == ["done"] * 4 + ["damaged"]
+    assert "e-cut.bag is damaged" in on_dask[-1].error and on_dask[-1].n_scans == 15
 
 
 def test_cli_on_an_existing_scheduler_and_on_its_own_cluster(recordings, client, tmp_path):
@@ -203,3 +207,114 @@ def test_ctrl_c_leaves_finished_outputs_and_valid_partials_only(tmp_path):
         else:
             assert len(records) == n_scans
     assert max(partial_records) > 0, partial_records  # the one that was part-way written kept its records
+
+
+# ---------------------------------------------------------------------------- one long recording, every core
+def test_split_ranges_cut_only_what_is_longer_than_its_share():
+    # the Radish set on two workers: freiburg-079 (4,791 of 8,725 scans) is longer than its share, 4,362.5
+    assert parallel.split_ranges([4791, 1941, 910, 440, 406, 237], 2) == [[(0, 2396), (2396, 4791)]] + [None] * 5
+    assert parallel.split_ranges([1000, 10], 4, min_scans=100) == [[(0, 250), (250, 500), (500, 750), (750, 1000)],
+                                                                   None]
+    assert parallel.split_ranges([300] * 8, 2) == [None] * 8  # equal recordings: one task each, as before
+    assert parallel.split_ranges([None, 5000], 2) == [None, [(0, 2500), (2500, 5000)]]  # unknown size: whole
+    assert parallel.split_ranges([5000], 1) == [None]
+    assert parallel.split_ranges([999], 2) == [None]  # two pieces would be shorter than MIN_PIECE_SCANS
+    rng = np.random.default_rng(0)
+    for _ in range(200):  # the ranges cover each recording exactly, in order, none shorter than min_scans
+        sizes = rng.integers(1, 5000, rng.integers(1, 6)).tolist()
+        workers, least = int(rng.integers(1, 9)), int(rng.integers(1, 300))
+        for n, pieces in zip(sizes, parallel.split_ranges(sizes, workers, min_scans=least), strict=True):
+            if pieces is None:
+                continue
+            assert pieces[0][0] == 0 and pieces[-1][1] == n
+            assert all(a[1] == b[0] for a, b in zip(pieces, pieces[1:], strict=False))
+            assert all(b - a >= least for a, b in pieces) and len(pieces) <= workers
+
+
+@pytest.fixture
+def long_log(tmp_path):
+    """A CARMEN log of 200 scans whose line for scan 150 is malformed (written by the test), and two short bags."""
+    from tests.test_scan_ranges import carmen_log
+
+    log = carmen_log(tmp_path / "long.log", 200, bad_line=150)
+    for name, world, n in (("p.bag", "hall", 25), ("q.bag", "office", 30)):
+        write_simulation(world, tmp_path / name, "ros1", seed=n, n_scans=n)
+    return [log, tmp_path / "p.bag", tmp_path / "q.bag"]
+
+
+class _Steps:
+    """A progress-bar factory that keeps the steps it was advanced by (one per task)."""
+
+    def __init__(self) -> None:
+        self.steps: list[int] = []
+
+    def __call__(self, total, unit):
+        outer = self
+
+        class Bar:
+            def update(self, n):
+                outer.steps.append(n)
+
+            def close(self):
+                pass
+
+        return Bar()
+
+
+@pytest.mark.parametrize("strict", [False, True])
+def test_a_split_recording_gives_the_serial_output_row_for_row(long_log, client, tmp_path, monkeypatch, strict):
+    monkeypatch.setattr(parallel, "MIN_PIECE_SCANS", 50)
+    bar = _Steps()
+    on_dask = parallel.extract_many(long_log, tmp_path / "dask", client=client, strict=strict, progress=bar)
+    serial = parallel.extract_many(long_log, tmp_path / "serial", workers=0, strict=strict)
+    assert sorted(bar.steps) == [25, 30, 100, 100]  # the log of 200 ran as two ranges of 100
+    for r, s in zip(on_dask, serial, strict=True):
+        assert (r.status, r.error, r.n_scans, r.n_rows, r.counts) == (s.status, s.error, s.n_scans, s.n_rows, s.counts)
+        assert _records(Path(r.output)) == _records(Path(s.output))
+    assert on_dask[0].status == "damaged" and on_dask[0].n_scans == (150 if strict else 199)
+    assert sorted(p.name for p in (tmp_path / "dask").iterdir()) == [
+        "long.features.jsonl", "p.features.jsonl", "q.features.jsonl"]  # no parts left behind
+    table, serial_table = tmp_path / "dask.parquet", tmp_path / "serial.parquet"
+    parallel.extract_many(long_log, table, client=client, strict=strict, scans=slice(10, None))
+    parallel.extract_many(long_log, serial_table, workers=0, strict=strict, scans=slice(10, None))
+    a, b = labkit.read_table(table), labkit.read_table(serial_table)
+    pd.testing.assert_frame_equal(a, b)
+    assert a[a.recording == "long.log"].scan.min() >= 10 and len(a[a.recording == "long.log"]) > 0
+
+
+def test_ctrl_c_keeps_what_the_ranges_of_a_split_recording_wrote(tmp_path, client, monkeypatch):
+    """Ctrl-C (here: raised at the client when the first task finishes) while a split recording runs:
+    its output is unchanged (not there), and what its ranges wrote is one partial file: the whole of
+    the range that finished, and records equal to the pipeline's on the same scans."""
+    from tests.test_scan_ranges import carmen_log
+
+    monkeypatch.setattr(parallel, "MIN_PIECE_SCANS", 50)
+    log = carmen_log(tmp_path / "long.log", 1000)  # two ranges of 500, after other.log's 600 (not split)
+    other = carmen_log(tmp_path / "other.log", 600, seed=1)
+
+    def interrupting(total, unit):
+        class Bar:
+            def update(self, n):
+                raise KeyboardInterrupt
+
+            def close(self):
+                pass
+
+        return Bar()
+
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt) as info:  # when the first range of long.log is done
+        parallel.extract_many([log, other], out, client=client, progress=interrupting)
+    results = info.value.results
+    assert results[0].status == "interrupted", results[0]
+    left = sorted(p.name for p in out.iterdir())
+    assert "long.features.jsonl" not in left and not [n for n in left if ".labkit-" in n], left
+    partial = Path(results[0].output)
+    assert partial.parent == out and partial.name.startswith("long.") and ".partial." in partial.name
+    kept = {r["scan"]: r for r in _records(partial)}
+    assert set(range(500)) <= set(kept) or set(range(500, 1000)) <= set(kept), sorted(kept)
+    scans = list(labkit.read_scans(log))
+    for k in list(kept)[::25]:
+        record = {"scan": k, **labkit.extract_features(scans[k]).as_record()}
+        record.pop("timings_ms")
+        assert json.loads(json.dumps(labkit.io.features.json_safe(record))) == kept[k]

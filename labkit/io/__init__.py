@@ -25,13 +25,15 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
+import numpy as np
+
 from .._safe import OutputKind, check_output
 from ..errors import RefusedError
 from ..scan import Scan
 from . import bags
 from .bags import StampsChangedWarning, plan_stamps, write_bag
 from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_carmen
-from .errors import CorruptFileError, EmptyRecordingError
+from .errors import WATCHED, CorruptFileError, EmptyRecordingError, Faults
 from .features import read_features, write_features
 from .formats import (
     FORMATS,
@@ -128,6 +130,10 @@ class ScanStream:
         For bags: the pose topics read (:mod:`labkit.io.poses`).
     pose_sources : dict
         After reading a bag: for each scan frame, how its pose was found.
+    first, stop : int, int or None
+        The scan range read (``read_scans(..., scans=...)``): the scans ``first`` up to, not
+        including, ``stop`` (None: to the end), counted from 0 in reading order. ``count`` is
+        then the number in the range, when known, and ``held`` the number in the file.
     """
 
     def __init__(self, path: Path, fmt: str, topic: str | None, count: int | None, readable: bool,
@@ -138,10 +144,36 @@ class ScanStream:
         self.pose_plan = pose_plan
         self.pose_sources: dict[str, str] = {}
         self.pose_count: int | None = None  # pose messages the bag's index lists
+        self.held = count  # the scans the file says it holds (``count`` is the range's)
+        self.first, self.stop = 0, None
 
     def __iter__(self) -> Iterator[Scan]:
         scans = FORMATS[self.format].read(self)
-        return scans if self.poses is not None else _without_poses(scans)
+        if self.poses is None:
+            scans = _without_poses(scans)
+        if self.first or self.stop is not None:
+            scans = _in_range(scans, self.path, self.strict, self.first, self.stop)
+        return scans
+
+    def _select(self, scans: slice) -> None:
+        """Read only ``scans`` (see :func:`read_scans`)."""
+        if not isinstance(scans, slice) or scans.step not in (None, 1):
+            raise ValueError(f"scans must be a slice of scan indices without a step, got {scans!r}")
+        for end in (scans.start, scans.stop):
+            if end is not None and (isinstance(end, bool) or not isinstance(end, (int, np.integer))):
+                raise ValueError(f"scans must be a slice of whole numbers, got {scans!r}")
+        negative = any(end is not None and end < 0 for end in (scans.start, scans.stop))
+        if negative and self.count is None:
+            raise RefusedError(f"{self.path} does not say how many scans it holds, so a range counted from its end "
+                               f"({_slice_text(scans)}) cannot be placed: give the range from the start")
+        if self.count is not None:
+            first, stop, _ = scans.indices(self.count)
+            self.count = max(stop - first, 0)
+            self.first, self.stop = first, max(stop, first)
+        else:
+            self.first, self.stop = scans.start or 0, scans.stop
+            if self.stop is not None:
+                self.stop = max(self.stop, self.first)
 
     def __len__(self) -> int:
         if self.count is None:
@@ -158,8 +190,46 @@ def _without_poses(scans: Iterable[Scan]) -> Iterator[Scan]:
         yield scan if scan.pose is None else scan.replace(pose=None)
 
 
+def _slice_text(scans: slice) -> str:
+    return f"{'' if scans.start is None else scans.start}:{'' if scans.stop is None else scans.stop}"
+
+
+def _in_range(scans: Iterable[Scan], path: Path, strict: bool, first: int, stop: int | None) -> Iterator[Scan]:
+    """The scans ``first`` .. ``stop - 1`` of ``scans``; reading stops after the last one. A
+    record the reader skipped on the way (before or inside the range) is still reported: the
+    reader's :class:`~labkit.io.errors.Faults` are watched, and a :class:`CorruptFileError`
+    follows the range's last scan (the reader raises its own when it reaches the file's end)."""
+    it = iter(scans)
+    watched: list[Faults] = []
+    read = 0
+
+    def pull():
+        token = WATCHED.set(watched)
+        try:
+            return next(it, None)
+        finally:
+            WATCHED.reset(token)
+
+    try:
+        while stop is None or read < stop:
+            scan = pull()
+            if scan is None:
+                return  # the file's end: the reader has raised its own error if it skipped anything
+            if read >= first:
+                yield scan
+            read += 1
+        seen = Faults(path, strict)
+        for faults in watched:
+            seen.add(faults)
+        seen.check(read)
+    finally:
+        close = getattr(it, "close", None)
+        if close is not None:
+            close()
+
+
 def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = False,
-               poses: str | bool | None = None) -> ScanStream:
+               poses: str | bool | None = None, scans: slice | None = None) -> ScanStream:
     """Open any supported file and return its scans as an iterable :class:`ScanStream`.
 
     Parameters
@@ -179,6 +249,13 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         poses, a JSON scan's ``pose``, a bag's ``/tf`` or its one ``nav_msgs/Odometry`` topic,
         interpolated to each scan's stamp (:mod:`labkit.io.poses` gives the rules). A bag topic
         name: that odometry or tf topic. False: no poses.
+    scans : slice, optional
+        Read only these scans, as Python slices them: ``slice(100, 200)`` the scans 100 to 199,
+        counted from 0 in reading order (a damaged file: among the scans that could be read);
+        ``slice(-50, None)`` the last 50 (only for files that say how many scans they hold). No
+        step. Reading stops after the range's last scan; a record skipped on the way is still
+        reported (``CorruptFileError`` after the range's scans). The stream's ``first`` is
+        where the range starts, ``count`` how many scans it holds (when known).
 
     Raises
     ------
@@ -208,13 +285,17 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         raise ValueError(f"poses must be None, True, False or a topic name, got {poses!r}")
     row = FORMATS[fmt]
     if row.open is not None:
-        return row.open(p, fmt, topic, strict, poses)
-    _refuse_pose_topic(fmt, poses)
-    if topic is not None:
-        raise RefusedError(f"topic does not apply to {row.description} files",
-                           f"--topic does not apply to {row.description} files")
-    inline = None if poses is False else "the scans' 'pose' fields"
-    return ScanStream(p, fmt, None, row.count(p) if row.count is not None else None, True, strict, inline)
+        stream = row.open(p, fmt, topic, strict, poses)
+    else:
+        _refuse_pose_topic(fmt, poses)
+        if topic is not None:
+            raise RefusedError(f"topic does not apply to {row.description} files",
+                               f"--topic does not apply to {row.description} files")
+        inline = None if poses is False else "the scans' 'pose' fields"
+        stream = ScanStream(p, fmt, None, row.count(p) if row.count is not None else None, True, strict, inline)
+    if scans is not None:
+        stream._select(scans)
+    return stream
 
 
 def _refuse_pose_topic(fmt: str, poses: str | bool | None) -> None:
@@ -284,7 +365,7 @@ def __getattr__(name: str):
 
 def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
             overwrite: bool = False, progress: bool = False, strict: bool = False,
-            poses: str | bool | None = None, only_scans: bool = False) -> int:
+            poses: str | bool | None = None, only_scans: bool = False, scans: slice | None = None) -> int:
     """Copy the recording ``src`` into ``dst`` (formats from the names); return the scans copied.
 
     Between bags (ROS1 ``.bag``, ROS2 folder, MCAP) the whole recording is copied: every topic,
@@ -294,6 +375,9 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     side is not a bag, the scans alone are copied: the LaserScan topic (``topic``) as ``/scan``,
     with their poses (``poses`` as in :func:`read_scans`) as ``nav_msgs/Odometry`` on ``/odom``
     in a bag, as ``pose`` fields in JSON lines.
+
+    ``scans``: only this range of scans (a slice, as for :func:`read_scans`); a scans-only copy
+    (between bags it needs ``only_scans=True``: a whole-recording copy has no scan range).
 
     A damaged ``src`` still produces a complete ``dst`` holding every readable scan, then
     the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar. ``dst``
@@ -305,7 +389,7 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     describes, and a :class:`StampsChangedWarning` says how.
     """
     return convert_recording(src, dst, topic=topic, format=format, overwrite=overwrite, progress=progress,
-                             strict=strict, poses=poses, only_scans=only_scans).scans
+                             strict=strict, poses=poses, only_scans=only_scans, scans=scans).scans
 
 
 @dataclass(frozen=True)
@@ -319,12 +403,18 @@ class Conversion:
 
 def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
                       overwrite: bool = False, progress: bool = False, strict: bool = False,
-                      poses: str | bool | None = None, only_scans: bool = False) -> Conversion:
+                      poses: str | bool | None = None, only_scans: bool = False,
+                      scans: slice | None = None) -> Conversion:
     """:func:`convert`, saying what it wrote (:class:`Conversion`)."""
     src, dst = Path(src), Path(dst)
     fmt = output_format(dst, format)
     src_fmt = detect_format(src)
     if not only_scans and src_fmt in bags.BAG_FORMATS and fmt in bags.BAG_FORMATS:
+        if scans is not None:
+            raise RefusedError("a scan range is a scans-only copy: a bag-to-bag copy carries every topic whole "
+                               "(only_scans=True for the range's scans alone)",
+                               "--scans and --time choose what --only-scans copies; without it a bag-to-bag copy "
+                               "carries every topic whole")
         if topic is not None or poses not in (None, True):
             raise RefusedError("topic and poses choose what a scans-only copy holds; a bag-to-bag copy carries every "
                                "topic as it is (only_scans=True for the scans alone)",
@@ -338,14 +428,14 @@ def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = N
 
         n_scans, _n, written = copy_bag(src, src_fmt, dst, fmt, overwrite=overwrite, strict=strict, progress=progress)
         return Conversion(n_scans, dict(written))
-    stream = read_scans(src, topic=topic, strict=strict, poses=poses)
+    stream = read_scans(src, topic=topic, strict=strict, poses=poses, scans=scans)
     check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
     restamp = None
     if FORMATS[stream.format].free_stamps and not FORMATS[fmt].free_stamps:
         try:
-            restamp, note = plan_stamps(read_scans(src, topic=topic, poses=False), fmt)
+            restamp, note = plan_stamps(read_scans(src, topic=topic, poses=False, scans=scans), fmt)
         except CorruptFileError:  # read what can be read; the conversion reports the damage
-            restamp, note = plan_stamps(_readable(read_scans(src, topic=topic, poses=False)), fmt)
+            restamp, note = plan_stamps(_readable(read_scans(src, topic=topic, poses=False, scans=scans)), fmt)
         if note:
             warnings.warn(f"{src}: {note}", StampsChangedWarning, stacklevel=2)
     scans: Iterable[Scan] = stream
@@ -369,11 +459,15 @@ def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
 def _read_bag(stream: ScanStream) -> Iterator[Scan]:
     poses = None
     if stream.pose_plan is not None:
-        poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict,
-                               expected=stream.pose_count)
+        unwatched = WATCHED.set(None)  # a scan range reports what the scans' reader met, not the whole pose pass
+        try:
+            poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict,
+                                   expected=stream.pose_count)
+        finally:
+            WATCHED.reset(unwatched)
         stream.pose_sources = poses.sources  # filled in as scan frames are met
     yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses,
-                             expected=stream.count)
+                             expected=stream.held)
 
 
 def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | bool | None) -> ScanStream:

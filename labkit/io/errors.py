@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+from contextvars import ContextVar
 from pathlib import Path
 
 from ..errors import CorruptFileError, EmptyRecordingError
 
 __all__ = ["CorruptFileError", "EmptyRecordingError", "Faults"]
+
+#: While set (to a list), every :class:`Faults` made is appended to it: a reader stopped before
+#: its end (a scan range, :func:`labkit.read_scans`) can still say what it skipped on the way.
+WATCHED: ContextVar[list | None] = ContextVar("labkit_watched_faults", default=None)
 
 
 class Faults:
@@ -48,6 +53,9 @@ class Faults:
         self.done: int | None = None  # records read, when the reader says (for merge)
         self.first: tuple[str, str] | None = None
         self.wheres: list[str] = []
+        watched = WATCHED.get()
+        if watched is not None:
+            watched.append(self)
 
     def skip(self, where: str, reason: str, count: int = 1, *, known: bool = True, open_end: bool = False) -> bool:
         """Note a damaged place at ``where`` that cost ``count`` records (``known=False``: and
@@ -79,6 +87,21 @@ class Faults:
                 self.wheres.append(where)
         lost, _exact = other.lost(other.done)
         self.other += lost
+        self.stopped = self.stopped or other.stopped
+
+    def add(self, other: Faults) -> None:
+        """Count the faults ``other`` met so far as this one's own (a reader stopped before its end,
+        a scan range: the records it noted lost, no index count, which holds only at the file's end)."""
+        if other.first is None:
+            return
+        if self.first is None:
+            self.first = other.first
+        for where in other.wheres:
+            if where not in self.wheres:
+                self.wheres.append(where)
+        self.count += other.count
+        self.other += other.other
+        self.unknown = self.unknown or other.unknown
         self.stopped = self.stopped or other.stopped
 
     def __bool__(self) -> bool:

@@ -50,11 +50,13 @@ def json_safe(obj):
 FEATURES_FILE = OutputKind("a labkit features file (.jsonl)", (".jsonl",), first_json_line_with("features"))
 
 
-def write_features(features: Iterable[Features], out, *, overwrite: bool = False, inputs=()) -> int:
+def write_features(features: Iterable[Features], out, *, overwrite: bool = False, inputs=(),
+                   first_scan: int = 0) -> int:
     """Write one JSON line per :class:`labkit.Features` to ``out`` (a path, ``"-"`` for
     standard output, or an open text file); returns how many were written.
 
-    Each record also gets ``"scan"``, its place in the stream. A path is written under a
+    Each record also gets ``"scan"``, its place in the recording: ``first_scan`` (where the
+    stream starts, e.g. a scan range's first scan) plus its place in the stream. A path is written under a
     temporary name and renamed when complete (see :mod:`labkit._safe`): if iterating
     ``features`` raises :class:`~labkit.io.CorruptFileError` (a damaged recording), the file
     holds every scan before it and the error propagates. ``inputs``: the recordings read,
@@ -63,15 +65,15 @@ def write_features(features: Iterable[Features], out, *, overwrite: bool = False
     if isinstance(out, (str, Path)) and str(out) != "-":
         with safe_output(out, FEATURES_FILE, overwrite=overwrite, inputs=inputs) as tmp, \
                 open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-            return _write_records(features, fh)
-    return _write_records(features, sys.stdout if str(out) == "-" else out)
+            return _write_records(features, fh, first_scan)
+    return _write_records(features, sys.stdout if str(out) == "-" else out, first_scan)
 
 
-def _write_records(features: Iterable[Features], fh) -> int:
+def _write_records(features: Iterable[Features], fh, first_scan: int = 0) -> int:
     n = 0
     try:
         for f in features:
-            record = {"scan": n, **f.as_record()}
+            record = {"scan": first_scan + n, **f.as_record()}
             fh.write(json.dumps(json_safe(record), separators=(",", ":"), allow_nan=False) + "\n")
             n += 1
     finally:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -12,7 +13,7 @@ import numpy as np
 from .._safe import OutputKind, first_json_line_with, safe_output
 
 __all__ = ["VisibleWall", "VisibleCircle", "VisibleArc", "VisibleLeg", "ScanTruth", "GroundTruth",
-           "TRUTH_FILE", "write_truth", "read_truth", "truth_path_for"]
+           "TRUTH_FILE", "write_truth", "read_truth", "TruthStream", "truth_path_for"]
 
 _ROUND = 6  # decimals kept in ground-truth files (micrometres, micro-radians)
 
@@ -251,24 +252,37 @@ def write_truth(path: str | Path, sc: Recorded, truths, *, seed: int, overwrite:
 
 
 def read_truth(path: str | Path) -> GroundTruth:
-    """Read a ground-truth JSON-lines file written by :func:`write_truth`."""
-    path = Path(path)
-    with open(path, encoding="utf-8") as fh:
-        try:
-            header = json.loads(fh.readline())
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: line 1 is not a labkit ground-truth header: {exc}") from None
-        if not isinstance(header, dict) or header.get("labkit_truth") != 1:
-            raise ValueError(f"{path}: line 1 is not a labkit ground-truth header")
-        n = int(header["lidar"]["n_beams"])
-        scans = {}
-        for lineno, line in enumerate(fh, start=2):
-            if not line.strip():
-                continue
-            try:
-                tr = ScanTruth.from_json(json.loads(line), n)
-            except (json.JSONDecodeError, KeyError, TypeError) as exc:
-                raise ValueError(f"{path}: line {lineno} is not a scan record: {exc}") from None
-            scans[tr.stamp_ns] = tr
-    return GroundTruth(header, scans)
+    """Read a ground-truth JSON-lines file written by :func:`write_truth` (all of it, into
+    memory; :class:`TruthStream` reads one scan at a time)."""
+    stream = TruthStream(path)
+    return GroundTruth(stream.header, {tr.stamp_ns: tr for tr in stream})
 
+
+class TruthStream:
+    """A ground-truth file read one scan at a time, so that memory stays flat however long the
+    recording: ``header`` (line 1) is read at once; iterating gives each scan's
+    :class:`ScanTruth` in file order (the simulator writes them in time order)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        with open(self.path, encoding="utf-8") as fh:
+            try:
+                header = json.loads(fh.readline())
+            except json.JSONDecodeError as exc:
+                raise ValueError(f"{self.path}: line 1 is not a labkit ground-truth header: {exc}") from None
+        if not isinstance(header, dict) or header.get("labkit_truth") != 1:
+            raise ValueError(f"{self.path}: line 1 is not a labkit ground-truth header")
+        self.header = header
+
+    def __iter__(self) -> Iterator[ScanTruth]:
+        n = int(self.header["lidar"]["n_beams"])
+        with open(self.path, encoding="utf-8") as fh:
+            fh.readline()
+            for lineno, line in enumerate(fh, start=2):
+                if not line.strip():
+                    continue
+                try:
+                    tr = ScanTruth.from_json(json.loads(line), n)
+                except (json.JSONDecodeError, KeyError, TypeError) as exc:
+                    raise ValueError(f"{self.path}: line {lineno} is not a scan record: {exc}") from None
+                yield tr

@@ -51,8 +51,11 @@ if "rerun_notebook" in sys.modules and "RERUN_NOTEBOOK_ASSET" not in os.environ:
     )
 os.environ.setdefault("RERUN_NOTEBOOK_ASSET", "serve-local")
 
+import contextlib  # noqa: E402
+import errno  # noqa: E402
 import itertools  # noqa: E402
 import math  # noqa: E402
+import warnings  # noqa: E402
 from collections.abc import Iterable  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -87,6 +90,7 @@ __all__ = [
     "record",
     "record_scans",
     "RecordSummary",
+    "StampsCollapsedWarning",
     "describe",
     "show_inline",
     "STEP",
@@ -104,7 +108,8 @@ INVALID_RAY_M = 0.4  # length of the grey ray drawn for an invalid beam
 # radii in UI points (negative in rerun): dots keep their size on screen at any zoom
 POINT_RADIUS_UI = -1.5
 SEGMENT_RADIUS_UI = -2.5
-_BATCH = 256  # scans per send_columns call
+_BATCH = 128  # scans per send_columns call: memory in flight grows with it, the file's footer with 1 / _BATCH
+_PEEK = 256  # scans looked at before writing: do they carry poses, do their stamps advance?
 #: Map decimation: every MAP_EVERY-th scan with a pose adds to the accumulated map, one point per
 #: MAP_CELL_M grid cell; the path keeps a point every PATH_STEP_M.
 MAP_EVERY = 10
@@ -133,10 +138,12 @@ def map_view() -> rrb.Spatial2DView:
 
 
 def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False,
-              with_times: bool = True) -> rrb.Blueprint:
+              with_times: bool = True, timeline: str | None = None) -> rrb.Blueprint:
     """The default layout: the scan view on the left; counts, stage times, log and notes on
     the right. ``with_map``: the map view (world frame) beside the scan view; ``with_times=False``
-    leaves out the stage-time panel (a recording without features has no stage times). With
+    leaves out the stage-time panel (a recording without features has no stage times);
+    ``timeline``: the timeline the viewer opens on (:data:`SEQUENCE` for a recording whose
+    stamps do not advance). With
     ``compare=("A", "B")`` there is one scan view per named configuration
     (features logged with ``log_features(..., name="A")``), side by side, each showing the
     scan, the ground truth and that configuration's features."""
@@ -165,6 +172,7 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
             rrb.Vertical(*[view for view, _ in panels], row_shares=[share for _, share in panels]),
             column_shares=[3, 3, 2] if with_map else [3, 2],
         ),
+        *([rrb.TimePanel(timeline=timeline)] if timeline else []),
         collapse_panels=False,
     )
 
@@ -271,7 +279,7 @@ def _log_frames(rec, frames: Iterable[tuple[Scan, np.ndarray | None, Features | 
     map (``world_map``) those that have a pose."""
 
     def send(batch, k: int) -> None:
-        _send_batch(rec, batch, start_index + k, show_invalid)
+        _send_batch(rec, batch, start_index + k, show_invalid, k == 0)
         if world_map is not None:
             world_map.send(batch, start_index + k)
 
@@ -288,6 +296,7 @@ class _Map:
             raise ValueError(f"map_every must be >= 1, got {every}")
         self.rec, self.every, self.thin = rec, int(every), GridThinning(cell_m)
         self.n_posed = 0
+        self.labels_hidden = False
         self.path: list[tuple[float, float]] = []
         rec.log("map", rr.Transform3D(mat3x3=_Y_UP), static=True)
         rec.log("map/sensor/marker", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[_MAP_COLORS["pose"]],
@@ -322,7 +331,9 @@ class _Map:
         if items[0][2] is not None:
             feats = [f if s.pose is not None else Features(f.stamp_ns, f.n_beams, f.labels)
                      for s, (_, _, f) in zip(scans, items, strict=True)]
-            _send_features(self.rec, times, feats, "map/sensor", None, segment_count=False)
+            _send_features(self.rec, times, feats, "map/sensor", None, segment_count=False,
+                           hide_labels=not self.labels_hidden)
+            self.labels_hidden = True
         keys = []
         for k in posed:
             if self.n_posed % self.every == 0:
@@ -407,7 +418,7 @@ def _scalars(rec, path: str, times, values) -> None:
 
 
 def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]], first_index: int,
-                show_invalid) -> None:
+                show_invalid, first_batch: bool = True) -> None:
     batch = [scan for scan, _, _ in items]
     idx = np.arange(first_index, first_index + len(batch))
     stamps = np.array([s.stamp_ns for s in batch], dtype=np.int64)
@@ -417,7 +428,7 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
     rec.send_columns(
         "world/scan/points",
         indexes=times,
-        columns=rr.Points2D.columns(positions=pts, colors=np.tile(COLORS["points"], (len(pts), 1)),
+        columns=rr.Points2D.columns(positions=pts, colors=_colors("points", len(pts)),
                                     radii=np.full(len(pts), POINT_RADIUS_UI, dtype=np.float32)).partition(lengths),
     )
     _scalars(rec, "metrics/valid_beams", times, lengths)
@@ -428,7 +439,7 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
             indexes=times,
             columns=rr.LineStrips2D.columns(
                 strips=np.concatenate(rays),
-                colors=np.tile(COLORS["invalid"], (sum(map(len, rays)), 1)),
+                colors=_colors("invalid", sum(map(len, rays))),
             ).partition([len(r) for r in rays]),
         )
     if items[0][1] is not None:
@@ -447,7 +458,8 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
         )
         _scalars(rec, "metrics/count/segments", times, n_segments)
     if items[0][2] is not None:
-        _send_features(rec, times, [f for _, _, f in items], "world", "metrics", segment_count=False)
+        _send_features(rec, times, [f for _, _, f in items], "world", "metrics", segment_count=False,
+                       hide_labels=first_batch)
 
 
 def _forever(value):
@@ -463,13 +475,17 @@ def _colors_rgb(rgb, n: int) -> np.ndarray:
     return np.tile(np.array(rgb, dtype=np.uint8), (n, 1))
 
 
-def _send_features(rec, times, feats: list[Features], world: str, metrics: str | None, segment_count: bool) -> None:
+def _send_features(rec, times, feats: list[Features], world: str, metrics: str | None, segment_count: bool,
+                   hide_labels: bool = True) -> None:
     """Every feature layer of a batch of scans, as one ``send_columns`` call per layer (and,
-    under ``metrics``, their counts and stage times)."""
+    under ``metrics``, their counts and stage times). ``hide_labels``: also log the layers' static
+    draw order and label visibility (once per recording: every static log is a chunk of its own,
+    and every chunk costs the file's footer memory until the file is closed)."""
 
     # the layers' draw order and labels, only where features are logged: an entity that names an archetype
     # without its required component (Ellipses2D without half_sizes) shows an error badge in the viewer
-    _hide_labels(rec, world)
+    if hide_labels:
+        _hide_labels(rec, world)
 
     def send(layer: str, archetype, colour: str, size_ui: float, **columns) -> None:
         per_scan = [getattr(f, layer) for f in feats]
@@ -527,7 +543,7 @@ def log_features(
     def send(batch: list[Features], k: int) -> None:
         k0 = start_index + k
         times = _time_columns(np.arange(k0, k0 + len(batch)), np.array([f.stamp_ns for f in batch], np.int64))
-        _send_features(rec, times, batch, world, metrics, segment_count=True)
+        _send_features(rec, times, batch, world, metrics, segment_count=True, hide_labels=k == 0)
 
     return _batched(features, send)
 
@@ -554,32 +570,38 @@ def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int
     ``index_of`` maps ``stamp_ns`` to the scan's sequence number; truths of stamps not in
     it are skipped. Returns how many were logged.
     """
-    def send(batch: list[tuple[int, object]], _first: int) -> None:
-        times = _time_columns(np.array([k for k, _ in batch]), np.array([tr.stamp_ns for _, tr in batch], np.int64))
-        truths = [tr for _, tr in batch]
-        walls = [w for tr in truths for w in tr.walls]
-        rec.send_columns("world/truth/walls", indexes=times, columns=rr.LineStrips2D.columns(
-            strips=_segments([w.start for w in walls], [w.end for w in walls]), colors=_colors("truth", len(walls)),
-            labels=[w.name for w in walls], radii=np.full(len(walls), -1.0, dtype=np.float32),
-        ).partition([len(tr.walls) for tr in truths]))
-        arcs = [a for tr in truths for a in tr.arcs]
-        rec.send_columns("world/truth/arcs", indexes=times, columns=rr.LineStrips2D.columns(
-            strips=[arc_points(a.center, a.radius, a.start, a.end) for a in arcs], colors=_colors("truth", len(arcs)),
-            labels=[a.name for a in arcs], radii=np.full(len(arcs), -1.0, dtype=np.float32),
-        ).partition([len(tr.arcs) for tr in truths]))
-        for key in ("circles", "legs"):
-            items = [c for tr in truths for c in getattr(tr, key)]
-            half = np.array([getattr(c, "radius", None) or c.diameter / 2 for c in items]).reshape(-1, 1)
-            rec.send_columns(f"world/truth/{key}", indexes=times, columns=rr.Ellipses2D.columns(
-                centers=np.array([c.center for c in items]).reshape(-1, 2), half_sizes=np.repeat(half, 2, axis=1),
-                colors=_colors("truth", len(items)), line_radii=np.full(len(items), -1.0, dtype=np.float32),
-            ).partition([len(getattr(tr, key)) for tr in truths]))
-
     known = ((index_of[tr.stamp_ns], tr) for tr in truths if tr.stamp_ns in index_of)
-    n = _batched(known, send)
+    n = _batched(known, lambda batch, _first: _send_truth(rec, batch))
+    _hide_truth_labels(rec)
+    return n
+
+
+def _hide_truth_labels(rec: rr.RecordingStream) -> None:
     for layer in ("walls", "arcs"):
         rec.log(f"world/truth/{layer}", rr.LineStrips2D.from_fields(show_labels=False), static=True)
-    return n
+
+
+def _send_truth(rec: rr.RecordingStream, batch: list[tuple[int, object]]) -> None:
+    """One ``send_columns`` call per truth layer for ``(scan index, ScanTruth)`` pairs."""
+    times = _time_columns(np.array([k for k, _ in batch]), np.array([tr.stamp_ns for _, tr in batch], np.int64))
+    truths = [tr for _, tr in batch]
+    walls = [w for tr in truths for w in tr.walls]
+    rec.send_columns("world/truth/walls", indexes=times, columns=rr.LineStrips2D.columns(
+        strips=_segments([w.start for w in walls], [w.end for w in walls]), colors=_colors("truth", len(walls)),
+        labels=[w.name for w in walls], radii=np.full(len(walls), -1.0, dtype=np.float32),
+    ).partition([len(tr.walls) for tr in truths]))
+    arcs = [a for tr in truths for a in tr.arcs]
+    rec.send_columns("world/truth/arcs", indexes=times, columns=rr.LineStrips2D.columns(
+        strips=[arc_points(a.center, a.radius, a.start, a.end) for a in arcs], colors=_colors("truth", len(arcs)),
+        labels=[a.name for a in arcs], radii=np.full(len(arcs), -1.0, dtype=np.float32),
+    ).partition([len(tr.arcs) for tr in truths]))
+    for key in ("circles", "legs"):
+        items = [c for tr in truths for c in getattr(tr, key)]
+        half = np.array([getattr(c, "radius", None) or c.diameter / 2 for c in items]).reshape(-1, 1)
+        rec.send_columns(f"world/truth/{key}", indexes=times, columns=rr.Ellipses2D.columns(
+            centers=np.array([c.center for c in items]).reshape(-1, 2), half_sizes=np.repeat(half, 2, axis=1),
+            colors=_colors("truth", len(items)), line_radii=np.full(len(items), -1.0, dtype=np.float32),
+        ).partition([len(getattr(tr, key)) for tr in truths]))
 
 
 @dataclass(frozen=True)
@@ -666,8 +688,11 @@ def record_scans(
     with_map: bool | None = None,
     map_every: int = MAP_EVERY,
     map_cell_m: float = MAP_CELL_M,
+    start_index: int = 0,
 ) -> RecordSummary:
-    """Write scans to an ``.rrd`` file with the default blueprint.
+    """Write scans to an ``.rrd`` file with the default blueprint, as they come: the file is
+    written while the scans are read (``RecordingStream.save`` before anything is logged, then
+    ``send_columns`` every :data:`_BATCH` scans), so memory stays flat however long the recording.
 
     When the scans carry poses (``with_map=None``: when one of the first 256 does), the map view
     is logged beside the scan view: the path, the sensor's pose per scan, the scan and its
@@ -677,29 +702,99 @@ def record_scans(
     Features are logged when given (``features``, one per scan) or computed here with
     ``config`` (a :class:`labkit.Config`); otherwise only the scans and their range
     segments (``labels`` per scan, or adaptive with ``segment_threshold_m`` as floor). ``truth`` is
-    a :class:`labkit.sim.GroundTruth` to log beside them. If iterating ``scans`` raises
+    a :class:`labkit.sim.GroundTruth`, or a :class:`labkit.sim.TruthStream` read along with the
+    scans (both in time order), to log beside them. If iterating ``scans`` raises
     :class:`labkit.CorruptFileError` (a damaged file), the ``.rrd`` holds every scan that
     could be read, the error is logged to ``log`` and returned in the summary (not raised).
+    ``start_index``: the ``scan`` timeline's number of the first scan (a range of a recording).
+
+    When the scans' time stamps do not advance (at least 1 % of them no later than the scan
+    before, as in the Radish ``infinite-corridor`` log), a :class:`StampsCollapsedWarning` says so:
+    scrub the ``scan`` timeline, which the viewer then opens on.
 
     The file is written under a temporary name and renamed when complete; ``overwrite``
     replaces only an existing ``.rrd``, and the output may not be one of ``inputs`` (see
     :mod:`labkit._safe`). Interrupted (Ctrl-C), the recording so far is closed and kept as
-    ``<name>.partial.rrd``.
+    ``<name>.partial.rrd``. A write that fails (a full disk) raises ``OSError`` naming ``out``,
+    and no file is left.
     """
     scans = iter(scans)
-    if with_map is None:  # look at the first batch: does the recording have poses?
-        first: list[Scan] = []
-        damage = None
-        try:
-            first.extend(itertools.islice(scans, _BATCH))
-        except CorruptFileError as exc:  # logged, as any damage, after the scans before it
-            damage = exc
+    first: list[Scan] = []  # a look at the first batch: poses? stamps?
+    damage = None
+    try:
+        first.extend(itertools.islice(scans, _PEEK))
+    except CorruptFileError as exc:  # logged, as any damage, after the scans before it
+        damage = exc
+    if with_map is None:
         with_map = any(s.pose is not None for s in first)
-        scans = itertools.chain(first, scans if damage is None else _raise(damage))
+    timeline = SEQUENCE if _Stamps.collapsed(first) else None
+    scans = itertools.chain(first, scans if damage is None else _raise(damage))
     with safe_output(out, RRD_FILE, overwrite=overwrite, inputs=inputs) as tmp:
         return _record_scans(scans, tmp, Path(out), name=name, truth=truth, labels=labels, features=features,
                              config=config, segment_threshold_m=segment_threshold_m, description=description,
-                             world_map=(map_every, map_cell_m) if with_map else None)
+                             world_map=(map_every, map_cell_m) if with_map else None, start_index=start_index,
+                             timeline=timeline)
+
+
+class StampsCollapsedWarning(UserWarning):
+    """The scans of a recording written by :func:`record_scans` do not advance in time."""
+
+
+class _Stamps:
+    """Counts the scans whose stamp is no later than the one before (stamps that do not advance)."""
+
+    SHARE = 0.01  # warn from this share of such scans on
+
+    def __init__(self) -> None:
+        self.n = self.stuck = 0
+        self.last: int | None = None
+
+    def add(self, stamp_ns: int) -> None:
+        if self.last is not None and stamp_ns <= self.last:
+            self.stuck += 1
+        self.last = stamp_ns
+        self.n += 1
+
+    @property
+    def bad(self) -> bool:
+        return self.stuck >= 2 and self.stuck >= self.SHARE * self.n
+
+    @classmethod
+    def collapsed(cls, scans: Iterable[Scan]) -> bool:
+        stamps = cls()
+        for scan in scans:
+            stamps.add(scan.stamp_ns)
+        return stamps.bad
+
+
+class _TruthFeed:
+    """The ground truth of each batch of scans, by stamp: from a :class:`~labkit.sim.GroundTruth`
+    by lookup, or read along from a stream of truths in time order (memory stays flat)."""
+
+    def __init__(self, truth) -> None:
+        from ..sim import GroundTruth
+
+        self.lookup = truth if isinstance(truth, GroundTruth) else None
+        self.items = None if self.lookup is not None else iter(truth)
+        self.ahead: dict[int, object] = {}  # read, not yet matched
+        self.last: int | None = None  # stamp of the last truth read
+
+    def take(self, stamps: list[int]) -> list:
+        """The truths of ``stamps`` (each once), in the order of ``stamps``."""
+        if self.lookup is not None:
+            return [self.lookup[s] for s in dict.fromkeys(stamps) if s in self.lookup]
+        top = max(stamps)
+        while self.items is not None and (self.last is None or self.last <= top):
+            truth = next(self.items, None)
+            if truth is None:
+                self.items = None
+                break
+            self.ahead[truth.stamp_ns] = truth
+            self.last = truth.stamp_ns
+        matched = [self.ahead.pop(s) for s in dict.fromkeys(stamps) if s in self.ahead]
+        for s in [s for s in self.ahead if s <= top]:  # no later scan has them (scans in time order)
+            del self.ahead[s]
+        return matched
 
 
 def _raise(exc: Exception):
@@ -707,20 +802,51 @@ def _raise(exc: Exception):
     yield  # a generator that raises when first iterated
 
 
+def _writer_failed(tmp: Path, exc: RuntimeError) -> OSError:
+    """rerun's file writer stopped ("File-writer thread shut down prematurely": it does not say
+    why). Find out by writing beside the output: a full disk, a quota, an I/O error."""
+    probe = tmp.with_name(f".{tmp.name}.probe")
+    try:
+        with open(probe, "wb") as fh:
+            fh.write(b"\0" * (1 << 20))
+            fh.flush()
+            os.fsync(fh.fileno())
+    except OSError as err:
+        return OSError(err.errno, err.strerror, str(tmp))
+    finally:
+        with contextlib.suppress(OSError):
+            probe.unlink()
+    return OSError(errno.EIO, f"rerun could not write the recording ({exc})", str(tmp))
+
+
+def _close(rec: rr.RecordingStream, tmp: Path) -> None:
+    """Flush and close ``rec``'s file; a write that failed is an ``OSError`` (see :func:`_writer_failed`)."""
+    try:
+        rec.flush()
+    except RuntimeError as exc:
+        with contextlib.suppress(RuntimeError):
+            rec.disconnect()
+        raise _writer_failed(tmp, exc) from None
+    rec.disconnect()
+
+
 def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features, config, segment_threshold_m,
-                  description, world_map=None) -> RecordSummary:
+                  description, world_map=None, start_index: int = 0, timeline: str | None = None) -> RecordSummary:
     rec = new_recording(name)
     with_features = features is not None or config is not None
-    rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features))
+    rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features,
+                                              timeline=timeline))
     log_static(rec, description)
     the_map = _Map(rec, *world_map, features=with_features) if world_map is not None else None
-    stamps: list[int] = []
+    feed = _TruthFeed(truth) if truth is not None else None
+    stamps = _Stamps()
     counts: dict[str, int] = {}
     seconds: dict[str, float] = {}
+    n_truth = 0
 
     def stamped():
         for s in scans:
-            stamps.append(s.stamp_ns)
+            stamps.add(s.stamp_ns)
             yield s
 
     side = features if features is not None else labels if labels is not None else _forever(None)
@@ -739,24 +865,44 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
             else:
                 yield scan, _segment(scan, segment_threshold_m), None
 
+    def send(batch, k: int) -> None:
+        nonlocal n_truth
+        first = start_index + k
+        _send_batch(rec, batch, first, True, k == 0)
+        if the_map is not None:
+            the_map.send(batch, first)
+        if feed is not None:
+            index_of = {scan.stamp_ns: first + i for i, (scan, _, _) in enumerate(batch)}
+            matched = feed.take([scan.stamp_ns for scan, _, _ in batch])
+            if matched:
+                _send_truth(rec, [(index_of[tr.stamp_ns], tr) for tr in matched])
+                n_truth += len(matched)
+
     error: Exception | None = None
     try:
-        n = _log_frames(rec, frames(), 0, True, the_map)
+        n = _batched(frames(), send)
     except CorruptFileError as exc:
-        error, n = exc, len(stamps)
-        rec.set_time(SEQUENCE, sequence=max(n - 1, 0))
+        error, n = exc, stamps.n
+        rec.set_time(SEQUENCE, sequence=start_index + max(n - 1, 0))
         log_text(rec, f"damaged input: {exc}", level="ERROR")
     except BaseException:  # interrupted or failed: close the file properly (labkit._safe decides its fate)
-        rec.flush()
-        rec.disconnect()
+        with contextlib.suppress(RuntimeError):
+            rec.flush()
+        with contextlib.suppress(RuntimeError):
+            rec.disconnect()
         raise
-    n_truth = log_truth(rec, truth, {s: k for k, s in enumerate(stamps)}) if truth is not None else 0
+    if n_truth:
+        _hide_truth_labels(rec)
     if the_map is not None:
         the_map.finish(truth)
-    rec.set_time(SEQUENCE, sequence=0)
+    rec.set_time(SEQUENCE, sequence=start_index)
     log_text(rec, f"{n} scans from {name}" + (f", ground truth for {n_truth}" if n_truth else ""))
-    rec.flush()
-    rec.disconnect()
+    if stamps.bad:
+        note = (f"{name}: {stamps.stuck} of {stamps.n} scans have a time stamp no later than the scan before: the "
+                f"'{TIME}' timeline cannot order them; scrub the '{SEQUENCE}' timeline (the scan's number) instead")
+        log_text(rec, note, level="WARN")
+        warnings.warn(note, StampsCollapsedWarning, stacklevel=3)
+    _close(rec, tmp)
     return RecordSummary(out, n, n_truth, error, counts, seconds)
 
 
@@ -777,40 +923,46 @@ def record(
     overwrite: bool = False,
     strict: bool = False,
     poses: str | bool | None = None,
+    scans: slice | None = None,
 ) -> RecordSummary:
     """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
     ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
     (``config``, default :class:`labkit.Config` (); ``features=False``: scans and range
-    segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it. See
-    :func:`record_scans` for damaged inputs and for ``overwrite``; ``strict`` stops reading
-    at the first bad record. When the recording has poses (``poses`` as in :func:`labkit.read_scans`),
-    the map view is logged too (module docstring).
+    segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it (read
+    along with the scans). ``scans``: only this range of scans (a slice, as
+    :func:`labkit.read_scans` takes it), numbered on the ``scan`` timeline as in the whole
+    recording. See :func:`record_scans` for damaged inputs, for ``overwrite`` and for memory;
+    ``strict`` stops reading at the first bad record. When the recording has poses (``poses``
+    as in :func:`labkit.read_scans`), the map view is logged too (module docstring).
     """
     from ..io import read_scans
-    from ..sim import read_truth, truth_path_for
+    from ..sim import TruthStream, truth_path_for
 
     check_output(out, RRD_FILE, overwrite=overwrite, inputs=[source])  # before any reading
-    stream = read_scans(source, topic=topic, strict=strict, poses=poses)
+    stream = read_scans(source, topic=topic, strict=strict, poses=poses, scans=scans)
     name = Path(source).name
     if features and config is None:
         config = Config()
     truth_file = truth_path_for(source)
-    truth = read_truth(truth_file) if truth_file.exists() else None
+    truth = TruthStream(truth_file) if truth_file.exists() else None
     if description is None:
         origin = f"Format: `{stream.format}`, topic: `{stream.topic}`, poses: {stream.poses or 'none'}."
+        if scans is not None:
+            origin += f" Scans {stream.first} to {'the end' if stream.stop is None else stream.stop - 1}."
         if not features:
             origin += f" Range segments: adaptive breakpoints, {segment_threshold_m} m floor."
         description = describe(name, source=origin, config=config if features else None, truth=truth is not None,
                                world_map=stream.poses is not None)
-    scans = iter(stream)
+    items = iter(stream)
     if progress:
         from tqdm.auto import tqdm
 
-        scans = tqdm(scans, total=stream.count, unit="scan", desc=f"view {name}")
+        items = tqdm(items, total=stream.count, unit="scan", desc=f"view {name}")
     inputs = [source, truth_file] if truth is not None else [source]
-    return record_scans(scans, out, name=name, truth=truth, config=config if features else None,
+    return record_scans(items, out, name=name, truth=truth, config=config if features else None,
                         segment_threshold_m=segment_threshold_m, description=description, overwrite=overwrite,
-                        inputs=inputs, with_map=None if stream.poses is not None else False)
+                        inputs=inputs, with_map=None if stream.poses is not None else False,
+                        start_index=stream.first)
 
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=(),
@@ -919,5 +1071,5 @@ def record_steps(scan: Scan, steps: list[Step], out: str | Path, *, name: str = 
         rec = new_recording(name)
         rec.save(tmp, default_blueprint=steps_blueprint())
         n = log_steps(rec, scan, steps)
-        rec.disconnect()
+        _close(rec, tmp)
     return n
