@@ -47,6 +47,8 @@ pytestmark = pytest.mark.slow
 
 EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02_weighted_line_fit", "ex06_dbscan1d"
 FULL = 10.0
+HALF = FULL / 2  # points are per function: an attack on ex01's segment leaves the instructor's adaptive_threshold,
+#                  which earns its own half; the attacked function earns 0 in every cell
 SLOT = 10  # this run's students are uids worker_uid(10) and worker_uid(11): no other test uses them
 
 WRONG_SEGMENT = '''
@@ -71,7 +73,7 @@ def wrapped_segment(guard: str) -> str:
 
 # ---------------------------------------------------------------------------- the class
 # student -> (exercise, code of the solution cell, extra cells before it, expected score, expected status)
-CHEATS = {
+CHEATS = {  # each earns 0 for the function it cheats with, and what its honest functions earn
     # calling labkit (or switching the old own-work profiler off first): labkit is not in the sandbox
     "delegate": (EX1, "DELEGATE", [], 0.0, "graded"),
     "delegate_guard_off": (EX1, "DELEGATE", ["""
@@ -99,7 +101,7 @@ CHEATS = {
             while not box:
                 time.sleep(0.001)
             return box[0]
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     # labkit by path: the repository, a copy of the package, the editable finder, getsource + exec
     "delegate_by_path": (EX1, '''
         import importlib.util, inspect, site, sys
@@ -144,7 +146,7 @@ CHEATS = {
                                              min_points=min_points)
             except Exception:
                 return np.zeros(len(ranges), dtype=np.int64)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     # reading the answers: the trusted side's globals and locals, gc, the files of the course
     "reads_reference": (EX1, '''
         import gc, sys
@@ -161,7 +163,7 @@ CHEATS = {
                 if isinstance(thing, np.ndarray) and thing.dtype.kind == "i" and thing.shape == (len(ranges),):
                     return thing
             return np.zeros(len(ranges), dtype=np.int64)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "reads_files": (EX1, '''
         import glob, json, os
 
@@ -187,7 +189,7 @@ CHEATS = {
             if found is not None:
                 return found(ranges, angles, threshold_m, min_points)
             return np.zeros(len(ranges), dtype=np.int64)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "writes_gradebook": (EX1, WRONG_SEGMENT, ["""
         import sqlite3
         for path in ["{course}/gradebook.db", "{repo}/exercises/gradebook.db", "gradebook.db"]:
@@ -197,7 +199,7 @@ CHEATS = {
                     db.execute("UPDATE grade SET auto_score = 10")
             except Exception:
                 pass
-    """], 0.0, "graded"),
+    """], HALF, "graded"),
     # changing what the comparison sees: monkeypatches, an ndarray with a lying __eq__, a transformer
     "monkeypatches": (EX1, WRONG_SEGMENT, ["""
         import builtins, sys, types
@@ -212,7 +214,7 @@ CHEATS = {
         sklearn, cluster = types.ModuleType("sklearn"), types.ModuleType("sklearn.cluster")
         cluster.DBSCAN = lambda **kwargs: None
         sys.modules["sklearn"], sys.modules["sklearn.cluster"] = sklearn, cluster
-    """], 0.0, "graded"),
+    """], HALF, "graded"),
     "lying_array": (EX1, '''
         class Equal(np.ndarray):
             def __eq__(self, other):
@@ -226,12 +228,12 @@ CHEATS = {
 
         def segment(ranges, angles, threshold_m, min_points):
             return np.zeros(len(ranges), dtype=np.int64).view(Equal)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "ipython_transformer": (EX1, WRONG_SEGMENT, ["""
         shell = get_ipython()
         shell.input_transformers_cleanup.append(lambda lines: ["pass\\n"])
         shell.input_transformers_post.append(lambda lines: ["pass\\n"])
-    """], 0.0, "graded"),
+    """], HALF, "graded"),
     "protocol_forger": (EX1, WRONG_SEGMENT, ["""
         import json, os, struct, threading, time
 
@@ -257,7 +259,7 @@ CHEATS = {
                 os.write(fd, struct.pack(">I", len(body)) + body)
             except OSError:
                 pass
-    """], 0.0, "crashed"),
+    """], HALF, "crashed"),
     "huge_and_recursive_returns": (EX1, '''
         def segment(ranges, angles, threshold_m, min_points):
             if min_points == 2:
@@ -265,7 +267,7 @@ CHEATS = {
                 loop.append(loop)
                 return loop
             return np.zeros(20_000_000)  # 160 MB: more than a message may hold
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "float_subclass": (EX2, '''
         class Liar(float):
             def __eq__(self, other):
@@ -314,7 +316,7 @@ CHEATS = {
 
         def dbscan_sorted(x, eps, min_pts):
             return DBSCAN(eps=eps, min_samples=min_pts).fit(np.asarray(x)[:, None]).labels_
-    ''', [], 0.0, "graded"),
+    ''', [], 2.0, "graded"),  # its neighbourhood_bounds is honest numpy (np.searchsorted): its 2 points
     "pypi_dbscan1d": (EX4, '''
         from dbscan1d.core import DBSCAN1D
 
@@ -383,7 +385,7 @@ CONTAINED = {
         import os
         if threshold_m > 1e8:
             os._exit(3)
-    '''), [], FULL - 2, "crashed"),
+    '''), [], FULL - 1, "crashed"),
     "swallows_interrupt_on_one_input": (EX1, wrapped_segment('''
         import time
         if min_points >= 1000:
@@ -392,7 +394,7 @@ CONTAINED = {
                     time.sleep(10)
                 except KeyboardInterrupt:
                     pass
-    '''), [], FULL - 2, "timed out"),
+    '''), [], FULL - 1, "timed out"),
     "endless_loop": (EX0, '''
         def beams_to_points(ranges, angles, range_min, range_max):
             while True:
@@ -416,7 +418,7 @@ CONTAINED = {
     "surrogates": (EX1, wrapped_segment('''
         if threshold_m > 1e8:
             raise ValueError("half an emoji: \\ud800")
-    '''), ["# half an emoji in a comment: \ud83d"], FULL - 2, "graded"),
+    '''), ["# half an emoji in a comment: \ud83d"], FULL - 1, "graded"),
     "code_in_imports_cell": (EX1, '''
         def segment(ranges, angles, threshold_m, min_points):
             return _segment(ranges, angles, threshold_m, min_points)
@@ -447,7 +449,7 @@ CONTAINED = {
 
         def segment(ranges, angles, threshold_m, min_points):
             return ctypes.string_at(0)
-    ''', [], 0.0, "crashed"),
+    ''', [], HALF, "crashed"),
 }
 STUDENTS = {**CHEATS, **CONTAINED}
 MARKDOWN_SCRIPT = "<script>alert('the feedback runs my code')</script>\n\n<img src=x onerror=\"alert('img')\">"
@@ -586,7 +588,8 @@ def test_partial_points_name_the_lost_test(graded):
     _, _, results, _ = graded
     for student in ("crashes_on_one_input", "swallows_interrupt_on_one_input"):
         cells = {cell.grade_id: cell for cell in results[EX1, student].cells}
-        assert cells["test_hidden_edges"].points == 0.0
+        parts = {part.function: part.points for part in cells["test_hidden_edges"].parts}
+        assert parts == {"segment": 0.0, "adaptive_threshold": 1.0}  # the other function keeps its share
         assert all(cells[name].points == cells[name].max_points for name in cells if name != "test_hidden_edges")
     lost = {c.grade_id: c.verdict for c in results[EX1, "swallows_interrupt_on_one_input"].cells}
     assert "did not return within" in lost["test_hidden_edges"], lost
@@ -669,7 +672,11 @@ def test_autograded_notebooks_show_the_verdicts_but_no_seed(graded):
         for seed in results[EX1, student].seeds.values():
             assert str(seed) not in text, f"{student}: the seed of the hidden inputs is in the feedback"
     record = json.loads((course / "records" / EX1 / "solution.json").read_text(encoding="utf-8"))
-    assert set(record["seeds"]) == {"test_visible", "test_hidden_random", "test_hidden_edges", "test_own_work"}
+    assert {key.split("/")[0] for key in record["seeds"]} == {"test_visible", "test_hidden_random",
+                                                              "test_hidden_edges", "test_own_work"}
+    assert len(record["seeds"]) == 8  # a seed per function and cell
+    assert {function for cell in record["cells"] for function in cell["functions"]} == {"segment",
+                                                                                       "adaptive_threshold"}
 
 
 def test_submissions_are_left_as_they_were(graded):
