@@ -2,9 +2,9 @@
 
 The proof is the grader's own: every function a course notebook defines is tried, in place of each
 function an exercise asks for, under that exercise's hidden random tests of that function (the
-spec's ``test_hidden_random`` or ``test_hidden_random__<function>``, with fresh inputs). If one passes, a student could copy it from the notebook
-and earn the exercise's points, and this test fails naming the notebook, the function and the
-exercise.
+spec's ``test_hidden_random`` or ``test_hidden_random__<function>``, with fresh inputs). If one passes, a
+student could copy it from the notebook and earn the function's points, and this test fails naming the
+notebook, the function and the exercise.
 
 Fast by construction: the notebooks are not run. Only their ``import`` statements, their simple
 constants (``NAME = value`` by arithmetic and numpy calls) and their top-level ``def``s are executed (IPython magics are
