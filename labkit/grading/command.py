@@ -8,7 +8,8 @@ gradebook, the autograded notebooks, the records and ``grades.csv``
 the exit status is 0 when every submission got a verdict (whatever it was).
 
 ``labkit grade --check my.ipynb`` runs one notebook's visible tests with the same trusted grader
-and sandbox and prints a verdict per graded cell.
+and sandbox and prints a verdict per graded cell and function; outside a course (a student with
+only the release) the checks are the notebook's own locked cells, as released.
 
 :func:`add_grade_parser` and :func:`run_grade` are what ``labkit``'s command line calls;
 ``python -m labkit.grading`` runs the same command on its own.
@@ -440,7 +441,8 @@ def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
     parser.add_argument("--student", action="append", metavar="ID", help="grade only this student (repeatable)")
     parser.add_argument("-o", "--output", help="the grades CSV (default: <course>/grades.csv)")
     parser.add_argument("--check", metavar="NOTEBOOK",
-                        help="run one notebook's visible tests the way it will be graded, and print a verdict per test")
+                        help="run one notebook's visible tests the way it will be graded (the release alone is "
+                        "enough), and print a verdict per test and function")
     parser.add_argument("--exercise", dest="check_exercise", metavar="NAME",
                         help="with --check: the exercise, when the notebook's name does not say")
     parser.add_argument("--no-sandbox", action="store_true",
