@@ -50,7 +50,7 @@ def main() -> None:
     args = ap.parse_args()
 
     stages = {
-        "segment": lambda s: segment_labels(s, 0.08, adaptive=False),
+        "segment": lambda s: segment_labels(s, threshold_m=0.08, adaptive=False),
         "circles": detect_circles,
         "arc-like": lambda s: detect_circles(s, arc_like=True),
         "legs": detect_legs,

@@ -396,7 +396,7 @@ def _scan_runs(scan: Scan, segments, seg_threshold_m: float) -> _Runs:
             raise ValueError(f"segments has beam indices outside the scan's 0..{scan.n_beams - 1}")
         return runs
     check_positive("seg_threshold_m", seg_threshold_m)
-    return _runs_from_labels(scan, segment_labels(scan, seg_threshold_m, min_points=2, adaptive=False))
+    return _runs_from_labels(scan, segment_labels(scan, threshold_m=seg_threshold_m, min_points=2, adaptive=False))
 
 
 class _Geometry(NamedTuple):

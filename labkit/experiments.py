@@ -43,7 +43,7 @@ from .evaluation import (
 from .features import LineSegment, line_segment
 from .geometry import angle_difference
 from .lines import LINE_EXTRACTORS as REGISTRY
-from .lines._runs import _placed
+from .lines.placing import placed as place_lines
 from .lines.split_merge import SplitMergeParams, split_and_merge
 from .noise import AUTO_LINES, FIXED_LINES
 from .pipeline import Config, extract_features
@@ -363,17 +363,17 @@ def false_positive_reasons(data: Sequence[SimScan], noise_std_m: float, extract:
             for k, v in sorted(found.items(), key=lambda kv: -len(kv[1]))]
 
 
-#: What a user trusts, as the extractors' placing defaults: within 5 cm and 3 deg of the true line.
-PLACE_DR_M, PLACE_DALPHA = SplitMergeParams.place_dr_m, math.radians(SplitMergeParams.place_dalpha_deg)
+#: What a user trusts, as the extractors' placing defaults: within 5 cm and 3 degrees of the true line.
+PLACE_DR_M, PLACE_DALPHA_DEG = SplitMergeParams.place_dr_m, SplitMergeParams.place_dalpha_deg
 
 
 def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: float = PLACE_DR_M,
-                place_dalpha: float = PLACE_DALPHA) -> list[LineSegment]:
+                place_dalpha_deg: float = PLACE_DALPHA_DEG) -> list[LineSegment]:
     """The lines of an extractor that knew which beams hit which wall: for every visible wall of
     ``item``'s truth, one line fitted (weighted polar least squares, as the extractors fit) to
     exactly the valid beams that hit it, with the covariance of the true range noise; with
     ``place_confidence`` > 0, only those the data can place, as the ``"auto"`` settings choose
-    (:func:`labkit.fitting.placement_probability` within ``place_dr_m`` and ``place_dalpha``).
+    (:func:`labkit.fitting.placement_probability` within ``place_dr_m`` and ``place_dalpha_deg``).
 
     No extractor knows the truth, so on the same scans none should find more walls with as few
     false lines by that choice: its TruePos / FalsePos are a reference for what the data allows
@@ -388,7 +388,7 @@ def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: flo
         if len(beams) < 2:
             continue
         lines.append(line_segment(scan.points[beams], beams, range_sigma=item.noise_std_m))
-    return _placed(lines, place_dr_m, place_dalpha, place_confidence, None)  # (the extractors' own rule)
+    return place_lines(lines, place_dr_m, place_dalpha_deg, place_confidence)  # (the extractors' own rule)
 
 
 #: The confidences of :func:`placement_frontier`: every line, then tighter choices up to the
@@ -414,7 +414,7 @@ def placement_frontier(data: Sequence[SimScan], confidences: Sequence[float] = P
              "extractor": {id(item.scan): extract(item.scan, place_confidence=0.0) for item in data}}
 
     def placed(lines: dict, c: float) -> Callable:
-        return lambda scan: _placed(lines[id(scan)], PLACE_DR_M, PLACE_DALPHA, c, None)
+        return lambda scan: place_lines(lines[id(scan)], PLACE_DR_M, PLACE_DALPHA_DEG, c)
 
     rows = []
     for c in confidences:

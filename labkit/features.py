@@ -18,16 +18,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._params import Params, param, takes_params
 from ._plainfloat import intersect1, wrap1
 from ._records import fast_init
 from .fitting import fit_line_polar
 from .geometry import project_onto_line
+from .params import Params, checked_by, param
 
 __all__ = ["LineSegment", "Corner", "Circle", "Leg", "Person", "Features", "line_segment", "find_corners"]
 
 
-def _frozen(a) -> np.ndarray:
+def frozen_array(a) -> np.ndarray:
+    """``a`` as a read-only float array (the records' arrays never change once built)."""
     a = np.array(a, dtype=float)
     a.setflags(write=False)
     return a
@@ -117,7 +118,7 @@ def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None)
     fit = fit_line_polar(rho, theta, weights, range_sigma=range_sigma)
     ends = project_onto_line(p[[0, -1]], fit.r, fit.alpha)
     idx.setflags(write=False)
-    return LineSegment(fit.r, fit.alpha, _frozen(fit.covariance), _frozen(ends[0]), _frozen(ends[1]),
+    return LineSegment(fit.r, fit.alpha, frozen_array(fit.covariance), frozen_array(ends[0]), frozen_array(ends[1]),
                        int(idx[0]), int(idx[-1]), len(p), fit.rms, idx)
 
 
@@ -175,19 +176,19 @@ class CornerParams(Params):
     max_extension_m: float = param(0.1, "how far a line may be extended to reach the corner, metres", lo=0)
 
 
-@takes_params(CornerParams)
+@checked_by(CornerParams)
 def find_corners(
     lines: list[LineSegment],
     *,
-    min_angle: float,
-    max_gap_m: float,
-    max_extension_m: float,
+    min_angle_deg: float = CornerParams.min_angle_deg,
+    max_gap_m: float = CornerParams.max_gap_m,
+    max_extension_m: float = CornerParams.max_extension_m,
     wrap: bool = False,
 ) -> list[Corner]:
     """Corners between consecutive line segments (in the order given, usually scan order).
 
     Two consecutive segments make a corner when their lines differ in direction by more
-    than ``min_angle`` and the end of the first is within ``max_gap_m`` of the start of the
+    than ``min_angle_deg`` (degrees, default 30) and the end of the first is within ``max_gap_m`` of the start of the
     second. The corner is the intersection of the two lines. It is ``"extrapolated"`` when
     the lines must be extended further than ``max_extension_m`` to meet it -- or, when the
     lines end on neighbouring beams, further than the gap between those two beams, which
@@ -203,11 +204,7 @@ def find_corners(
     >>> [(c.kind, np.round(c.point, 6).tolist()) for c in find_corners([a, b])]
     [('concave', [3.0, 0.1])]
     """
-    if not (0 < min_angle <= math.pi / 2):
-        raise ValueError(f"min_angle must be in (0, pi/2] radians, got {min_angle}")
-    for name, v in (("max_gap_m", max_gap_m), ("max_extension_m", max_extension_m)):
-        if not (v >= 0 and math.isfinite(v)):
-            raise ValueError(f"{name} must be a finite number >= 0, got {v}")
+    min_angle = math.radians(min_angle_deg)
     out: list[Corner] = []
     n = len(lines)
     pairs = [(i, i + 1) for i in range(n - 1)]
@@ -239,7 +236,7 @@ def find_corners(
         side_origin = _side(a_start, b_end, (0.0, 0.0))
         side_corner = _side(a_start, b_end, p)
         kind = "concave" if side_origin * side_corner < 0 else "convex"
-        out.append(Corner(_frozen(p), angle, kind, extension > allowed, (i, j), a.last, b.first))
+        out.append(Corner(frozen_array(p), angle, kind, extension > allowed, (i, j), a.last, b.first))
     return out
 
 

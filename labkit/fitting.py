@@ -43,6 +43,7 @@ __all__ = [
     "line_covariance",
     "line_from_sums",
     "line_covariances",
+    "line_covariances_rms",
     "placement_probability",
 ]
 
@@ -169,14 +170,14 @@ def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bo
     ``x[starts[k]:starts[k + 1]]`` (the last runs to the end), its normal ``alpha[k]``;
     ``var_x``/``var_y`` are per-point variances. Returns (K, 2, 2); NaN for a line whose
     direction is undetermined (all points identical, or an isotropic cloud)."""
-    return _line_covariances(x, y, w, starts, alpha, var_x, var_y, ray_noise)[0]
+    return line_covariances_rms(x, y, w, starts, alpha, var_x, var_y, ray_noise=ray_noise)[0]
 
 
-def _line_covariances(x, y, w, starts, alpha, var_x, var_y=None, ray_noise: bool = True,
-                      r=None) -> tuple[np.ndarray, np.ndarray | None]:
-    """:func:`line_covariances`; with ``r`` (K,), also the RMS distance of each line's
+def line_covariances_rms(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bool = True,
+                         r=None) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`line_covariances`, and with ``r`` (K,) also the RMS distance of each line's
     points to the line ``(r[k], alpha[k])`` (it needs the cos and sin of alpha at every
-    point, which the covariances compute anyway)."""
+    point, which the covariances compute anyway; None without ``r``)."""
     starts = np.asarray(starts)
     if len(starts) == 1:  # one line: plain sums and scalars broadcast (reduceat costs more)
         counts = len(x)

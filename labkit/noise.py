@@ -50,7 +50,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from ._checks import check_nonneg, check_positive
-from ._params import AUTO
+from .params import AUTO
 from .scan import Scan
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "noise_sigma", "auto_split_threshold",

@@ -28,16 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._cache import remembered
-from ._params import AUTO, Params, param, takes_params
 from .noise import RANGE_SIGMA_M, scan_sigma
+from .params import AUTO, Params, checked_by, param
 from .scan import Scan
 
 __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
            "range_segments", "breakpoint_thresholds", "segment_order",
-           "segments_from_labels", "labels_from"]
-
-
+           "segments_from_labels", "labels_from", "detector_labels"]
 
 
 @dataclass(frozen=True)
@@ -50,18 +47,13 @@ class SegmentationParams(Params):
     (``adaptive=False`` gives the fixed threshold of the paper)."""
 
     threshold_m: float = param(0.08, "largest gap between neighbouring points of a segment, metres (Xavier et al. "
-                                     "seg_threshold); the floor of the adaptive threshold", lo=0, strict=True,
-                                 finite=True)
+                                     "seg_threshold); the floor of the adaptive threshold", lo=0, strict=True)
     adaptive: bool = param(True, "grow the threshold with range and angular step (Borges & Aldon)")
     incidence_deg: float = param(10.0, "grazing angle lambda of the adaptive threshold, degrees",
                                  lo=0, strict=True, hi=89.9)
     range_sigma_m: float = param(AUTO, "range noise of the sensor, metres (adaptive threshold); auto: "
-                                       "estimated from each scan (labkit.noise)", lo=0, finite=True, auto=True)
+                                       "estimated from each scan (labkit.noise)", lo=0, auto=True)
     min_points: int = param(2, "smallest segment kept; isolated points are dropped", lo=1)
-
-    @classmethod
-    def renamed(cls) -> dict:
-        return {"incidence_deg": "incidence_deg"}  # segment_labels takes degrees
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,7 +112,6 @@ def breakpoint_thresholds(
     return _thresholds(r_a, r_b, np.abs(np.asarray(dphi, dtype=float)), threshold_m, incidence_deg, range_sigma_m)
 
 
-@remembered
 def _check_adaptive(incidence_deg: float, range_sigma_m: float) -> None:
     if not (0 < incidence_deg < 90):
         raise ValueError(f"incidence_deg must be in (0, 90) degrees, got {incidence_deg}")
@@ -137,24 +128,22 @@ def _thresholds(r_a, r_b, dphi: np.ndarray, threshold_m: float, incidence_deg: f
     return np.fmax(d, threshold_m)
 
 
-@takes_params(SegmentationParams, positional=("threshold_m",))
+@checked_by(SegmentationParams, positional=("threshold_m",))
 def segment_labels(
     scan: Scan,
     *,
-    threshold_m: float,
-    min_points: int,
-    adaptive: bool,
-    incidence_deg: float,
-    range_sigma_m: float,
+    threshold_m: float = SegmentationParams.threshold_m,
+    min_points: int = SegmentationParams.min_points,
+    adaptive: bool = SegmentationParams.adaptive,
+    incidence_deg: float = SegmentationParams.incidence_deg,
+    range_sigma_m: float | str = SegmentationParams.range_sigma_m,
 ) -> np.ndarray:
     """Label each beam with its range segment.
 
     Parameters
     ----------
     scan : Scan
-    params : SegmentationParams, optional
-        The parameters below (default: the record's defaults, the pipeline's segmentation);
-        each may also be given as a keyword (``threshold_m`` also by position, as before).
+        Invalid beams are masked: they belong to no segment and end the one before them.
     threshold_m : float, metres
         Largest distance between neighbouring points of one segment. Default 0.08 m
         (Xavier et al. 2005, Table II ``seg_threshold``).
@@ -183,7 +172,6 @@ def segment_labels(
     >>> segment_labels(s, adaptive=False).tolist()
     [0, 0, 0, 1, 1, -1, -1]
     """
-    # (every value was checked when its SegmentationParams was built: each keyword is one of its fields)
     n = scan.n_beams
     if n == 0:
         return np.full(n, -1, dtype=np.int64)
@@ -224,12 +212,36 @@ def segment_labels(
     return np.where(valid, new_id[raw], -1)
 
 
-def range_segments(scan: Scan, params: SegmentationParams | None = None, *args, **overrides) -> list[RangeSegment]:
+@checked_by(SegmentationParams, positional=("threshold_m",))
+def range_segments(
+    scan: Scan,
+    *,
+    threshold_m: float = SegmentationParams.threshold_m,
+    min_points: int = SegmentationParams.min_points,
+    adaptive: bool = SegmentationParams.adaptive,
+    incidence_deg: float = SegmentationParams.incidence_deg,
+    range_sigma_m: float | str = SegmentationParams.range_sigma_m,
+) -> list[RangeSegment]:
     """The segments of :func:`segment_labels` (the same arguments) as :class:`RangeSegment`
     records, in scan order (a seam-crossing segment is listed first and its indices run
     N-k..N-1, 0..m)."""
-    labels = segment_labels(scan, params, *args, **overrides)
+    labels = segment_labels.unchecked(scan, threshold_m=threshold_m, min_points=min_points, adaptive=adaptive,
+                                      incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)
     return segments_from_labels(scan, labels)
+
+
+def detector_labels(scan: Scan, segments, range_sigma_m: float | str | None = None) -> np.ndarray:
+    """The range segments a detector works on, as per-beam labels: ``segments`` when given
+    (labels or :class:`RangeSegment` records, see :func:`labels_from`), else the scan's default
+    segmentation (:class:`SegmentationParams`, the pipeline's), whose adaptive breakpoints
+    follow the detector's own range noise as its thresholds do: ``"auto"`` (the scan's estimate)
+    or a number of metres; 0, a detector's fixed tests (the papers'), the fixed settings' noise
+    (:data:`labkit.noise.RANGE_SIGMA_M`); None the segmentation's default."""
+    if segments is not None:
+        return labels_from(scan, segments)
+    if range_sigma_m is None:
+        return segment_labels.unchecked(scan)
+    return segment_labels.unchecked(scan, range_sigma_m=RANGE_SIGMA_M if range_sigma_m == 0 else range_sigma_m)
 
 
 def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

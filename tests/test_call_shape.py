@@ -1,14 +1,32 @@
-"""The one call shape of labkit's detectors (``labkit._params.takes_params``): keywords are
-checked like a record, and the record a keyword builds is remembered for the next call --
-these tests try to make that memory answer for a call it was not made for."""
+"""The public boundary of labkit's detectors (``labkit.params.checked_by``): real signatures whose
+keywords are the parameter record's fields with the record's defaults, every value checked there
+against the record's limits, and the keywords of the older call shape still working for one release
+with a ``DeprecationWarning`` that names the new one.
+
+The invalid values are generated from each record's declared limits (as scikit-learn's
+``check_param_validation`` feeds generated invalid values to every estimator), so a new field is
+checked without an edit here."""
 
 from __future__ import annotations
+
+import dataclasses
+import inspect
+import math
 
 import numpy as np
 import pytest
 
-from labkit import detect_circles, segment_labels
-from labkit.circles.iav import CircleParams
+import labkit
+from labkit.features import CornerParams
+from labkit.lines import (
+    AngularParams,
+    HoughParams,
+    IAVLineParams,
+    IncrementalParams,
+    RansacParams,
+    RegressionParams,
+    SplitMergeParams,
+)
 from labkit.scan import Scan
 from labkit.segmentation import SegmentationParams
 
@@ -16,51 +34,172 @@ from labkit.segmentation import SegmentationParams
 _ANGLES = np.radians(np.arange(30) * 0.5)
 _SCAN = Scan(ranges=2.0 + 0.3 * (np.arange(30) // 10), angles=_ANGLES)
 
+#: every public function checked by a record, with that record
+PUBLIC = [
+    (labkit.segment_labels, SegmentationParams),
+    (labkit.range_segments, SegmentationParams),
+    (labkit.split_and_merge, SplitMergeParams),
+    (labkit.incremental_lines, IncrementalParams),
+    (labkit.regression_lines, RegressionParams),
+    (labkit.ransac_lines, RansacParams),
+    (labkit.hough_lines, HoughParams),
+    (labkit.angular_segmentation, AngularParams),
+    (labkit.angular_arrays, AngularParams),
+    (labkit.detect_lines_iav, IAVLineParams),
+    (labkit.find_corners, CornerParams),
+]
+_IDS = [fn.__name__ for fn, _ in PUBLIC]
 
-def test_a_keyword_is_the_record_with_that_value():
-    for threshold in (0.5, 0.1, 0.5):  # back and forth: each call its own answer, not the last call's
-        by_keyword = segment_labels(_SCAN, threshold_m=threshold, adaptive=False)
-        by_record = segment_labels(_SCAN, SegmentationParams(threshold_m=threshold, adaptive=False))
-        np.testing.assert_array_equal(by_keyword, by_record)
-        assert by_keyword.max() + 1 == (1 if threshold == 0.5 else 3)
+
+def _fields(record) -> list[dataclasses.Field]:
+    return [f for f in dataclasses.fields(record) if f.metadata.get("record") is None
+            and f.name not in record._not_passed]
 
 
-def test_the_same_keywords_on_another_record_use_that_record():
-    loose, tight = SegmentationParams(threshold_m=0.5), SegmentationParams(threshold_m=0.1)
-    assert segment_labels(_SCAN, loose, adaptive=False).max() == 0
-    assert segment_labels(_SCAN, tight, adaptive=False).max() == 2
+@pytest.mark.parametrize(("fn", "record"), PUBLIC, ids=_IDS)
+def test_the_signature_is_the_record(fn, record):
+    """Every field is a keyword of the function, of the same name, whose default is the record's."""
+    params = inspect.signature(fn).parameters
+    assert "overrides" not in params and "params" not in params
+    for f in _fields(record):
+        assert f.name in params, f"{fn.__name__} has no keyword {f.name}"
+        p = params[f.name]
+        assert p.kind is inspect.Parameter.KEYWORD_ONLY
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        assert p.default == default, f"{fn.__name__}({f.name}=...) defaults to {p.default!r}, the record to {default!r}"
+    assert fn.params_cls is record
 
 
-def test_a_value_of_the_wrong_type_is_refused_after_the_right_one_was_remembered():
-    segment_labels(_SCAN, adaptive=True)  # remembered; 1 == True and hash(1) == hash(True)
+def _invalid(f: dataclasses.Field) -> list:
+    """Values the field's declared limits refuse."""
+    meta = f.metadata
+    kind = meta["kind"]
+    if kind is bool:
+        return [1, "yes"]
+    if kind is str:
+        return ["no such choice", 3]
+    if kind is tuple:
+        lo = meta["lo"] if meta["lo"] is not None else 0.0
+        return [(lo + 2.0, lo + 1.0), (lo - 1.0, lo + 1.0) if meta["lo"] is not None else (1.0,), "ab"]
+    out = ["many" if not meta.get("auto") else "some", None if not meta["optional"] else "none?", [1.0]]
+    if meta["lo"] is not None:
+        out.append(meta["lo"] if meta["strict"] else meta["lo"] - 1)
+    if meta["hi"] is not None:
+        out.append(meta["hi"] + 1)
+    if kind is int:
+        out.append(3.5)
+    elif meta.get("finite"):
+        out.append(math.inf)
+    return out
+
+
+@pytest.mark.parametrize(("fn", "record"), PUBLIC, ids=_IDS)
+def test_every_invalid_value_is_refused_naming_its_keyword(fn, record):
+    first = [] if fn is labkit.find_corners else _SCAN
+    checked = 0
+    for f in _fields(record):
+        for value in _invalid(f):
+            with pytest.raises(ValueError, match=f.name):
+                fn(first, **{f.name: value})
+            checked += 1
+    assert checked >= 2 * len(_fields(record))
+
+
+@pytest.mark.parametrize(("fn", "record"), PUBLIC, ids=_IDS)
+def test_the_record_refuses_what_the_function_refuses(fn, record):
+    """One home for the limits: the same values are refused by the record (a config file)."""
+    for f in _fields(record):
+        for value in _invalid(f):
+            with pytest.raises(ValueError, match=f.name):
+                record(**{f.name: value})
+
+
+def test_a_keyword_is_the_value_it_names():
+    for threshold in (0.5, 0.1, 0.5):
+        labels = labkit.segment_labels(_SCAN, threshold_m=threshold, adaptive=False)
+        assert labels.max() + 1 == (1 if threshold == 0.5 else 3)
+
+
+def test_a_value_of_the_wrong_type_is_refused():
+    labkit.segment_labels(_SCAN, adaptive=True)
     with pytest.raises(ValueError, match="adaptive must be true or false"):
-        segment_labels(_SCAN, adaptive=1)
-    segment_labels(_SCAN, min_points=2)
+        labkit.segment_labels(_SCAN, adaptive=1)
     with pytest.raises(ValueError, match="min_points must be a whole number"):
-        segment_labels(_SCAN, min_points=2.0)
+        labkit.segment_labels(_SCAN, min_points=2.0)
 
 
-def test_a_bad_value_is_refused_every_time():
-    for _ in range(2):  # a refusal is not remembered as a record
-        with pytest.raises(ValueError, match="threshold_m must be > 0"):
-            segment_labels(_SCAN, threshold_m=-1.0)
+def test_a_misspelt_keyword_is_a_type_error():
+    with pytest.raises(TypeError, match="treshold_m"):
+        labkit.segment_labels(_SCAN, treshold_m=0.5)
 
 
-def test_a_pair_given_as_a_list_is_checked_and_used():
-    s = Scan(ranges=np.full(40, 2.0), angles=np.radians(np.arange(40) * 0.5))
-    assert detect_circles(s, mean_range_deg=[90.0, 155.0]) == detect_circles(s, CircleParams())
-    with pytest.raises(ValueError, match="low < high"):
-        detect_circles(s, mean_range_deg=[155.0, 90.0])
-
-
-def test_the_old_positional_threshold_and_its_errors():
-    np.testing.assert_array_equal(segment_labels(_SCAN, 0.5, adaptive=False),
-                                  segment_labels(_SCAN, threshold_m=0.5, adaptive=False))
-    with pytest.raises(TypeError, match="got 'threshold_m' twice"):
-        segment_labels(_SCAN, 0.5, threshold_m=0.5)
-    with pytest.raises(TypeError, match="takes the scan"):
-        segment_labels(_SCAN, 0.5, 3)
-    with pytest.raises(TypeError, match="has no parameter 'treshold_m'"):
-        segment_labels(_SCAN, treshold_m=0.5)
+# ---------------------------------------------------------------------------- the older call shape
+def test_a_record_as_second_argument_still_works_with_a_warning():
+    with pytest.warns(DeprecationWarning, match=r"segment_labels\(scan, \*\*params.kwargs\(\)\)"):
+        old = labkit.segment_labels(_SCAN, SegmentationParams(threshold_m=0.5, adaptive=False))
+    np.testing.assert_array_equal(old, labkit.segment_labels(_SCAN, threshold_m=0.5, adaptive=False))
     with pytest.raises(ValueError, match="must be a SegmentationParams"):
-        segment_labels(_SCAN, CircleParams())
+        labkit.segment_labels(_SCAN, IAVLineParams())
+
+
+def test_the_old_positional_threshold_still_works_with_a_warning():
+    with pytest.warns(DeprecationWarning, match="threshold_m by position"):
+        old = labkit.segment_labels(_SCAN, 0.5, adaptive=False)
+    np.testing.assert_array_equal(old, labkit.segment_labels(_SCAN, threshold_m=0.5, adaptive=False))
+    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match="got 'threshold_m' twice"):
+        labkit.segment_labels(_SCAN, 0.5, threshold_m=0.5)
+    with pytest.raises(TypeError, match="one positional argument"):
+        labkit.segment_labels(_SCAN, 0.5, 3)
+
+
+def _room():
+    from tests.test_split_merge import room_scan
+
+    return room_scan()
+
+
+@pytest.mark.parametrize(("fn", "old", "new"), [
+    (labkit.split_and_merge, {"merge_dalpha": math.radians(4.0)}, {"merge_dalpha_deg": 4.0}),
+    (labkit.split_and_merge, {"place_dalpha": math.radians(1.0)}, {"place_dalpha_deg": 1.0}),
+    (labkit.hough_lines, {"alpha_step": math.radians(2.0)}, {"alpha_step_deg": 2.0}),
+    (labkit.angular_segmentation, {"eps_theta": math.radians(5.0), "eps_dist": 0.05, "min_pts": 6},
+     {"eps_theta_deg": 5.0, "eps_dist_m": 0.05, "min_points": 6}),
+    (labkit.detect_lines_iav, {"mean_tolerance": math.radians(3.0)}, {"mean_tolerance_deg": 3.0}),
+])
+def test_an_old_keyword_is_its_new_one_with_a_warning_naming_it(fn, old, new):
+    scan = _room()
+    with pytest.warns(DeprecationWarning) as caught:
+        got = fn(scan, **old)
+    said = " ".join(str(w.message) for w in caught)
+    for name in new:
+        assert f"{name}=" in said
+    want = fn(scan, **new)
+    assert [(ln.first, ln.last) for ln in got] == [(ln.first, ln.last) for ln in want]
+    assert all(math.isclose(a.r, b.r, abs_tol=1e-12) for a, b in zip(got, want, strict=True))
+
+
+def test_angular_segmentations_old_positional_shape_still_works_with_a_warning():
+    scan = _room()
+    with pytest.warns(DeprecationWarning):
+        old = labkit.angular_segmentation(scan, math.radians(4.0), 0.04, 7)
+    new = labkit.angular_segmentation(scan, eps_theta_deg=4.0, eps_dist_m=0.04, min_points=7)
+    assert [(ln.first, ln.last) for ln in old] == [(ln.first, ln.last) for ln in new]
+
+
+def test_an_old_keyword_and_its_new_one_together_are_refused():
+    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match="both"):
+        labkit.split_and_merge(_room(), merge_dalpha=0.1, merge_dalpha_deg=5.0)
+
+
+def test_lines_similar_takes_degrees_and_its_old_radians_with_a_warning():
+    from labkit.features import line_segment
+
+    a = line_segment(np.array([[-1.0, 2.0], [-2.0, 2.0], [-3.0, 2.0]]), [0, 1, 2])
+    b = line_segment(np.array([[-4.0, 2.0], [-5.0, 2.1], [-6.0, 2.2]]), [3, 4, 5])  # about 5.7 deg apart
+    far = 100.0  # |dr| does not decide here
+    assert labkit.lines_similar(a, b, merge_dr_m=far, merge_dalpha_deg=10.0)[0]
+    assert not labkit.lines_similar(a, b, merge_dr_m=far, merge_dalpha_deg=5.0)[0]
+    with pytest.warns(DeprecationWarning, match="merge_dalpha_deg"):
+        assert not labkit.lines_similar(a, b, merge_dr_m=far, merge_dalpha=math.radians(5.0))[0]
+    with pytest.warns(DeprecationWarning, match="merge_dalpha_deg"):
+        assert labkit.lines_similar(a, b, merge_dr_m=far, merge_dalpha=math.radians(10.0))[0]

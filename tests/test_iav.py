@@ -436,9 +436,10 @@ def test_iav_construction_is_best_on_nearly_half_circles():
 def _reference_circles(scan, *, arc_like=False, min_points=4, min_chord_m=0.15, middle=(0.1, 0.7),
                        mean_range=(90 * DEG, 135 * DEG), std_max=0.15, arc_like_std_max=23 * DEG):
     """detect_circles written as a plain loop over range_segments and the public point
-    functions, straight from the paper's description."""
+    functions, straight from the paper's description (its fixed tests: ``range_sigma_m=0``, whose
+    segmentation has the fixed settings' 1 cm of range noise)."""
     out = []
-    for seg in range_segments(scan, 0.08):
+    for seg in range_segments(scan, threshold_m=0.08, range_sigma_m=0.01):
         p = seg.points
         if len(p) < min_points or np.hypot(*(p[-1] - p[0])) < min_chord_m:
             continue
@@ -478,15 +479,16 @@ def test_batch_detector_matches_the_plain_loop(objects, walls, full, seed, arc_l
     lidar = (sim.Lidar.from_fov("ring", 360.0, 1.0, full_circle=True, noise_std_m=0.01) if full
              else sim.Lidar.from_fov("half", 180.0, 0.5, noise_std_m=0.005))
     scan, _ = sim.scan_at(world, lidar, (0.0, 0.0, 0.3), rng=np.random.default_rng(seed))
-    got = detect_circles(scan, arc_like=arc_like)
+    got = detect_circles(scan, arc_like=arc_like, range_sigma_m=0)
     want = _reference_circles(scan, arc_like=arc_like)
     assert [(c.first, c.last, c.n_points, c.kind) for c in got] == [w[:4] for w in want]
     for c, (*_, mean, std, center, radius) in zip(got, want, strict=True):
         assert c.iav_mean == pytest.approx(mean, abs=1e-9) and c.iav_std == pytest.approx(std, abs=1e-9)
         np.testing.assert_allclose(c.center, center, atol=1e-9)
         assert c.radius == pytest.approx(radius, rel=1e-9)
-    _, trace = detect_circles(scan, arc_like=arc_like, trace=True)
-    assert [(t.first, t.last) for t in trace] == [(g.first, g.last) for g in range_segments(scan, 0.08)]
+    _, trace = detect_circles(scan, arc_like=arc_like, range_sigma_m=0, trace=True)
+    assert [(t.first, t.last) for t in trace] == [(g.first, g.last) for g in range_segments(
+        scan, threshold_m=0.08, range_sigma_m=0.01)]
 
 
 def test_invalid_beams_are_masked_not_raised():

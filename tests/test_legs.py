@@ -111,7 +111,7 @@ def test_people_are_paired_legs_of_one_person(hall):
 def _reference_legs(scan, pad=1.0):
     """detect_legs as a plain loop over range_segments and the public functions."""
     out = []
-    for seg in range_segments(scan, 0.08, range_sigma_m=0.01):  # (the fixed settings' segmentation)
+    for seg in range_segments(scan, threshold_m=0.08, range_sigma_m=0.01):  # (the fixed settings' segmentation)
         p = seg.points
         if len(p) < 3:
             continue

@@ -295,8 +295,8 @@ OWN_BAD = {
                    ({"max_trials": 0}, "max_trials"), ({"draw_window": 0}, "draw_window"), ({"rng": 42}, "rng"),
                    ({"rng": np.random.RandomState(0)}, "rng")],
     hough_lines: [({"r_step_m": 0.0}, "r_step_m"), ({"r_step_m": np.inf}, "r_step_m"),
-                  ({"alpha_step": -0.1}, "alpha_step"), ({"alpha_step": 2.0}, "alpha_step"),
-                  ({"alpha_step": 1e-5}, "alpha_step"), ({"threshold_m": 0}, "threshold_m"),
+                  ({"alpha_step_deg": -0.1}, "alpha_step_deg"), ({"alpha_step_deg": 91.0}, "alpha_step_deg"),
+                  ({"alpha_step_deg": 1e-3}, "alpha_step_deg"), ({"threshold_m": 0}, "threshold_m"),
                   ({"min_votes": 1}, "min_votes"), ({"min_votes": True}, "min_votes")],
 }
 

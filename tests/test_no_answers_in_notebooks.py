@@ -222,7 +222,7 @@ def test_the_forms_reach_a_known_answer():
         return fit.r, fit.alpha
 
     def segment_fixed(scan, threshold_m, min_points):
-        return labkit.segment_labels(scan, threshold_m, min_points=min_points, adaptive=False)
+        return labkit.segment_labels(scan, threshold_m=threshold_m, min_points=min_points, adaptive=False)
 
     for exercise, function, candidate in [("ex02_weighted_line_fit", "fit_line", fit_polar),
                                           ("ex01_range_segmentation", "segment", segment_fixed)]:

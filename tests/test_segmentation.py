@@ -57,10 +57,10 @@ def test_matches_the_loop_reference(ranges, threshold, min_points, full):
     n = len(ranges)
     step = 2 * np.pi / max(n, 1) if full else np.radians(1.0)
     scan = Scan(ranges=ranges, angles=-np.pi + step * np.arange(n), range_max=30.0)
-    got = segment_labels(scan, threshold, min_points=min_points, adaptive=False)
+    got = segment_labels(scan, threshold_m=threshold, min_points=min_points, adaptive=False)
     want = reference_labels(scan, threshold, min_points)
     np.testing.assert_array_equal(got, want)
-    segments = range_segments(scan, threshold, min_points=min_points, adaptive=False)
+    segments = range_segments(scan, threshold_m=threshold, min_points=min_points, adaptive=False)
     assert [s.indices.tolist() for s in segments] == reference_runs(scan, threshold, min_points)
 
 
@@ -86,7 +86,7 @@ def test_segment_crossing_the_seam_of_a_full_circle():
 @pytest.mark.parametrize("bad", [0.0, -1.0, np.nan, np.inf])
 def test_rejects_bad_threshold(bad):
     with pytest.raises(ValueError, match="threshold_m"):
-        segment_labels(Scan(ranges=[1.0], angles=[0.0]), bad)
+        segment_labels(Scan(ranges=[1.0], angles=[0.0]), threshold_m=bad)
 
 
 def test_rejects_bad_min_points():
@@ -107,7 +107,7 @@ def test_separate_objects_in_the_simulator_are_separate_segments():
     world = sim.World("t", walls=(sim.Wall((6.0, -20.0), (6.0, 20.0)),), circles=(sim.Column((3.0, 0.0), 0.3),))
     lidar = sim.LIDARS["lms200"]
     scan, truth = sim.scan_at(world, lidar, (0.0, 0.0, 0.0))
-    labels = segment_labels(scan, 0.08)
+    labels = segment_labels(scan, threshold_m=0.08)
     column = truth.hits == 1
     assert len(set(labels[column])) == 1 and labels[column][0] >= 0
     assert not set(labels[column]) & set(labels[truth.hits == 0])

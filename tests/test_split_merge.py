@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import labkit
 from labkit import (
     LineSegment,
     Scan,
@@ -183,11 +184,11 @@ def test_merge_angle_difference_is_taken_across_the_wrap():
 
     a, b = piece(179.0, -1.0), piece(-179.0, 1.0)
     assert float(angle_difference(a.alpha, b.alpha)) == pytest.approx(math.radians(-2.0), abs=1e-9)
-    assert lines_similar(a, b, merge_dalpha=math.radians(5))[0]
+    assert lines_similar(a, b, merge_dalpha_deg=5.0)[0]
     c, d = piece(170.0, -1.0), piece(-170.0, 1.0)
-    ok, stat = lines_similar(c, d, merge_dr_m=1.0, merge_dalpha=math.radians(5))
+    ok, stat = lines_similar(c, d, merge_dr_m=1.0, merge_dalpha_deg=5.0)
     assert not ok and stat == pytest.approx(4.0, rel=1e-6)  # 20 deg apart, not 340
-    assert lines_similar(c, d, merge_dr_m=1.0, merge_dalpha=math.radians(25))[0]
+    assert lines_similar(c, d, merge_dr_m=1.0, merge_dalpha_deg=25.0)[0]
 
 
 def test_lines_through_the_origin_with_opposite_normals_are_similar():
@@ -442,3 +443,52 @@ def test_chi_square_merge_transforms_the_covariance_of_a_turned_around_line():
     turned = lines_similar(a, _flipped(b, rng), merge="chi2")[1]
     assert turned == pytest.approx(same_way, rel=0.02)
     assert lines_similar(_flipped(a, rng), b, merge="chi2")[1] == pytest.approx(same_way, rel=0.02)
+
+
+# ---------------------------------------------------------------------------- the bare IEPF
+def test_iepf_splits_an_l_at_its_corner():
+    corner = np.array([[x, 0.0] for x in range(6)] + [[5.0, y] for y in range(1, 7)])
+    assert labkit.lines.iepf(corner) == [(0, 6), (6, 12)]
+    assert labkit.lines.iepf(corner[:4]) == []  # fewer than min_points
+    # min_points = 4: the worst point may not be among the first or last two
+    protected = np.array([[0.0, 0.0], [1.0, 0.9], [2.0, 0.05], [3.0, 0.0], [4.0, 0.0]])
+    assert labkit.lines.iepf(protected, 0.1, 4) == [(0, 5)]
+
+
+def test_iepf_accepts_only_runs_within_the_threshold_of_their_chord():
+    """Every accepted run's allowed points lie within the threshold of its chord (measured here with
+    numpy's cross product), and the runs tile the list but for short leftovers."""
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        t = np.sort(rng.uniform(0, 10, 80))
+        pts = np.column_stack([t, np.where(t < 5, 0.2 * t, 2.0 - 0.2 * t)]) + rng.normal(0, 0.01, (80, 2))
+        runs = labkit.lines.iepf(pts, 0.05, 5)
+        for a, b in runs:
+            p = pts[a:b]
+            u = p[-1] - p[0]
+            q = p - p[0]
+            d = np.abs(u[0] * q[:, 1] - u[1] * q[:, 0]) / np.linalg.norm(u)
+            assert d[2:-2].max() <= 0.05 or b - a <= 4
+        assert all(b1 <= a2 for (_, b1), (a2, _) in zip(runs, runs[1:], strict=False))
+
+
+def test_iepf_is_what_split_and_merge_accepts_without_its_extras():
+    """On one range segment, with a fixed threshold, no gap cut, no merge and no length test,
+    split-and-merge accepts exactly the runs of the bare recursion."""
+    for noise in (0.0, 0.01):
+        scan = room_scan(noise=noise, seed=2)
+        for seg in labkit.range_segments(scan, threshold_m=0.08, min_points=5, adaptive=True, range_sigma_m=0.01):
+            _, steps = labkit.split_and_merge(scan, split_threshold_m=0.05, min_points=5, merge=None,
+                                              min_length_m=0.0, max_gap_m=1e9, place_confidence=0.0,
+                                              segments=[seg], trace=True)
+            accepted = [(s.first, s.last) for s in steps if s.kind == "accept"]
+            ours = [(int(seg.indices[a]), int(seg.indices[b - 1])) for a, b in labkit.lines.iepf(seg.points, 0.05, 5)]
+            assert ours == accepted
+
+
+@pytest.mark.parametrize("bad", [{"points": np.zeros((3, 3))}, {"threshold_m": 0.0}, {"min_points": 1},
+                                 {"min_points": 2.5}, {"points": [[0.0, np.nan], [1.0, 1.0]]}])
+def test_iepf_refuses_bad_input(bad):
+    args = {"points": np.zeros((5, 2)), **bad}
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        labkit.lines.iepf(args.pop("points"), **args)

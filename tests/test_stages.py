@@ -94,7 +94,7 @@ def test_a_config_section_is_its_detectors_record():
     scan = SCANS[0]
     cfg = cfg.updated({"lines.split_threshold_m": 0.02, "circles.min_points": 6})
     f = labkit.extract_features(scan, cfg)
-    assert _key(labkit.split_and_merge(scan, cfg.lines, segments=_mask(_mask(f.labels, f.legs), f.circles))) \
-        == _key(f.lines)
+    rest = _mask(_mask(f.labels, f.legs), f.circles)
+    assert _key(labkit.split_and_merge(scan, **cfg.lines.kwargs(), segments=rest)) == _key(f.lines)
     assert _key(labkit.split_and_merge(scan, split_threshold_m=0.02, segments=_mask(_mask(f.labels, f.legs),
                                                                                     f.circles))) == _key(f.lines)

@@ -328,7 +328,7 @@ def test_reference_extractors_give_the_same_lines_with_trace(name):
     extract = LINE_EXTRACTORS[name].fn
     n = 0
     for where, scan in _scenes():
-        for segments in (None, labkit.segment_labels(scan, 0.3)):
+        for segments in (None, labkit.segment_labels(scan, threshold_m=0.3)):
             lines, steps = extract(scan, segments=segments, trace=True)
             assert _line_key(lines) == _line_key(extract(scan, segments=segments)), where
             assert _accepted_key(steps) == _line_key(lines), where

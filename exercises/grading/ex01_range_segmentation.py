@@ -62,7 +62,8 @@ def assert_thresholds(result, expected):
 
 
 def _check_labels(segment, beams, threshold_m, min_points, what, as_list=False):
-    reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m, min_points=min_points, adaptive=False)
+    reference = labkit.segment_labels(labkit.Scan(**beams), threshold_m=threshold_m, min_points=min_points,
+                                      adaptive=False)
     ranges, angles = beams["ranges"], beams["angles"]
     if as_list:
         ranges, angles = ranges.tolist(), angles.tolist()
@@ -225,7 +226,7 @@ import labkit
 
 def segment(ranges, angles, threshold_m, min_points):
     scan = labkit.Scan(ranges=ranges, angles=angles)
-    return labkit.segment_labels(scan, threshold_m, min_points=min_points, adaptive=False)
+    return labkit.segment_labels(scan, threshold_m=threshold_m, min_points=min_points, adaptive=False)
 ''', "adaptive_threshold": '''
 import labkit
 

@@ -9,6 +9,8 @@ per submission and test, fresh for every change of the submitted code. Its messa
 wrong, never the inputs or the expected values. See exercises/README.md.
 """
 
+import math
+
 import numpy as np
 
 import labkit
@@ -50,7 +52,7 @@ def _as_segment(r, alpha):
 
 def _check_similar(similar, r1, alpha1, r2, alpha2, dr_max, dalpha_max, where):
     expected, _ = labkit.lines_similar(_as_segment(r1, alpha1), _as_segment(r2, alpha2), merge="thresholds",
-                                       merge_dr_m=dr_max, merge_dalpha=dalpha_max)
+                                       merge_dr_m=dr_max, merge_dalpha_deg=math.degrees(dalpha_max))
     result = similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max)
     assert isinstance(result, (bool, np.bool_)), f"{where}: similar must return True or False, got {result!r}"
     assert result == expected, f"{where}: {'similar' if expected else 'different'} lines, got {result}"
@@ -224,7 +226,8 @@ def similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max):
         return labkit.LineSegment(r=r, alpha=alpha, covariance=np.eye(2), start=np.zeros(2), end=np.ones(2),
                                   first=0, last=1, n_points=2, error=0.0, indices=np.arange(2))
 
-    return labkit.lines_similar(line(r1, alpha1), line(r2, alpha2), merge_dr_m=dr_max, merge_dalpha=dalpha_max)[0]
+    return labkit.lines_similar(line(r1, alpha1), line(r2, alpha2), merge_dr_m=dr_max,
+                                merge_dalpha_deg=math.degrees(dalpha_max))[0]
 ''',
 }
 

@@ -71,12 +71,13 @@ from .._iav import (  # the shared machinery; the public names are documented he
     is_v_corner,
     middle_point_offset,
 )
-from .._params import AUTO, Params, param, takes_params
 from ..features import Circle, LineSegment
 from ..noise import noise_sigma
+from ..params import AUTO, Params, param
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
+from ._takes_params import old_kwargs, takes_params
 
 __all__ = [
     "CircleParams",
@@ -112,7 +113,8 @@ class CircleParams(Params):
 
     min_points: int = param(4, "fewest points (circle_min_pts)", lo=3)
     min_chord_m: float = param(0.15, "shortest chord, metres (circle_min_len)", lo=0)
-    max_chord_m: float = param(math.inf, "longest chord, metres (circle_max_len; inf: unlimited)", lo=0, strict=True)
+    max_chord_m: float = param(math.inf, "longest chord, metres (circle_max_len; inf: unlimited)", lo=0, strict=True,
+                               finite=False)
     middle_range: tuple = param((0.1, 0.7), "prerequisite band: the middle point's distance from the chord, "
                                             "as a fraction of the chord", lo=0)
     mean_range_deg: tuple = param(tuple(math.degrees(a) for a in CIRCLE_MEAN_RANGE), "accepted IAV mean, degrees",
@@ -145,8 +147,8 @@ class ArcParams(Params):
     center_method: str = param("geometric", "centre and radius: geometric, algebraic or iav",
                                choices=("iav", "algebraic", "geometric"))
 
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
+    def _old_kwargs(self) -> dict:
+        kw = old_kwargs(self)
         kw["line_params"] = {"split_threshold_m": kw.pop("split_threshold_m"), "min_length_m": kw.pop("min_length_m")}
         return kw
 

@@ -78,13 +78,14 @@ from .._iav import (
     _trace,
     circle_from_iav,
 )
-from .._params import AUTO, Params, param, takes_params
 from ..features import Leg, Person
 from ..fitting import fit_circle
 from ..noise import noise_sigma
+from ..params import AUTO, Params, param
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
+from ._takes_params import old_kwargs, takes_params
 
 __all__ = ["LegsParams", "detect_legs", "pair_legs", "is_occluded"]
 
@@ -153,7 +154,7 @@ class LegsParams(Params):
     iav_mean_range_deg: tuple = param((0.0, 180.0), "accepted IAV mean, degrees ([0, 180]: not tested)", lo=0,
                                       hi=180)
     iav_std_max_deg: float = param(math.inf, "largest IAV standard deviation, degrees (inf: not tested)",
-                                   lo=0, strict=True)
+                                   lo=0, strict=True, finite=False)
     reject_occluded: bool = param(True, "drop segments partly hidden behind a nearer object")
     center_method: str = param("ray", "centre: ray (middle point pushed back by the radius), iav, algebraic, "
                                       "geometric", choices=("ray", "iav", "algebraic", "geometric"))
@@ -163,11 +164,11 @@ class LegsParams(Params):
                                        lo=0, strict=True)
 
     @classmethod
-    def renamed(cls) -> dict:
+    def old_renamed(cls) -> dict:
         return {"chord_range_m": "chord_range"}
 
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
+    def _old_kwargs(self) -> dict:
+        kw = old_kwargs(self)
         if self.iav_mean_range_deg == (0.0, 180.0):
             kw["iav_mean_range"] = None
         if math.isinf(self.iav_std_max_deg):

@@ -8,9 +8,10 @@
   :func:`_taking_part` (the beams they use), :func:`_fit` (a weighted line in closed form)
   and :func:`_segments` (one line's inliers cut into segments);
 * for ``trace=True``: :class:`_Trace`, the :class:`labkit.Step` records of one call;
-* for the noise-following settings (``"auto"``, ``place_confidence``) of every extractor that has
-  them: :func:`_noise` (a threshold and the covariances' range noise for one scan),
-  :func:`_check_placing` and :func:`_placed` (drop the lines the data cannot place).
+* for the noise-following settings (``"auto"``) of every extractor that has them: :func:`_noise`
+  (a threshold and the covariances' range noise for one scan).
+
+Placing (dropping the lines the data cannot place) is :mod:`labkit.lines.placing`.
 """
 
 from __future__ import annotations
@@ -20,14 +21,13 @@ import math
 
 import numpy as np
 
-from .._checks import check_positive
-from ..features import LineSegment, _frozen, line_segment
-from ..fitting import line_from_sums, placement_probability
+from ..features import LineSegment, frozen_array, line_segment
+from ..fitting import line_from_sums
 from ..noise import auto_split_threshold, scan_sigma
+from ..params import AUTO
 from ..scan import Scan
 from ..segmentation import labels_from
 from ..steps import Step
-from ._params import AUTO
 
 
 class _Trace(list):
@@ -119,7 +119,7 @@ def _fitted(xy: np.ndarray, beams: np.ndarray, spans, min_length_m: float,
         line = line_segment(xy[a:b], beams[a:b], range_sigma=range_sigma)
         start, end, moved = _on_rays(xy[a].tolist(), xy[b - 1].tolist(), line.r, line.alpha)
         if moved:
-            line = dataclasses.replace(line, start=_frozen(start), end=_frozen(end))
+            line = dataclasses.replace(line, start=frozen_array(start), end=frozen_array(end))
         kept = line.length >= min_length_m
         if kept:
             lines.append(line)
@@ -257,37 +257,3 @@ def _noise(scan: Scan, threshold_m, range_sigma_m, sigmas: float) -> tuple[float
     if threshold_m == AUTO:
         threshold_m = auto_split_threshold(scan_sigma(scan) if sigma is None else sigma, sigmas)
     return threshold_m, sigma
-
-
-def _check_placing(range_sigma_m, place_dr_m: float, place_dalpha: float, place_confidence: float):
-    """The placing parameters checked (as the records check them); returns ``range_sigma_m``
-    as a float, None or ``"auto"``."""
-    if range_sigma_m is not None and range_sigma_m != AUTO:
-        range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
-    check_positive("place_dr_m", place_dr_m)
-    check_positive("place_dalpha", place_dalpha)
-    if not 0 <= place_confidence <= 1:
-        raise ValueError(f"place_confidence must be in [0, 1], got {place_confidence!r}")
-    return range_sigma_m
-
-
-def _placed(lines: list[LineSegment], max_dr_m: float, max_dalpha: float, confidence: float,
-            steps) -> list[LineSegment]:
-    """The lines the data can place: those whose covariance gives them at least ``confidence``
-    of lying within ``max_dr_m`` and ``max_dalpha`` of the true line
-    (:func:`labkit.fitting.placement_probability`); every other line is a ``"reject"`` step with
-    ``test="place_confidence"`` in ``steps`` if given. Shared by every extractor with a
-    ``place_confidence``. (In split-and-merge, joining such a line to its neighbour instead,
-    when the joined line still passes the split test, found fewer walls and more false lines on
-    the simulated sets of ``benchmarks/evaluation.py``.)"""
-    if confidence <= 0 or not lines:
-        return lines
-    chance = placement_probability(np.array([ln.covariance for ln in lines]), max_dr_m, max_dalpha).tolist()
-    out = []
-    for ln, c in zip(lines, chance, strict=True):
-        if c >= confidence:
-            out.append(ln)
-        elif steps is not None:
-            steps.add("reject", ln.first, ln.last, ln.r, ln.alpha, value=c, threshold=confidence,
-                      test="place_confidence", reason=f"placed with probability {c:.2f} < place_confidence")
-    return out

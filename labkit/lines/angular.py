@@ -74,18 +74,19 @@ segmentation", 2021, section 3 (Algorithm 5).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_int, check_nonneg, check_positive
+from .._checks import check_int, check_nonneg
 from ..dbscan import dbscan1d
 from ..features import LineSegment, line_segment
 from ..geometry import circular_mean, signed_distance_to_line
 from ..noise import chi2_upper_over_dof, noise_sigma, scan_sigma
+from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, Params, param, takes_params
 
 __all__ = ["AngularSteps", "local_directions", "auto_direction_window", "angular_segmentation", "angular_arrays"]
 
@@ -245,19 +246,6 @@ def auto_direction_window(scan: Scan, sigma: float, eps_theta: float = EPS_THETA
     return largest
 
 
-def _check_params(scan, eps_theta, eps_dist, min_pts, split_gap_m):
-    if not isinstance(scan, Scan):
-        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    eps_theta = check_positive("eps_theta", eps_theta)
-    if eps_theta >= math.pi / 2:
-        raise ValueError(f"eps_theta must be < pi/2 radians, got {eps_theta!r}")
-    eps_dist = check_positive("eps_dist", eps_dist)
-    min_pts = check_int("min_pts", min_pts, 2)
-    if split_gap_m is not None:
-        split_gap_m = check_positive("split_gap_m", split_gap_m)
-    return eps_theta, eps_dist, min_pts, split_gap_m
-
-
 def _split_collinear(beams: np.ndarray, pts: np.ndarray, direction: float, gap: float) -> list[np.ndarray]:
     """Split where consecutive points along the line are more than ``gap`` apart."""
     along = pts[:, 0] * math.cos(direction) + pts[:, 1] * math.sin(direction)
@@ -286,7 +274,7 @@ class AngularParams(Params):
     eps_dist_m: float = param(EPS_DIST, "DBSCAN1D radius in line offset, metres", lo=0, strict=True)
     min_points: int = param(MIN_PTS, "DBSCAN1D min_pts of both clusterings", lo=2)
     split_gap_m: float = param(0.3, "split collinear clusters at gaps wider than this, metres (inf: never)", lo=0,
-                               strict=True, optional=True)
+                               strict=True, optional=True, finite=False)
     direction_window: int = param(AUTO, "half-width of the local directions' window, beams (1: the paper's three "
                                      "beams); auto: the narrowest the range noise allows", lo=1, auto=True, kind=int)
     range_sigma_m: float = param(AUTO, "range noise, metres: a local direction only where its window is straight at "
@@ -295,13 +283,7 @@ class AngularParams(Params):
 
     @classmethod
     def renamed(cls) -> dict:
-        return {"eps_dist_m": "eps_dist", "min_points": "min_pts"}
-
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
-        gap = kw["split_gap_m"]
-        kw["split_gap_m"] = None if gap is None or math.isinf(gap) else gap
-        return kw
+        return {"eps_dist": "eps_dist_m", "min_pts": "min_points"}
 
 
 def _outside(scan: Scan, lines: list[LineSegment], segments) -> list[LineSegment]:
@@ -314,16 +296,17 @@ def _outside(scan: Scan, lines: list[LineSegment], segments) -> list[LineSegment
     return [ln for ln in lines if not outside[ln.indices].mean() > 0.5]
 
 
-@takes_params(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"), on_segments=_outside)
+@checked_by(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
 def angular_segmentation(
     scan: Scan,
     *,
-    eps_theta: float,
-    eps_dist: float,
-    min_pts: int,
-    split_gap_m: float | None,
-    direction_window: int | str,
-    range_sigma_m: float | str,
+    eps_theta_deg: float = AngularParams.eps_theta_deg,
+    eps_dist_m: float = AngularParams.eps_dist_m,
+    min_points: int = AngularParams.min_points,
+    split_gap_m: float | None = AngularParams.split_gap_m,
+    direction_window: int | str = AngularParams.direction_window,
+    range_sigma_m: float | str = AngularParams.range_sigma_m,
+    segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
     """Line segments of a scan by angular segmentation (Meglicki 2021, Algorithm 5).
@@ -333,21 +316,15 @@ def angular_segmentation(
     scan : Scan
         Invalid beams are skipped (they also leave their neighbours without a local
         direction).
-    params : AngularParams, optional
-        The parameters, in degrees and metres (default: its defaults); any of its fields may
-        be given as a keyword (``eps_theta_deg=5``), and so may the radian names below,
-        also by position as before.
-    segments : labels or list of RangeSegment, optional
-        Keep only the lines with most of their beams in a segment (the whole scan is
-        clustered all the same).
-    eps_theta : float, radians
-        DBSCAN radius on local directions (circular, period pi), in (0, pi/2). Default
-        3 degrees.
-    eps_dist : float, metres
-        DBSCAN radius on the offsets that separate parallel lines. Default 0.03.
-    min_pts : int
-        DBSCAN neighbourhood size for both clusterings, the point itself included,
-        >= 2. Default 8. It is also the smallest segment.
+    eps_theta_deg : float, degrees
+        DBSCAN radius on local directions (circular, period 180 degrees; the paper's
+        ``eps_theta``), in (0, 89.9]. Default 3 degrees.
+    eps_dist_m : float, metres
+        DBSCAN radius on the offsets that separate parallel lines (the paper's ``eps_dist``).
+        Default 0.03.
+    min_points : int
+        DBSCAN neighbourhood size for both clusterings, the point itself included (the
+        paper's ``min_pts``), >= 2. Default 8. It is also the smallest segment.
     split_gap_m : float, optional, metres
         Also split collinear pieces wherever consecutive points along the line are
         farther apart than this (e.g. 0.3 for walls on either side of a door). Default
@@ -360,6 +337,9 @@ def angular_segmentation(
         When > 0, a beam gets a local direction only if its window is straight at this range
         noise (:func:`local_directions`). Default ``"auto"``: the scan's estimate
         (:func:`labkit.noise.scan_sigma`); 0: no test, the paper.
+    segments : labels or list of RangeSegment, optional
+        Keep only the lines with most of their beams in a segment (the whole scan is
+        clustered all the same).
     trace : bool
         Also return the steps, as :class:`labkit.Step` records (``algorithm="angular"``; ``beams``
         holds each step's beams, spread over the scan): ``"directions"`` (step 1: ``value`` beams
@@ -407,21 +387,23 @@ def angular_segmentation(
     >>> [(s.first, s.last) for s in segs]
     [(2, 137), (142, 158)]
     """
-    segments, _, steps = _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, direction_window, range_sigma_m,
-                                  trace)
-    return (segments, steps) if trace else segments
+    lines, _, steps = _angular(scan, eps_theta_deg, eps_dist_m, min_points, split_gap_m, direction_window,
+                               range_sigma_m, trace)
+    if segments is not None:
+        lines = _outside(scan, lines, segments)
+    return (lines, list(steps)) if trace else lines
 
 
-@takes_params(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
+@checked_by(AngularParams, positional=("eps_theta", "eps_dist", "min_pts"))
 def angular_arrays(
     scan: Scan,
     *,
-    eps_theta: float,
-    eps_dist: float,
-    min_pts: int,
-    split_gap_m: float | None,
-    direction_window: int | str,
-    range_sigma_m: float | str,
+    eps_theta_deg: float = AngularParams.eps_theta_deg,
+    eps_dist_m: float = AngularParams.eps_dist_m,
+    min_points: int = AngularParams.min_points,
+    split_gap_m: float | None = AngularParams.split_gap_m,
+    direction_window: int | str = AngularParams.direction_window,
+    range_sigma_m: float | str = AngularParams.range_sigma_m,
 ) -> AngularSteps:
     """The intermediate arrays of :func:`angular_segmentation` (same parameters), one per
     stage, per beam: local directions, angular labels, the clusters' mean directions, offsets
@@ -434,88 +416,141 @@ def angular_arrays(
     >>> np.degrees(a.directions).round(1).tolist(), int((a.labels == 0).sum())
     ([90.0], 159)
     """
-    return _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, direction_window, range_sigma_m, False)[1]
+    return _angular(scan, eps_theta_deg, eps_dist_m, min_points, split_gap_m, direction_window, range_sigma_m,
+                    False)[1]
 
 
-def _angular(scan, eps_theta, eps_dist, min_pts, split_gap_m, window, range_sigma_m, trace: bool):
-    """(segments, AngularSteps, list of Step or None): :func:`angular_segmentation`."""
-    eps_theta, eps_dist, min_pts, split_gap_m = _check_params(scan, eps_theta, eps_dist, min_pts, split_gap_m)
+def _angular(scan, eps_theta_deg, eps_dist, min_pts, split_gap_m, window, range_sigma_m, trace: bool):
+    """(segments, AngularSteps, list of Step or None): :func:`angular_segmentation`, Algorithm 5's
+    steps in order."""
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+    eps_theta = math.radians(eps_theta_deg)
+    if split_gap_m is not None and math.isinf(split_gap_m):
+        split_gap_m = None
     sigma = noise_sigma(scan, range_sigma_m)
     if window == AUTO:
         window = auto_direction_window(scan, sigma if sigma > 0 else scan_sigma(scan), eps_theta)
-    steps: list[Step] | None = [] if trace else None
+    steps = _Notes() if trace else None
+    n, pts = scan.n_beams, scan.points
 
-    def note(kind: str, beams: np.ndarray, **fields) -> None:
-        b = beams.tolist()
-        steps.append(Step("angular", kind, min(b, default=-1), max(b, default=-1), beams=tuple(b), **fields))
-
-    n = scan.n_beams
+    # step 1: a local direction at every beam
     theta = local_directions(scan, window, sigma if sigma > 0 else None)
-    angular_labels = np.full(n, -1, dtype=np.int64)
-    distances = np.full(n, np.nan)
-    labels = np.full(n, -1, dtype=np.int64)
+    # step 2: DBSCAN on the directions, wrapping at pi
+    angular_labels = _cluster_directions(theta, eps_theta, min_pts, window, sigma, steps)
     directions: list[float] = []
+    distances = np.full(n, np.nan)
     clusters: list[np.ndarray] = []
+    for k in range(int(angular_labels.max(initial=-1)) + 1):
+        members = np.flatnonzero(angular_labels == k)
+        direction = _cluster_direction(theta, members, k, steps)
+        directions.append(direction)
+        if math.isnan(direction):
+            continue
+        # step 3: parallel lines, by their offsets from the line through the origin
+        offset, parallel = _parallel_lines(pts, members, direction, eps_dist, min_pts, steps)
+        distances[members] = offset
+        for beams in parallel:
+            # step 4 (optional): collinear pieces
+            clusters += _collinear_pieces(beams, pts, direction, split_gap_m, min_pts, steps)
 
+    segments, labels = _segments(scan, clusters, min_pts, steps)
+    arrays = AngularSteps(_frozen(theta), _frozen(angular_labels), _frozen(np.array(directions, dtype=float)),
+                          _frozen(distances), _frozen(labels))
+    return segments, arrays, steps
+
+
+class _Notes(list):
+    """The :class:`labkit.Step` records of one call (``algorithm="angular"``), each with its beams."""
+
+    def add(self, kind: str, beams: np.ndarray, **fields) -> None:
+        b = beams.tolist()
+        self.append(Step("angular", kind, min(b, default=-1), max(b, default=-1), beams=tuple(b), **fields))
+
+
+def _cluster_directions(theta: np.ndarray, eps_theta: float, min_pts: int, window: int, sigma: float,
+                        steps) -> np.ndarray:
+    """Step 2: the angular cluster of every beam with a local direction (DBSCAN1D with period pi), -1
+    for the others."""
+    angular_labels = np.full(len(theta), -1, dtype=np.int64)
     defined = np.flatnonzero(np.isfinite(theta))
     if defined.size:
-        # step 2: DBSCAN on local directions, wrapping at pi
         angular_labels[defined] = dbscan1d(theta[defined], eps_theta, min_pts, period=math.pi)
     if steps is not None:
         over = f" over {2 * window + 1} beams" + (f", straight at {1000 * sigma:.1f} mm" if sigma > 0 else "")
-        note("directions", defined, value=defined.size, threshold=window,
-             reason=f"{defined.size} beams have a local direction{over}; DBSCAN on them (eps_theta "
-                    f"{math.degrees(eps_theta):.1f} deg) finds {int(angular_labels.max(initial=-1)) + 1} clusters")
-    pts = scan.points
-    for k in range(int(angular_labels.max(initial=-1)) + 1):
-        members = np.flatnonzero(angular_labels == k)
-        try:
-            direction = circular_mean(theta[members], period=math.pi)
-        except ValueError:  # directions spread evenly round the circle: no common direction
-            directions.append(math.nan)
-            if steps is not None:
-                note("reject", members, test="direction", reason=f"angular cluster {k}: no common direction")
-            continue
-        directions.append(direction)
-        normal = math.remainder(direction + math.pi / 2, 2 * math.pi)
+        steps.add("directions", defined, value=defined.size, threshold=window,
+                  reason=f"{defined.size} beams have a local direction{over}; DBSCAN on them (eps_theta "
+                         f"{math.degrees(eps_theta):.1f} deg) finds {int(angular_labels.max(initial=-1)) + 1} clusters")
+    return angular_labels
+
+
+def _cluster_direction(theta: np.ndarray, members: np.ndarray, k: int, steps) -> float:
+    """The circular mean (period pi) of angular cluster ``k``'s directions; NaN when they spread
+    evenly round the circle and have no common direction."""
+    try:
+        direction = circular_mean(theta[members], period=math.pi)
+    except ValueError:
         if steps is not None:
-            note("direction", members, r=0.0, alpha=normal, value=direction,
-                 reason=f"angular cluster {k}: {members.size} beams, direction {math.degrees(direction):.1f} deg")
-        # step 3: offsets from the line through the origin along the cluster's direction
-        offset = signed_distance_to_line(pts[members], 0.0, direction + math.pi / 2)
-        distances[members] = offset
-        offset_labels = dbscan1d(offset, eps_dist, min_pts)
+            steps.add("reject", members, test="direction", reason=f"angular cluster {k}: no common direction")
+        return math.nan
+    if steps is not None:
+        steps.add("direction", members, r=0.0, alpha=math.remainder(direction + math.pi / 2, 2 * math.pi),
+                  value=direction,
+                  reason=f"angular cluster {k}: {members.size} beams, direction {math.degrees(direction):.1f} deg")
+    return direction
+
+
+def _parallel_lines(pts: np.ndarray, members: np.ndarray, direction: float, eps_dist: float, min_pts: int,
+                    steps) -> tuple[np.ndarray, Iterator[np.ndarray]]:
+    """Step 3: the signed offsets of an angular cluster's points from the line through the origin
+    along its direction, and its beams split into parallel lines by DBSCAN1D on those offsets (one
+    by one, each noted as it is taken)."""
+    offset = signed_distance_to_line(pts[members], 0.0, direction + math.pi / 2)
+    offset_labels = dbscan1d(offset, eps_dist, min_pts)
+
+    def lines() -> Iterator[np.ndarray]:
+        normal = math.remainder(direction + math.pi / 2, 2 * math.pi)
         for j in range(int(offset_labels.max(initial=-1)) + 1):
             beams = members[offset_labels == j]
             if steps is not None:
                 d = float(np.median(offset[offset_labels == j]))
                 alpha = normal if d >= 0 else math.remainder(normal + math.pi, 2 * math.pi)
-                note("offset", beams, r=abs(d), alpha=alpha, value=d,
-                     reason=f"direction {math.degrees(direction):.1f} deg, offset cluster {j}: "
-                            f"{beams.size} beams {d:.3f} m from the origin")
-            # step 4 (optional): collinear pieces
-            pieces = [beams] if split_gap_m is None else _split_collinear(beams, pts[beams], direction, split_gap_m)
-            clusters.extend(p for p in pieces if p.size >= min_pts)
-            if steps is not None:
-                for p in pieces:
-                    if p.size < min_pts:
-                        note("reject", p, value=p.size, threshold=min_pts, test="min_pts",
-                             reason=f"a collinear piece of {p.size} points < min_pts={min_pts}")
+                steps.add("offset", beams, r=abs(d), alpha=alpha, value=d,
+                          reason=f"direction {math.degrees(direction):.1f} deg, offset cluster {j}: "
+                                 f"{beams.size} beams {d:.3f} m from the origin")
+            yield beams
 
-    full_circle = scan.is_full_circle
-    ordered = [_scan_order(c, n, full_circle) for c in clusters]
-    ordered.sort(key=lambda c: int(c[0]))
+    return offset, lines()
+
+
+def _collinear_pieces(beams: np.ndarray, pts: np.ndarray, direction: float, split_gap_m: float | None,
+                      min_pts: int, steps) -> list[np.ndarray]:
+    """Step 4: a line's beams cut where consecutive points along it are more than ``split_gap_m``
+    apart (none: not cut, the paper); pieces with fewer than ``min_pts`` points are noise."""
+    pieces = [beams] if split_gap_m is None else _split_collinear(beams, pts[beams], direction, split_gap_m)
+    if steps is not None:
+        for p in pieces:
+            if p.size < min_pts:
+                steps.add("reject", p, value=p.size, threshold=min_pts, test="min_pts",
+                          reason=f"a collinear piece of {p.size} points < min_pts={min_pts}")
+    return [p for p in pieces if p.size >= min_pts]
+
+
+def _segments(scan: Scan, clusters: list[np.ndarray], min_pts: int, steps) -> tuple[list[LineSegment], np.ndarray]:
+    """A :class:`LineSegment` fitted to each final cluster, sorted by first beam (a cluster across the
+    seam of a full-circle scan starts where it starts), and every beam's segment (-1: none)."""
+    n = scan.n_beams
+    ordered = sorted((_scan_order(c, n, scan.is_full_circle) for c in clusters), key=lambda c: int(c[0]))
+    pts = scan.points
     segments = [line_segment(pts[c], c) for c in ordered]
+    labels = np.full(n, -1, dtype=np.int64)
     for i, c in enumerate(ordered):
         labels[c] = i
     if steps is not None:
         for s, c in zip(segments, ordered, strict=True):
-            note("accept", c, r=s.r, alpha=s.alpha, value=s.n_points, threshold=min_pts,
-                 reason=f"segment of {s.n_points} beams, r {s.r:.3f} m, alpha {math.degrees(s.alpha):.1f} deg")
-    arrays = AngularSteps(_frozen(theta), _frozen(angular_labels), _frozen(np.array(directions, dtype=float)),
-                          _frozen(distances), _frozen(labels))
-    return segments, arrays, steps
-
+            steps.add("accept", c, r=s.r, alpha=s.alpha, value=s.n_points, threshold=min_pts,
+                      reason=f"segment of {s.n_points} beams, r {s.r:.3f} m, alpha {math.degrees(s.alpha):.1f} deg")
+    return segments, labels
 
 
 #: The registry's name for it (it takes ``segments`` and gives the lines of the whole scan's

@@ -21,7 +21,7 @@ walls, so each line's inliers are cut, in scan order, into runs with no gap wide
 at least ``min_length_m`` long becomes one :class:`~labkit.features.LineSegment`, fitted to that run's points alone.
 
 The accumulator uses labkit's normal form: ``x cos(alpha) + y sin(alpha) = r`` with ``r >= 0``
-and ``alpha`` in (-pi, pi]. Its directions are the full circle in steps of ``alpha_step``, and
+and ``alpha`` in (-pi, pi]. Its directions are the full circle in steps of ``alpha_step_deg``, and
 a point votes only where ``r >= 0`` (rounded to the nearest cell), so every line has one cell,
 for half the directions. Its distances run from 0 to the farthest point in steps of
 ``r_step_m``. The votes of all points are counted in one ``np.bincount``; the votes of removed
@@ -44,14 +44,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._cache import remembered
-from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..noise import INLIER_SIGMAS
+from ..params import AUTO, checked_by, param
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, PlacingParams, param, takes_params
-from ._runs import _check_placing, _fit, _noise, _placed, _segments, _taking_part, _Trace
+from ._runs import _fit, _noise, _segments, _taking_part, _Trace
+from .placing import PlacingParams, placed
 
 __all__ = ["hough_lines"]
 
@@ -70,7 +69,7 @@ class HoughParams(PlacingParams):
     each default once: lengths in metres, angles in degrees."""
 
     r_step_m: float = param(0.05, "accumulator cell size in r, metres", lo=0, strict=True)
-    alpha_step_deg: float = param(1.0, "accumulator cell size in alpha, degrees", lo=0, strict=True, hi=90)
+    alpha_step_deg: float = param(1.0, "accumulator cell size in alpha, degrees", lo=math.degrees(1e-3), hi=90)
     threshold_m: float = param(AUTO, "a point belongs to a peak's line within this distance, metres; auto: "
                                      "max(2.5 sigma, 2 cm) of the scan's range noise", lo=0, strict=True, auto=True)
     min_votes: int = param(8, "fewest votes of a peak", lo=2)
@@ -80,21 +79,21 @@ class HoughParams(PlacingParams):
                              lo=0, strict=True)
 
 
-@takes_params(HoughParams)
+@checked_by(HoughParams)
 def hough_lines(
     scan: Scan,
     *,
-    r_step_m: float,
-    alpha_step: float,
-    threshold_m: float,
-    min_votes: int,
-    min_points: int,
-    min_length_m: float,
-    max_gap_m: float,
-    range_sigma_m: float | str | None,
-    place_dr_m: float,
-    place_dalpha: float,
-    place_confidence: float,
+    r_step_m: float = HoughParams.r_step_m,
+    alpha_step_deg: float = HoughParams.alpha_step_deg,
+    threshold_m: float = HoughParams.threshold_m,
+    min_votes: int = HoughParams.min_votes,
+    min_points: int = HoughParams.min_points,
+    min_length_m: float = HoughParams.min_length_m,
+    max_gap_m: float = HoughParams.max_gap_m,
+    range_sigma_m: float | str | None = HoughParams.range_sigma_m,
+    place_dr_m: float = HoughParams.place_dr_m,
+    place_dalpha_deg: float = HoughParams.place_dalpha_deg,
+    place_confidence: float = HoughParams.place_confidence,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -106,15 +105,15 @@ def hough_lines(
         Invalid beams (NaN, inf, 0, out of range) are masked: they do not vote.
     r_step_m : float, metres
         Size of the accumulator's cells in ``r``. Default 0.05 m.
-    alpha_step : float, radians
-        Size of the accumulator's cells in ``alpha``, between 0.001 rad and pi/2. Default
-        1 degree (360 directions). With the 0.05 m step the cells are coarse enough that the
+    alpha_step_deg : float, degrees
+        Size of the accumulator's cells in ``alpha``, between 0.001 rad (0.057 degrees) and 90
+        degrees. Default 1 degree (360 directions). With the 0.05 m step the cells are coarse enough that the
         points of a wall a few metres long, with centimetres of noise, vote mostly for one
         cell or two neighbours, and fine enough that two walls meeting at a corner, or a wall
         and the back of a door recess, fall in different cells; the refinement (step 3) then
         makes the line exact. Over 20 scans each of five simulated worlds, halving both steps
         finds about the same walls at over twice the cost.
-        The accumulator holds ``n_alpha x n_r`` counts, ``n_alpha = 2 pi / alpha_step`` and
+        The accumulator holds ``n_alpha x n_r`` counts, ``n_alpha = 360 / alpha_step_deg`` and
         ``n_r = r_max / r_step_m + 2`` for the farthest point ``r_max``: with a 722-beam scan
         reaching 32 m, 360 x 642 = 231,120 counts (1.8 MB as int64), plus the 722 x 360 table
         of the cell each point voted for (2.1 MB as int64), kept to take votes back.
@@ -148,7 +147,7 @@ def hough_lines(
         The range noise of the lines' covariances (and of ``threshold_m="auto"``), as for
         :func:`labkit.lines.ransac.ransac_lines`. Default ``"auto"``; ``None``: each line's own
         residuals.
-    place_dr_m, place_dalpha, place_confidence : float
+    place_dr_m, place_dalpha_deg, place_confidence : float
         Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
         ``place_confidence`` 0.8; 0: every line, as in :data:`labkit.noise.FIXED_HOUGH`). On the 408
         simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
@@ -198,9 +197,7 @@ def hough_lines(
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m, range_sigma_m = _params(
-        r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m, range_sigma_m,
-        place_dr_m, place_dalpha, place_confidence)
+    alpha_step = math.radians(alpha_step_deg)
     threshold_m, sigma = _noise(scan, threshold_m, range_sigma_m, INLIER_SIGMAS)  # the numbers for this scan ("auto")
 
     # the beams that vote: valid ones (given a segmentation, those in a segment) within the accumulator
@@ -271,7 +268,7 @@ def hough_lines(
         lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m, steps, sigma)
 
     lines.sort(key=lambda s: s.first)
-    lines = _placed(lines, place_dr_m, place_dalpha, place_confidence, steps)
+    lines = placed(lines, place_dr_m, place_dalpha_deg, place_confidence, steps)
     return (lines, list(steps)) if trace else lines
 
 
@@ -288,21 +285,3 @@ def _peak_steps(steps: _Trace, peak: int, cell_number, n_r: int, alphas: np.ndar
         return
     steps.add("peak", voters[0], voters[-1], r, alpha, value=votes, threshold=min_votes, test="min_votes",
               beams=tuple(voters.tolist()), reason=f"the peak: {where}, {votes} votes")
-
-
-@remembered
-def _params(r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m, range_sigma_m,
-            place_dr_m, place_dalpha, place_confidence) -> tuple:
-    """The parameters of :func:`hough_lines` checked and converted, in its order (up to ``range_sigma_m``)."""
-    r_step_m = check_positive("r_step_m", r_step_m)
-    alpha_step = check_positive("alpha_step", alpha_step)
-    if not 1e-3 <= alpha_step <= math.pi / 2:
-        raise ValueError(f"alpha_step must be between 0.001 and pi/2 radians, got {alpha_step!r}")
-    if threshold_m != AUTO:
-        threshold_m = check_positive("threshold_m", threshold_m)
-    min_votes = check_int("min_votes", min_votes, 2)
-    min_points = check_int("min_points", min_points, 2)
-    min_length_m = check_nonneg("min_length_m", min_length_m)
-    max_gap_m = check_positive("max_gap_m", max_gap_m)
-    range_sigma_m = _check_placing(range_sigma_m, place_dr_m, place_dalpha, place_confidence)
-    return r_step_m, alpha_step, threshold_m, min_votes, min_points, min_length_m, max_gap_m, range_sigma_m

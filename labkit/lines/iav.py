@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_int, check_nonneg, check_positive
 from .._iav import (
     _ACCEPTED,
     _DEGENERATE,
@@ -27,10 +26,10 @@ from .._iav import (
     _trace,
 )
 from ..features import LineSegment, line_segment
+from ..params import Params, checked_by, param
 from ..scan import Scan
-from ..segmentation import RangeSegment
+from ..segmentation import RangeSegment, detector_labels
 from ..steps import Step
-from ._params import Params, param, takes_params
 
 __all__ = ["detect_lines_iav"]
 
@@ -47,15 +46,16 @@ class IAVLineParams(Params):
     std_max_deg: float = param(math.degrees(CIRCLE_STD_MAX), "largest IAV standard deviation, degrees", lo=0,
                                strict=True)
 
-@takes_params(IAVLineParams, segmented=True, own_segmentation=("seg_threshold_m",))
+
+@checked_by(IAVLineParams)
 def detect_lines_iav(
     scan: Scan,
     *,
-    seg_threshold_m: float = 0.08,
-    min_points: int,
-    min_length_m: float,
-    mean_tolerance: float,
-    std_max: float,
+    seg_threshold_m: float | None = None,
+    min_points: int = IAVLineParams.min_points,
+    min_length_m: float = IAVLineParams.min_length_m,
+    mean_tolerance_deg: float = IAVLineParams.mean_tolerance_deg,
+    std_max_deg: float = IAVLineParams.std_max_deg,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -64,8 +64,8 @@ def detect_lines_iav(
     A whole segment is a line when it has at least ``min_points`` points (Table II
     ``line_min_pts``: 5), its extremes are at least ``min_length_m`` apart
     (``line_min_len``: 150 mm), and its signed inscribed angles have a mean within
-    ``mean_tolerance`` of pi and a standard deviation below ``std_max`` (the circles'
-    0.15 rad: "the same procedure of circles"). The paper gives no tolerance for the
+    ``mean_tolerance_deg`` of 180 degrees and a standard deviation below ``std_max_deg`` (the
+    circles' 0.15 rad: "the same procedure of circles"). The paper gives no tolerance for the
     mean; 5 deg is ours: a circular arc has mean ``180 - phi / 2`` for an arc of ``phi``,
     so 5 deg keeps arcs spanning more than 10 deg out. Unlike split-and-merge, a segment
     is accepted or rejected as a whole, never split. Each accepted segment is fitted by
@@ -74,23 +74,24 @@ def detect_lines_iav(
     Parameters
     ----------
     scan : Scan
-    seg_threshold_m : float, metres
-        Range segmentation threshold (Table II ``seg_threshold``, 80 mm). Ignored when
-        ``segments`` is given.
+    seg_threshold_m : float or None, metres
+        A fixed range segmentation threshold (Table II ``seg_threshold``, 80 mm). Default None:
+        the default segmentation (:func:`labkit.segment_labels`, adaptive with an 80 mm floor),
+        as in the pipeline. Ignored when ``segments`` is given.
     min_points : int
         Table II ``line_min_pts``: 5.
     min_length_m : float, metres
         Table II ``line_min_len``: 150 mm between the segment's extremes.
-    mean_tolerance : float, radians
-        Largest distance of the mean inscribed angle from pi: 5 deg (ours).
-    std_max : float, radians
-        0.15 rad (8.6 deg), as for circles.
+    mean_tolerance_deg : float, degrees
+        Largest distance of the mean inscribed angle from 180 degrees: 5 (ours).
+    std_max_deg : float, degrees
+        0.15 rad (8.6 degrees), as for circles.
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments.
     trace : bool
         Also return one :class:`labkit.Step` per segment (``algorithm="iav_lines"``), as
         :func:`labkit.detect_circles` does; an ``"accept"`` step carries the line ``r, alpha``,
-        and the ``"iav mean"`` test compares ``value = |mean - pi|`` with ``mean_tolerance``.
+        and the ``"iav mean"`` test compares ``value = |mean - pi|`` (radians) with ``mean_tolerance_deg`` in radians.
 
     Returns
     -------
@@ -106,10 +107,9 @@ def detect_lines_iav(
     (2.0, True, 107)
     """
     _check_scan(scan)
-    min_points = check_int("min_points", min_points, 3)
-    min_length_m = check_nonneg("min_length_m", min_length_m)
-    mean_tolerance = check_positive("mean_tolerance", mean_tolerance)
-    std_max = check_positive("std_max", std_max)
+    mean_tolerance, std_max = math.radians(mean_tolerance_deg), math.radians(std_max_deg)
+    if segments is None and seg_threshold_m is None:
+        segments = detector_labels(scan, None)
     runs = _scan_runs(scan, segments, seg_threshold_m)
     s = runs.starts.size
     if s == 0:

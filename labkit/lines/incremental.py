@@ -60,15 +60,14 @@ from dataclasses import dataclass
 
 import numpy as np  # noqa: F401 - used in doctests
 
-from .._cache import remembered
-from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..fitting import line_from_sums
 from ..noise import GROW_SIGMAS
+from ..params import AUTO, checked_by, param
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, PlacingParams, param, takes_params
-from ._runs import _check_placing, _fitted, _noise, _placed, _PrefixSums, _runs, _Trace
+from ._runs import _fitted, _noise, _PrefixSums, _runs, _Trace
+from .placing import PlacingParams, placed
 
 __all__ = ["incremental_lines"]
 
@@ -86,18 +85,18 @@ class IncrementalParams(PlacingParams):
     max_gap_m: float = param(0.3, "no line across a gap wider than this, metres", lo=0, strict=True)
 
 
-@takes_params(IncrementalParams)
+@checked_by(IncrementalParams)
 def incremental_lines(
     scan: Scan,
     *,
-    max_error_m: float,
-    min_points: int,
-    min_length_m: float,
-    max_gap_m: float,
-    range_sigma_m: float | str | None,
-    place_dr_m: float,
-    place_dalpha: float,
-    place_confidence: float,
+    max_error_m: float = IncrementalParams.max_error_m,
+    min_points: int = IncrementalParams.min_points,
+    min_length_m: float = IncrementalParams.min_length_m,
+    max_gap_m: float = IncrementalParams.max_gap_m,
+    range_sigma_m: float | str | None = IncrementalParams.range_sigma_m,
+    place_dr_m: float = IncrementalParams.place_dr_m,
+    place_dalpha_deg: float = IncrementalParams.place_dalpha_deg,
+    place_confidence: float = IncrementalParams.place_confidence,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -130,7 +129,7 @@ def incremental_lines(
         The range noise of the lines' covariances (and of ``max_error_m="auto"``), as for
         :func:`labkit.lines.ransac.ransac_lines`. Default ``"auto"``; ``None``: each line's own
         residuals.
-    place_dr_m, place_dalpha, place_confidence : float
+    place_dr_m, place_dalpha_deg, place_confidence : float
         Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
         ``place_confidence`` 0.8; 0: every line, as in :data:`labkit.noise.FIXED_INCREMENTAL`). On the 408
         simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
@@ -180,8 +179,6 @@ def incremental_lines(
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    max_error_m, min_points, min_length_m, max_gap_m, range_sigma_m = _params(
-        max_error_m, min_points, min_length_m, max_gap_m, range_sigma_m, place_dr_m, place_dalpha, place_confidence)
     max_error_m, sigma = _noise(scan, max_error_m, range_sigma_m, GROW_SIGMAS)  # the numbers for this scan ("auto")
     steps = _Trace("incremental") if trace else None
     beams, runs = _runs(scan, segments, max_gap_m, min_points)
@@ -229,7 +226,7 @@ def incremental_lines(
         spans += run_spans
 
     lines = _fitted(xy, beams, spans, min_length_m, steps, sigma)  # step 7
-    lines = _placed(lines, place_dr_m, place_dalpha, place_confidence, steps)  # step 8
+    lines = placed(lines, place_dr_m, place_dalpha_deg, place_confidence, steps)  # step 8
     return (lines, list(steps)) if trace else lines
 
 
@@ -263,18 +260,6 @@ def _grow_step(steps: _Trace, beams, start: int, stop: int, end: int, sums, xs, 
     steps.add("grow", first, last, r, alpha, at=at, value=d, threshold=max_error_m, test="max_error_m",
               reason=f"grown to {stop - start} points; beam {at} is {d:.3f} m off the refitted line > max_error_m: "
                      f"the line ends")
-
-
-
-@remembered
-def _params(max_error_m, min_points, min_length_m, max_gap_m, range_sigma_m, place_dr_m, place_dalpha,
-            place_confidence) -> tuple:
-    """The parameters of :func:`incremental_lines` checked and converted, in its order (up to ``range_sigma_m``)."""
-    if max_error_m != AUTO:
-        max_error_m = check_positive("max_error_m", max_error_m)
-    return (max_error_m, check_int("min_points", min_points, 2), check_nonneg("min_length_m", min_length_m),
-            check_positive("max_gap_m", max_gap_m),
-            _check_placing(range_sigma_m, place_dr_m, place_dalpha, place_confidence))
 
 
 def _hand_back_corners(spans: list[list[int]], sums, xs, ys, min_points: int, steps: _Trace | None = None,

@@ -46,14 +46,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._cache import remembered
-from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
 from ..noise import INLIER_SIGMAS
+from ..params import AUTO, checked_by, param
 from ..scan import Scan
 from ..steps import Step
-from ._params import AUTO, PlacingParams, param, takes_params
-from ._runs import _check_placing, _fit, _noise, _placed, _segments, _taking_part, _Trace
+from ._runs import _fit, _noise, _segments, _taking_part, _Trace
+from .placing import PlacingParams, placed
 
 __all__ = ["ransac_lines"]
 
@@ -79,21 +78,21 @@ class RansacParams(PlacingParams):
                              lo=0, strict=True)
 
 
-@takes_params(RansacParams)
+@checked_by(RansacParams)
 def ransac_lines(
     scan: Scan,
     *,
-    threshold_m: float,
-    min_inliers: int,
-    max_trials: int,
-    draw_window: int | None,
-    min_points: int,
-    min_length_m: float,
-    max_gap_m: float,
-    range_sigma_m: float | str | None,
-    place_dr_m: float,
-    place_dalpha: float,
-    place_confidence: float,
+    threshold_m: float | str = RansacParams.threshold_m,
+    min_inliers: int = RansacParams.min_inliers,
+    max_trials: int = RansacParams.max_trials,
+    draw_window: int | None = RansacParams.draw_window,
+    min_points: int = RansacParams.min_points,
+    min_length_m: float = RansacParams.min_length_m,
+    max_gap_m: float = RansacParams.max_gap_m,
+    range_sigma_m: float | str | None = RansacParams.range_sigma_m,
+    place_dr_m: float = RansacParams.place_dr_m,
+    place_dalpha_deg: float = RansacParams.place_dalpha_deg,
+    place_confidence: float = RansacParams.place_confidence,
     segments=None,
     rng: np.random.Generator | None = None,
     trace: bool = False,
@@ -151,10 +150,10 @@ def ransac_lines(
         covariance is worked out from its own residuals (:func:`labkit.features.line_segment`); a
         number: that noise. With ``threshold_m="auto"`` it is
         also the noise the threshold follows (the scan's estimate when ``None``).
-    place_dr_m, place_dalpha, place_confidence : float
+    place_dr_m, place_dalpha_deg, place_confidence : float
         What a user trusts, as in :func:`labkit.split_and_merge`: a line is reported only if, by its
-        covariance, it lies within ``place_dr_m`` (default 5 cm) in ``r`` and ``place_dalpha``
-        (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the true line with
+        covariance, it lies within ``place_dr_m`` (default 5 cm) in ``r`` and ``place_dalpha_deg``
+        (default 3 degrees) in ``alpha`` of the true line with
         probability ``place_confidence`` (default 0.8; 0: every line is reported, as in
         :data:`labkit.noise.FIXED_RANSAC`): :func:`labkit.fitting.placement_probability`. A short
         piece whose angle the data cannot fix to a few degrees is dropped (a ``"reject"`` step
@@ -219,9 +218,6 @@ def ransac_lines(
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m, range_sigma_m = _params(
-        threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m, range_sigma_m,
-        place_dr_m, place_dalpha, place_confidence)
     if rng is None:
         rng = np.random.default_rng(DEFAULT_SEED)
     elif not isinstance(rng, np.random.Generator):
@@ -288,7 +284,7 @@ def ransac_lines(
         lines += _segments(xy, beams, labels, inliers, min_points, min_length_m, max_gap_m, steps, sigma)
 
     lines.sort(key=lambda s: s.first)
-    lines = _placed(lines, place_dr_m, place_dalpha, place_confidence, steps)
+    lines = placed(lines, place_dr_m, place_dalpha_deg, place_confidence, steps)
     return (lines, list(steps)) if trace else lines
 
 
@@ -310,20 +306,3 @@ def _hypothesis_steps(steps: _Trace, pair: np.ndarray, normal: np.ndarray, offse
         steps.add("reject", min(a, b), max(a, b), r, alpha, at=a, value=votes, threshold=min_inliers,
                   test="min_inliers", beams=(a, b),
                   reason=f"{votes} inliers < min_inliers={min_inliers}: no more lines")
-
-
-@remembered
-def _params(threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m, range_sigma_m,
-            place_dr_m, place_dalpha, place_confidence) -> tuple:
-    """The parameters of :func:`ransac_lines` checked and converted, in its order (up to ``range_sigma_m``)."""
-    if threshold_m != AUTO:
-        threshold_m = check_positive("threshold_m", threshold_m)
-    min_inliers = check_int("min_inliers", min_inliers, 2)
-    max_trials = check_int("max_trials", max_trials, 1)
-    if draw_window is not None:
-        draw_window = check_int("draw_window", draw_window, 1)
-    min_points = check_int("min_points", min_points, 2)
-    min_length_m = check_nonneg("min_length_m", min_length_m)
-    max_gap_m = check_positive("max_gap_m", max_gap_m)
-    range_sigma_m = _check_placing(range_sigma_m, place_dr_m, place_dalpha, place_confidence)
-    return threshold_m, min_inliers, max_trials, draw_window, min_points, min_length_m, max_gap_m, range_sigma_m

@@ -58,12 +58,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._cache import remembered
-from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment
+from ..params import Params, checked_by, param
 from ..scan import Scan
 from ..steps import Step
-from ._params import Params, param, takes_params
 from ._runs import _fitted, _PrefixSums, _runs, _Trace
 
 __all__ = ["regression_lines"]
@@ -88,16 +86,16 @@ class RegressionParams(Params):
     range_sigma_m: float = param(None, "range noise, metres (none: estimated from the scan)", lo=0, strict=True,
                                  optional=True, kind=float)
 
-@takes_params(RegressionParams)
+@checked_by(RegressionParams)
 def regression_lines(
     scan: Scan,
     *,
-    window: int,
-    fidelity_threshold: float,
-    min_points: int,
-    min_length_m: float,
-    max_gap_m: float,
-    range_sigma_m: float | None,
+    window: int = RegressionParams.window,
+    fidelity_threshold: float = RegressionParams.fidelity_threshold,
+    min_points: int = RegressionParams.min_points,
+    min_length_m: float = RegressionParams.min_length_m,
+    max_gap_m: float = RegressionParams.max_gap_m,
+    range_sigma_m: float | None = RegressionParams.range_sigma_m,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -173,8 +171,7 @@ def regression_lines(
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    window, threshold, min_points, min_length_m, max_gap_m, range_sigma_m = _params(
-        window, fidelity_threshold, min_points, min_length_m, max_gap_m, range_sigma_m)
+    threshold = fidelity_threshold
     # the runs a line may not cross; a run needs two windows, so that they can be compared
     steps = _Trace("regression") if trace else None
     beams, runs = _runs(scan, segments, max_gap_m, max(min_points, window + 1))
@@ -251,15 +248,6 @@ def _window_steps(steps: _Trace, beams, lines: _Lines, starts, window: int, fide
         steps.add("cluster", beams[a], beams[b - 1], one.r[0], one.alpha[0], value=worst, threshold=threshold / s2,
                   test="fidelity_threshold",
                   reason=f"cluster {j}: {n_windows} windows in a row, fidelity at most {worst:.1f}")
-
-
-@remembered
-def _params(window, fidelity_threshold, min_points, min_length_m, max_gap_m, range_sigma_m) -> tuple:
-    """The parameters of :func:`regression_lines` checked and converted, in its order."""
-    return (check_int("window", window, 3), check_positive("fidelity_threshold", fidelity_threshold),
-            check_int("min_points", min_points, 2), check_nonneg("min_length_m", min_length_m),
-            check_positive("max_gap_m", max_gap_m),
-            None if range_sigma_m is None else check_positive("range_sigma_m", range_sigma_m))
 
 
 class _Lines:

@@ -1,46 +1,56 @@
 """Split-and-merge line extraction, with the iterative end-point fit (IEPF) variant.
 
-The algorithm of the course slides (after Nguyen et al. 2005):
+The algorithm of the course slides (after Nguyen et al. 2005), as :func:`split_and_merge` runs it:
 
-1. Cut the scan into range segments (:mod:`labkit.segmentation`); each is a list in L.
-2. Take the next list and fit a line to it.
+1. Initialise a list of lists L: every range segment (:mod:`labkit.segmentation`) is a list.
+2. Take the next list from L and fit a line to it.
 3. Find the worst point, the one farthest from the line; it may not be one of the first or
    last ``min_points // 2`` points (``minPointsPerLine`` in the slides).
-4. If its distance is under ``split_threshold_m`` accept the line, otherwise split the list
-   at that point and go back to 2 with both halves. Points stranded in pieces too short
-   for a line (often the beams around a corner) join the neighbouring line when they are
-   within three range sigmas of it.
-5. When every list is done, merge similar neighbouring lines: ``|r1 - r2|`` and
+4. If its distance is under ``split_threshold_m``, accept the line and go to 2.
+5. Otherwise split the list at that point, put both halves back into L and go to 2.
+6. When every list is done, merge similar neighbouring lines: ``|r1 - r2|`` and
    ``|alpha1 - alpha2|`` under thresholds (the angle difference taken across the wrap, so
    170 deg and -170 deg are 20 deg apart), or a chi-square test on the covariances, and
-   refit the merged line from all its points. Two lines are never merged across a valid beam
-   between them that ends more than ``max_gap_m`` off the merged line: behind it, the beam saw
-   through it (a doorway, a slot between shelves); in front of it, something else stopped the
-   beam (a chair leg, a person), so the stretch of wall behind was never seen.
-6. Drop the lines the data cannot place: by its covariance, a line must lie within the
-   trusted ``|dr|`` and ``|dalpha|`` of the true line with probability ``place_confidence``.
+   refit the merged line from all its points.
+
+:func:`iepf` is steps 2-5 bare, on one list of points. :func:`split_and_merge` adds what real
+scans need, each a named stage of its own below:
+
+* a list is first split at its widest gap between neighbouring points wider than ``max_gap_m``
+  (:func:`_widest_gap`); lists with fewer than ``min_points`` points make no line, and their
+  points, stranded between two lines (often the beams around a corner), join the neighbouring
+  line when they are within three range sigmas of it (:func:`_absorb`);
+* the split test follows the sensor's range noise by default (``"auto"``, :class:`_SplitTest`):
+  ``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`), each point is measured
+  against five of its own sigmas across the line (at least 2 cm), the fit's residuals against
+  sigma, and a stretch of points lying to one side of the line is cut out; a far wall seen at a
+  grazing angle, which the range segmentation cut at every beam, is joined again first
+  (:func:`join_grazing_walls`);
+* two lines are never merged across a valid beam between them that ends more than ``max_gap_m``
+  off the merged line (:func:`_merge`): behind it, the beam saw through it (a doorway, a slot
+  between shelves); in front of it, something else stopped the beam (a chair leg, a person), so
+  the stretch of wall behind was never seen. Lines shorter than ``min_length_m`` are dropped;
+* last, the lines the data cannot place are dropped (:mod:`labkit.lines.placing`): by its
+  covariance, a line must lie within the trusted ``|dr|`` and ``|dalpha|`` of the true line with
+  probability ``place_confidence``.
+
+:data:`labkit.noise.FIXED_LINES` gives the papers' fixed 5 cm threshold instead, with every line
+reported.
 
 A line's segment runs between its first and last points projected onto it, but never past the
 rays of its first and last beams: a noisy end point seen at a grazing angle projects along the
 line over the next beams' rays, and the segment would claim a surface where they saw another.
 
-The thresholds that depend on the sensor's range noise follow it by default (``"auto"``):
-``range_sigma_m`` is estimated from each scan (:mod:`labkit.noise`) and the split test measures
-each point against its own noise across the line, five times ``sigma |cos(incidence)|`` (at least
-2 cm), and the fit's residuals against ``sigma``; lines the data cannot place are dropped
-(``place_confidence`` 0.8). :data:`labkit.noise.FIXED_LINES` gives the papers' fixed 5 cm
-threshold instead, with every line reported.
-
 ``method="fit"`` measures the worst point from the least-squares line (the slides);
-``method="endpoints"`` from the chord through the list's first and last points -- the
-iterative end-point fit of the lab report and of Xavier et al. (2005) -- which is cheaper
-and is refitted by least squares only once a line is accepted. A list is also split at the
-widest gap between neighbouring points when that gap exceeds ``max_gap_m``.
+``method="endpoints"`` from the chord through the list's first and last points -- the iterative
+end-point fit of the lab report and of Xavier et al. (2005) -- which is cheaper and is refitted by
+least squares only once a line is accepted.
 
-Every fit inside the split loop is O(1): prefix sums of ``w``, ``w x``, ``w y``,
-``w x^2``, ``w y^2`` and ``w x y`` over a segment give the weighted sums of any run of it
-by two subtractions, and the closed form of :func:`labkit.fitting.fit_line_polar` needs
-nothing else. Only the worst-point search touches every point.
+Every fit inside the split loop is O(1): prefix sums of ``w``, ``w x``, ``w y``, ``w x^2``,
+``w y^2`` and ``w x y`` over a segment give the weighted sums of any run of it by two
+subtractions, and the closed form of :func:`labkit.fitting.fit_line_polar` needs nothing else
+(:class:`labkit.lines._split_merge_fast.Runs`, where this module's speed tricks live). Only the
+worst-point search touches every point.
 
 ``split_and_merge(..., trace=True)`` also returns the steps taken, as :class:`labkit.Step`
 records, so a notebook, a widget (:func:`labkit.viz.steps.step_viewer`) or the rerun viewer
@@ -50,212 +60,36 @@ records, so a notebook, a widget (:func:`labkit.viz.steps.step_viewer`) or the r
 from __future__ import annotations
 
 import math
+import warnings
 from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._cache import remembered
-from .._checks import check_int, check_nonneg, check_positive
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from ..fitting import _line_covariances, line_from_sums
 from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
+from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
-from ..segmentation import SegmentationParams, _thresholds, labels_from, segment_labels, segment_order
+from ..segmentation import SegmentationParams, detector_labels, segment_labels, segment_order
 from ..steps import Step
-from ._params import AUTO, Params, param, takes_params
-from ._runs import _check_placing, _ends_off, _on_rays, _placed
+from ._runs import _ends_off, _Trace
+from ._split_merge_fast import (
+    GRAZING_DEG,
+    Line,
+    Runs,
+    covariances,
+    grazing_links,
+    grazing_runs,
+    line_segments,
+    shifted_stretch,
+    wide_gaps,
+)
+from .placing import placed
 
-__all__ = ["split_and_merge", "lines_similar"]
+__all__ = ["split_and_merge", "iepf", "lines_similar", "join_grazing_walls", "SplitMergeParams", "GRAZING_DEG",
+           "RESIDUAL_Z", "SHIFT_Z", "SHIFT_MIN_M"]
 
 _METHODS = ("fit", "endpoints")
-_MERGES = ("thresholds", "chi2", None)
-
-
-class _Steps(list):
-    """The steps of one run of :func:`split_and_merge`, as :class:`labkit.Step` records."""
-
-    def __init__(self, algorithm: str):
-        super().__init__()
-        self.algorithm = algorithm
-
-    def add(self, kind: str, first: int, last: int, r: float = math.nan, alpha: float = math.nan, **fields) -> None:
-        self.append(Step(self.algorithm, kind, first, last, r, alpha, **fields))
-
-
-class _Run:
-    """Range segments laid end to end (points ``xy``, beams ``idx``) with prefix sums of
-    ``w, wx, wy, wxx, wyy, wxy``: the sums of any sub-run, hence its weighted line fit, in O(1)."""
-
-    __slots__ = ("xy", "x", "y", "idx", "c")
-
-    def __init__(self, xy: np.ndarray, w: np.ndarray, idx: np.ndarray):
-        self.xy, self.idx = xy, idx
-        self.x, self.y = x, y = xy[:, 0], xy[:, 1]
-        c = np.empty((len(x) + 1, 6))  # row i: the sums over points 0..i-1
-        c[0] = 0.0
-        t = c[1:]  # the terms of every point, summed up in place below
-        t[:, 0] = w
-        np.multiply(w, x, out=t[:, 1])  # w x
-        np.multiply(w, y, out=t[:, 2])  # w y
-        np.multiply(t[:, 1], x, out=t[:, 3])  # w x x
-        np.multiply(t[:, 2], y, out=t[:, 4])  # w y y
-        np.multiply(t[:, 1], y, out=t[:, 5])  # w x y
-        # the running sums down the columns; read as three columns of complex numbers, each
-        # complex add sums two columns at once: the same sums, in half the steps
-        z = t.view(np.complex128)
-        np.add.accumulate(z, axis=0, out=z)  # (= cumsum, with less overhead)
-        self.c = c
-
-    def sums(self, a: int, b: int) -> list[float]:
-        # python floats: scalar arithmetic on them is fastest (converting only the sums
-        # used is much cheaper than converting the whole table)
-        return (self.c[b] - self.c[a]).tolist()
-
-    def lines(self, spans: list[tuple[int, int]]) -> list[_Line]:
-        """A :class:`_Line` for each run ``a..b-1`` of ``spans``; their sums, end points and
-        beams are gathered in one go."""
-        if not spans:
-            return []
-        ab = np.array(spans)
-        a, b = ab[:, 0], ab[:, 1]  # (indexing: unpacking an array costs an IndexError)
-        sums = (self.c.take(b, axis=0) - self.c.take(a, axis=0)).tolist()
-        p_first, p_last = self.xy.take(a, axis=0).tolist(), self.xy.take(b - 1, axis=0).tolist()
-        first, last = self.idx.take(a).tolist(), self.idx.take(b - 1).tolist()
-        return [_Line(self.idx[i:j], s, f, g, p, q)
-                for (i, j), s, f, g, p, q in zip(spans, sums, first, last, p_first, p_last, strict=True)]
-
-
-class _Line:
-    """A line during split-and-merge: its beams (all, ``first`` and ``last``), weighted sums,
-    fit, first and last points, and their projections onto the line (``start``, ``end``)."""
-
-    __slots__ = ("idx", "first", "last", "s", "r", "alpha", "p_first", "p_last", "start", "end", "cov")
-
-    def __init__(self, idx: np.ndarray, s: list[float], first: int, last: int, p_first, p_last):
-        self.idx, self.s, self.first, self.last = idx, s, first, last
-        self.r, self.alpha = r, alpha = line_from_sums(*s)
-        self.p_first, self.p_last = p_first, p_last
-        # the first and last points projected onto the line, but never past the rays of the
-        # first and last beams (a noisy end point at a grazing angle projects over the next rays)
-        self.start, self.end, _ = _on_rays(p_first, p_last, r, alpha)
-        self.cov = None
-
-    @property
-    def length(self) -> float:
-        return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
-
-
-def _similar(r1, a1, c1, r2, a2, c2, merge, merge_dr_m, merge_dalpha, merge_chi2) -> tuple[bool, float]:
-    da = math.remainder(a2 - a1, 2 * math.pi)
-    dr = r2 - r1
-    flipped = abs(da) > math.pi / 2
-    if flipped:  # the same line with its normal turned around (both near the origin)
-        da = math.remainder(da - math.pi, 2 * math.pi)
-        dr = -r2 - r1
-    if merge == "thresholds":
-        stat = max(abs(dr) / merge_dr_m, abs(da) / merge_dalpha)
-        return stat < 1.0, stat
-    c2 = np.asarray(c2)
-    if flipped:  # (r, alpha) -> (-r, alpha + pi) has Jacobian diag(-1, 1): the r-alpha cross term changes sign
-        c2 = c2 * np.array([[1.0, -1.0], [-1.0, 1.0]])
-    cov = np.asarray(c1) + c2
-    d = np.array([dr, da])
-    try:
-        stat = float(d @ np.linalg.solve(cov, d))
-    except np.linalg.LinAlgError:
-        return False, math.inf
-    if not math.isfinite(stat):
-        return False, math.inf
-    return stat < merge_chi2, stat
-
-
-def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds", merge_dr_m: float = 0.2,
-                  merge_dalpha: float = math.radians(10.0), merge_chi2: float = 9.21) -> tuple[bool, float]:
-    """Whether two lines are similar enough to merge, and the test statistic.
-
-    The angle difference is taken across the wrap (170 deg vs -170 deg is 20 deg). Two
-    lines close to the origin may describe the same line with opposite normals (``r`` near
-    0, ``alpha`` differing by about pi); the second line is then compared as
-    ``(-r, alpha + pi)``. ``merge="thresholds"`` passes when ``|dr| < merge_dr_m`` and
-    ``|dalpha| < merge_dalpha`` (the statistic is the larger of the two ratios, < 1 passes);
-    ``merge="chi2"`` when the Mahalanobis distance ``d^T (C_a + C_b)^-1 d`` of
-    ``d = (dr, dalpha)`` is under ``merge_chi2`` (default 9.21, the 99% point of chi-square
-    with 2 degrees of freedom).
-
-    Examples
-    --------
-    >>> a = line_segment(np.array([[-1.0, 2.0], [-2.0, 2.01], [-3.0, 2.02]]), [0, 1, 2])
-    >>> b = line_segment(np.array([[-4.0, 2.03], [-5.0, 2.04], [-6.0, 2.05]]), [3, 4, 5])
-    >>> lines_similar(a, b)[0]
-    True
-    """
-    if merge not in ("thresholds", "chi2"):
-        raise ValueError(f'merge must be "thresholds" or "chi2", got {merge!r}')
-    return _similar(a.r, a.alpha, a.covariance, b.r, b.alpha, b.covariance, merge, merge_dr_m, merge_dalpha,
-                    merge_chi2)
-
-
-def _absorb(accepted, leftovers, run: _Run, threshold: float, steps, rho=None,
-            noise_sigma: float = 0.0) -> list[tuple[int, int]]:
-    """Give the points of runs too short for a line to the neighbouring lines they fit.
-
-    A split can strand a few points between two lines, e.g. the beams just around a corner
-    when the worst point is not the corner beam itself; left out, they make the corner look
-    hidden. Each stranded point joins the line next to it (within the same range segment)
-    when it is within ``threshold`` of that line (the nearer one if both), working outwards
-    from the line. With ``noise_sigma`` (``"auto"``) a point's threshold is at most three of its
-    own sigmas across the line, ``3 max(noise_sigma |cos(incidence)|, MIN_SPLIT_M / SPLIT_SIGMAS)``
-    (``rho``: the points' ranges): a wall seen at a grazing angle is thin.
-    """
-    if not leftovers or not accepted:
-        return sorted(accepted)
-    by_end = {b: k for k, (a, b) in enumerate(accepted)}
-    by_start = {a: k for k, (a, b) in enumerate(accepted)}
-    spans = [list(ab) for ab in accepted]
-    x, y = run.x, run.y
-    fits: dict[int, tuple[float, float, float]] = {}  # cos(alpha), sin(alpha), r of the lines used
-
-    def distance(k, i):
-        if k is None:
-            return math.inf
-        if k not in fits:
-            r, alpha = line_from_sums(*run.sums(*accepted[k]))
-            fits[k] = math.cos(alpha), math.sin(alpha), r
-        c, s, r = fits[k]
-        v = x.item(i) * c + y.item(i) * s
-        if noise_sigma:  # in units of the threshold at this point's incidence
-            return abs(v - r) * threshold / min(threshold, 3.0 * max(noise_sigma * abs(v) / rho.item(i),
-                                                                      MIN_SPLIT_M / SPLIT_SIGMAS))
-        return abs(v - r)
-
-    for a, b in leftovers:
-        left, right = by_end.get(a), by_start.get(b)
-        lo, hi = a, b
-        while lo < hi:
-            d = distance(left, lo)
-            if not (d <= threshold and d <= distance(right, lo)):
-                break
-            lo += 1
-        while hi > lo and distance(right, hi - 1) <= threshold:
-            hi -= 1
-        if left is not None:
-            spans[left][1] = lo
-        if right is not None:
-            spans[right][0] = hi
-        if steps is not None and (lo > a or hi < b):
-            steps.add("absorb", int(run.idx[a]), int(run.idx[b - 1]), value=(lo - a) + (b - hi),
-                      reason=f"{(lo - a) + (b - hi)} stranded points joined the neighbouring lines")
-    return sorted((a, b) for a, b in spans)
-
-
-def _covariances(idx: np.ndarray, starts: np.ndarray, alpha: np.ndarray, p: np.ndarray, ranges: np.ndarray, weights,
-                 sigma: float, r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
-    """Covariances of lines whose beams ``idx[starts[k]:starts[k + 1]]`` have the points ``p``
-    (and, given the lines' ``r``, their RMS errors: :func:`labkit.fitting._line_covariances`)."""
-    w = np.ones(len(idx)) if weights == "uniform" else 1.0 / ranges.take(idx)
-    var = np.full(len(idx), sigma * sigma)
-    return _line_covariances(p[:, 0], p[:, 1], w, starts, alpha, var, r=r)
 
 
 @dataclass(frozen=True)
@@ -289,33 +123,95 @@ class SplitMergeParams(Params):
     weights: str = param("inverse_range", "point weights of the fits: inverse_range (1/rho, the slides) or uniform",
                          choices=("inverse_range", "uniform"), optional=True)
 
-    def kwargs(self) -> dict:
-        kw = super().kwargs()
-        kw["merge"] = None if kw["merge"] == "none" else kw["merge"]
-        kw["weights"] = None if kw["weights"] == "inverse_range" else kw["weights"]
-        return kw
+
+# ============================================================================ the bare algorithm
+def iepf(points, threshold_m: float = 0.05, min_points: int = SplitMergeParams.min_points) -> list[tuple[int, int]]:
+    """The split of the slides on one list of points (steps 2-5), by iterative end-point fit.
+
+    The list's worst point is the one farthest from its chord (the line through its first and
+    last points), among those that are not one of the first or last ``min_points // 2`` (unless
+    the list is too short to leave any). Farther than ``threshold_m``, the list is split there
+    (the worst point ends the left half); otherwise it is a line. Lists with fewer than
+    ``min_points`` points make no line. No gaps, no noise tests, no merge: what
+    :func:`split_and_merge` accepts on a single range segment with a fixed ``split_threshold_m``,
+    no gap wider than ``max_gap_m`` and nothing stranded.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2), metres
+        One run of points in scan order.
+    threshold_m : float, metres
+        The split threshold. Default 0.05 m (the papers').
+    min_points : int
+        ``minPointsPerLine``, at least 2. Default 5.
+
+    Returns
+    -------
+    list of (int, int)
+        The accepted lines as half-open index ranges ``[a, b)`` of ``points``, in order.
+
+    Examples
+    --------
+    Two walls meeting in a corner at index 5:
+
+    >>> corner = [[x, 0.0] for x in range(6)] + [[5.0, y] for y in range(1, 7)]
+    >>> iepf(corner)
+    [(0, 6), (6, 12)]
+    """
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2 or not np.isfinite(p).all():
+        raise ValueError(f"points must be finite, of shape (N, 2), got shape {p.shape}")
+    if not (threshold_m > 0 and math.isfinite(threshold_m)):
+        raise ValueError(f"threshold_m must be a finite number > 0, got {threshold_m!r}")
+    if isinstance(min_points, bool) or not isinstance(min_points, (int, np.integer)) or min_points < 2:
+        raise ValueError(f"min_points must be a whole number >= 2, got {min_points!r}")
+    keep = min_points // 2
+    accepted, lists = [], [(0, len(p))]  # step 1: L holds the whole list
+    while lists:
+        a, b = lists.pop()  # step 2: the next list
+        if b - a < min_points:
+            continue
+        lo, hi = (a + keep, b - keep) if b - a > 2 * keep else (a, b)
+        d = _chord_distances(p[a:b])[lo - a:hi - a]  # step 3: the worst point, from the chord
+        worst = lo + int(d.argmax())
+        if d.max() > threshold_m and a < worst < b - 1:  # step 5: split there, the left half first
+            lists += [(worst + 1, b), (a, worst + 1)]
+        else:  # step 4: a line
+            accepted.append((a, b))
+    return accepted
 
 
-@takes_params(SplitMergeParams, segmented=True, own_segmentation=("segment_threshold_m", "adaptive_segmentation"))
+def _chord_distances(p: np.ndarray) -> np.ndarray:
+    """How far each point of ``p`` lies from the chord through its first and last points."""
+    a, b = p[0], p[-1]
+    u = b - a
+    length = math.hypot(u[0], u[1])
+    if length == 0.0:
+        return np.hypot(p[:, 0] - a[0], p[:, 1] - a[1])
+    return np.abs(u[0] * (p[:, 1] - a[1]) - u[1] * (p[:, 0] - a[0])) / length
+
+
+# ============================================================================ split-and-merge
+@checked_by(SplitMergeParams)
 def split_and_merge(
     scan: Scan,
     *,
     method: str = "endpoints",
-    split_threshold_m: float,
-    min_points: int,
-    min_length_m: float,
-    max_gap_m: float,
-    merge: str | None,
-    merge_dr_m: float,
-    merge_dalpha: float,
-    merge_chi2: float,
-    segment_threshold_m: float = SegmentationParams.threshold_m,
-    adaptive_segmentation: bool = SegmentationParams.adaptive,
-    range_sigma_m: float,
-    weights,
-    place_dr_m: float,
-    place_dalpha: float,
-    place_confidence: float,
+    split_threshold_m: float | str = SplitMergeParams.split_threshold_m,
+    min_points: int = SplitMergeParams.min_points,
+    min_length_m: float = SplitMergeParams.min_length_m,
+    max_gap_m: float = SplitMergeParams.max_gap_m,
+    merge: str | None = SplitMergeParams.merge,
+    merge_dr_m: float = SplitMergeParams.merge_dr_m,
+    merge_dalpha_deg: float = SplitMergeParams.merge_dalpha_deg,
+    merge_chi2: float = SplitMergeParams.merge_chi2,
+    range_sigma_m: float | str = SplitMergeParams.range_sigma_m,
+    weights: str | None = SplitMergeParams.weights,
+    place_dr_m: float = SplitMergeParams.place_dr_m,
+    place_dalpha_deg: float = SplitMergeParams.place_dalpha_deg,
+    place_confidence: float = SplitMergeParams.place_confidence,
+    segment_threshold_m: float | None = None,
+    adaptive_segmentation: bool | None = None,
     segments=None,
     trace: bool = False,
 ) -> list[LineSegment] | tuple[list[LineSegment], list[Step]]:
@@ -350,7 +246,7 @@ def split_and_merge(
         of that line (:data:`SHIFT_Z`: a recess, a chair against the wall, a bent end; the
         stretch is cut out). All of these also hold for merges, and stranded points join a
         line only within three of their own sigmas. A far wall seen at a few degrees, which the
-        breakpoint detector cuts at every beam, is joined again (:func:`_grazing_runs`): lone
+        breakpoint detector cuts at every beam, is joined again (:func:`join_grazing_walls`): lone
         beams in a row, each cut from the next at :data:`GRAZING_DEG` or more from the beams.
         :func:`labkit.noise.auto_split_threshold` (``max(5 sigma, 2 cm)``, a point seen head-on)
         is the threshold the trace and the merge's worst-point test report. A number gives the
@@ -366,33 +262,34 @@ def split_and_merge(
         this; lines whose facing ends are farther apart are never merged, nor are lines
         between which a valid beam ends more than this behind the merged line (it saw through
         it) or in front of it (it hides what the line would claim). Default 0.3 m.
-    merge : {"thresholds", "chi2", None}
-        The merge test (see :func:`lines_similar`); ``None`` skips the merge step.
-    merge_dr_m, merge_dalpha, merge_chi2 : float
-        Thresholds of the merge test: 0.2 m, 10 deg, and 9.21 (chi-square, 2 dof, 99%).
+    merge : {"thresholds", "chi2", "none"}
+        The merge test (see :func:`lines_similar`); ``"none"`` (or None) skips the merge step.
+    merge_dr_m, merge_dalpha_deg, merge_chi2 : float
+        Thresholds of the merge test: 0.2 m, 10 degrees, and 9.21 (chi-square, 2 dof, 99%).
         They can be generous because every merge must also pass the split test: the
         refitted line may miss none of its points by more than ``split_threshold_m``. Tight
         thresholds leave short noisy pieces of long walls unmerged: a few degrees of
         angle error on a piece 3 m away shifts its ``r`` by decimetres.
-    segment_threshold_m, adaptive_segmentation : float, bool
-        Range segmentation (:func:`labkit.segmentation.segment_labels`): 0.08 m floor with
-        the adaptive breakpoint detector on.
     range_sigma_m : float or "auto"
         Range noise, for the adaptive breakpoints, the lines' covariances and the ``"auto"``
         split threshold. Default ``"auto"``: estimated from the scan
         (:func:`labkit.noise.scan_sigma`); a number: that noise (the fixed settings' 0.01 m).
-    place_dr_m, place_dalpha, place_confidence : float
+    weights : {"inverse_range", "uniform"}
+        Point weights of the fits: ``1 / rho`` (the slides, the default; None means it too) or
+        equal.
+    place_dr_m, place_dalpha_deg, place_confidence : float
         What a user trusts: a line is reported only if, by its covariance (from
         ``range_sigma_m``), it lies within ``place_dr_m`` (default 5 cm) in ``r`` and
-        ``place_dalpha`` (default 3 deg, the record's ``place_dalpha_deg``) in ``alpha`` of the
-        true line with probability ``place_confidence`` (default 0.8; 0: every line is
-        reported, as in the papers):
+        ``place_dalpha_deg`` (default 3 degrees) in ``alpha`` of the true line with probability
+        ``place_confidence`` (default 0.8; 0: every line is reported, as in the papers):
         :func:`labkit.fitting.placement_probability`. A short piece seen from afar, whose angle
         the data cannot fix to a few degrees, is dropped (a ``"reject"`` step with
         ``test="place_confidence"``). The defaults are Nguyen et al.'s tolerance of a correct
         line; at 0.8 a line matches the wall it belongs to four times in five.
-    weights : None or "uniform"
-        Point weights of the fits: ``None`` is ``1 / rho`` (the slides).
+    segment_threshold_m, adaptive_segmentation : float, bool, optional
+        A range segmentation of the scan's own (:func:`labkit.segmentation.segment_labels` with
+        these, and ``min_points`` as its smallest segment). Default None: the default
+        segmentation (the pipeline's), its breakpoints following ``range_sigma_m``.
     segments : ndarray of per-beam labels or list of RangeSegment, optional
         A range segmentation computed elsewhere (shared with other detectors, or with the
         beams of circles and legs set to -1 so that no line is fitted to them); then
@@ -437,205 +334,105 @@ def split_and_merge(
     >>> [(round(s.r, 6), round(float(np.degrees(s.alpha)), 6), s.first, s.last) for s in lines]
     [(2.0, 0.0, 0, 160)]
     """
-    if not isinstance(scan, Scan):
-        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
-    min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m = _params(
-        method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
-        merge_chi2, range_sigma_m, place_dr_m, place_dalpha, place_confidence)
-    if range_sigma_m == AUTO:
-        range_sigma_m = scan_sigma(scan)
-    noise_sigma = 0.0  # > 0: the "auto" split test, which measures each point against this range noise
-    if split_threshold_m == AUTO:
-        split_threshold_m = auto_split_threshold(range_sigma_m)
-        noise_sigma = range_sigma_m
+    _check_arguments(scan, method, segment_threshold_m, adaptive_segmentation)
+    steps = _Trace("iepf" if method == "endpoints" else "split_and_merge") if trace else None
+    sigma = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
+    test = _SplitTest(split_threshold_m, sigma)
 
-    steps = _Steps("iepf" if method == "endpoints" else "split_and_merge") if trace else None
-    if segments is None:
-        labels = segment_labels(scan, segment_threshold_m, min_points=min_points, adaptive=adaptive_segmentation,
-                                range_sigma_m=range_sigma_m)
-    else:
-        labels = labels_from(scan, segments)
-    grazing = None
-    if noise_sigma:  # "auto": walls seen at a grazing angle, which the breakpoints left as lone points
-        labels, grazing = _grazing_runs(scan, labels, segment_threshold_m, min_points, range_sigma_m)
-    points = scan.points
-    ranges = scan.ranges
-    keep = min_points // 2
-    order, starts, stops = segment_order(labels)
-    order.setflags(write=False)  # so are the lines' beams, slices of it
-    # one pass over the whole scan, segments laid end to end: points, weights, prefix sums, gaps
-    xy = points.take(order, axis=0)  # = points[order], several times faster
-    w = np.ones(len(order)) if weights == "uniform" else 1.0 / ranges.take(order)
-    run = _Run(xy, w, order)
-    rho = ranges.take(order) if noise_sigma else None
-    x, y = run.x, run.y
-    # the gaps between neighbours wider than max_gap_m, where a run may have to be cut (ascending);
-    # as hypot(dx, dy) <= |dx| + |dy|, only the few neighbours with |dx| + |dy| near max_gap_m are measured
-    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]
-    near = (np.abs(dx) + np.abs(dy) > 0.99 * max_gap_m).nonzero()[0]
-    gaps = dict(zip(near.tolist(), np.hypot(dx[near], dy[near]).tolist(), strict=True))
-    wide = [i for i, gap in gaps.items() if gap > max_gap_m  # (not where a grazing wall was joined again)
-            and not (grazing is not None and order[i + 1] == order[i] + 1 and grazing[order[i]])]
-    spans: list[tuple[int, int]] = []  # the accepted runs a..b-1, scan order
-    normal = np.empty(2)  # (cos alpha, sin alpha) of the line being tested
-    fit = method == "fit"
-    absorb_m = min(split_threshold_m, 3 * range_sigma_m)
-    for seg_a, seg_b in zip(starts.tolist(), stops.tolist(), strict=True):
-        if steps is not None:
-            joined = grazing is not None and bool(grazing.take(order[seg_a:seg_b - 1]).any())
-            graze = " (with beams the breakpoints cut from it: a wall seen at a grazing angle)" if joined else ""
-            steps.add("segment", int(order[seg_a]), int(order[seg_b - 1]), value=seg_b - seg_a,
-                      reason=f"range segment of {seg_b - seg_a} points{graze}")
-        stack = [(seg_a, seg_b)]
-        accepted: list[tuple[int, int]] = []
-        leftovers: list[tuple[int, int]] = []
-        while stack:
-            a, b = stack.pop()
-            n = b - a
-            if steps is not None:
-                first, last = int(order[a]), int(order[b - 1])
-            if n < min_points:
-                if steps is not None:
-                    steps.add("reject", first, last, value=n, threshold=min_points, test="min_points",
-                              reason=f"{n} points < min_points={min_points}")
-                leftovers.append((a, b))
-                continue
-            k = bisect_left(wide, a) if wide else 0
-            if k < len(wide) and wide[k] < b - 1:  # a gap wider than max_gap_m: cut at the widest
-                g = max(wide[k:bisect_left(wide, b - 1)], key=gaps.__getitem__)
-                if steps is not None:
-                    steps.add("gap", first, last, at=int(order[g]), value=gaps[g], threshold=max_gap_m,
-                              test="max_gap_m", reason=f"gap {gaps[g]:.3f} m > max_gap_m")
-                stack.append((g + 1, b))
-                stack.append((a, g + 1))
-                continue
-            if fit:
-                r, alpha = line_from_sums(*run.sums(a, b))
-            else:  # the chord: the line through points a and b - 1
-                x0, y0, x1, y1 = x.item(a), y.item(a), x.item(b - 1), y.item(b - 1)
-                alpha = math.atan2(x1 - x0, -(y1 - y0))
-                r = x0 * math.cos(alpha) + y0 * math.sin(alpha)
-                if r < 0:
-                    r, alpha = -r, alpha + math.pi
-                alpha = math.remainder(alpha, 2 * math.pi)
-            lo, hi = (a + keep, b - keep) if n > 2 * keep else (a, b)
-            # signed distances v - r; the worst point is the farther of the two extremes
-            normal[0], normal[1] = math.cos(alpha), math.sin(alpha)
-            v = xy[lo:hi].dot(normal)  # xy[lo:hi] @ normal, with less overhead
-            k_hi, k_lo = int(v.argmax()), int(v.argmin())
-            d_hi, d_lo = v.item(k_hi) - r, r - v.item(k_lo)
-            if d_hi > d_lo or (d_hi == d_lo and k_hi < k_lo):
-                worst, p = d_hi, lo + k_hi
-            else:
-                worst, p = d_lo, lo + k_lo
-            if steps is not None:
-                ref = "fitted line" if fit else "chord"
-                steps.add("fit", first, last, r, alpha, at=int(order[p]), value=worst, threshold=split_threshold_m,
-                          reason=f"worst point {worst:.3f} m from the {ref}")
-            test, threshold = "split_threshold_m", split_threshold_m
-            failed = worst > split_threshold_m
-            if noise_sigma and not failed and a < p < b - 1:
-                # "auto": each point against its own noise across the line, then the fit's residuals
-                if worst > MIN_SPLIT_M:
-                    q, ratio = _beyond_own_noise(v, rho[lo:hi], r, noise_sigma)
-                    if ratio > 1.0:
-                        failed, p = True, lo + q
-                        worst = abs(v.item(q) - r)
-                        threshold = worst / ratio
-            misfit = None
-            if noise_sigma and not failed and n > 2:  # "auto": the fit's residuals against the noise
-                rf, af = (r, alpha) if fit else line_from_sums(*run.sums(a, b))
-                normal[0], normal[1] = math.cos(af), math.sin(af)
-                misfit = _misfit(xy[a:b].dot(normal), rho[a:b], rf, noise_sigma)
-                if misfit is not None and misfit[0] == "residual" and a < p < b - 1:
-                    failed, test, threshold = True, "residual", noise_sigma
-            if failed and a < p < b - 1:
-                if steps is not None:
-                    if test == "residual":
-                        reason = (f"residuals wider than range noise {noise_sigma:.3f} m allows "
-                                  f"(RMS {misfit[1]:.3f} m)")
-                    elif threshold < split_threshold_m:
-                        reason = (f"{worst:.3f} m > {threshold:.3f} m, {SPLIT_SIGMAS:g} sigma across the line "
-                                  "at this point's incidence")
-                    else:
-                        reason = f"{worst:.3f} m > split_threshold_m={split_threshold_m}"
-                    steps.add("split", first, last, r, alpha, at=int(order[p]), value=worst,
-                              threshold=threshold, test=test, reason=reason)
-                stack.append((p + 1, b))  # right half, processed after the left half
-                stack.append((a, p + 1))  # the worst point ends the left half
-                continue
-            if misfit is not None and misfit[0] == "shift":  # a stretch of points to one side of the fit
-                k, width, mean = misfit[1]
-                cuts = (a, a + k, a + k + width, b)  # the stretch and what lies either side of it
-                if steps is not None:
-                    steps.add("split", first, last, rf, af, at=int(order[a + k]), value=abs(mean),
-                              threshold=noise_sigma, test="shift",
-                              reason=f"beams {int(order[a + k])}..{int(order[a + k + width - 1])} lie "
-                                     f"{abs(mean):.3f} m to one side of the fitted line on average")
-                for c0, c1 in reversed(list(zip(cuts[:-1], cuts[1:], strict=True))):
-                    if c1 > c0:
-                        stack.append((c0, c1))
-                continue
-            if steps is not None:
-                steps.add("accept", first, last, r, alpha, at=int(order[p]), value=worst,
-                          threshold=split_threshold_m, test="split_threshold_m",
-                          reason=f"{worst:.3f} m <= split_threshold_m")
-            accepted.append((a, b))
-        spans += _absorb(accepted, leftovers, run, absorb_m, steps, rho, noise_sigma) if leftovers else sorted(accepted)
-    lines = run.lines(spans)
-
-    merge_args = dict(max_gap_m=max_gap_m, max_error_m=split_threshold_m, merge=merge, merge_dr_m=merge_dr_m,
-                      merge_dalpha=merge_dalpha, merge_chi2=merge_chi2, ranges=ranges, angles=scan.angles,
-                      valid=scan.valid, weights=weights, sigma=range_sigma_m, noise_sigma=noise_sigma,
-                      segment_threshold_m=segment_threshold_m)
-    wrap = merge is not None and len(lines) > 1 and scan.is_full_circle
-    if merge is not None and len(lines) > 1:
-        lines = _merge(lines, points, wrap, steps, **merge_args)
-    kept = []
-    for line in lines:
-        if line.length < min_length_m:
-            if steps is not None:
-                steps.add("reject", line.first, line.last, line.r, line.alpha, value=line.length,
-                          threshold=min_length_m, test="min_length_m",
-                          reason=f"length {line.length:.3f} m < min_length_m={min_length_m}")
-            continue
-        kept.append(line)
-    if merge is not None and 1 < len(kept) < len(lines):
-        # a short piece dropped from between two parts of one wall (a few noisy points around
-        # a dropout) no longer keeps them apart: try merging the new neighbours
-        kept = _merge(kept, points, wrap, steps, **merge_args)
-    out = _finish(kept, points, ranges, weights, range_sigma_m)
+    # step 1: the list of lists L, one list per range segment
+    labels = _range_segments(scan, segments, segment_threshold_m, adaptive_segmentation, min_points, sigma)
+    L = _Lists(scan, labels, weights, max_gap_m, test, segment_threshold_m, min_points)
+    # steps 2-5 on every list: fit a line, find the worst point, accept the line or split there
+    spans: list[tuple[int, int]] = []
+    for a, b in L.segments(steps):
+        accepted, leftovers = _split(L, a, b, method == "fit", min_points, test, steps)
+        spans += _absorb(accepted, leftovers, L, test, steps)
+    lines = L.runs.lines(spans)
+    # step 6: merge similar neighbours; drop the lines too short, then merge the new neighbours
+    merging = _Merging(scan, merge, merge_dr_m, math.radians(merge_dalpha_deg), merge_chi2, max_gap_m, test,
+                       weights, sigma, segment_threshold_m, steps)
+    lines = merging.merge(lines)
+    kept = _drop_short(lines, min_length_m, steps)
+    if 1 < len(kept) < len(lines):  # a short piece between two parts of one wall no longer keeps them apart
+        kept = merging.merge(kept)
+    # line segments, less those the data cannot place
+    out = line_segments(kept, scan.points, scan.ranges, weights, sigma)
     if place_confidence > 0 and out:
-        out = _placed(out, place_dr_m, place_dalpha, place_confidence, steps)
+        out = placed(out, place_dr_m, place_dalpha_deg, place_confidence, steps)
     return (out, list(steps)) if trace else out
 
 
-#: With ``split_threshold_m="auto"``: neighbouring lone beams that the breakpoint detector cut
-#: (its ``incidence_deg``, 10 deg) are joined again when the line between their points makes at
-#: least this angle (degrees) with the beams; ``min_points`` or more in a row are a wall seen at a
-#: grazing angle (:func:`_grazing_runs`). On the simulated sets 2-5 deg find the same walls to
-#: within 0.003 of TruePos.
-GRAZING_DEG = 3.0
+def _check_arguments(scan, method, segment_threshold_m, adaptive_segmentation) -> None:
+    """What the record does not check: the scan, the method and the segmentation of its own."""
+    if not isinstance(scan, Scan):
+        raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
+    if method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    if segment_threshold_m is not None and not (isinstance(segment_threshold_m, (int, float, np.floating))
+                                                and segment_threshold_m > 0 and math.isfinite(segment_threshold_m)):
+        raise ValueError(f"segment_threshold_m must be a finite number > 0, got {segment_threshold_m!r}")
+    if adaptive_segmentation is not None and not isinstance(adaptive_segmentation, (bool, np.bool_)):
+        raise ValueError(f"adaptive_segmentation must be true or false, got {adaptive_segmentation!r}")
 
 
-def _grazing_links(p: np.ndarray, r: np.ndarray, a: np.ndarray, k: np.ndarray, threshold_m: float,
-                   sigma: float) -> np.ndarray:
-    """Which pairs of neighbouring beams ``(k, k + 1)`` (points ``p``, ranges ``r``, angles ``a``
-    of the scan) the breakpoint detector cut (its ``incidence_deg``) though the line between their
-    points makes :data:`GRAZING_DEG` or more with the beams: the same surface seen at a grazing
-    angle, nothing between them (no beam)."""
-    gap = np.hypot(p[k + 1, 0] - p[k, 0], p[k + 1, 1] - p[k, 1])
-    dphi = np.abs(a[k + 1] - a[k])
-    ra, rb = r[k], r[k + 1]
-    return (gap > _thresholds(ra, rb, dphi, threshold_m, SegmentationParams.incidence_deg, sigma)) & (
-        gap <= _thresholds(ra, rb, dphi, threshold_m, GRAZING_DEG, sigma))
+def _range_segments(scan: Scan, segments, threshold_m, adaptive, min_points: int, sigma: float) -> np.ndarray:
+    """Step 1's lists as per-beam labels: ``segments`` when given, a segmentation of the scan's own
+    when ``threshold_m`` or ``adaptive`` is, else the default one (see :func:`split_and_merge`)."""
+    if segments is not None or (threshold_m is None and adaptive is None):
+        return detector_labels(scan, segments, sigma)
+    return segment_labels.unchecked(
+        scan, threshold_m=SegmentationParams.threshold_m if threshold_m is None else threshold_m,
+        min_points=min_points, adaptive=SegmentationParams.adaptive if adaptive is None else bool(adaptive),
+        range_sigma_m=sigma)
 
 
-def _grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points: int,
-                  sigma: float) -> tuple[np.ndarray, np.ndarray | None]:
+# ---------------------------------------------------------------------------- step 1: the lists
+class _Lists:
+    """The list of lists L of one scan: its range segments laid end to end in one pass (points,
+    weights, prefix sums: :class:`~labkit.lines._split_merge_fast.Runs`), the points' ranges, and
+    where neighbouring points are more than ``max_gap_m`` apart. With the noise-aware test, the
+    walls seen at a grazing angle are joined first (:func:`join_grazing_walls`)."""
+
+    def __init__(self, scan: Scan, labels: np.ndarray, weights, max_gap_m: float, test: _SplitTest,
+                 segment_threshold_m, min_points: int):
+        floor = SegmentationParams.threshold_m if segment_threshold_m is None else segment_threshold_m
+        self.grazing = None
+        if test.noise_sigma:
+            labels, self.grazing = join_grazing_walls(scan, labels, floor, min_points, test.noise_sigma)
+        self.order, self.starts, self.stops = segment_order(labels)
+        self.order.setflags(write=False)  # so are the lines' beams, slices of it
+        w = np.ones(len(self.order)) if weights == "uniform" else 1.0 / scan.ranges.take(self.order)
+        self.runs = Runs(scan.points.take(self.order, axis=0), w, self.order)
+        self.rho = scan.ranges.take(self.order) if test.noise_sigma else None
+        self.max_gap_m = max_gap_m
+        # the gaps wider than max_gap_m, where a list may have to be cut (not where a grazing wall was joined)
+        self.gaps = wide_gaps(self.runs.x, self.runs.y, max_gap_m)
+        self.wide = [i for i, gap in self.gaps.items() if gap > max_gap_m and not self.joined_at(i)]
+
+    def joined_at(self, i: int) -> bool:
+        """Whether points ``i`` and ``i + 1`` are neighbouring beams of a wall joined at a grazing angle."""
+        return (self.grazing is not None and self.order[i + 1] == self.order[i] + 1
+                and bool(self.grazing[self.order[i]]))
+
+    def beam(self, i: int) -> int:
+        return int(self.order[i])
+
+    def segments(self, steps):
+        """Each range segment as the points ``a..b-1`` (a ``"segment"`` step each)."""
+        for a, b in zip(self.starts.tolist(), self.stops.tolist(), strict=True):
+            if steps is not None:
+                joined = self.grazing is not None and bool(self.grazing.take(self.order[a:b - 1]).any())
+                graze = " (with beams the breakpoints cut from it: a wall seen at a grazing angle)" if joined else ""
+                steps.add("segment", self.beam(a), self.beam(b - 1), value=b - a,
+                          reason=f"range segment of {b - a} points{graze}")
+            yield a, b
+
+
+def join_grazing_walls(scan: Scan, labels: np.ndarray, threshold_m: float, min_points: int,
+                       sigma: float) -> tuple[np.ndarray, np.ndarray | None]:
     """``labels`` with the walls seen at a grazing angle that the breakpoint detector cut to
     pieces joined again (relabelled in scan order), and at which beams ``k`` the pair
-    ``(k, k + 1)`` was joined (None: none).
+    ``(k, k + 1)`` was joined (None: none). The ``"auto"`` split test only.
 
     The detector (:func:`labkit.segmentation.segment_labels`) cuts between two beams when the
     line joining their points is within ``incidence_deg`` (10 deg) of the beams: there it cannot
@@ -647,55 +444,95 @@ def _grazing_runs(scan: Scan, labels: np.ndarray, threshold_m: float, min_points
     the segment at either end when it was cut from it the same way. The split tests then cut
     what is not one line. (Beams without a label closer than the detector's threshold were not
     cut: the pipeline's beams of circles and legs. They stay out.)"""
-    n = len(labels)
-    free = scan.valid & (labels < 0)
-    k = np.flatnonzero(free[:-1] & free[1:])  # pairs of lone beams
-    m = min_points - 1  # pairs in a chain of min_points beams
-    if len(k) < m or not (k[m - 1:] - k[:len(k) - m + 1] == m - 1).any():  # (no m of them in a row)
-        return labels, None
-    link = np.zeros(n - 1, dtype=bool)
-    link[k[_grazing_links(scan.points, scan.ranges, scan.angles, k, threshold_m, sigma)]] = True
-    edges = np.flatnonzero(np.diff(np.concatenate([[False], link, [False]]).astype(np.int8)))
-    firsts, lasts = edges[0::2], edges[1::2]  # chain j: beams firsts[j] .. lasts[j]
-    long = lasts - firsts + 1 >= min_points
-    if not long.any():
-        return labels, None
-    firsts, lasts = firsts[long], lasts[long]
-    # the pairs between a chain and the segment it continues, either side
-    ends = np.concatenate([firsts - 1, lasts])
-    ends = ends[(ends >= 0) & (ends < n - 1)]
-    ends = ends[scan.valid[ends] & scan.valid[ends + 1]]
-    link[ends[_grazing_links(scan.points, scan.ranges, scan.angles, ends, threshold_m, sigma)]] = True
-    same = (labels[:-1] == labels[1:]) & (labels[:-1] >= 0)  # pairs the segmentation joined
-    joined = np.zeros(n - 1, dtype=bool)
-    for f, e in zip(firsts.tolist(), lasts.tolist(), strict=True):
-        joined[max(f - 1, 0):e + 1] = link[max(f - 1, 0):e + 1]
-    out = labels.copy()
-    top = int(labels.max()) + 1
-    runs = np.flatnonzero(np.diff(np.concatenate([[False], joined | same, [False]]).astype(np.int8)))
-    firsts, lasts = runs[0::2], runs[1::2]
-    count = np.concatenate([[0], np.add.accumulate(joined)])
-    new = count[lasts] > count[firsts]  # (a run with no new pair is a segment as it was)
-    for j, (f, e) in enumerate(zip(firsts[new].tolist(), lasts[new].tolist(), strict=True)):
-        out[f:e + 1] = top + j
-    if scan.is_full_circle and labels[0] >= 0 and labels[0] == labels[-1] and out[0] != out[-1]:
-        out[out == out[-1]] = out[0]  # the segment across the seam stays one
-    # labels in scan order again: each segment is a run of beams, numbered where it starts; one
-    # crossing the seam keeps the first number at its end too
-    seen = out >= 0
-    start = seen.copy()
-    start[1:] &= out[1:] != out[:-1]
-    number = np.add.accumulate(start) - 1
-    if seen[0] and out[0] == out[-1]:
-        number[np.flatnonzero(start)[-1]:] = 0
-    return np.where(seen, number, -1), np.concatenate([joined & ~same, [False]])
+    return grazing_runs(scan, labels, threshold_m, min_points, sigma)
 
 
+# ---------------------------------------------------------------------------- steps 2-5: the split
+def _split(L: _Lists, a: int, b: int, fit: bool, min_points: int, test: _SplitTest,
+           steps) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """Steps 2-5 on the list of points ``a..b-1``: the runs accepted as lines and those left
+    with too few points, each ``(a, b)``."""
+    keep = min_points // 2
+    accepted: list[tuple[int, int]] = []
+    leftovers: list[tuple[int, int]] = []
+    lists = [(a, b)]
+    while lists:
+        a, b = lists.pop()  # step 2: the next list
+        if b - a < min_points:
+            _note_too_few(L, a, b, min_points, steps)
+            leftovers.append((a, b))
+            continue
+        g = _widest_gap(L, a, b, steps)
+        if g is not None:  # first cut at a gap: the gap ends the left half
+            lists += [(g + 1, b), (a, g + 1)]
+            continue
+        r, alpha = L.runs.fit(a, b) if fit else _chord(L.runs, a, b)  # step 2: its line
+        p, worst, v, lo = _worst_point(L.runs, a, b, r, alpha, keep)  # step 3: the worst point
+        if steps is not None:
+            steps.add("fit", L.beam(a), L.beam(b - 1), r, alpha, at=L.beam(p), value=worst,
+                      threshold=test.threshold, reason=f"worst point {worst:.3f} m from the "
+                                                       f"{'fitted line' if fit else 'chord'}")
+        cut, p, worst = test.cut(L, a, b, r, alpha, fit, p, worst, v, lo, steps)  # step 4: is it a line?
+        if cut is None:
+            if steps is not None:
+                steps.add("accept", L.beam(a), L.beam(b - 1), r, alpha, at=L.beam(p), value=worst,
+                          threshold=test.threshold, test="split_threshold_m",
+                          reason=f"{worst:.3f} m <= split_threshold_m")
+            accepted.append((a, b))
+            continue
+        bounds = (a, *cut, b)  # step 5: split, the pieces back into L, the first on top
+        lists += [(c0, c1) for c0, c1 in reversed(list(zip(bounds[:-1], bounds[1:], strict=True))) if c1 > c0]
+    return accepted, leftovers
+
+
+def _note_too_few(L: _Lists, a: int, b: int, min_points: int, steps) -> None:
+    if steps is not None:
+        steps.add("reject", L.beam(a), L.beam(b - 1), value=b - a, threshold=min_points, test="min_points",
+                  reason=f"{b - a} points < min_points={min_points}")
+
+
+def _widest_gap(L: _Lists, a: int, b: int, steps) -> int | None:
+    """The point before the widest gap of the list ``a..b-1`` wider than ``max_gap_m``, or None."""
+    k = bisect_left(L.wide, a) if L.wide else 0
+    if not (k < len(L.wide) and L.wide[k] < b - 1):
+        return None
+    g = max(L.wide[k:bisect_left(L.wide, b - 1)], key=L.gaps.__getitem__)
+    if steps is not None:
+        steps.add("gap", L.beam(a), L.beam(b - 1), at=L.beam(g), value=L.gaps[g], threshold=L.max_gap_m,
+                  test="max_gap_m", reason=f"gap {L.gaps[g]:.3f} m > max_gap_m")
+    return g
+
+
+def _chord(runs: Runs, a: int, b: int) -> tuple[float, float]:
+    """The line ``(r, alpha)`` through points ``a`` and ``b - 1`` (IEPF's chord)."""
+    x0, y0, x1, y1 = runs.x.item(a), runs.y.item(a), runs.x.item(b - 1), runs.y.item(b - 1)
+    alpha = math.atan2(x1 - x0, -(y1 - y0))
+    r = x0 * math.cos(alpha) + y0 * math.sin(alpha)
+    if r < 0:
+        r, alpha = -r, alpha + math.pi
+    return r, math.remainder(alpha, 2 * math.pi)
+
+
+def _worst_point(runs: Runs, a: int, b: int, r: float, alpha: float, keep: int):
+    """Step 3: the point of ``a..b-1`` farthest from the line ``(r, alpha)``, not one of the first
+    or last ``keep`` unless the list is too short to leave any; returns it, its distance, the
+    signed projections ``v`` of the points ``lo..hi-1`` searched, and ``lo``. On a tie the
+    first."""
+    n = b - a
+    lo, hi = (a + keep, b - keep) if n > 2 * keep else (a, b)
+    v = runs.xy[lo:hi].dot(np.array([math.cos(alpha), math.sin(alpha)]))  # points on the normal
+    k_hi, k_lo = int(v.argmax()), int(v.argmin())
+    d_hi, d_lo = v.item(k_hi) - r, r - v.item(k_lo)  # the farther of the two extremes
+    if d_hi > d_lo or (d_hi == d_lo and k_hi < k_lo):
+        return lo + k_hi, d_hi, v, lo
+    return lo + k_lo, d_lo, v, lo
+
+
+# ---------------------------------------------------------------------------- step 4: the split test
 #: With ``split_threshold_m="auto"``, a run whose fit has residuals wider than the range noise
 #: allows is split too: its weighted mean square residual (per degree of freedom) must stay under
 #: ``sigma^2`` times the upper quantile of chi-square / dof this many standard normal deviations out.
 RESIDUAL_Z = 3.0
-
 
 #: With ``split_threshold_m="auto"``, a run is split where a stretch of its points lies to one side
 #: of its fitted line: the sum of the residuals over some window of ``w`` consecutive points (``w`` =
@@ -707,6 +544,94 @@ SHIFT_Z = 5.0
 SHIFT_MIN_M = 0.01
 
 
+class _SplitTest:
+    """Step 4, whether a list is a line: the worst point against ``split_threshold_m``; with
+    ``"auto"`` (``noise_sigma`` > 0) three more stages, in order, each of which can cut the list:
+
+    1. the worst point in units of its own noise across the line (:func:`_beyond_own_noise`);
+    2. the fitted line's residuals against the noise (:func:`_misfit`, ``"residual"``);
+    3. a stretch of points to one side of the fitted line (:func:`_misfit`, ``"shift"``).
+    """
+
+    def __init__(self, split_threshold_m, sigma: float):
+        self.noise_sigma = sigma if split_threshold_m == AUTO else 0.0  # > 0: the noise-aware stages
+        self.threshold = auto_split_threshold(sigma) if split_threshold_m == AUTO else split_threshold_m
+        self.absorb_m = min(self.threshold, 3 * sigma)  # stranded points join a line within this
+
+    def cut(self, L: _Lists, a: int, b: int, r: float, alpha: float, fit: bool, p: int, worst: float,
+            v: np.ndarray, lo: int, steps) -> tuple[tuple[int, ...] | None, int, float]:
+        """Where to cut the list ``a..b-1`` (the points that start the new pieces; None: it is a
+        line), and the worst point and its distance, as the stages found them. ``p`` is its worst
+        point, ``worst`` its distance from the line ``(r, alpha)``, ``v`` the projections of the
+        points ``lo..`` searched."""
+        test, threshold = "split_threshold_m", self.threshold
+        failed = worst > threshold
+        sigma = self.noise_sigma
+        if sigma and not failed and a < p < b - 1 and worst > MIN_SPLIT_M:  # stage 1: the point's own noise
+            q, ratio = _beyond_own_noise(v, L.rho[lo:lo + len(v)], r, sigma)
+            if ratio > 1.0:
+                failed, p = True, lo + q
+                worst = abs(v.item(q) - r)
+                threshold = worst / ratio
+        misfit = None
+        if sigma and not failed and b - a > 2:  # stages 2 and 3: the fitted line against the noise
+            rf, af = (r, alpha) if fit else L.runs.fit(a, b)
+            misfit = _misfit(L.runs.xy[a:b].dot(np.array([math.cos(af), math.sin(af)])), L.rho[a:b], rf, sigma)
+            if misfit is not None and misfit[0] == "residual" and a < p < b - 1:
+                failed, test, threshold = True, "residual", sigma
+        if failed and a < p < b - 1:  # split at the worst point, which ends the left half
+            if steps is not None:
+                steps.add("split", L.beam(a), L.beam(b - 1), r, alpha, at=L.beam(p), value=worst,
+                          threshold=threshold, test=test, reason=self._why(test, worst, threshold, misfit))
+            return (p + 1,), p, worst
+        if misfit is not None and misfit[0] == "shift":  # cut the stretch out
+            k, width, mean = misfit[1]
+            if steps is not None:
+                steps.add("split", L.beam(a), L.beam(b - 1), rf, af, at=L.beam(a + k), value=abs(mean),
+                          threshold=sigma, test="shift",
+                          reason=f"beams {L.beam(a + k)}..{L.beam(a + k + width - 1)} lie "
+                                 f"{abs(mean):.3f} m to one side of the fitted line on average")
+            return (a + k, a + k + width), p, worst
+        return None, p, worst
+
+    def _why(self, test: str, worst: float, threshold: float, misfit) -> str:
+        if test == "residual":
+            return f"residuals wider than range noise {self.noise_sigma:.3f} m allows (RMS {misfit[1]:.3f} m)"
+        if threshold < self.threshold:
+            return (f"{worst:.3f} m > {threshold:.3f} m, {SPLIT_SIGMAS:g} sigma across the line "
+                    "at this point's incidence")
+        return f"{worst:.3f} m > split_threshold_m={self.threshold}"
+
+    def line_fails(self, v: np.ndarray, rho: np.ndarray, r: float) -> tuple[str, str] | None:
+        """The split test of a merged line (``v`` its points' projections on its normal, ``rho``
+        their ranges): the test it fails and why, or None."""
+        worst = float(np.max(np.abs(v - r)))
+        if worst > self.threshold:
+            return "split_threshold_m", f"the merged line misses a point by {worst:.3f} m"
+        sigma = self.noise_sigma
+        if not sigma:
+            return None
+        if worst > MIN_SPLIT_M and _beyond_own_noise(v, rho, r, sigma)[1] > 1.0:
+            return "split_threshold_m", f"a point misses it by more than {SPLIT_SIGMAS:g} of its sigmas"
+        misfit = _misfit(v, rho, r, sigma)
+        if misfit is None:
+            return None
+        if misfit[0] == "residual":
+            return "residual", "the merged line's residuals are wider than the range noise allows"
+        return "shift", f"{misfit[1][1]} of its points lie {abs(misfit[1][2]):.3f} m to one side of it on average"
+
+
+def _beyond_own_noise(v: np.ndarray, rho: np.ndarray, r: float, sigma: float) -> tuple[int, float]:
+    """Which point is farthest from the line ``(r, alpha)`` in units of its own split threshold
+    ``max(SPLIT_SIGMAS sigma |cos(incidence)|, MIN_SPLIT_M)``, and that ratio (> 1: it fails);
+    ``v`` are the points' projections on the line's normal, ``rho`` their ranges. Range noise
+    moves a point across the line by its cosine of incidence, ``|v| / rho``: a wall seen at a
+    grazing angle is thin, and a step in it is not noise."""
+    ratio = np.abs(v - r) / np.maximum(np.abs(v) * (SPLIT_SIGMAS * sigma) / rho, MIN_SPLIT_M)
+    q = int(ratio.argmax())
+    return q, ratio.item(q)
+
+
 def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
     """How a run of points fails to lie on its fitted line ``r`` within range noise ``sigma``
     (``v``: the points' projections on the line's normal, ``rho``: their ranges), or None.
@@ -716,7 +641,7 @@ def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
     ``("residual", rms)``: the residuals in those units have a mean square per degree of freedom
     above 1 and above the chi-square quantile at :data:`RESIDUAL_Z` (a bend too gentle for any one
     point to show); ``("shift", (k, w, mean))``: the ``w`` points from the ``k``-th lie to one side
-    of the line (:data:`SHIFT_Z`, :data:`SHIFT_MIN_M`).
+    of the line (:data:`SHIFT_Z`, :data:`SHIFT_MIN_M`; :func:`~labkit.lines._split_merge_fast.shifted_stretch`).
     """
     n = len(v)
     if n <= 2:
@@ -732,67 +657,222 @@ def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
         return "residual", math.sqrt(float(res @ res) / n)
     if n < 8 or total <= SHIFT_Z * SHIFT_Z:  # (a shifted stretch's z squared is at most the total)
         return None
-    c = np.zeros(n + 1)
-    np.add.accumulate(res, out=c[1:])  # (= cumsum, with less overhead)
-    # a window of w = 4, 8, ... points is w / 4 windows of 4: if none of those has a mean over
-    # SHIFT_MIN_M, no window does (most runs at a few millimetres of noise end here)
-    if float(np.abs(c[4:] - c[:-4]).max()) <= SHIFT_MIN_M * 4:
-        return None
-    v2 = np.zeros(n + 1)
-    np.add.accumulate(sd * sd, out=v2[1:])
-    best, best_z = None, SHIFT_Z
-    w = 4
-    while 2 * w <= n:
-        s, s2 = c[w:] - c[:-w], v2[w:] - v2[:-w]
-        zw = np.abs(s) / np.sqrt(s2)
-        k = int(zw.argmax())
-        if zw.item(k) > best_z and abs(s.item(k)) > SHIFT_MIN_M * w:
-            best, best_z = (k, w, s.item(k) / w), zw.item(k)
-        w *= 2
+    best = shifted_stretch(res, sd, SHIFT_Z, SHIFT_MIN_M)
     return None if best is None else ("shift", best)
 
 
-def _beyond_own_noise(v: np.ndarray, rho: np.ndarray, r: float, sigma: float) -> tuple[int, float]:
-    """Which point is farthest from the line ``(r, alpha)`` in units of its own split threshold
-    ``max(SPLIT_SIGMAS sigma |cos(incidence)|, MIN_SPLIT_M)``, and that ratio (> 1: it fails);
-    ``v`` are the points' projections on the line's normal, ``rho`` their ranges. Range noise
-    moves a point across the line by its cosine of incidence, ``|v| / rho``: a wall seen at a
-    grazing angle is thin, and a step in it is not noise."""
-    ratio = np.abs(v - r) / np.maximum(np.abs(v) * (SPLIT_SIGMAS * sigma) / rho, MIN_SPLIT_M)
-    q = int(ratio.argmax())
-    return q, ratio.item(q)
+# ---------------------------------------------------------------------------- stranded points
+def _absorb(accepted: list[tuple[int, int]], leftovers: list[tuple[int, int]], L: _Lists, test: _SplitTest,
+            steps) -> list[tuple[int, int]]:
+    """Give the points of runs too short for a line to the neighbouring lines they fit.
+
+    A split can strand a few points between two lines, e.g. the beams just around a corner
+    when the worst point is not the corner beam itself; left out, they make the corner look
+    hidden. Each stranded point joins the line next to it (within the same range segment)
+    when it is within ``min(split threshold, 3 sigma)`` of that line (the nearer one if both),
+    working outwards from the line. With the ``"auto"`` test a point's threshold is at most three of
+    its own sigmas across the line, ``3 max(sigma |cos(incidence)|, MIN_SPLIT_M / SPLIT_SIGMAS)``:
+    a wall seen at a grazing angle is thin.
+    """
+    if not leftovers or not accepted:
+        return sorted(accepted)
+    threshold, noise_sigma, rho = test.absorb_m, test.noise_sigma, L.rho
+    by_end = {b: k for k, (a, b) in enumerate(accepted)}
+    by_start = {a: k for k, (a, b) in enumerate(accepted)}
+    spans = [list(ab) for ab in accepted]
+    x, y = L.runs.x, L.runs.y
+    fits: dict[int, tuple[float, float, float]] = {}  # cos(alpha), sin(alpha), r of the lines used
+
+    def distance(k, i):
+        if k is None:
+            return math.inf
+        if k not in fits:
+            r, alpha = L.runs.fit(*accepted[k])
+            fits[k] = math.cos(alpha), math.sin(alpha), r
+        c, s, r = fits[k]
+        v = x.item(i) * c + y.item(i) * s
+        if noise_sigma:  # in units of the threshold at this point's incidence
+            return abs(v - r) * threshold / min(threshold, 3.0 * max(noise_sigma * abs(v) / rho.item(i),
+                                                                      MIN_SPLIT_M / SPLIT_SIGMAS))
+        return abs(v - r)
+
+    for a, b in leftovers:
+        left, right = by_end.get(a), by_start.get(b)
+        lo, hi = a, b
+        while lo < hi:
+            d = distance(left, lo)
+            if not (d <= threshold and d <= distance(right, lo)):
+                break
+            lo += 1
+        while hi > lo and distance(right, hi - 1) <= threshold:
+            hi -= 1
+        if left is not None:
+            spans[left][1] = lo
+        if right is not None:
+            spans[right][0] = hi
+        if steps is not None and (lo > a or hi < b):
+            steps.add("absorb", L.beam(a), L.beam(b - 1), value=(lo - a) + (b - hi),
+                      reason=f"{(lo - a) + (b - hi)} stranded points joined the neighbouring lines")
+    return sorted((a, b) for a, b in spans)
 
 
-@remembered
-def _params(method, merge, weights, min_points, split_threshold_m, min_length_m, max_gap_m, merge_dr_m, merge_dalpha,
-            merge_chi2, range_sigma_m, place_dr_m, place_dalpha, place_confidence) -> tuple:
-    """The parameters of :func:`split_and_merge` checked, in its order; returns those it uses converted."""
-    if method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
-    if merge not in _MERGES:
-        raise ValueError(f'merge must be "thresholds", "chi2" or None, got {merge!r}')
-    if weights not in (None, "uniform"):
-        raise ValueError(f'weights must be None (1/rho) or "uniform", got {weights!r}')
-    min_points = check_int("min_points", min_points, 2)
-    if split_threshold_m != AUTO:
-        split_threshold_m = check_positive("split_threshold_m", split_threshold_m)
-    min_length_m = check_nonneg("min_length_m", min_length_m)
-    max_gap_m = check_positive("max_gap_m", max_gap_m)
-    check_positive("merge_dr_m", merge_dr_m)
-    check_positive("merge_dalpha", merge_dalpha)
-    check_positive("merge_chi2", merge_chi2)
-    if range_sigma_m != AUTO:  # a number or "auto" here (no per-line residual noise)
-        range_sigma_m = check_positive("range_sigma_m", range_sigma_m)
-    _check_placing(range_sigma_m, place_dr_m, place_dalpha, place_confidence)
-    return min_points, split_threshold_m, min_length_m, max_gap_m, range_sigma_m
+# ---------------------------------------------------------------------------- step 6: the merge
+def _similar(r1, a1, c1, r2, a2, c2, merge, merge_dr_m, merge_dalpha, merge_chi2) -> tuple[bool, float]:
+    da = math.remainder(a2 - a1, 2 * math.pi)
+    dr = r2 - r1
+    flipped = abs(da) > math.pi / 2
+    if flipped:  # the same line with its normal turned around (both near the origin)
+        da = math.remainder(da - math.pi, 2 * math.pi)
+        dr = -r2 - r1
+    if merge == "thresholds":
+        stat = max(abs(dr) / merge_dr_m, abs(da) / merge_dalpha)
+        return stat < 1.0, stat
+    c2 = np.asarray(c2)
+    if flipped:  # (r, alpha) -> (-r, alpha + pi) has Jacobian diag(-1, 1): the r-alpha cross term changes sign
+        c2 = c2 * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    cov = np.asarray(c1) + c2
+    d = np.array([dr, da])
+    try:
+        stat = float(d @ np.linalg.solve(cov, d))
+    except np.linalg.LinAlgError:
+        return False, math.inf
+    if not math.isfinite(stat):
+        return False, math.inf
+    return stat < merge_chi2, stat
 
 
-def _beam_between(line: _Line, after: int, before: int, ranges: np.ndarray, valid: np.ndarray, angles: np.ndarray,
-                  margin: float) -> tuple[int, float] | None:
-    """The first valid beam strictly between beams ``after`` and ``before`` (across the seam
-    when ``before < after``) whose ray meets ``line`` and ends more than ``margin`` off it, and
-    how far in front of the line it ends (negative: behind), or None. A beam with no valid
-    return is no evidence either way; nor is one whose ray does not meet the line."""
+def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds",
+                  merge_dr_m: float = SplitMergeParams.merge_dr_m,
+                  merge_dalpha_deg: float = SplitMergeParams.merge_dalpha_deg,
+                  merge_chi2: float = SplitMergeParams.merge_chi2, **deprecated) -> tuple[bool, float]:
+    """Whether two lines are similar enough to merge, and the test statistic.
+
+    The angle difference is taken across the wrap (170 deg vs -170 deg is 20 deg). Two
+    lines close to the origin may describe the same line with opposite normals (``r`` near
+    0, ``alpha`` differing by about pi); the second line is then compared as
+    ``(-r, alpha + pi)``. ``merge="thresholds"`` passes when ``|dr| < merge_dr_m`` and
+    ``|dalpha| < merge_dalpha_deg`` (the statistic is the larger of the two ratios, < 1 passes);
+    ``merge="chi2"`` when the Mahalanobis distance ``d^T (C_a + C_b)^-1 d`` of
+    ``d = (dr, dalpha)`` is under ``merge_chi2`` (default 9.21, the 99% point of chi-square
+    with 2 degrees of freedom).
+
+    Examples
+    --------
+    >>> a = line_segment(np.array([[-1.0, 2.0], [-2.0, 2.01], [-3.0, 2.02]]), [0, 1, 2])
+    >>> b = line_segment(np.array([[-4.0, 2.03], [-5.0, 2.04], [-6.0, 2.05]]), [3, 4, 5])
+    >>> lines_similar(a, b)[0]
+    True
+    """
+    if deprecated:
+        merge_dalpha_deg = _old_merge_dalpha(deprecated, merge_dalpha_deg)
+    if merge not in ("thresholds", "chi2"):
+        raise ValueError(f'merge must be "thresholds" or "chi2", got {merge!r}')
+    return _similar(a.r, a.alpha, a.covariance, b.r, b.alpha, b.covariance, merge, merge_dr_m,
+                    math.radians(merge_dalpha_deg), merge_chi2)
+
+
+def _old_merge_dalpha(deprecated: dict, merge_dalpha_deg: float) -> float:
+    """``merge_dalpha`` (radians) of an older release, in degrees, with a ``DeprecationWarning``."""
+    unknown = set(deprecated) - {"merge_dalpha"}
+    if unknown:
+        raise TypeError(f"lines_similar() got an unexpected keyword argument {unknown.pop()!r}")
+    warnings.warn("lines_similar(merge_dalpha=...) is deprecated: use merge_dalpha_deg=... (in degrees)",
+                  DeprecationWarning, stacklevel=3)
+    return math.degrees(deprecated["merge_dalpha"])
+
+
+class _Merging:
+    """Step 6: merge neighbouring similar lines, refitting from the summed weighted sums.
+
+    Neighbours are consecutive lines whose facing ends are at most ``max_gap_m`` apart (with the
+    ``"auto"`` split test, or neighbouring beams the breakpoint detector cut only for a grazing
+    angle, :func:`~labkit.lines._split_merge_fast.grazing_links`); on a full-circle scan the last
+    and first lines are neighbours too. A merge is undone when the refitted line fails the split
+    test (:meth:`_SplitTest.line_fails`), or when a beam between the two lines ends more than
+    ``max_gap_m`` off the merged line (:func:`_beam_between`): behind it, the beam saw through it
+    (a doorway, a window) and the line would cover a hole; in front of it, the beam hid the
+    stretch the line would claim (a chair leg).
+    """
+
+    def __init__(self, scan: Scan, merge, merge_dr_m: float, merge_dalpha: float, merge_chi2: float,
+                 max_gap_m: float, test: _SplitTest, weights, sigma: float, segment_threshold_m, steps):
+        self.how = None if merge == "none" else merge  # the merge test
+        self.sigma = sigma
+        self.dr_m, self.dalpha, self.chi2 = merge_dr_m, merge_dalpha, merge_chi2
+        self.max_gap_m, self.test, self.weights, self.steps = max_gap_m, test, weights, steps
+        self.floor = SegmentationParams.threshold_m if segment_threshold_m is None else segment_threshold_m
+        self.points, self.ranges, self.angles, self.valid = scan.points, scan.ranges, scan.angles, scan.valid
+        self.wrap = scan.is_full_circle
+
+    def merge(self, lines: list[Line]) -> list[Line]:
+        """``lines`` with every pair of similar neighbours merged, left to right (and across the seam)."""
+        if self.how is None or len(lines) < 2:
+            return lines
+        out = list(lines)
+        i = 0
+        while i < len(out) - 1:
+            merged = self._attempt(out[i], out[i + 1])
+            if merged is None:
+                i += 1
+            else:
+                out[i:i + 2] = [merged]
+        if self.wrap and len(out) > 1:
+            merged = self._attempt(out[-1], out[0])
+            if merged is not None:
+                out = [merged] + out[1:-1]
+        return out
+
+    def _neighbours(self, a: Line, b: Line) -> bool:
+        """Whether the facing ends of ``a`` and ``b`` are close enough to merge them (a "keep" step if not)."""
+        gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
+        if gap <= self.max_gap_m or (self.test.noise_sigma and b.first == a.last + 1 and grazing_links(
+                self.points, self.ranges, self.angles, np.array([a.last]), self.floor, self.test.noise_sigma).item(0)):
+            return True
+        if self.steps is not None:
+            self.steps.add("keep", a.first, b.last, at=a.last, value=gap, threshold=self.max_gap_m, test="max_gap_m",
+                           reason=f"facing ends {gap:.3f} m apart > max_gap_m")
+        return False
+
+    def _attempt(self, a: Line, b: Line) -> Line | None:
+        """``a`` and ``b`` merged, or None."""
+        if not self._neighbours(a, b):
+            return None
+        if self.how == "chi2":
+            for ln in (a, b):
+                if ln.cov is None:
+                    ln.cov = covariances(ln.idx, np.zeros(1, np.int64), np.array([ln.alpha]),
+                                         self.points.take(ln.idx, axis=0), self.ranges, self.weights,
+                                         self.sigma)[0][0]
+        ok, stat = _similar(a.r, a.alpha, a.cov, b.r, b.alpha, b.cov, self.how, self.dr_m, self.dalpha, self.chi2)
+        merged = failed = None
+        if ok:
+            merged = a.joined(b)
+            p = self.points.take(merged.idx, axis=0)
+            v = p[:, 0] * math.cos(merged.alpha) + p[:, 1] * math.sin(merged.alpha)
+            failed = self.test.line_fails(v, self.ranges.take(merged.idx), merged.r)
+            if failed is None:
+                failed = _beam_between(merged, a.last, b.first, self.ranges, self.valid, self.angles, self.max_gap_m)
+            if failed is not None:
+                merged = None
+        if self.steps is not None:
+            if not ok:
+                test, reason = "merge", f"different: statistic {stat:.2f}"
+            elif merged is None:
+                test, reason = failed[0], f"similar ({stat:.2f}) but {failed[1]}"
+            else:
+                test, reason = "merge", f"similar: statistic {stat:.2f}"
+            ln = merged if merged is not None else a
+            self.steps.add("merge" if merged is not None else "keep", a.first, b.last, ln.r, ln.alpha, at=a.last,
+                           value=stat, threshold=self.chi2 if self.how == "chi2" else 1.0, test=test, reason=reason)
+        return merged
+
+
+def _beam_between(line: Line, after: int, before: int, ranges: np.ndarray, valid: np.ndarray, angles: np.ndarray,
+                  margin: float) -> tuple[str, str] | None:
+    """Why ``line`` may not cover the beams strictly between beams ``after`` and ``before``
+    (across the seam when ``before < after``): the first valid one whose ray meets the line and
+    ends more than ``margin`` in front of or behind it; or None. A beam with no valid return is no
+    evidence either way; nor is one whose ray does not meet the line."""
     if before == after + 1:  # neighbours in the scan (most merges): no beam between them
         return None
     if before > after:
@@ -806,114 +886,22 @@ def _beam_between(line: _Line, after: int, before: int, ranges: np.ndarray, vali
     with np.errstate(invalid="ignore", divide="ignore"):
         hit = valid.take(js) & _ends_off(rho, c, line.r, margin)
     k = np.flatnonzero(hit)
-    return (int(js[k[0]]), float(line.r / c[k[0]] - rho[k[0]])) if len(k) else None
+    if not len(k):
+        return None
+    beam, ahead = int(js[k[0]]), float(line.r / c[k[0]] - rho[k[0]])
+    where = f"{ahead:.2f} m in front of" if ahead > 0 else f"{-ahead:.2f} m behind"
+    return "beam_between", f"beam {beam} ends {where} the merged line (more than max_gap_m)"
 
 
-def _merge(lines: list[_Line], points, wrap: bool, steps, *, max_gap_m, max_error_m, merge, merge_dr_m,
-           merge_dalpha, merge_chi2, ranges, angles, valid, weights, sigma, noise_sigma,
-           segment_threshold_m) -> list[_Line]:
-    """Merge neighbouring similar lines, refitting from the summed weighted sums.
-
-    Neighbours are consecutive lines whose facing ends are at most ``max_gap_m`` apart (with
-    ``noise_sigma`` > 0, or neighbouring beams the breakpoint detector cut only for a grazing
-    angle, :func:`_grazing_links`; ``segment_threshold_m`` is its floor); on a full-circle scan
-    the last and first lines are neighbours too. A merge is undone when the
-    refitted line's worst point is farther than ``max_error_m`` from it, when (``noise_sigma``
-    > 0, the ``"auto"`` split test) it fails the split loop's noise tests, or when a beam
-    between the two lines ends more than ``max_gap_m`` off the merged line: behind it, the beam
-    saw through it (a doorway, a window) and the line would cover a hole; in front of it, the
-    beam hid the stretch the line would claim (a chair leg).
-    """
-
-    def attempt(a: _Line, b: _Line) -> _Line | None:
-        first, last = a.first, b.last
-        gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
-        if gap > max_gap_m and not (noise_sigma and b.first == a.last + 1 and _grazing_links(
-                points, ranges, angles, np.array([a.last]), segment_threshold_m, sigma).item(0)):
+def _drop_short(lines: list[Line], min_length_m: float, steps) -> list[Line]:
+    """The lines at least ``min_length_m`` long (a ``"reject"`` step for each other)."""
+    kept = []
+    for line in lines:
+        if line.length < min_length_m:
             if steps is not None:
-                steps.add("keep", first, last, at=a.last, value=gap, threshold=max_gap_m, test="max_gap_m",
-                          reason=f"facing ends {gap:.3f} m apart > max_gap_m")
-            return None
-        if merge == "chi2":
-            for ln in (a, b):
-                if ln.cov is None:
-                    ln.cov = _covariances(ln.idx, np.zeros(1, np.int64), np.array([ln.alpha]),
-                                          points.take(ln.idx, axis=0), ranges, weights, sigma)[0][0]
-        ok, stat = _similar(a.r, a.alpha, a.cov, b.r, b.alpha, b.cov, merge, merge_dr_m, merge_dalpha,
-                            merge_chi2)
-        merged = worst = None
-        if ok:
-            idx = np.concatenate([a.idx, b.idx])
-            idx.setflags(write=False)
-            merged = _Line(idx, [u + v for u, v in zip(a.s, b.s, strict=True)], a.first, b.last, a.p_first,
-                           b.p_last)
-            p = points.take(idx, axis=0)
-            v = p[:, 0] * math.cos(merged.alpha) + p[:, 1] * math.sin(merged.alpha)
-            worst = float(np.max(np.abs(v - merged.r)))
-            failed = None  # (the test the merged line fails, why)
-            if worst > max_error_m:
-                failed = "split_threshold_m", f"the merged line misses a point by {worst:.3f} m"
-            elif noise_sigma and worst > MIN_SPLIT_M and _beyond_own_noise(v, ranges.take(idx), merged.r,
-                                                                          noise_sigma)[1] > 1.0:
-                failed = "split_threshold_m", f"a point misses it by more than {SPLIT_SIGMAS:g} of its sigmas"
-            elif noise_sigma and (misfit := _misfit(v, ranges.take(idx), merged.r, noise_sigma)) is not None:
-                if misfit[0] == "residual":
-                    failed = "residual", "the merged line's residuals are wider than the range noise allows"
-                else:
-                    failed = "shift", (f"{misfit[1][1]} of its points lie {abs(misfit[1][2]):.3f} m to one side "
-                                       "of it on average")
-            else:
-                off = _beam_between(merged, a.last, b.first, ranges, valid, angles, max_gap_m)
-                if off is not None:
-                    beam, ahead = off
-                    where = f"{ahead:.2f} m in front of" if ahead > 0 else f"{-ahead:.2f} m behind"
-                    failed = "beam_between", f"beam {beam} ends {where} the merged line (more than max_gap_m)"
-            if failed is not None:
-                merged = None
-        if steps is not None:
-            if not ok:
-                test, reason = "merge", f"different: statistic {stat:.2f}"
-            elif merged is None:
-                test, reason = failed[0], f"similar ({stat:.2f}) but {failed[1]}"
-            else:
-                test, reason = "merge", f"similar: statistic {stat:.2f}"
-            ln = merged if merged is not None else a
-            steps.add("merge" if merged is not None else "keep", first, last, ln.r, ln.alpha, at=a.last,
-                      value=stat, threshold=merge_chi2 if merge == "chi2" else 1.0, test=test, reason=reason)
-        return merged
-
-    out = list(lines)
-    i = 0
-    while i < len(out) - 1:
-        merged = attempt(out[i], out[i + 1])
-        if merged is None:
-            i += 1
-        else:
-            out[i:i + 2] = [merged]
-    if wrap and len(out) > 1:
-        merged = attempt(out[-1], out[0])
-        if merged is not None:
-            out = [merged] + out[1:-1]
-    return out
-
-
-def _finish(lines: list[_Line], points, ranges, weights, sigma: float) -> list[LineSegment]:
-    """LineSegment records, with every line's covariance and RMS error in one vectorised pass."""
-    if not lines:
-        return []
-    counts = np.array([len(ln.idx) for ln in lines])
-    idx = np.concatenate([ln.idx for ln in lines])
-    starts = counts.cumsum() - counts
-    p = points.take(idx, axis=0)  # = points[idx]
-    alpha, r = np.array([ln.alpha for ln in lines]), np.array([ln.r for ln in lines])
-    cov, rms = _covariances(idx, starts, alpha, p, ranges, weights, sigma, r)  # and the RMS distances to the lines
-    rms = rms.tolist()
-    # read-only records (the beams already are): each covariance, start and end is a view of these
-    cov.setflags(write=False)
-    ends = np.array([ln.start + ln.end for ln in lines])
-    ends.setflags(write=False)
-    ends = list(ends.reshape(-1, 2))  # start 0, end 0, start 1, ...
-    return [LineSegment(ln.r, ln.alpha, c, start, end, ln.first, ln.last, n, error, ln.idx)
-            for ln, c, start, end, n, error in zip(lines, cov, ends[0::2], ends[1::2], counts.tolist(), rms,
-                                                   strict=True)]
-
+                steps.add("reject", line.first, line.last, line.r, line.alpha, value=line.length,
+                          threshold=min_length_m, test="min_length_m",
+                          reason=f"length {line.length:.3f} m < min_length_m={min_length_m}")
+            continue
+        kept.append(line)
+    return kept

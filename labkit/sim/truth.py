@@ -5,14 +5,11 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
 from .._safe import OutputKind, first_json_line_with, safe_output
-
-if TYPE_CHECKING:
-    from .lidar import Scenario
 
 __all__ = ["VisibleWall", "VisibleCircle", "VisibleArc", "VisibleLeg", "ScanTruth", "GroundTruth",
            "TRUTH_FILE", "write_truth", "read_truth", "truth_path_for"]
@@ -217,7 +214,17 @@ TRUTH_FILE = OutputKind("a labkit ground-truth file (.truth.jsonl)", (".truth.js
                         first_json_line_with("labkit_truth"))
 
 
-def write_truth(path: str | Path, sc: Scenario, truths, *, seed: int, overwrite: bool = False) -> int:
+class Recorded(Protocol):
+    """What a ground-truth file's header describes: a world and a lidar (each with ``to_dict()``),
+    the topic and the frame of the scans (a :class:`labkit.sim.Scenario`)."""
+
+    world: Any
+    lidar: Any
+    topic: str
+    frame_id: str
+
+
+def write_truth(path: str | Path, sc: Recorded, truths, *, seed: int, overwrite: bool = False) -> int:
     """Write ``truths`` (an iterable of :class:`ScanTruth`) as JSON lines; returns the count.
 
     Line 1 is a header (format version, world, lidar, object table, seed); every further

@@ -399,7 +399,7 @@ def _batched(items: Iterable, send) -> int:
 
 def _segment(scan: Scan, threshold_m: float | None) -> np.ndarray | None:
     """Range segments as the pipeline's default makes them (adaptive, ``threshold_m`` floor)."""
-    return None if threshold_m is None else segment_labels(scan, threshold_m, adaptive=True)
+    return None if threshold_m is None else segment_labels(scan, threshold_m=threshold_m, adaptive=True)
 
 
 def _scalars(rec, path: str, times, values) -> None:
