@@ -49,6 +49,11 @@ EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02
 FULL = 10.0
 HALF = FULL / 2  # points are per function: an attack on ex01's segment leaves the instructor's adaptive_threshold,
 #                  which earns its own half; the attacked function earns 0 in every cell
+
+
+class AtMost(float):
+    """The expected score of an attack that races the grader: its honest functions' points at most (its own forged
+    frames may crash the calls of those too), never a point for the function it cheats with."""
 SLOT = 10  # this run's students are uids worker_uid(10) and worker_uid(11): no other test uses them
 
 WRONG_SEGMENT = '''
@@ -250,7 +255,7 @@ CHEATS = {  # each earns 0 for the function it cheats with, and what its honest 
                 time.sleep(0.01)
 
         threading.Thread(target=forge, daemon=True).start()
-    """], 0.0, None),
+    """], AtMost(HALF), None),  # which calls its frames break depends on the timing: 0 or 5 seen under load
     "forged_load_reply": (EX1, WRONG_SEGMENT, ["""
         import json, os, struct
         body = json.dumps({"errors": [{"cell": 0, "types": 5, "message": None}]}).encode()
@@ -570,7 +575,12 @@ def test_every_student_scores_what_their_own_code_earns(graded, student):
     score, status = expected[key]
     result = results[key]
     verdicts = {cell.grade_id: cell.verdict for cell in result.cells}
-    assert result.score == score, f"{student}: {result.score} instead of {score}: {verdicts}"
+    if isinstance(score, AtMost):
+        assert result.score <= score, f"{student}: {result.score}, more than {score:g}: {verdicts}"
+        attacked = [part for cell in result.cells for part in cell.parts if part.function == "segment"]
+        assert attacked and all(part.points == 0 for part in attacked), f"{student}: {verdicts}"
+    else:
+        assert result.score == score, f"{student}: {result.score} instead of {score}: {verdicts}"
     if status is not None:
         assert result.status == status, f"{student}: {result.status} ({result.detail})"
     assert result.max_score == FULL
@@ -611,16 +621,22 @@ def test_delegating_fails_with_a_message_that_says_why(graded):
 def test_the_gradebook_holds_the_scores_and_nothing_the_students_wrote(graded):
     from nbgrader.api import Gradebook
 
-    course, expected, _, _ = graded
+    course, expected, results, _ = graded
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", "labkit") as gradebook:
         for (name, student), (score, status) in expected.items():
             if status == "not submitted" and student != "empty_folder" or student in UNRECORDED:
                 continue
             submission = gradebook.find_submission(name, student)
-            assert submission.score == score, (name, student)
+            assert submission.score == _recorded(score, results[name, student]), (name, student)
             assert all(grade.manual_score is None for nb in submission.notebooks for grade in nb.grades)
         ids = {s.id for s in gradebook.students}
     assert {student for _, student in expected} - set(UNRECORDED) <= ids
+
+
+def _recorded(score: float, result) -> float:
+    """The score the records must hold: the expected one, or for a bound (checked in
+    test_every_student_scores_what_their_own_code_earns) the one the run gave."""
+    return result.score if isinstance(score, AtMost) else score
 
 
 def as_in_csv(student: str) -> str:
@@ -630,12 +646,12 @@ def as_in_csv(student: str) -> str:
 
 
 def test_grades_csv_tells_the_statuses_apart(graded):
-    course, expected, _, _ = graded
+    course, expected, results, _ = graded
     with open(course / "grades.csv", newline="", encoding="utf-8") as f:
         rows = {(row["assignment"], row["student_id"]): row for row in csv.DictReader(f)}
     for (name, student), (score, status) in expected.items():
         key = (name, as_in_csv(student))
-        assert float(rows[key]["score"]) == score, key
+        assert float(rows[key]["score"]) == _recorded(score, results.get((name, student))), key
         if status is not None:
             assert rows[key]["status"] == status, key
     assert {row["status"] for row in rows.values()} >= {"graded", "not submitted", "timed out", "crashed",
@@ -644,7 +660,7 @@ def test_grades_csv_tells_the_statuses_apart(graded):
 
 
 def test_nbgrader_export_and_feedback_work_on_the_gradebook(graded):
-    course, expected, _, _ = graded
+    course, expected, results, _ = graded
     env = dict(os.environ, PATH=os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""),
                JUPYTER_CONFIG_DIR=str(course / ".jupyter-config"))
     for args in (["export", "--to", "export.csv"], ["generate_feedback", EX1, "--student", "crashes_on_one_input"]):
@@ -655,7 +671,7 @@ def test_nbgrader_export_and_feedback_work_on_the_gradebook(graded):
         exported = {(row["assignment"], row["student_id"]): float(row["score"]) for row in csv.DictReader(f)}
     for (name, student), (score, _) in expected.items():
         if student not in (*UNRECORDED, CSV_ID):  # nbgrader export does not quote: CSV_ID's commas split it
-            assert exported[name, student] == score, (name, student)
+            assert exported[name, student] == _recorded(score, results[name, student]), (name, student)
     html = (course / "feedback" / "crashes_on_one_input" / EX1 / f"{EX1}.html").read_text(encoding="utf-8")
     assert "test_hidden_edges" in html and "exited with status 3" in html
 

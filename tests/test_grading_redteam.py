@@ -214,7 +214,8 @@ except ImportError:
 
 
 ''' + SEGMENT.replace("    return labels", """    if labkit is not None:
-        expected = labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m=threshold_m, min_points=min_points)
+        expected = labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m=threshold_m,
+                                         min_points=min_points)
         assert np.array_equal(labels, expected), "differs from labkit"
     return labels"""))
 
