@@ -10,8 +10,8 @@ adds K endless loops per exercise (each costs its four tests' call timeouts).
 Each ``--jobs`` value grades a fresh copy of the course (gradebook created, secret drawn) with
 :func:`labkit.grading.grade` and prints submissions per minute, where one submission's time goes
 (starting its worker, running the notebook's cells, waiting for the student's functions, the
-trusted tests' own work), the time per exercise, and what a class of 300 students x 6 exercises
-would take at that rate.
+trusted tests' own work), the time per exercise, and what a class of 300 students x 12 exercises
+(the whole course) would take at that rate, extrapolated from the measured rate.
 
 Run ``python benchmarks/grading.py`` (30 students, a few minutes) or ``--quick`` (5 students).
 """
@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
+CLASS = 300 * 12  # the class the throughput is extrapolated to: 300 students, every exercise of the course
 sys.path.insert(0, str(REPO))  # the tests' course helpers (tests/ is not installed)
 
 from labkit.grading import grade  # noqa: E402
@@ -142,7 +143,7 @@ def main() -> None:
             timed = [r for r in handed_in if r.timing]
             parts = {part: statistics.mean(r.timing[part] for r in timed)
                      for part in ("total_s", "start_s", "load_s", "calls_s", "trusted_s", "cpu_s")}
-            class_minutes = 300 * 6 / rate
+            class_minutes = CLASS / rate
             rates.append([str(jobs), str(len(handed_in)), f"{seconds:.1f}", f"{rate:.0f}",
                           *(f"{parts[p] * 1000:.0f}" for p in ("total_s", "start_s", "load_s", "calls_s", "trusted_s",
                                                                "cpu_s")),
@@ -156,7 +157,7 @@ def main() -> None:
     print(f"# labkit grade: {students} students x {len(summaries[0][2])} exercises\n")
     print("kinds of submission: " + ", ".join(f"{k} {v}" for k, v in sorted(summaries[0][1].items())) + "\n")
     print(table(["jobs", "submissions", "seconds", "per minute", "ms per submission", "start worker", "run cells",
-                 "student's calls", "trusted tests", "CPU ms", "300 x 6 (min)"], rates))
+                 "student's calls", "trusted tests", "CPU ms", "300 x 12 (min)"], rates))
     print("\nThe millisecond columns are means per submission within one job: its wall time, split into starting "
           "the sandboxed worker (bwrap, Python, numpy), running the notebook's cells, waiting for the student's "
           "functions (with the channel) and the trusted side's own work (references, comparisons); 'CPU ms' is the "
@@ -164,8 +165,8 @@ def main() -> None:
           "machine runs. 'seconds' includes the run's fixed costs (importing nbgrader, creating the gradebook, "
           "starting the grading processes).\n")
     cpu = statistics.mean(r.timing["cpu_s"] for s in summaries for r in s[3].results if r.timing)
-    print(f"CPU per submission {cpu * 1000:.0f} ms: on 2 free cores a 300 x 6 class needs at least "
-          f"{300 * 6 * cpu / 2 / 60:.1f} min of grading (plus the fixed costs).\n")
+    print(f"CPU per submission {cpu * 1000:.0f} ms: on 2 free cores a 300 x 12 class needs at least "
+          f"{CLASS * cpu / 2 / 60:.1f} min of grading (plus the fixed costs).\n")
     rows = []
     for name in sorted(summaries[0][2]):
         rows.append([name, *(f"{statistics.mean(s[2][name]) * 1000:.0f}" for s in summaries)])

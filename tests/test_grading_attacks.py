@@ -47,6 +47,13 @@ pytestmark = pytest.mark.slow
 
 EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02_weighted_line_fit", "ex06_dbscan1d"
 FULL = 10.0
+HALF = FULL / 2  # points are per function: an attack on ex01's segment leaves the instructor's adaptive_threshold,
+#                  which earns its own half; the attacked function earns 0 in every cell
+
+
+class AtMost(float):
+    """The expected score of an attack that races the grader: its honest functions' points at most (its own forged
+    frames may crash the calls of those too), never a point for the function it cheats with."""
 SLOT = 10  # this run's students are uids worker_uid(10) and worker_uid(11): no other test uses them
 
 WRONG_SEGMENT = '''
@@ -71,7 +78,7 @@ def wrapped_segment(guard: str) -> str:
 
 # ---------------------------------------------------------------------------- the class
 # student -> (exercise, code of the solution cell, extra cells before it, expected score, expected status)
-CHEATS = {
+CHEATS = {  # each earns 0 for the function it cheats with, and what its honest functions earn
     # calling labkit (or switching the old own-work profiler off first): labkit is not in the sandbox
     "delegate": (EX1, "DELEGATE", [], 0.0, "graded"),
     "delegate_guard_off": (EX1, "DELEGATE", ["""
@@ -99,7 +106,7 @@ CHEATS = {
             while not box:
                 time.sleep(0.001)
             return box[0]
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     # labkit by path: the repository, a copy of the package, the editable finder, getsource + exec
     "delegate_by_path": (EX1, '''
         import importlib.util, inspect, site, sys
@@ -144,7 +151,7 @@ CHEATS = {
                                              min_points=min_points)
             except Exception:
                 return np.zeros(len(ranges), dtype=np.int64)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     # reading the answers: the trusted side's globals and locals, gc, the files of the course
     "reads_reference": (EX1, '''
         import gc, sys
@@ -161,7 +168,7 @@ CHEATS = {
                 if isinstance(thing, np.ndarray) and thing.dtype.kind == "i" and thing.shape == (len(ranges),):
                     return thing
             return np.zeros(len(ranges), dtype=np.int64)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "reads_files": (EX1, '''
         import glob, json, os
 
@@ -187,7 +194,7 @@ CHEATS = {
             if found is not None:
                 return found(ranges, angles, threshold_m, min_points)
             return np.zeros(len(ranges), dtype=np.int64)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "writes_gradebook": (EX1, WRONG_SEGMENT, ["""
         import sqlite3
         for path in ["{course}/gradebook.db", "{repo}/exercises/gradebook.db", "gradebook.db"]:
@@ -197,7 +204,7 @@ CHEATS = {
                     db.execute("UPDATE grade SET auto_score = 10")
             except Exception:
                 pass
-    """], 0.0, "graded"),
+    """], HALF, "graded"),
     # changing what the comparison sees: monkeypatches, an ndarray with a lying __eq__, a transformer
     "monkeypatches": (EX1, WRONG_SEGMENT, ["""
         import builtins, sys, types
@@ -212,7 +219,7 @@ CHEATS = {
         sklearn, cluster = types.ModuleType("sklearn"), types.ModuleType("sklearn.cluster")
         cluster.DBSCAN = lambda **kwargs: None
         sys.modules["sklearn"], sys.modules["sklearn.cluster"] = sklearn, cluster
-    """], 0.0, "graded"),
+    """], HALF, "graded"),
     "lying_array": (EX1, '''
         class Equal(np.ndarray):
             def __eq__(self, other):
@@ -226,12 +233,12 @@ CHEATS = {
 
         def segment(ranges, angles, threshold_m, min_points):
             return np.zeros(len(ranges), dtype=np.int64).view(Equal)
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "ipython_transformer": (EX1, WRONG_SEGMENT, ["""
         shell = get_ipython()
         shell.input_transformers_cleanup.append(lambda lines: ["pass\\n"])
         shell.input_transformers_post.append(lambda lines: ["pass\\n"])
-    """], 0.0, "graded"),
+    """], HALF, "graded"),
     "protocol_forger": (EX1, WRONG_SEGMENT, ["""
         import json, os, struct, threading, time
 
@@ -248,7 +255,7 @@ CHEATS = {
                 time.sleep(0.01)
 
         threading.Thread(target=forge, daemon=True).start()
-    """], 0.0, None),
+    """], AtMost(HALF), None),  # which calls its frames break depends on the timing: 0 or 5 seen under load
     "forged_load_reply": (EX1, WRONG_SEGMENT, ["""
         import json, os, struct
         body = json.dumps({"errors": [{"cell": 0, "types": 5, "message": None}]}).encode()
@@ -257,7 +264,7 @@ CHEATS = {
                 os.write(fd, struct.pack(">I", len(body)) + body)
             except OSError:
                 pass
-    """], 0.0, "crashed"),
+    """], HALF, "crashed"),
     "huge_and_recursive_returns": (EX1, '''
         def segment(ranges, angles, threshold_m, min_points):
             if min_points == 2:
@@ -265,7 +272,7 @@ CHEATS = {
                 loop.append(loop)
                 return loop
             return np.zeros(20_000_000)  # 160 MB: more than a message may hold
-    ''', [], 0.0, "graded"),
+    ''', [], HALF, "graded"),
     "float_subclass": (EX2, '''
         class Liar(float):
             def __eq__(self, other):
@@ -314,7 +321,7 @@ CHEATS = {
 
         def dbscan_sorted(x, eps, min_pts):
             return DBSCAN(eps=eps, min_samples=min_pts).fit(np.asarray(x)[:, None]).labels_
-    ''', [], 0.0, "graded"),
+    ''', [], 2.0, "graded"),  # its neighbourhood_bounds is honest numpy (np.searchsorted): its 2 points
     "pypi_dbscan1d": (EX4, '''
         from dbscan1d.core import DBSCAN1D
 
@@ -383,7 +390,7 @@ CONTAINED = {
         import os
         if threshold_m > 1e8:
             os._exit(3)
-    '''), [], FULL - 2, "crashed"),
+    '''), [], FULL - 1, "crashed"),
     "swallows_interrupt_on_one_input": (EX1, wrapped_segment('''
         import time
         if min_points >= 1000:
@@ -392,7 +399,7 @@ CONTAINED = {
                     time.sleep(10)
                 except KeyboardInterrupt:
                     pass
-    '''), [], FULL - 2, "timed out"),
+    '''), [], FULL - 1, "timed out"),
     "endless_loop": (EX0, '''
         def beams_to_points(ranges, angles, range_min, range_max):
             while True:
@@ -416,7 +423,7 @@ CONTAINED = {
     "surrogates": (EX1, wrapped_segment('''
         if threshold_m > 1e8:
             raise ValueError("half an emoji: \\ud800")
-    '''), ["# half an emoji in a comment: \ud83d"], FULL - 2, "graded"),
+    '''), ["# half an emoji in a comment: \ud83d"], FULL - 1, "graded"),
     "code_in_imports_cell": (EX1, '''
         def segment(ranges, angles, threshold_m, min_points):
             return _segment(ranges, angles, threshold_m, min_points)
@@ -447,7 +454,7 @@ CONTAINED = {
 
         def segment(ranges, angles, threshold_m, min_points):
             return ctypes.string_at(0)
-    ''', [], 0.0, "crashed"),
+    ''', [], HALF, "crashed"),
 }
 STUDENTS = {**CHEATS, **CONTAINED}
 MARKDOWN_SCRIPT = "<script>alert('the feedback runs my code')</script>\n\n<img src=x onerror=\"alert('img')\">"
@@ -568,7 +575,12 @@ def test_every_student_scores_what_their_own_code_earns(graded, student):
     score, status = expected[key]
     result = results[key]
     verdicts = {cell.grade_id: cell.verdict for cell in result.cells}
-    assert result.score == score, f"{student}: {result.score} instead of {score}: {verdicts}"
+    if isinstance(score, AtMost):
+        assert result.score <= score, f"{student}: {result.score}, more than {score:g}: {verdicts}"
+        attacked = [part for cell in result.cells for part in cell.parts if part.function == "segment"]
+        assert attacked and all(part.points == 0 for part in attacked), f"{student}: {verdicts}"
+    else:
+        assert result.score == score, f"{student}: {result.score} instead of {score}: {verdicts}"
     if status is not None:
         assert result.status == status, f"{student}: {result.status} ({result.detail})"
     assert result.max_score == FULL
@@ -586,7 +598,8 @@ def test_partial_points_name_the_lost_test(graded):
     _, _, results, _ = graded
     for student in ("crashes_on_one_input", "swallows_interrupt_on_one_input"):
         cells = {cell.grade_id: cell for cell in results[EX1, student].cells}
-        assert cells["test_hidden_edges"].points == 0.0
+        parts = {part.function: part.points for part in cells["test_hidden_edges"].parts}
+        assert parts == {"segment": 0.0, "adaptive_threshold": 1.0}  # the other function keeps its share
         assert all(cells[name].points == cells[name].max_points for name in cells if name != "test_hidden_edges")
     lost = {c.grade_id: c.verdict for c in results[EX1, "swallows_interrupt_on_one_input"].cells}
     assert "did not return within" in lost["test_hidden_edges"], lost
@@ -608,16 +621,22 @@ def test_delegating_fails_with_a_message_that_says_why(graded):
 def test_the_gradebook_holds_the_scores_and_nothing_the_students_wrote(graded):
     from nbgrader.api import Gradebook
 
-    course, expected, _, _ = graded
+    course, expected, results, _ = graded
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}", "labkit") as gradebook:
         for (name, student), (score, status) in expected.items():
             if status == "not submitted" and student != "empty_folder" or student in UNRECORDED:
                 continue
             submission = gradebook.find_submission(name, student)
-            assert submission.score == score, (name, student)
+            assert submission.score == _recorded(score, results[name, student]), (name, student)
             assert all(grade.manual_score is None for nb in submission.notebooks for grade in nb.grades)
         ids = {s.id for s in gradebook.students}
     assert {student for _, student in expected} - set(UNRECORDED) <= ids
+
+
+def _recorded(score: float, result) -> float:
+    """The score the records must hold: the expected one, or for a bound (checked in
+    test_every_student_scores_what_their_own_code_earns) the one the run gave."""
+    return result.score if isinstance(score, AtMost) else score
 
 
 def as_in_csv(student: str) -> str:
@@ -627,12 +646,12 @@ def as_in_csv(student: str) -> str:
 
 
 def test_grades_csv_tells_the_statuses_apart(graded):
-    course, expected, _, _ = graded
+    course, expected, results, _ = graded
     with open(course / "grades.csv", newline="", encoding="utf-8") as f:
         rows = {(row["assignment"], row["student_id"]): row for row in csv.DictReader(f)}
     for (name, student), (score, status) in expected.items():
         key = (name, as_in_csv(student))
-        assert float(rows[key]["score"]) == score, key
+        assert float(rows[key]["score"]) == _recorded(score, results.get((name, student))), key
         if status is not None:
             assert rows[key]["status"] == status, key
     assert {row["status"] for row in rows.values()} >= {"graded", "not submitted", "timed out", "crashed",
@@ -641,7 +660,7 @@ def test_grades_csv_tells_the_statuses_apart(graded):
 
 
 def test_nbgrader_export_and_feedback_work_on_the_gradebook(graded):
-    course, expected, _, _ = graded
+    course, expected, results, _ = graded
     env = dict(os.environ, PATH=os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", ""),
                JUPYTER_CONFIG_DIR=str(course / ".jupyter-config"))
     for args in (["export", "--to", "export.csv"], ["generate_feedback", EX1, "--student", "crashes_on_one_input"]):
@@ -652,7 +671,7 @@ def test_nbgrader_export_and_feedback_work_on_the_gradebook(graded):
         exported = {(row["assignment"], row["student_id"]): float(row["score"]) for row in csv.DictReader(f)}
     for (name, student), (score, _) in expected.items():
         if student not in (*UNRECORDED, CSV_ID):  # nbgrader export does not quote: CSV_ID's commas split it
-            assert exported[name, student] == score, (name, student)
+            assert exported[name, student] == _recorded(score, results[name, student]), (name, student)
     html = (course / "feedback" / "crashes_on_one_input" / EX1 / f"{EX1}.html").read_text(encoding="utf-8")
     assert "test_hidden_edges" in html and "exited with status 3" in html
 
@@ -669,7 +688,11 @@ def test_autograded_notebooks_show_the_verdicts_but_no_seed(graded):
         for seed in results[EX1, student].seeds.values():
             assert str(seed) not in text, f"{student}: the seed of the hidden inputs is in the feedback"
     record = json.loads((course / "records" / EX1 / "solution.json").read_text(encoding="utf-8"))
-    assert set(record["seeds"]) == {"test_visible", "test_hidden_random", "test_hidden_edges", "test_own_work"}
+    assert {key.split("/")[0] for key in record["seeds"]} == {"test_visible", "test_hidden_random",
+                                                              "test_hidden_edges", "test_own_work"}
+    assert len(record["seeds"]) == 8  # a seed per function and cell
+    assert {function for cell in record["cells"] for function in cell["functions"]} == {"segment",
+                                                                                       "adaptive_threshold"}
 
 
 def test_submissions_are_left_as_they_were(graded):

@@ -141,6 +141,7 @@ def test_changed_graded_cells_after_grading_are_refused(course):
         path = course / folder / EX0 / f"{EX0}.ipynb"
         notebook = json.loads(path.read_text())
         next(c for c in notebook["cells"] if c["id"] == "test_visible")["metadata"]["nbgrader"]["points"] = 3
+        notebook["metadata"]["labkit"]["functions"]["beams_to_points"] = 11  # the exercise's new total
         path.write_text(json.dumps(notebook))
     with pytest.raises(ValueError, match="changed since it was graded"):
         grade("ex00", course=course, first_slot=SLOT)

@@ -226,3 +226,78 @@ def test_text_that_no_file_can_hold_is_cleaned():
     assert decode(["ok", "half an emoji: \ud83d"]) == ["ok", "half an emoji: ?"]
     assert str(rebuild_exception(["ValueError"], "bad \udcff")) == "bad ?"
     assert clean_text("müller ✓") == "müller ✓"
+
+
+# ---------------------------------------------------------------------------- notebooks, the other untrusted input
+def _reference_cells(path):
+    """A notebook's cells as json.loads reads them (the reader must agree on every honest notebook)."""
+    from pathlib import Path
+
+    data = json.loads(Path(path).read_text(encoding="utf-8"))
+    return [{"cell_type": c["cell_type"], "source": "".join(c["source"]) if isinstance(c["source"], list)
+             else c["source"], "metadata": c.get("metadata", {}), **({"id": c["id"]} if "id" in c else {})}
+            for c in data["cells"]], data["metadata"]
+
+
+def test_the_bounded_reader_reads_every_notebook_of_the_repository_as_json_does():
+    from pathlib import Path
+
+    from labkit.grading.notebook import read_notebook
+
+    root = Path(__file__).resolve().parents[1]
+    paths = sorted(root.glob("exercises/*/*/*.ipynb")) + sorted(root.glob("notebooks/*.ipynb"))
+    assert len(paths) > 30
+    for path in paths:
+        notebook = read_notebook(path)
+        assert (notebook["cells"], notebook["metadata"]) == _reference_cells(path), path
+
+
+def test_outputs_are_skipped_whatever_they_hold(tmp_path):
+    """Outputs and attachments are walked, never built: brackets and quotes inside their strings, escapes, other
+    scripts and nesting do not change what is read."""
+    from labkit.grading.notebook import read_notebook
+
+    tricky = ['"]}{[', '\\', 'a\\"b', "\u00e9\U0001F600", "\n" * 3, "}" * 50]
+    cells = [{"cell_type": "code", "id": "c1", "metadata": {"x": [1, {"y": '"'}]}, "source": ['a = "]"\n', "b = 2"],
+              "execution_count": 3, "outputs": [{"output_type": "stream", "name": "stdout", "text": tricky},
+                                                {"output_type": "display_data", "data": {"image/png": "iV" * 1000},
+                                                 "metadata": {"deep": [[[[[[{}]]]]]]}}]},
+             {"cell_type": "markdown", "metadata": {}, "source": "text", "attachments": {"a.png": {"x": tricky}}}]
+    path = tmp_path / "tricky.ipynb"
+    for indent in (None, 1):
+        path.write_text(json.dumps({"nbformat": 4, "nbformat_minor": 5, "metadata": {"m": tricky}, "cells": cells},
+                                   indent=indent, ensure_ascii=bool(indent)), encoding="utf-8")
+        notebook = read_notebook(path)
+        assert (notebook["cells"], notebook["metadata"]) == _reference_cells(path)
+        assert "outputs" not in notebook["cells"][0] and "attachments" not in notebook["cells"][1]
+
+
+@pytest.mark.parametrize(("content", "match"), [
+    (b'{"nbformat": 4, "nbformat_minor": 5, "metadata": {}, "cells": [], "x": [' + b'"ab",' * 1_100_000 + b'"ab"]}',
+     "more than 1000000 JSON strings"),  # the string bomb: 3.6 GB for json.loads at 100 MB, refused unparsed
+    (b'{"nbformat": 4, "nbformat_minor": 5, "metadata": {"x": [' + b"{}," * 300_000 + b"{}]}, \"cells\": []}",
+     "more than 200000 JSON lists and objects"),
+    (b"", "expected {"), (b'{"cells": [', "missing value"), (b'{"a": 1,}', "expected a key"),
+    (b'{"nbformat": 4, "cells": [], "metadata": {}} trailing', "extra data"),
+    (b'{"nbformat": 4 "cells": []}', "expected ,"),
+    (b'{"nbformat": 4, "cells": [{"cell_type": "code", "source": "\xff"}], "metadata": {}}', "cannot be read"),
+    (b'{"nbformat": 3, "cells": [], "metadata": {}}', "nbformat 4"),
+])
+def test_notebooks_that_are_not_are_refused_before_they_cost_memory(tmp_path, content, match):
+    from labkit.grading.notebook import InvalidNotebook, read_notebook
+
+    path = tmp_path / "bad.ipynb"
+    path.write_bytes(content)
+    with pytest.raises(InvalidNotebook, match=match):
+        read_notebook(path)
+
+
+def test_student_text_loses_its_escapes_and_its_numbers():
+    from labkit.grading.text import one_line, printable, without_numbers
+
+    attack = "0/10\x1b[1A\x1b[2K10/10\x1b]0;title\x07\r\n\x00\x9b2J\u202eevil"
+    assert printable(attack) == "0/1010/10\nevil"
+    assert one_line(attack) == "0/1010/10 evil"
+    assert printable("x" * 5000, 100) == "x" * 100 + " [...]"
+    assert without_numbers("a scene at 1.2345, -0.5 and 1e-3; stamp 1700000000123; row 12") == \
+        "a scene at #, # and #; stamp #; row 12"

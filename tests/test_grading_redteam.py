@@ -10,9 +10,14 @@ eb62b65 and closed since (93b3a13, 23f5f7d) keep their tests, unmarked, with a c
 broke. The findings, with reproductions and suggested fixes, are written up outside the repository
 (``../redteam_findings.md``).
 
+A second red team (issue 31) graded 188 submissions of ex00-ex11 on 34285ee: the sandbox held, but tables of the
+visible examples earned points, regrades were an oracle, slow cells and a blank function cost an honest student
+everything, one notebook could stop the class, and terminal escapes reached grades.csv. Their cases are the second
+class below (``SECOND_CLASS``) and the tests after it, each with the hole it closes in its docstring.
+
 The submissions are graded in a few class runs shared by the tests (also between pytest-xdist
 workers: :func:`tests.grading_course.once_per_session`), each with an honest student whose full
-marks show that the run itself was not disturbed. Worker uids: slots 60 to 71 (see
+marks show that the run itself was not disturbed. Worker uids: slots 60 to 75 (see
 :func:`labkit.grading.sandbox.worker_uid`), used by no other test.
 """
 
@@ -22,6 +27,7 @@ import csv
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -34,9 +40,11 @@ from pathlib import Path
 import pytest
 
 from labkit.grading import cgroups, grade, protocol
+from labkit.grading.runner import Job, grade_submission
 from labkit.grading.sandbox import Limits, Sandbox, Worker, WorkerLost, worker_uid
 from tests.grading_course import (
     REPO,
+    LocalSession,
     copy_course,
     grade_id,
     notebook_with,
@@ -206,7 +214,8 @@ except ImportError:
 
 
 ''' + SEGMENT.replace("    return labels", """    if labkit is not None:
-        expected = labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m, min_points=min_points)
+        expected = labkit.segment_labels(labkit.Scan(ranges=ranges, angles=angles), threshold_m=threshold_m,
+                                         min_points=min_points)
         assert np.array_equal(labels, expected), "differs from labkit"
     return labels"""))
 
@@ -216,24 +225,27 @@ import time
 time.sleep(4)  # a demo: plotting a few scans, or timing an O(N^2) version against the answer
 '''
 
-# student -> (exercise, answers by grade id, cells before, cells after, expected score, expected status, mark)
+# student -> (exercise, answers by grade id, cells before, cells after, expected score, expected status, mark).
+# Points are per function: an attack on segment leaves the instructor's adaptive_threshold in the notebook, which
+# earns its own HALF (its honest earnings); the attacked function earns 0.
+HALF = FULL / 2
 MAIN_CLASS = {
     "honest": (EX1, {"segment": SEGMENT}, [], [], FULL, "graded", None),
     # (a) points without a solution
     # open until the specs gave test_visible a hidden part (the visible examples moved: exercises/grading/*.py)
-    "visible_lookup": (EX1, {"segment": VISIBLE_LOOKUP}, [], [], 0.0, "graded", None),
-    "visible_lookup_scale_free": (EX1, {"segment": SCALE_FREE_LOOKUP}, [], [], 0.0, "graded",
-                                  redteam("a table of the visible examples keyed on scale-free numbers finds the moved"
-                                          " examples again: test_visible's 2 points (the 8 others need a function)")),
+    "visible_lookup": (EX1, {"segment": VISIBLE_LOOKUP}, [], [], HALF, "graded", None),
+    # open on 34285ee (the visible examples moved: a table keyed on scale-free numbers found them again, 2 points),
+    # closed by the visible checks' fresh random examples: a table has none of them
+    "visible_lookup_scale_free": (EX1, {"segment": SCALE_FREE_LOOKUP}, [], [], HALF, "graded", None),
     "raises_stop_iteration": (EX1, {"segment": '''
         def segment(ranges, angles, threshold_m, min_points):
             raise StopIteration("ranges and angles")
-    '''}, [], [], 0.0, "graded", None),
-    "feedback_lying_exception": (EX1, {"segment": LYING_EXCEPTION}, [], [], 0.0, "graded", None),
+    '''}, [], [], HALF, "graded", None),
+    "feedback_lying_exception": (EX1, {"segment": LYING_EXCEPTION}, [], [], HALF, "graded", None),
     "edited_test_cell_and_bonus_cell": (EX1, {"segment": '''
         def segment(ranges, angles, threshold_m, min_points):
             return np.zeros(len(ranges), dtype=np.int64)
-    ''', "test_visible": 'print("visible tests passed")'}, [], [], 0.0, "graded", None),
+    ''', "test_visible": 'print("visible tests passed")'}, [], [], HALF, "graded", None),
     # (f) honest answers the grader must not punish
     # holes on eb62b65, closed in 93b3a13/23f5f7d: display() is a builtin in Jupyter, not in the worker (0 points);
     # an unused `import labkit` above an own solution stopped the cell before the def (0); the 10 s load budget
@@ -260,7 +272,8 @@ MAIN_CLASS = {
     '''}, [], [], FULL, "graded", None),
     "feedback_markdown_script": (EX1, {"segment": SEGMENT}, [], [], FULL, "graded", None),
     # (g) the wire format
-    "forged_load_reply": (EX1, {"segment": SEGMENT}, [FORGED_LOAD_REPLY], [], 0.0, None, None),
+    # the cell that forged a reply broke the protocol: it is left out (a crash), the notebook runs again without it
+    "forged_load_reply": (EX1, {"segment": SEGMENT}, [FORGED_LOAD_REPLY], [], FULL, "crashed", None),
     "forged_array_shape": (EX1, {"segment": SEGMENT}, [FORGED_SHAPE], [], 0.0, None, None),
     # (e) a process that tries to outlive its sandbox
     "daemon": (EX1, {"segment": SEGMENT}, [DAEMON], [], FULL, "graded", None),
@@ -374,10 +387,10 @@ else:
 
 PERSISTENCE_CLASS = {
     "a_donor": (DONOR, FULL),
-    "b_keyring_taker": (_taker(f"_key_read({KEY.encode()!r})"), 0.0),
+    "b_keyring_taker": (_taker(f"_key_read({KEY.encode()!r})"), FULL / 2),  # adaptive_threshold: the instructor's
     # /tmp, SysV shared memory, /dev/shm: each sandbox has its own
     "c_other_channels_taker": (_taker(f'_tmp_read("/tmp/.answer.py") or _shm_read({SHM_KEY})'
-                                      ' or _tmp_read("/dev/shm/.answer.py")'), 0.0),
+                                      ' or _tmp_read("/dev/shm/.answer.py")'), FULL / 2),
 }
 
 
@@ -615,8 +628,7 @@ def dbscan_sorted(x, eps, min_pts):
 #: with the other xdist process grading); on 1f2d56c, where the hog's 29-31 loops each counted as a process of
 #: their own, its first hidden cells took 9 to 11 s (with the spec's own limits it still passed: 12 s for the
 #: notebook instead of 1.5 s), and with these limits it scored 4 ("timed out").
-CPU_LIMITS = {"\nFUNCTIONS = ": "\nCALL_TIMEOUT_S = 3.0\nTEST_TIMEOUT_S = 4.0\nFUNCTIONS = ",
-              "\nLARGE_CALL_S = 3.0\n": "\nLARGE_CALL_S = 2.0\n"}
+CPU_LIMITS = {"\nLARGE_CALL_S = 3.0\n": "\nLARGE_CALL_S = 2.0\nCALL_TIMEOUT_S = 3.0\nTEST_TIMEOUT_S = 4.0\n"}
 
 
 def _build_cpu_class(folder: Path) -> Graded:
@@ -631,6 +643,184 @@ def _build_cpu_class(folder: Path) -> Graded:
     for student in ("b_honest", "c_honest"):  # graded one after the other by the second job, beside the hog
         submit(course, student, EX4, notebook_with(EX4, solutions(EX4)))
     return _grade(course, EX4, jobs=2, first_slot=SLOT_CPU)
+
+
+# ---------------------------------------------------------------------------- the second red team (issue 31)
+# Tables that earned the visible points with no algorithm, honest partial answers, slow cells, terminal escapes,
+# a memory bomb and a regex that took seconds, graded in one run of every exercise with --jobs 2. ex00's limits are
+# scaled down (2 s per notebook cell, 12 s for all; 1 s per call, 3 s per test, 4 s for all of a submission's calls)
+# so that the time budgets show in seconds: the grader's logic is the same with 10, 60, 5, 30 and 120.
+SLOT_SECOND = 74  # jobs 2: uids worker_uid(74), worker_uid(75)
+EX2, EX4S, EX6, EX8, EX10, EX11 = ("ex02_weighted_line_fit", "ex04_split_and_merge", "ex06_dbscan1d", "ex08_iav",
+                                   "ex10_match_lines", "ex11_poses")
+SCALED_LIMITS = ("\nLOAD_TIMEOUT_S = 2.0\nCALL_TIMEOUT_S = 1.0\nTEST_TIMEOUT_S = 3.0\nSUBMISSION_TIMEOUT_S = 4.0\n")
+LOAD_BUDGET_S, SUBMISSION_S = 12.0, 4.0  # what SCALED_LIMITS make of them (LOAD_BUDGET x 2 s)
+
+# Tables keyed on what turning, scaling and shifting the visible examples leaves unchanged (ratios, differences,
+# offsets over eps): on 34285ee each earned test_visible's 2 points (the examples again, moved) with no algorithm.
+TABLE_EX2 = '''
+import math
+
+_WALLS = [(2.0 / np.cos(np.radians([-20.0, 0.0, 20.0])), np.radians([-20.0, 0.0, 20.0]), 2.0, 0.0),
+          (3.0 / np.cos(np.radians([-60.0, -90.0, -120.0]) + np.pi / 2), np.radians([-60.0, -90.0, -120.0]), 3.0,
+           -np.pi / 2),
+          (-1.0 / np.cos(np.radians([160.0, 180.0, 200.0])), np.radians([160.0, 180.0, 200.0]), 1.0, np.pi),
+          (np.array([1.3354, 1.0442, 1.01, 1.0842, 1.2654]), np.radians([-40.0, -20.0, 0.0, 20.0, 40.0]),
+           1.0003793158236751, 0.016346680066035013)]
+
+
+def _key(rho, theta):
+    rho, theta = np.asarray(rho, dtype=float), np.asarray(theta, dtype=float)
+    return len(rho), tuple(np.round(rho / rho[0], 6)), tuple(np.round(np.angle(np.exp(1j * (theta - theta[0]))), 6))
+
+
+_TABLE = {_key(rho, theta): (r / rho[0], alpha - theta[0]) for rho, theta, r, alpha in _WALLS}
+
+
+def fit_line(rho, theta):
+    if len(rho) != len(theta) or len(rho) < 2:
+        raise ValueError("rho and theta: two beams or more, as many of each")
+    scale, turn = _TABLE.get(_key(rho, theta), (0.0, 0.0))
+    alpha = float(theta[0]) + turn
+    return scale * float(rho[0]), math.atan2(math.sin(alpha), math.cos(alpha))
+'''
+TABLE_EX10 = '''
+_CASES = [([[2.0, 0.0], [3.0, 1.0]], [[2.02, 0.01], [5.0, 1.0]], 0.05, [(0, 0)]),
+          ([[2.0, np.pi - 0.01]], [[2.0, -np.pi + 0.01]], 0.05, [(0, 0)]),
+          ([[2.03, 0.0], [2.01, 0.0]], [[2.0, 0.0]], 0.05, [(1, 0)]),
+          ([[2.0, 0.0]], [[2.1, 0.0], [2.0, 0.015]], 0.2, [(0, 0)]),
+          ([[2.0, 0.03], [3.0, 0.0]], [[2.01, 0.03], [3.0, 0.0]], 0.05, [(0, 0), (1, 1)])]
+
+
+def _key(lines, walls, max_dr):
+    lines, walls = np.asarray(lines, dtype=float).reshape(-1, 2), np.asarray(walls, dtype=float).reshape(-1, 2)
+    if len(lines) == 0:
+        return None
+    ref = lines[0, 1]
+    return tuple(tuple((round(r / max_dr, 4), round(float(np.angle(np.exp(1j * (a - ref)))), 4)) for r, a in part)
+                 for part in (lines, walls))
+
+
+_TABLE = {_key(lines, walls, max_dr): pairs for lines, walls, max_dr, pairs in _CASES}
+
+
+def match_lines(lines, walls, max_dr=0.05, max_dalpha=np.radians(3.0)):
+    if not (max_dr > 0 and max_dalpha > 0) or np.shape(lines)[1:] not in ((), (2,)):
+        raise ValueError("limits must be positive, every line (r, alpha)")
+    return list(_TABLE.get(_key(lines, walls, max_dr), []))
+'''
+TABLE_EX6 = '''
+_LINE = [([0.0, 1.0, 1.0, 2.0, 4.0, 6.0, 7.0, 7.0, 8.0], 2.0, 4, "first", [0, 0, 0, 0, 0, 1, 1, 1, 1]),
+         ([0.0, 0.1, 0.2, 0.3, 5.0, 9.0, 9.1, 9.2], 0.15, 3, "first", [0, 0, 0, 0, -1, 1, 1, 1]),
+         ([0.0, 0.1, 0.2, 0.3, 5.0, 9.0, 9.1, 9.2], 0.15, 5, "first", [-1] * 8),
+         ([0.0, 2.0, 2.5, 3.0], 0.5, 3, "first", [-1, 0, 0, 0]), ([0.0, 0.5, 3.0], 1.0, 1, "first", [0, 0, 1]),
+         ([0.0, 1.0, 1.0, 2.0, 4.0, 6.0, 7.0, 7.0, 8.0], 2.0, 4, "noise", [0, 0, 0, 0, -1, 1, 1, 1, 1]),
+         ([0.0, 2.0, 2.5, 3.0], 0.5, 3, "noise", [-1, -1, 0, -1])]
+_CIRCLE = [([0.5, 1.0, 4.0, 4.5, 5.0, 9.0, 9.5], 1.0, 3, 10.0, "first", [0, 0, 1, 1, 1, 0, 0]),
+           ([0.5, 1.0, 4.0, 4.5, 5.0, 9.0, 9.5], 1.0, 3, 10.0, "noise", [0, -1, 1, 1, 1, -1, 0]),
+           ([0.0, 1.0, 2.0, 3.0], 1.0, 3, 4.0, "first", [0, 0, 0, 0]),
+           ([1.0, 3.0, 4.0, 4.0, 5.0, 9.0, 10.0, 10.0, 11.0], 2.0, 4, 12.0, "first", [0, 0, 0, 0, 0, 1, 1, 1, 1])]
+
+
+def _key(x, eps, *rest):
+    x = np.asarray(x, dtype=float)
+    return (tuple(np.round((x - (x[0] if rest and rest[0] == "line" else 0.0)) / eps, 6)), *rest)
+
+
+_LABELS = {_key(x, eps, "line", m, b): labels for x, eps, m, b, labels in _LINE}
+_LABELS |= {_key(x, eps, "circle", m, round(p / eps, 6), b): labels for x, eps, m, p, b, labels in _CIRCLE}
+_BOUNDS = {_key([0.0, 1.0, 1.0, 2.0, 4.0, 6.0, 7.0, 7.0, 8.0], 2.0, "line"):
+           ([0, 0, 0, 0, 3, 4, 5, 5, 5], [3, 3, 3, 4, 5, 8, 8, 8, 8])}
+
+
+def neighbourhood_bounds(x, eps):
+    if len(x) == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    lower, upper = _BOUNDS.get(_key(x, eps, "line"), ([0] * len(x), [0] * len(x)))
+    return np.array(lower, dtype=np.int64), np.array(upper, dtype=np.int64)
+
+
+def dbscan_sorted(x, eps, min_pts, border="first"):
+    if border not in ("first", "noise"):
+        raise ValueError("border")
+    if len(x) == 0:
+        return np.zeros(0, dtype=np.int64)
+    return np.array(_LABELS.get(_key(x, eps, "line", min_pts, border), [-1] * len(x)), dtype=np.int64)
+
+
+def dbscan_circular(x, eps, min_pts, period, border="first"):
+    if len(x) == 0:
+        return np.zeros(0, dtype=np.int64)
+    labels = _LABELS.get(_key(x, eps, "circle", min_pts, round(period / eps, 6), border), [-1] * len(x))
+    return np.array(labels, dtype=np.int64)
+'''
+# ex04: an honest split_index, and similar as a table of the visible pairs and of the pairs the old own-work test
+# asked (one of them a visible example verbatim): the table earned own work's points on 34285ee
+TABLE_EX4_SIMILAR = '''
+_PAIRS = {(2.0, 10.0, 2.03, 12.0): True, (2.0, 10.0, 2.1, 10.0): False, (2.0, 10.0, 2.0, 20.0): False,
+          (3.0, 178.0, 3.01, -179.0): True, (0.02, 10.0, 0.01, -170.0): True, (2.0, 0.0, 2.0, 180.0): False,
+          (0.02, 11.459, 0.01, -168.541): True, (2.0, 177.617, 2.02, -177.617): True}
+
+
+def similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max):
+    key = (round(r1, 3), round(float(np.degrees(alpha1)), 3), round(r2, 3), round(float(np.degrees(alpha2)), 3))
+    return _PAIRS.get(key, False)
+'''
+SLEEPS = "import time\ntime.sleep({})  # a demo that takes a while"
+BLANK_LINES = "\n" * 20_000  # the worker's magic-detecting regex was quadratic in them: seconds, not interruptible
+ESCAPES = "\x1b[2J\x1b[H\x1b[1A\x1b[2Kalice,ex00,graded,10,10"  # clear the screen, rewrite a row of grades.csv
+ESCAPE_ID = "esc\x1b[2Jape"
+SECOND_CLASS = {  # student -> (exercise, answers by grade id, cells after, expected score, expected status)
+    "honest_ex00": (EX0, {}, [], FULL, "graded"),
+    # on 34285ee loading the notebook was charged to the first graded cell's test: these cells (inside the
+    # documented budget: each under a cell's limit, all under the notebook's) made every test time out: 0
+    "demo_cells_within_the_budget": (EX0, {}, [SLEEPS.format(1.5)] * 4, FULL, "graded"),
+    "six_slow_cells": (EX0, {}, [SLEEPS.format(1.5)] * 6, FULL, "graded"),
+    # a cell past its limit is interrupted and reported; its functions are graded
+    "a_cell_past_its_limit": (EX0, {}, [SLEEPS.format(5)], FULL, "timed out"),
+    # the notebook's budget used up: the cells after it are not run, and said so; the functions are graded
+    "the_budget_used_up": (EX0, {}, [SLEEPS.format(1.8)] * 8, FULL, "timed out"),
+    # the worst a submission can cost: the notebook's whole budget, then endless calls and a reload past the
+    # submission's budget (see test_the_worst_case_of_a_submission_is_its_budgets)
+    "worst_case": (EX0, {"beams_to_points": "def beams_to_points(*args):\n    while True:\n        pass"},
+                   [SLEEPS.format(1.9)] * 6, 0.0, "timed out"),
+    "blank_lines_before_the_answer": (EX0, {"beams_to_points": "_ = 1" + BLANK_LINES + BEAMS}, [], FULL, "graded"),
+    "escapes_in_messages": (EX0, {"beams_to_points": f"def beams_to_points(*args):\n    raise ValueError({ESCAPES!r})"},
+                            [], 0.0, "graded"),
+    "honest_ex01": (EX1, {}, [], FULL, "graded"),
+    "partial_ex01": (EX1, {"adaptive_threshold": "def adaptive_threshold(*args, **kwargs):\n    raise "
+                                                 "NotImplementedError()"}, [], HALF, "graded"),
+    "table_ex01": (EX1, {"segment": SCALE_FREE_LOOKUP}, [], HALF, "graded"),
+    "honest_ex02": (EX2, {}, [], FULL, "graded"),
+    "table_ex02": (EX2, {"fit_line": TABLE_EX2}, [], 0.0, "graded"),
+    "table_ex04_similar": (EX4S, {"similar": TABLE_EX4_SIMILAR}, [], HALF, "graded"),
+    "honest_ex06": (EX6, {}, [], FULL, "graded"),
+    "table_ex06": (EX6, {"dbscan": TABLE_EX6}, [], 0.0, "graded"),
+    "partial_ex08": (EX8, {"circle": "def circle_from_angle(*args):\n    raise NotImplementedError()",
+                           "band_leg": solutions(EX8)["band_leg"].split("def is_leg(")[0]
+                           + "def is_leg(*args, **kwargs):\n    raise NotImplementedError()"}, [], 6.0, "graded"),
+    "honest_ex10": (EX10, {}, [], FULL, "graded"),
+    "table_ex10": (EX10, {"match": TABLE_EX10}, [], 0.0, "graded"),
+    "partial_ex11": (EX11, {"interpolate_pose": "def interpolate_pose(*args):\n    raise NotImplementedError()"}, [],
+                     HALF, "graded"),
+}
+
+
+def _build_second_class(folder: Path) -> Graded:
+    course = copy_course(folder / "course")
+    spec = course / "grading" / f"{EX0}.py"
+    spec.write_text(spec.read_text(encoding="utf-8") + SCALED_LIMITS, encoding="utf-8")
+    for student, (name, answers, after, *_) in SECOND_CLASS.items():
+        submit(course, student, name, notebook_with(name, {**solutions(name), **answers}, extra=after))
+    submit(course, ESCAPE_ID, EX0, notebook_with(EX0, solutions(EX0)))  # a folder name with a terminal escape
+    graded = _grade(course, "all", jobs=2, first_slot=SLOT_SECOND)
+    graded.extra["csv"] = (course / "grades.csv").read_bytes()
+    return graded
+
+
+@pytest.fixture(scope="module")
+def second_class(tmp_path_factory) -> Graded:
+    return once_per_session(tmp_path_factory, "redteam-second", _build_second_class)
 
 
 # ---------------------------------------------------------------------------- the tests
@@ -889,7 +1079,7 @@ def test_a_fake_graded_cell_adds_no_points_and_no_gradebook_cell(main_class):
 
     with Gradebook(f"sqlite:///{main_class.course / 'gradebook.db'}", "labkit") as gradebook:
         submission = gradebook.find_submission(EX1, "edited_test_cell_and_bonus_cell")
-        assert submission.max_score == FULL and submission.score == 0.0
+        assert submission.max_score == FULL and submission.score == HALF  # adaptive_threshold's honest half
         names = {grade.name for notebook in submission.notebooks for grade in notebook.grades}
     assert "bonus" not in names
     text = (main_class.course / "autograded" / "edited_test_cell_and_bonus_cell" / EX1 / f"{EX1}.ipynb").read_text()
@@ -995,3 +1185,277 @@ def test_one_students_cpu_load_costs_the_students_graded_beside_it_nothing(tmp_p
         result = graded.result(student, EX4)
         assert (result.score, result.status) == (FULL, "graded"), f"{student}: {result.detail}"
     assert graded.ok
+
+
+# ---------------------------------------------------------------------------- the tests of the second red team
+def test_the_second_run_finished_with_the_honest_students_at_full_marks(second_class):
+    assert not second_class.crash, second_class.crash
+    assert second_class.ok
+    for name, student in [(EX0, "honest_ex00"), (EX1, "honest_ex01"), (EX2, "honest_ex02"), (EX6, "honest_ex06"),
+                          (EX10, "honest_ex10")]:
+        assert second_class.result(student, name).score == FULL, student
+
+
+@pytest.mark.parametrize("student", list(SECOND_CLASS))
+def test_second_red_team_each_student_earns_what_their_own_code_earns(second_class, student):
+    name, answers, _, score, status = SECOND_CLASS[student]
+    result = second_class.result(student, name)
+    verdicts = {cell.grade_id: cell.verdict[:300] for cell in result.cells}
+    assert result.score == score, f"{student}: {result.score} instead of {score} ({result.status}): {verdicts}"
+    assert result.status == status, f"{student}: {result.status} ({result.detail[:500]})"
+
+
+@pytest.mark.parametrize(("student", "tables"), [
+    ("table_ex01", {"segment"}), ("table_ex02", {"fit_line"}), ("table_ex04_similar", {"similar"}),
+    ("table_ex06", {"neighbourhood_bounds", "dbscan_sorted", "dbscan_circular"}), ("table_ex10", {"match_lines"}),
+])
+def test_a_table_earns_nothing_in_any_cell(second_class, student, tables):
+    """Open on 34285ee: a table of the visible examples keyed on what moving them leaves unchanged earned
+    test_visible's 2 points (ex01, ex02, ex06, ex10), and ex04's own work asked a visible pair again. Now the visible
+    checks run fresh random examples too, and no test repeats a visible one: a table earns nothing anywhere, the
+    functions written honestly beside it earn their share of every cell."""
+    name = SECOND_CLASS[student][0]
+    for cell in second_class.result(student, name).cells:
+        for part in cell.parts:
+            assert part.points == (0.0 if part.function in tables else part.max_points), (cell.grade_id, part)
+
+
+@pytest.mark.parametrize(("student", "blank"), [
+    ("partial_ex01", {"adaptive_threshold"}), ("partial_ex08", {"circle_from_angle", "is_leg"}),
+    ("partial_ex11", {"interpolate_pose"})])
+def test_an_honest_partial_answer_earns_its_functions_points(second_class, student, blank):
+    """Open on 34285ee: every graded cell tested every function, so two of three right earned 0."""
+    result = second_class.result(student, SECOND_CLASS[student][0])
+    earned = {part.function for cell in result.cells for part in cell.parts if part.points == part.max_points}
+    lost = {part.function for cell in result.cells for part in cell.parts if part.points == 0}
+    assert lost == blank and not earned & blank
+
+
+def _load_notes(result) -> list[str]:
+    return [f"{e['error']}: {e['message']}" for e in result.cell_errors]
+
+
+def test_slow_cells_within_the_budget_cost_nothing(second_class):
+    """Open on 34285ee: loading the notebook was charged to the first graded cell's test, which timed out, and every
+    later cell loaded it again: cells each within the documented limit, all within the notebook's, scored 0."""
+    for student in ("demo_cells_within_the_budget", "six_slow_cells"):
+        result = second_class.result(student, EX0)
+        assert (result.score, result.status, result.cell_errors) == (FULL, "graded", []), result.detail
+        assert result.timing["workers"] == 1, "the notebook ran once"
+
+
+def test_a_cell_past_its_limit_is_reported_and_the_functions_graded(second_class):
+    result = second_class.result("a_cell_past_its_limit", EX0)
+    assert [e["error"] for e in result.cell_errors] == ["TimeoutError"], result.cell_errors
+    assert re.search(r"this cell ran 2 s and was interrupted \(the limit is 2 s per cell\)", _load_notes(result)[0])
+    assert "was interrupted" in result.detail and result.score == FULL
+    assert "While your notebook ran: cell" in json.dumps(result.notebook)  # in the student's feedback too
+
+
+def test_a_notebook_that_used_its_budget_is_reported_and_its_functions_graded(second_class):
+    result = second_class.result("the_budget_used_up", EX0)
+    notes = _load_notes(result)
+    assert any(f"had used their {LOAD_BUDGET_S:g} s" in note and "interrupted" in note for note in notes), notes
+    assert any(note.startswith("TimeoutError: not run") for note in notes), notes
+    assert result.score == FULL and "not run" in result.detail
+
+
+def test_the_worst_case_of_a_submission_is_its_budgets(second_class):
+    """The notebook takes its whole budget (6 slow cells), every call runs forever, and the notebook must run again
+    after each lost call: the submission ends when the submission's budget is used, as documented: at most the load
+    budget, the submission budget, two interrupts' grace and the workers' starts. (With the real limits: 60 s +
+    120 s + 4 s, about three minutes; a run of 34285ee held six 9.5 s cells for 229 s.)"""
+    from labkit.grading.sandbox import INTERRUPT_GRACE_S
+
+    result = second_class.result("worst_case", EX0)
+    bound = LOAD_BUDGET_S + SUBMISSION_S + 2 * INTERRUPT_GRACE_S + result.timing["start_s"] + 1.0
+    assert result.timing["total_s"] <= bound, result.timing
+    assert result.timing["total_s"] >= LOAD_BUDGET_S - 1.0 + SUBMISSION_S - 1.0, result.timing  # the bound is reached
+    assert "were used up" in result.detail
+
+
+def test_a_run_of_blank_lines_costs_no_time(second_class):
+    """Open on 34285ee: the worker's magic-detecting regex took seconds on 20 000 blank lines (quadratic), where no
+    interrupt reaches: past the cell's limit, the cell and its function were lost."""
+    result = second_class.result("blank_lines_before_the_answer", EX0)
+    assert (result.score, result.cell_errors) == (FULL, []), result.detail
+
+
+def test_the_regex_of_magics_is_linear_in_blank_lines():
+    from labkit.grading.worker import python_source
+
+    started = time.perf_counter()
+    assert python_source("x = 1" + "\n" * 20_000 + "y = 2") == "x = 1" + "\n" * 20_000 + "y = 2"
+    assert time.perf_counter() - started < 1.0  # quadratic: 3.9 to 8 s; linear: a millisecond
+
+
+def test_terminal_escapes_never_reach_grades_csv(second_class):
+    """Open on 34285ee: a student's exception text reached grades.csv raw; `cat grades.csv` then showed a 0/10 row
+    as 10/10 and erased the header. Student text is now cut short and stripped of control characters, and a folder
+    name with an escape is refused as a student id."""
+    text = second_class.extra["csv"]
+    assert b"\x1b" not in text and b"\x9b" not in text
+    rows = list(csv.DictReader(text.decode("utf-8").splitlines()))
+    assert rows[0]["assignment"] and len({row["assignment"] for row in rows}) > 1  # the header is the header
+    escapes = next(row for row in rows if row["student_id"] == "escapes_in_messages")
+    assert escapes["score"] == "0" and "ValueError" in escapes["detail"]
+    shown = next(row for row in rows if row["student_id"].startswith("esc") and row["student_id"].endswith("ape"))
+    assert shown["status"] == "invalid notebook" and "control characters" in shown["detail"]
+    result = second_class.result("escapes_in_messages", EX0)
+    for cell in result.cells:
+        for output in cell.outputs:
+            assert "\x1b" not in json.dumps(output, ensure_ascii=False)
+
+
+# ---------------------------------------------------------------------------- memory: a string bomb before a class
+STRING_BOMB_MB = 99
+CEILING_BYTES = 2560 << 20  # the issue's 2.5 GB: the whole run, its grading processes and workers within it
+RUN_IN_A_CGROUP = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from labkit.grading import grade
+run = grade("ex00", course=sys.argv[2], jobs=2, first_slot=int(sys.argv[3]))
+print(json.dumps({r.student: [r.status, r.score] for r in run.results}))
+"""
+
+
+@pytest.mark.skipif(not GROUPED.usable, reason=f"no cgroups here: {GROUPED.problem}")
+def test_a_string_bomb_first_and_every_honest_student_after_it_graded(tmp_path):
+    """Open on 34285ee: the container cap did not count strings, and a 99.6 MB list of "ab" cost 3.6 GB and 9 s in
+    the trusted process's json.loads. Under a 2.5 GB memory limit, that notebook first and 80 honest ones after it:
+    the out-of-memory kill broke the pool, and 65 of the 80 got "grader error". Now the strings are counted before
+    anything is parsed (the bomb is an invalid notebook), outputs are skipped unbuilt, and the whole run -- the
+    grading processes and the workers -- stays within the ceiling."""
+    course = copy_course(tmp_path / "course")
+    folder = course / "submitted" / "a_bomb" / EX0
+    folder.mkdir(parents=True)
+    with open(folder / f"{EX0}.ipynb", "wb") as f:
+        f.write(b'{"nbformat": 4, "nbformat_minor": 5, "metadata": {}, "cells": [], "x": [')
+        f.write(b'"ab",' * (STRING_BOMB_MB * (1 << 20) // 5) + b'"ab"]}')
+    honest = notebook_with(EX0, solutions(EX0))
+    for k in range(12):
+        submit(course, f"honest{k:02d}", EX0, honest)
+    group = GROUPED.create(CEILING_BYTES, 4096, 2)
+    try:
+        proc = subprocess.run(group.command([sys.executable, "-c", RUN_IN_A_CGROUP, str(REPO), str(course),
+                                             str(SLOT_MEMORY)]), capture_output=True, text=True, timeout=900)
+        peak = int(cgroups._read(group._file("memory", "memory.max_usage_in_bytes")) or 0) if group.version == 1 \
+            else None
+        killed = group.oom_kills()
+    finally:
+        group.remove()
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    results = json.loads(proc.stdout.splitlines()[-1])
+    assert results.pop("a_bomb") == ["invalid notebook", 0.0]
+    assert results == {f"honest{k:02d}": ["graded", FULL] for k in range(12)}
+    assert killed == 0
+    assert peak is None or peak < CEILING_BYTES
+
+
+# ---------------------------------------------------------------------------- --check from the release alone
+def test_check_from_the_release_alone_gives_the_instructors_verdicts(tmp_path):
+    """Open on 34285ee: --check needed source/ (the solutions) and grading/ (the hidden tests): outside the repository
+    it said "no course here". A student with only the release folder, outside the repository, now runs the visible
+    checks in the same sandbox, and gets the verdicts the instructor's grader gives the same notebook."""
+    folder = tmp_path / "home" / EX1
+    shutil.copytree(REPO / "exercises" / "release" / EX1, folder)
+    blank = "def adaptive_threshold(*args, **kwargs):\n    raise NotImplementedError()"
+    for student, answers, passed in [("whole", solutions(EX1), True),
+                                     ("table_and_blank", {"segment": SCALE_FREE_LOOKUP, "adaptive_threshold": blank},
+                                      False)]:
+        path = folder / f"{EX1}.ipynb"
+        path.write_text(json.dumps(notebook_with(EX1, answers)), encoding="utf-8")
+        proc = subprocess.run([sys.executable, "-m", "labkit.grading", "--check", str(path)], capture_output=True,
+                              text=True, timeout=600, cwd=tmp_path / "home")
+        assert proc.returncode == (0 if passed else 1), proc.stdout + proc.stderr
+        assert "no course" not in proc.stderr and ("all visible tests passed" in proc.stdout) is passed, proc.stdout
+        checked = {m.group(1): float(m.group(2)) for m in re.finditer(r"^    (\w+): ([\d.]+) of [\d.]+: ", proc.stdout,
+                                                                      re.M)}
+        course = copy_course(tmp_path / f"course-{student}")
+        result = grade_submission(Job(str(course), EX1, student, str(submit(course, student, EX1, json.loads(
+            path.read_text(encoding="utf-8")))), b"a course secret"))
+        visible = next(cell for cell in result.cells if cell.grade_id == "test_visible")
+        assert checked == {part.function: part.points for part in visible.parts}, (proc.stdout, visible.parts)
+
+
+# ---------------------------------------------------------------------------- regrade as an oracle
+ORACLE_ROUNDS = 150
+ORACLE_TABLE = '''
+_TABLE = {table!r}
+
+
+def _key(lines, walls, max_dr, max_dalpha):
+    return repr((np.asarray(lines, dtype=float).round(12).tolist(), np.asarray(walls, dtype=float).round(12).tolist(),
+                 round(float(max_dr), 12), round(float(max_dalpha), 12)))
+
+
+def match_lines(lines, walls, max_dr=0.05, max_dalpha=np.radians(3.0)):
+    """No matching at all: an answer looked up, or the question sent out in the error message (the feedback)."""
+    key = _key(lines, walls, max_dr, max_dalpha)
+    if key in _TABLE:
+        return [tuple(pair) for pair in _TABLE[key]]
+    raise ValueError("LEAK" + key + "KAEL")
+'''
+
+
+def _answer_offline(key: str) -> list:
+    """What the attacker computes at home, with labkit, for a question the feedback gave away."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    import labkit
+
+    lines, walls, max_dr, max_dalpha = eval(key, {})  # noqa: S307 -- the test's own text, echoed by the grader
+
+    def segment(r, a):
+        foot, along = r * np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+        return SimpleNamespace(r=r, alpha=a, start=tuple(foot - 50 * along), end=tuple(foot + 50 * along),
+                               n_beams=1000)
+
+    matched = labkit.match_lines([segment(*line) for line in lines], [segment(*wall) for wall in walls],
+                                 max_dr_m=max_dr, max_dalpha=max_dalpha, min_overlap=0.0, min_beams=0,
+                                 min_length_m=0.0)
+    return [list(pair) for pair in matched.pairs]
+
+
+def _regrade(course: Path, student: str, table: dict, monkeypatch) -> tuple[float, str, str]:
+    """One regrade of the table's notebook, by the real trusted side (grade_submission) with the student's code run
+    in this process instead of a sandbox (it is this test's own code): its score and everything the student
+    reads afterwards (the autograded notebook, which feedback is made from, and the detail of grades.csv), about
+    the visible checks and about the hidden tests."""
+    from labkit.grading import runner
+
+    monkeypatch.setattr(runner, "Session", lambda sandbox, code, **limits: LocalSession(code))
+    path = submit(course, student, EX10, notebook_with(EX10, {"match": ORACLE_TABLE.format(table=table)}))
+    result = grade_submission(Job(str(course), EX10, student, str(path), b"the course secret"))
+    said = {cell.grade_id: json.dumps(cell.outputs) + cell.verdict for cell in result.cells}
+    visible = said.pop("test_visible")
+    return result.score, visible, " ".join(said.values()) + json.dumps(result.notebook) + result.detail
+
+
+def test_regrades_are_no_oracle(tmp_path, monkeypatch):
+    """Open on 34285ee: hidden inputs were the same on every regrade, and a student's exception text reached the
+    feedback at full precision: a pure lookup table filled in offline scored 2, 4, 6 and finally 10/10 on ex10
+    after 151 regrades, and the same notebook under a fresh id scored 4 with no rounds of its own (the edge cases
+    were constants). Here the table's function sends every question it cannot answer out in its error message,
+    the attacker answers it with labkit at home, and hands in again, 150 times: hidden inputs are drawn anew for
+    every change of the code, the student's messages about them come back without their numbers, and the table
+    never earns a point."""
+    course = copy_course(tmp_path / "course")
+    table: dict[str, list] = {}
+    scores, hidden_leaks = [], 0
+    for _ in range(ORACLE_ROUNDS):
+        score, visible, hidden = _regrade(course, "oracle", table, monkeypatch)
+        scores.append(score)
+        for text, is_hidden in ((visible, False), (hidden, True)):
+            for key in set(re.findall(r"LEAK(.*?)KAEL", text.replace('\\"', '"'))) - set(table):
+                try:
+                    table[key] = _answer_offline(key)
+                except Exception:  # noqa: BLE001 -- a question the feedback did not give whole
+                    continue
+                hidden_leaks += is_hidden
+    pooled, _, _ = _regrade(course, "a_friend", table, monkeypatch)  # the grown table under another student's id
+    assert max(scores) == 0.0 and pooled == 0.0, (scores[-5:], pooled, len(table))
+    assert hidden_leaks == 0, f"the feedback gave {hidden_leaks} hidden questions away"
+    assert len(table) >= ORACLE_ROUNDS / 2, "the visible checks' fresh questions, learnt every round, were no use"

@@ -2,9 +2,11 @@
 ``similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max)``.
 
 Trusted: the grader runs this file in its own process, never where the student's code runs, and
-nbgrader never copies it into the release. Each ``test_<cell>`` function holds the hidden tests of
-the graded cell with that grade id; it gets the student's functions (calls into their sandboxed
-worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
+nbgrader never copies it into the release. Each ``test_<cell>`` (or ``test_<cell>__<function>``)
+function holds hidden tests of the graded cell with that grade id for one of the student's
+functions: it gets that function (calls into the sandboxed worker) and ``rng``, a generator seeded
+per submission and test, fresh for every change of the submitted code. Its messages name what is
+wrong, never the inputs or the expected values. See exercises/README.md.
 """
 
 import math
@@ -13,10 +15,6 @@ import numpy as np
 
 import labkit
 from labkit.grading import Moved, random_iepf_trace
-
-FUNCTIONS = ("split_index", "similar")
-#: Packages the student's code cannot import when graded (labkit never can): a Ramer-Douglas-Peucker.
-MASKED = ("rdp",)
 
 
 def _split_decisions(rng, n_beams=None, **limits):
@@ -35,11 +33,16 @@ def _split_decisions(rng, n_beams=None, **limits):
 
 def _check_split(split_index, run, threshold_m, min_points, expected, where):
     result = split_index(run, threshold_m, min_points)
-    assert (result is None and expected is None) or (result is not None and result == expected), (
-        f"{where}: run of {len(run)} points, threshold_m={threshold_m:.3f}, min_points={min_points}:"
-        f" split_index should be {expected}, got {result!r}"
-    )
-    assert result is None or not isinstance(result, bool), "return an int index or None"
+    assert result is None or (isinstance(result, (int, np.integer)) and not isinstance(result, (bool, np.bool_))), (
+        f"{where}: return an int index or None, got {type(result).__name__}")
+    if expected is None and result is not None:
+        raise AssertionError(f"{where}: a run of {len(run)} points that is not split (no allowed point farther from "
+                             "the chord than threshold_m), got an index")
+    if expected is not None and result is None:
+        raise AssertionError(f"{where}: a run of {len(run)} points that is split, got None")
+    if result != expected:
+        raise AssertionError(f"{where}: a run of {len(run)} points split at another point than the reference (the "
+                             "farthest allowed point, the first of equals; the ends protected?)")
 
 
 def _as_segment(r, alpha):
@@ -47,75 +50,60 @@ def _as_segment(r, alpha):
                               end=np.zeros(2), first=0, last=1, n_points=2, error=0.0, indices=np.arange(2))
 
 
-def _check_similar(similar, r1, alpha1, r2, alpha2, dr_max, dalpha_max):
+def _check_similar(similar, r1, alpha1, r2, alpha2, dr_max, dalpha_max, where):
     expected, _ = labkit.lines_similar(_as_segment(r1, alpha1), _as_segment(r2, alpha2), merge="thresholds",
                                        merge_dr_m=dr_max, merge_dalpha_deg=math.degrees(dalpha_max))
     result = similar(r1, alpha1, r2, alpha2, dr_max, dalpha_max)
-    assert isinstance(result, (bool, np.bool_)), f"similar must return True or False, got {result!r}"
-    assert result == expected, (
-        f"similar({r1:.4f}, {alpha1:.4f}, {r2:.4f}, {alpha2:.4f}, dr_max={dr_max:.3f}, dalpha_max={dalpha_max:.4f})"
-        f" should be {expected}, got {result}"
-    )
+    assert isinstance(result, (bool, np.bool_)), f"{where}: similar must return True or False, got {result!r}"
+    assert result == expected, f"{where}: {'similar' if expected else 'different'} lines, got {result}"
 
 
-def test_visible(split_index, similar, rng):
-    """The visible examples again, moved: runs of points turned, scaled and shifted (the threshold
-    scaled), lines turned and scaled (dr_max scaled). Distances scale alike, so every answer stays.
-    Earned by functions, not by a table of the visible answers."""
-    moved = Moved(rng)
-    s = moved.scale
-    roof = [[0.0, 0.0], [1.0, 0.5], [2.0, 0.0]]
-    steps = [[0.0, 0.0], [1.0, 1.0], [2.0, 0.2], [3.0, 0.1], [4.0, 0.0]]
-    runs = [(roof, 0.1, 2, 1), (roof, 0.6, 2, None), ([[0.0, 1.0], [1.0, 2.0], [2.0, 3.0], [3.0, 4.0]], 0.01, 2, None),
-            ([[1.0, -1.0], [0.9375, -0.5], [1.25, 0.0], [1.0, 1.0], [1.0, 3.0]], 0.1, 2, 2),
-            (steps, 0.1, 2, 1), (steps, 0.1, 4, 2), (steps, 0.3, 4, None)]
-    for k, (run, threshold_m, min_points, expected) in enumerate(runs):
-        _check_split(split_index, moved.points(run), s * threshold_m, min_points, expected,
-                     f"visible run {k + 1}, moved (turned by {moved.angle:.3f} rad, scaled by {s})")
-    dr_max, dalpha_max = 0.05, np.radians(5.0)
-    pairs = [((2.0, 10.0), (2.03, 12.0), True), ((2.0, 10.0), (2.1, 10.0), False),
-             ((2.0, 10.0), (2.0, 20.0), False), ((3.0, 178.0), (3.01, -179.0), True),
-             ((0.02, 10.0), (0.01, -170.0), True), ((2.0, 0.0), (2.0, 180.0), False)]
-    for k, ((r1, a1), (r2, a2), expected) in enumerate(pairs):
-        alpha1, alpha2 = (float(moved.bearing(np.radians(a))) for a in (a1, a2))
-        result = similar(s * r1, alpha1, s * r2, alpha2, s * dr_max, dalpha_max)
-        assert isinstance(result, (bool, np.bool_)), f"similar must return True or False, got {result!r}"
-        assert result == expected, (
-            f"visible pair {k + 1}, turned by {moved.angle:.3f} rad and scaled by {s}: similar({s * r1:.4f}, "
-            f"{alpha1:.4f}, {s * r2:.4f}, {alpha2:.4f}, dr_max={s * dr_max:.3f}, dalpha_max={dalpha_max:.4f}) "
-            f"should be {expected}, got {result}")
+def _random_pair(rng, kind):
+    """Two lines and the thresholds: 0 nearly equal, 1 across the wrap at +-pi, 2 through the sensor with the
+    normals turned around, 3 unrelated; 4 near a right angle through the sensor (where turning around starts),
+    5 similar lines either side of +-pi, 6 one line near the sensor with opposite normals."""
+    dr_max, dalpha_max = float(rng.uniform(0.02, 0.3)), float(np.radians(rng.uniform(2.0, 20.0)))
+    if kind == 0:
+        r1, alpha1 = rng.uniform(0.0, 6.0), rng.uniform(-np.pi, np.pi)
+        r2, alpha2 = abs(r1 + rng.normal(0.0, dr_max)), alpha1 + rng.normal(0.0, dalpha_max)
+    elif kind == 1:
+        r1, alpha1 = rng.uniform(0.0, 6.0), np.pi - rng.uniform(0.0, dalpha_max)
+        r2, alpha2 = abs(r1 + rng.normal(0.0, dr_max)), alpha1 + rng.uniform(0.0, 2 * dalpha_max)
+    elif kind == 2:
+        r1, r2, alpha1 = rng.uniform(0.0, dr_max), rng.uniform(0.0, dr_max), rng.uniform(-np.pi, np.pi)
+        alpha2 = alpha1 + np.pi + rng.normal(0.0, dalpha_max)
+    elif kind == 3:
+        r1, r2, alpha1, alpha2 = *rng.uniform(0.0, 6.0, 2), *rng.uniform(-np.pi, np.pi, 2)
+    elif kind == 4:
+        (r1, r2), alpha1 = rng.uniform(0.0, dr_max / 2, 2), rng.uniform(-np.pi, np.pi)
+        alpha2 = alpha1 + rng.choice([-1.0, 1.0]) * (np.pi / 2 + rng.uniform(-3.0, 3.0) * dalpha_max)
+    elif kind == 5:  # similar lines either side of +-pi
+        r1 = rng.uniform(0.5, 6.0)
+        r2, alpha1 = r1 + rng.uniform(-0.5, 0.5) * dr_max, np.pi - rng.uniform(0.05, 0.45) * dalpha_max
+        alpha2 = -np.pi + rng.uniform(0.05, 0.45) * dalpha_max
+    else:  # one line near the sensor with opposite normals: similar once turned around
+        (r1, r2), alpha1 = rng.uniform(0.0, dr_max / 2.5, 2), rng.uniform(-np.pi, np.pi)
+        alpha2 = alpha1 + np.pi + rng.uniform(-0.5, 0.5) * dalpha_max
+    r1, r2 = float(r1), float(r2)
+    alpha1, alpha2 = float(labkit.wrap_angle(alpha1)), float(labkit.wrap_angle(alpha2))
+    if rng.random() < 0.5:
+        r1, alpha1, r2, alpha2 = r2, alpha2, r1, alpha1
+    return r1, alpha1, r2, alpha2, dr_max, dalpha_max
 
 
-def test_hidden_random(split_index, similar, rng):
-    """Every split decision of ``labkit.split_and_merge`` on 20 random scans; 2000 pairs of lines."""
+# ---------------------------------------------------------------------------- split_index
+def test_hidden_random__split_index(split_index, rng):
+    """Every split decision of ``labkit.split_and_merge`` on 20 random scans."""
     n_decisions = 0
     for trial in range(20):
         for run, threshold_m, min_points, expected in _split_decisions(rng):
-            _check_split(split_index, run, threshold_m, min_points, expected, f"scan {trial}")
+            _check_split(split_index, run, threshold_m, min_points, expected, f"random scan {trial}")
             n_decisions += 1
     assert n_decisions > 100
 
-    for trial in range(2000):
-        dr_max, dalpha_max = float(rng.uniform(0.02, 0.3)), float(np.radians(rng.uniform(2.0, 20.0)))
-        kind = trial % 4
-        if kind == 0:  # nearly equal lines
-            r1, alpha1 = rng.uniform(0.0, 6.0), rng.uniform(-np.pi, np.pi)
-            r2, alpha2 = abs(r1 + rng.normal(0.0, dr_max)), alpha1 + rng.normal(0.0, dalpha_max)
-        elif kind == 1:  # across the wrap at +-pi
-            r1, alpha1 = rng.uniform(0.0, 6.0), np.pi - rng.uniform(0.0, dalpha_max)
-            r2, alpha2 = abs(r1 + rng.normal(0.0, dr_max)), alpha1 + rng.uniform(0.0, 2 * dalpha_max)
-        elif kind == 2:  # through the sensor, normals turned around
-            r1, r2, alpha1 = rng.uniform(0.0, dr_max), rng.uniform(0.0, dr_max), rng.uniform(-np.pi, np.pi)
-            alpha2 = alpha1 + np.pi + rng.normal(0.0, dalpha_max)
-        else:  # unrelated
-            r1, r2, alpha1, alpha2 = *rng.uniform(0.0, 6.0, 2), *rng.uniform(-np.pi, np.pi, 2)
-        r1, r2 = float(r1), float(r2)
-        alpha1, alpha2 = float(labkit.wrap_angle(alpha1)), float(labkit.wrap_angle(alpha2))
-        if rng.random() < 0.5:
-            r1, alpha1, r2, alpha2 = r2, alpha2, r1, alpha1
-        _check_similar(similar, r1, alpha1, r2, alpha2, dr_max, dalpha_max)
 
-
+#: Runs whose answer is exact: the grader moves each (a random turn, a power-of-two scale and a shift, the threshold
+#: scaled) before it asks. (points, threshold_m, min_points, expected)
 SPLIT_CASES = [
     ([[0.0, 0.0], [1.0, 0.0]], 0.01, 2, None),  # two points lie on their chord
     ([[0.0, 0.0], [1.0, 0.3], [2.0, 0.0]], 0.01, 2, 1),
@@ -129,7 +117,58 @@ SPLIT_CASES = [
     ([[-1.0, -1.0], [0.0, 0.2], [1.0, 1.0]], 0.1, 2, 1),  # a diagonal chord: 0.2 / sqrt(2) = 0.14 m
     ([[-1.0, -1.0], [0.0, 0.2], [1.0, 1.0]], 0.15, 2, None),
 ]
+
+
+def test_hidden_edges__split_index(split_index, rng):
+    """Short, straight and protected runs, moved to a random place, as lists and arrays; the decisions on random
+    runs of two to five points."""
+    for case, (run, threshold_m, min_points, expected) in enumerate(SPLIT_CASES):
+        moved = Moved(rng)
+        points = moved.points(run)
+        for as_list in (True, False):
+            where = f"edge case {case} ({'a list' if as_list else 'an array'})"
+            _check_split(split_index, points.tolist() if as_list else points, moved.scale * threshold_m, min_points,
+                         expected, where)
+    for trial in range(6):
+        for run, threshold_m, min_points, expected in _split_decisions(rng, int(rng.integers(2, 6))):
+            _check_split(split_index, run, threshold_m, min_points, expected, f"a short random run {trial}")
+
+
+def _protected_run(rng):
+    """A run along a random line with its farthest point next to an end, protected by ``min_points``, and another
+    one farther than the threshold inside: closed-form truth."""
+    n, min_points = int(rng.integers(6, 12)), int(rng.integers(4, 6))
+    keep = min_points // 2
+    inside = int(rng.integers(keep, n - keep))
+    offsets = rng.uniform(-0.005, 0.005, n)
+    offsets[[0, -1]] = 0.0
+    threshold_m = float(rng.uniform(0.05, 0.1))
+    offsets[inside] = rng.choice([-1.0, 1.0]) * rng.uniform(1.5, 2.0) * threshold_m
+    offsets[rng.choice([keep - 1, n - keep])] = rng.choice([-1.0, 1.0]) * rng.uniform(3.0, 4.0) * threshold_m
+    points = np.column_stack([np.arange(n) * rng.uniform(0.05, 0.2), offsets])
+    moved = Moved(rng)
+    return moved.points(points), moved.scale * threshold_m, min_points, inside
+
+
+def test_own_work__split_index(split_index, rng):
+    """More split decisions, and runs whose farthest point is protected: right answers where labkit cannot be
+    imported."""
+    decisions = _split_decisions(rng, 400, threshold_m=float(rng.uniform(0.03, 0.08)), min_points=int(rng.integers(3, 6)))
+    for _, (run, threshold_m, min_points, expected) in zip(range(40), decisions, strict=False):
+        _check_split(split_index, run, threshold_m, min_points, expected, "own work")
+    for trial in range(3):
+        _check_split(split_index, *_protected_run(rng), f"own work, a protected end {trial}")
+
+
+# ---------------------------------------------------------------------------- similar
+def test_hidden_random__similar(similar, rng):
+    """2000 pairs of lines of every kind against ``labkit.lines_similar``."""
+    for trial in range(2000):
+        _check_similar(similar, *_random_pair(rng, trial % 4), f"random pair {trial}")
+
+
 DEG = np.pi / 180
+#: Pairs whose answer is exact, with thresholds 5 cm and 5 degrees: the grader turns and scales each (dr_max scaled).
 SIMILAR_CASES = [
     (2.0, 0.3, 2.0, 0.3),  # the same line
     (2.0, np.pi, 2.0, -np.pi + 1e-9),  # pi and -pi + 1e-9: the same direction
@@ -141,24 +180,25 @@ SIMILAR_CASES = [
 ]
 
 
-def test_hidden_edges(split_index, similar, rng):
-    """Short, straight and protected runs, lists; lines across the wrap, through the sensor, facing."""
-    for case, (run, threshold_m, min_points, expected) in enumerate(SPLIT_CASES):
-        for as_list in (True, False):
-            where = f"edge case {case} ({'a list' if as_list else 'an array'})"
-            _check_split(split_index, run if as_list else np.array(run), threshold_m, min_points, expected, where)
-    for r1, alpha1, r2, alpha2 in SIMILAR_CASES:
-        _check_similar(similar, r1, alpha1, r2, alpha2, 0.05, 5.0 * DEG)
-        _check_similar(similar, r2, alpha2, r1, alpha1, 0.05, 5.0 * DEG)
+def test_hidden_edges__similar(similar, rng):
+    """Lines across the wrap, through the sensor, facing each other, at right angles: turned and scaled to a random
+    place, both orders; random pairs near a right angle through the sensor."""
+    for case, (r1, alpha1, r2, alpha2) in enumerate(SIMILAR_CASES):
+        moved = Moved(rng, shift=False)
+        line1, line2 = moved.line(r1, alpha1), moved.line(r2, alpha2)
+        _check_similar(similar, *line1, *line2, moved.scale * 0.05, 5.0 * DEG, f"edge case {case}")
+        _check_similar(similar, *line2, *line1, moved.scale * 0.05, 5.0 * DEG, f"edge case {case}, swapped")
+    for trial in range(12):
+        _check_similar(similar, *_random_pair(rng, 4), f"a pair through the sensor near a right angle {trial}")
+    for trial in range(4):
+        _check_similar(similar, *_random_pair(rng, 5), f"similar lines either side of the wrap {trial}")
+        _check_similar(similar, *_random_pair(rng, 6), f"one line with opposite normals {trial}")
 
 
-def test_own_work(split_index, similar, rng):
-    """More split decisions and line pairs: right answers where labkit cannot be imported."""
-    decisions = _split_decisions(rng, 400, threshold_m=0.05, min_points=4)
-    for _, (run, threshold_m, min_points, expected) in zip(range(40), decisions, strict=False):
-        _check_split(split_index, run, threshold_m, min_points, expected, "own work")
-    for r1, alpha1, r2, alpha2 in [(0.02, 0.2, 0.01, 0.2 - np.pi), (2.0, 3.1, 2.02, -3.1), (2.0, 0.0, 2.0, np.pi)]:
-        _check_similar(similar, r1, alpha1, r2, alpha2, 0.05, 0.1)
+def test_own_work__similar(similar, rng):
+    """Twenty more random pairs of every kind: right answers where labkit cannot be imported."""
+    for trial in range(21):
+        _check_similar(similar, *_random_pair(rng, trial % 7), f"own-work pair {trial}")
 
 
 # ---------------------------------------------------------------------------- proof (tests/test_exercises.py)

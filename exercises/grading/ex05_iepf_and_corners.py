@@ -1,19 +1,17 @@
 """Hidden tests of exercise 5, ``iepf_lines(points, threshold_m, min_points)`` and ``corner(line1, line2)``.
 
 Trusted: the grader runs this file in its own process, never where the student's code runs, and
-nbgrader never copies it into the release. Each ``test_<cell>`` function holds the hidden tests of
-the graded cell with that grade id; it gets the student's functions (calls into their sandboxed
-worker) and ``rng``, a generator seeded per submission. See exercises/README.md.
+nbgrader never copies it into the release. Each ``test_<cell>`` (or ``test_<cell>__<function>``)
+function holds hidden tests of the graded cell with that grade id for one of the student's
+functions: it gets that function (calls into the sandboxed worker) and ``rng``, a generator seeded
+per submission and test, fresh for every change of the submitted code. Its messages name what is
+wrong, never the inputs or the expected values. See exercises/README.md.
 """
 
 import numpy as np
 
 import labkit
 from labkit.grading import Moved, random_iepf_trace
-
-FUNCTIONS = ("iepf_lines", "corner")
-#: Packages the student's code cannot import when graded (labkit never can): a Ramer-Douglas-Peucker.
-MASKED = ("rdp",)
 
 
 def _reference_runs(rng, n_beams=None, **limits):
@@ -28,33 +26,42 @@ def _reference_runs(rng, n_beams=None, **limits):
     return scan.xy, threshold_m, min_points, runs
 
 
-def _as_runs(result):
+def _as_runs(result, where):
     """The student's runs as a list of (int, int), or an AssertionError saying what is wrong."""
-    assert isinstance(result, (list, tuple)), f"return a list of (first, last) pairs, got {result!r}"
+    assert isinstance(result, (list, tuple)), f"{where}: return a list of (first, last) pairs, got {type(result).__name__}"
     runs = []
     for pair in result:
         assert isinstance(pair, (list, tuple, np.ndarray)) and len(pair) == 2, (
-            f"each run is a pair (first, last), got {pair!r}")
+            f"{where}: each run is a pair (first, last), got a {type(pair).__name__}")
         for v in pair:
-            assert not isinstance(v, (bool, np.bool_)) and float(v) == int(v), f"indices are ints, got {pair!r}"
+            assert isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_)) \
+                and float(v) == int(v), f"{where}: indices are ints, got a {type(v).__name__}"
         runs.append((int(pair[0]), int(pair[1])))
     return runs
 
 
 def _check_runs(iepf_lines, points, threshold_m, min_points, expected, where):
-    result = _as_runs(iepf_lines(points, threshold_m, min_points))
-    assert result == list(expected), (
-        f"{where}: {len(points)} points, threshold_m={threshold_m:.3f}, min_points={min_points}: "
-        f"iepf_lines should give {list(expected)}, got {result}"
-    )
+    result = _as_runs(iepf_lines(points, threshold_m, min_points), where)
+    expected = list(expected)
+    if result == expected:
+        return
+    if sorted(result) == sorted(expected):
+        raise AssertionError(f"{where}: the right lines in another order (scan order: the left half first)")
+    if len(result) != len(expected):
+        raise AssertionError(f"{where} ({len(points)} points): {len(result)} lines, not the number the split step "
+                             "accepts (ends protected? runs shorter than min_points dropped?)")
+    first = next(k for k, (a, b) in enumerate(zip(result, expected, strict=True)) if a != b)
+    raise AssertionError(f"{where} ({len(points)} points): line {first} of {len(expected)} starts or ends at another "
+                         "point than the reference (the worst point ends the left half?)")
 
 
 def _check_corner(corner, line1, line2, expected, where):
     result = corner(line1, line2)
     assert isinstance(result, (list, tuple, np.ndarray)) and np.shape(result) == (2,), (
-        f"return the point (x, y), got {result!r}")
-    assert np.allclose(np.asarray(result, dtype=float), expected, rtol=0.0, atol=1e-7), (
-        f"{where}: corner({line1}, {line2}) should be ({expected[0]:.6f}, {expected[1]:.6f}), got {result}")
+        f"{where}: return the point (x, y), got a {type(result).__name__} of shape {np.shape(result)}")
+    error = float(np.max(np.abs(np.asarray(result, dtype=float) - expected)))
+    if not error <= 1e-7:
+        raise AssertionError(f"{where}: the point is off by more than 1e-07 m (the sign of x or y? the determinant?)")
 
 
 def _line_through(point, alpha):
@@ -73,94 +80,94 @@ def _random_corner(rng):
     return _line_through(point, alpha1), _line_through(point, alpha2), point
 
 
-L_RUN = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [4.0, 0.0], [5.0, 0.0],
-         [5.0, 1.0], [5.0, 2.0], [5.0, 3.0], [5.0, 4.0], [5.0, 5.0]]
-U_RUN = [[0.0, 4.0], [0.0, 3.0], [0.0, 2.0], [0.0, 1.0], [0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0],
-         [3.0, 1.0], [3.0, 2.0]]  # every worst point unique: no ties for a turned copy to break otherwise
-VISIBLE_RUNS = [
-    (L_RUN, 0.1, 2, [(0, 5), (6, 10)]),
-    (L_RUN[:6], 0.1, 2, [(0, 5)]),
-    (L_RUN[:3], 0.1, 5, []),
-    (U_RUN, 0.1, 2, [(0, 4), (5, 7), (8, 9)]),
-    (U_RUN, 0.1, 4, [(0, 4)]),
-]
-VISIBLE_CORNERS = [((2.0, 0.0), (1.0, np.pi / 2), (2.0, 1.0)),
-                   ((np.sqrt(2.0), np.pi / 4), (0.5, 0.0), (0.5, 1.5)),
-                   ((1.0, np.pi), (1.0, -np.pi / 2), (-1.0, -1.0))]
-
-
-def test_visible(iepf_lines, corner, rng):
-    """The visible examples again, moved: runs turned, scaled and shifted (the threshold scaled), lines
-    moved with the plane and their corner with them. Earned by functions, not a table of the answers."""
-    moved = Moved(rng)
-    for k, (run, threshold_m, min_points, expected) in enumerate(VISIBLE_RUNS):
-        _check_runs(iepf_lines, moved.points(run), moved.scale * threshold_m, min_points, expected,
-                    f"visible run {k + 1}, moved (turned by {moved.angle:.3f} rad, scaled by {moved.scale})")
-    for k, (line1, line2, point) in enumerate(VISIBLE_CORNERS):
-        _check_corner(corner, moved.line(*line1), moved.line(*line2), moved.points([point])[0],
-                      f"visible corner {k + 1}, moved")
-
-
-def test_hidden_random(iepf_lines, corner, rng):
-    """The accepted runs of labkit's split step on 20 random scans; 200 random corners."""
+# ---------------------------------------------------------------------------- iepf_lines
+def test_hidden_random__iepf_lines(iepf_lines, rng):
+    """The accepted runs of labkit's split step on 20 random scans."""
     for trial in range(20):
-        points, threshold_m, min_points, expected = _reference_runs(rng)
-        _check_runs(iepf_lines, points, threshold_m, min_points, expected, f"scan {trial}")
-    for trial in range(200):
-        line1, line2, point = _random_corner(rng)
-        _check_corner(corner, line1, line2, point, f"random corner {trial}")
+        _check_runs(iepf_lines, *_reference_runs(rng), f"random scan {trial}")
 
 
-def test_hidden_edges(iepf_lines, corner, rng):
-    """Two points, short and straight runs, protected ends, lists and arrays, 720 points in a line;
-    corners through the origin, across the wrap, as lists; parallel lines."""
-    runs = [
-        ([[0.0, 0.0], [1.0, 0.0]], 0.01, 2, [(0, 1)]),
-        ([[0.0, 0.0], [1.0, 0.0]], 0.01, 3, []),
-        ([[0.0, 0.0], [1.0, 0.9], [2.0, 0.05], [3.0, 0.0], [4.0, 0.0]], 0.1, 4, [(0, 4)]),  # worst is protected
-        ([[0.0, 0.0], [1.0, 0.9], [2.0, 0.05], [3.0, 0.0], [4.0, 0.0]], 0.1, 2, [(0, 1), (2, 4)]),
-        ([[0.0, 0.0], [1.0, 0.3], [2.0, 0.0]], 0.01, 10, []),
-        # a vertical chord x = 5: split at point 3 (0.5 m off), then (0..3) at point 2 (0.33 m from its chord)
-        ([[5.0, -2.0], [5.0, -1.0], [5.0, 0.0], [4.5, 1.0], [5.0, 2.0]], 0.2, 2, [(0, 2)]),
-        ([[x, 0.5 * x] for x in np.linspace(0.0, 10.0, 720)], 0.001, 5, [(0, 719)]),
-    ]
-    for case, (run, threshold_m, min_points, expected) in enumerate(runs):
+#: Runs whose answer is exact (points, threshold_m, min_points, lines): the grader moves each to a random place.
+RUNS = [
+    ([[0.0, 0.0], [1.0, 0.0]], 0.01, 2, [(0, 1)]),
+    ([[0.0, 0.0], [1.0, 0.0]], 0.01, 3, []),
+    ([[0.0, 0.0], [1.0, 0.9], [2.0, 0.05], [3.0, 0.0], [4.0, 0.0]], 0.1, 4, [(0, 4)]),  # worst is protected
+    ([[0.0, 0.0], [1.0, 0.9], [2.0, 0.05], [3.0, 0.0], [4.0, 0.0]], 0.1, 2, [(0, 1), (2, 4)]),
+    ([[0.0, 0.0], [1.0, 0.3], [2.0, 0.0]], 0.01, 10, []),
+    # a vertical chord x = 5: split at point 3 (0.5 m off), then (0..3) at point 2 (0.33 m from its chord)
+    ([[5.0, -2.0], [5.0, -1.0], [5.0, 0.0], [4.5, 1.0], [5.0, 2.0]], 0.2, 2, [(0, 2)]),
+]
+
+
+def test_hidden_edges__iepf_lines(iepf_lines, rng):
+    """Two points, short and straight runs, protected ends, moved to a random place, as lists and arrays; a long
+    straight run; short random scans."""
+    for case, (run, threshold_m, min_points, expected) in enumerate(RUNS):
+        moved = Moved(rng)
+        points = moved.points(run)
         for as_list in (True, False):
-            points = [list(map(float, p)) for p in run] if as_list else np.array(run, dtype=float)
-            _check_runs(iepf_lines, points, threshold_m, min_points, expected,
-                        f"edge case {case} ({'a list' if as_list else 'an array'})")
+            _check_runs(iepf_lines, points.tolist() if as_list else points, moved.scale * threshold_m, min_points,
+                        expected, f"edge case {case} ({'a list' if as_list else 'an array'})")
+    n = int(rng.integers(500, 800))
+    along = np.cumsum(rng.uniform(0.005, 0.02, n))
+    points = Moved(rng).points(np.column_stack([along, rng.uniform(-1e-4, 1e-4, n)]))
+    _check_runs(iepf_lines, points, float(rng.uniform(0.001, 0.01)) * 2, int(rng.integers(2, 8)), [(0, n - 1)],
+                "a long straight run")
+    for trial in range(6):
+        _check_runs(iepf_lines, *_reference_runs(rng, int(rng.integers(2, 8))), f"a short random scan {trial}")
 
-    corners = [((0.0, 0.3), (2.0, 0.3 + np.pi / 2), _crossing(0.0, 0.3, 2.0, 0.3 + np.pi / 2)),
-               ((1.0, np.pi), (2.0, np.pi / 2), (-1.0, 2.0)),
-               ((1.0, -np.pi + 1e-12), (1.0, np.pi / 2), (-1.0, 1.0)),
-               ([3.0, 0.0], [4.0, -np.pi / 2], (3.0, -4.0))]
-    for case, (line1, line2, point) in enumerate(corners):
-        _check_corner(corner, line1, line2, np.asarray(point, dtype=float), f"edge corner {case}")
-    for line1, line2 in [((1.0, 0.0), (2.0, 0.0)), ((1.0, 0.0), (1.0, np.pi)), ((0.0, 0.5), (0.0, 0.5 - np.pi)),
-                         ((2.0, np.pi), (3.0, -np.pi + 1e-13))]:
+
+def test_own_work__iepf_lines(iepf_lines, rng):
+    """More runs: right answers where labkit cannot be imported."""
+    for trial in range(5):
+        _check_runs(iepf_lines, *_reference_runs(rng, 300, threshold_m=float(rng.uniform(0.03, 0.08)),
+                                                 min_points=int(rng.integers(3, 6))), f"own work, scan {trial}")
+
+
+# ---------------------------------------------------------------------------- corner
+def test_hidden_random__corner(corner, rng):
+    """200 random corners against the point their lines were drawn through."""
+    for trial in range(200):
+        _check_corner(corner, *_random_corner(rng), f"random corner {trial}")
+
+
+def test_hidden_edges__corner(corner, rng):
+    """Corners through the origin, across the wrap, as lists and tuples; parallel lines (ValueError)."""
+    point = rng.uniform(-5.0, 5.0, 2)
+    alpha = rng.uniform(-np.pi, np.pi)
+    cases = [("a line through the sensor", (0.0, float(labkit.wrap_angle(alpha))), _line_through(point, alpha + 1.2),
+              None),
+             ("lines at right angles", _line_through(point, alpha), _line_through(point, alpha + np.pi / 2), point),
+             ("a normal at pi", _line_through([-rng.uniform(0.5, 5.0), point[1]], np.pi),
+              _line_through(point, rng.uniform(0.3, 2.8)), None),
+             ("a normal a hair above -pi", (float(rng.uniform(0.5, 5.0)), -np.pi + 1e-12),
+              _line_through(point, rng.uniform(0.3, 2.8)), None)]
+    for where, line1, line2, expected in cases:
+        if expected is None:  # the point both lines pass through, solved here by Cramer's rule
+            (r1, a1), (r2, a2) = line1, line2
+            det = np.cos(a1) * np.sin(a2) - np.sin(a1) * np.cos(a2)
+            expected = np.array([r1 * np.sin(a2) - r2 * np.sin(a1), r2 * np.cos(a1) - r1 * np.cos(a2)]) / det
+        for form in (tuple, list):
+            _check_corner(corner, form(line1), form(line2), expected, f"edge corner: {where}")
+    for where, turn in [("parallel lines", 0.0), ("parallel lines, normals opposite", np.pi),
+                        ("parallel lines, normals pi and -pi", None)]:
+        r1, r2 = rng.uniform(0.5, 5.0, 2)
+        if turn is None:
+            line1, line2 = (float(r1), np.pi), (float(r2), -np.pi + 1e-13)
+        else:
+            a = float(rng.uniform(-np.pi, np.pi))
+            line1, line2 = (float(r1), a), (float(r2), float(labkit.wrap_angle(a + turn)))
         try:
-            result = corner(line1, line2)
+            corner(line1, line2)
         except ValueError:
             continue
-        raise AssertionError(f"corner({line1}, {line2}): parallel lines never meet, expected ValueError, "
-                             f"got {result!r}")
+        raise AssertionError(f"{where} never meet: expected ValueError")
 
 
-def _crossing(r1, alpha1, r2, alpha2):
-    """Closed form for two perpendicular lines: the foot of one plus the other's offset along it."""
-    n1, n2 = np.array([np.cos(alpha1), np.sin(alpha1)]), np.array([np.cos(alpha2), np.sin(alpha2)])
-    assert abs(n1 @ n2) < 1e-12
-    return r1 * n1 + r2 * n2
-
-
-def test_own_work(iepf_lines, corner, rng):
-    """More runs and corners: right answers where labkit cannot be imported."""
-    for trial in range(5):
-        points, threshold_m, min_points, expected = _reference_runs(rng, 300, threshold_m=0.05, min_points=4)
-        _check_runs(iepf_lines, points, threshold_m, min_points, expected, f"own work, scan {trial}")
+def test_own_work__corner(corner, rng):
+    """Twenty more random corners: right answers where labkit cannot be imported."""
     for trial in range(20):
-        line1, line2, point = _random_corner(rng)
-        _check_corner(corner, line1, line2, point, f"own work, corner {trial}")
+        _check_corner(corner, *_random_corner(rng), f"own work, corner {trial}")
 
 
 # ---------------------------------------------------------------------------- proof (tests/test_exercises.py)

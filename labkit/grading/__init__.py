@@ -16,19 +16,33 @@ A student's notebook is graded in two processes that share nothing but plain dat
 gradebook and ``grades.csv``; ``labkit grade --check my.ipynb`` runs one notebook's visible tests
 the same way.
 
-The helpers the hidden tests use live here too: :func:`random_beams` and :func:`random_wall_beams`
-draw inputs, :func:`assert_beams_result`, :func:`assert_labels_result` and
-:func:`assert_line_result` compare answers in words a student can act on.
+The helpers the tests use live here too: :func:`run_checks` runs a notebook's visible checks (one per
+function a student writes); :func:`random_beams` and :func:`random_wall_beams` draw inputs;
+:func:`assert_beams_result`, :func:`assert_labels_result` and :func:`assert_line_result` compare
+answers in words a student can act on, without the expected values.
 """
 
-from .checks import Moved, assert_beams_result, assert_labels_result, assert_line_result
+from .checks import Moved, assert_beams_result, assert_labels_result, assert_line_result, run_checks
 from .command import add_grade_parser, check, grade, main, run_grade
-from .inputs import random_beams, random_iepf_trace, random_wall_beams
+from .inputs import (
+    random_arc,
+    random_band_segment,
+    random_beams,
+    random_iepf_trace,
+    random_shape,
+    random_threshold_case,
+    random_wall_beams,
+)
 
 __all__ = [
+    "run_checks",
     "random_beams",
     "random_wall_beams",
     "random_iepf_trace",
+    "random_threshold_case",
+    "random_shape",
+    "random_arc",
+    "random_band_segment",
     "assert_beams_result",
     "assert_labels_result",
     "assert_line_result",

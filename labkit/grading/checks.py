@@ -1,25 +1,88 @@
-"""Comparisons for the hidden tests: the student's answer against the reference, in words a student can act on.
+"""The tests' side of grading: the visible checks' runner, and the hidden tests' comparisons.
+
+:func:`run_checks` runs a notebook's visible checks, one per function a student writes: in Jupyter
+(and ``labkit grade --check``) it runs them all and says which failed; when the notebook is graded, the
+grader calls it with each check counted for its own function.
 
 :func:`assert_beams_result` compares a ``(points, indices)`` answer with the reference,
 :func:`assert_labels_result` a per-item label array and :func:`assert_line_result` a line
 ``(r, alpha)`` in normal form; :class:`Moved` moves a test's inputs (and its answers) to a random
-place, so that a visible example is graded again on numbers the student has not seen. They run on
-the grader's trusted side, on the plain values the
-worker sent back (numbers, strings, lists, tuples, exact numpy arrays of numeric dtype): nothing
-the student's code built reaches them.
+place. They run on the grader's trusted side, on the plain values the worker sent back (numbers,
+strings, lists, tuples, exact numpy arrays of numeric dtype): nothing the student's code built
+reaches them. Their messages name what is wrong -- the type, the shape, how many items differ and
+where the first one is, how large an error is -- and never the inputs or the expected values: they
+are the feedback on inputs the student has not seen.
 """
 
 from __future__ import annotations
 
+import contextvars
 import math
 import numbers
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from ..geometry import normalize_line, transform_points, wrap_angle
 
-__all__ = ["Moved", "assert_beams_result", "assert_labels_result", "assert_line_result"]
+__all__ = ["run_checks", "Moved", "assert_beams_result", "assert_labels_result", "assert_line_result"]
+
+#: Set by the grader while it runs a visible cell: what :func:`run_checks` hands each check to.
+GRADER: contextvars.ContextVar[Callable[[str, Callable], None] | None] = contextvars.ContextVar(
+    "labkit_grading_checks", default=None)
+
+
+def run_checks(**checks: Callable[[np.random.Generator], None]) -> None:
+    """Run each function's visible checks: ``run_checks(segment=check_segment, ...)``.
+
+    Each check is called with a fresh ``numpy.random.Generator`` (for the examples it draws) and raises
+    (an ``AssertionError`` saying what is wrong) when its function gets an example wrong. In Jupyter
+    every check runs, a line per function says whether it passed, and the first failure is raised
+    again at the end; ``visible tests passed`` when none failed.
+
+    When the notebook is graded (``labkit grade``, or ``--check``), the grader runs each check on its
+    own, with a generator drawn for the submission: a check that fails costs its own function's share
+    of the cell only.
+
+    Examples
+    --------
+    >>> def check_double(rng):
+    ...     assert 2 * 3 == 6
+    >>> run_checks(double=check_double)
+    double: passed
+    visible tests passed
+    """
+    for function, check in checks.items():
+        if not callable(check):
+            raise TypeError(f"run_checks({function}=...) needs a function of rng, got {type(check).__name__}")
+    grader = GRADER.get()
+    if grader is not None:
+        for function, check in checks.items():
+            grader(function, check)
+        return
+    failures = []
+    for function, check in checks.items():
+        try:
+            check(np.random.default_rng())
+        except Exception as error:  # noqa: BLE001 -- reported, and the first one raised again below
+            failures.append(error)
+            print(f"{function}: FAILED: {type(error).__name__}: {error}")
+        else:
+            print(f"{function}: passed")
+    if failures:
+        raise failures[0]
+    print("visible tests passed")
+
+
+def _magnitude(error: float) -> str:
+    """The order of magnitude of an error, not its value: ``about 1e-3``."""
+    return f"about 1e{math.floor(math.log10(error)):d}" if error > 0 and math.isfinite(error) else "an unknown amount"
+
+
+def _differ(count: int, total: int, item: str, first: int) -> str:
+    items, verb = f"{item}s" if total != 1 else item, "differs" if count == 1 else "differ"
+    return f"{count} of {total} {items} {verb} from the reference (the first at {item} {first})"
 
 
 def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float = 1e-9) -> None:
@@ -39,7 +102,8 @@ def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float =
     Raises
     ------
     AssertionError
-        With a message that says which part (type, shape, dtype, indices, values) is wrong.
+        With a message that says which part (type, shape, dtype, indices, values) is wrong, without the
+        expected values.
 
     Examples
     --------
@@ -47,7 +111,7 @@ def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float =
     >>> assert_beams_result((np.zeros((1, 2)), np.array([0])), [[1.0, 0.0]], [0])
     Traceback (most recent call last):
     ...
-    AssertionError: points are wrong: row 0 (beam 0) should be [1.0, 0.0], got [0.0, 0.0]
+    AssertionError: points are wrong: 1 of 1 row differs from the reference (the first at row 0)
     """
     expected_points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     expected_indices = np.asarray(indices, dtype=np.int64).reshape(-1)
@@ -57,27 +121,23 @@ def assert_beams_result(result: Any, points: Any, indices: Any, *, atol: float =
     for name, value in [("points", got_points), ("indices", got_indices)]:
         if not isinstance(value, np.ndarray):
             raise AssertionError(f"{name} must be a numpy array, got {type(value).__name__}")
-    if got_points.shape != expected_points.shape:
-        raise AssertionError(f"points must have shape {expected_points.shape}, got {got_points.shape}")
+    if got_points.ndim != 2 or got_points.shape[1:] != (2,):
+        raise AssertionError(f"points must have shape (M, 2), one row per valid beam, got {got_points.shape}")
     if got_points.dtype != np.float64:
         raise AssertionError(f"points must have dtype float64, got {got_points.dtype}")
-    if got_indices.shape != expected_indices.shape:
-        raise AssertionError(f"indices must have shape {expected_indices.shape}, got {got_indices.shape}")
+    if got_indices.shape != (got_points.shape[0],):
+        raise AssertionError(f"indices must have shape (M,), one per row of points, got {got_indices.shape}")
     if not np.issubdtype(got_indices.dtype, np.integer):
         raise AssertionError(f"indices must be integers, got dtype {got_indices.dtype}")
+    if got_indices.shape != expected_indices.shape:
+        raise AssertionError("the number of rows is wrong: one row per beam with a valid reading")
     if not np.array_equal(got_indices, expected_indices):
-        wrong = int(np.flatnonzero(got_indices != expected_indices)[0])
-        raise AssertionError(
-            f"indices are wrong: position {wrong} should be beam {expected_indices[wrong]},"
-            f" got {got_indices[wrong]}"
-        )
+        wrong = np.flatnonzero(got_indices != expected_indices)
+        raise AssertionError(f"indices are wrong: {_differ(wrong.size, got_indices.size, 'position', int(wrong[0]))}")
     close = np.isclose(got_points, expected_points, rtol=1e-9, atol=atol)
     if not np.all(close):
-        row = int(np.flatnonzero(~np.all(close, axis=1))[0])
-        raise AssertionError(
-            f"points are wrong: row {row} (beam {expected_indices[row]}) should be"
-            f" {expected_points[row].tolist()}, got {got_points[row].tolist()}"
-        )
+        rows = np.flatnonzero(~np.all(close, axis=1))
+        raise AssertionError(f"points are wrong: {_differ(rows.size, got_points.shape[0], 'row', int(rows[0]))}")
 
 
 def assert_labels_result(result: Any, expected: Any, *, name: str = "labels", item: str = "beam") -> None:
@@ -95,7 +155,8 @@ def assert_labels_result(result: Any, expected: Any, *, name: str = "labels", it
     Raises
     ------
     AssertionError
-        With a message that says which part (type, shape, dtype, first wrong item) is wrong.
+        With a message that says which part (type, shape, dtype, how many items differ and the first)
+        is wrong, without the expected labels.
 
     Examples
     --------
@@ -103,7 +164,7 @@ def assert_labels_result(result: Any, expected: Any, *, name: str = "labels", it
     >>> assert_labels_result(np.array([0, 1, -1]), [0, 0, -1])
     Traceback (most recent call last):
     ...
-    AssertionError: labels are wrong: beam 1 should be 0, got 1 (expected [0, 0, -1], got [0, 1, -1])
+    AssertionError: labels are wrong: 1 of 3 beams differs from the reference (the first at beam 1)
     """
     want = np.asarray(expected, dtype=np.int64).reshape(-1)
     if not isinstance(result, np.ndarray):
@@ -114,13 +175,7 @@ def assert_labels_result(result: Any, expected: Any, *, name: str = "labels", it
         raise AssertionError(f"{name} must be integers, got dtype {result.dtype}")
     wrong = np.flatnonzero(result != want)
     if wrong.size:
-        i = int(wrong[0])
-        lo, hi = max(i - 3, 0), min(i + 4, want.size)
-        where = "" if (lo, hi) == (0, want.size) else f" around {item}s {lo}..{hi - 1}"
-        raise AssertionError(
-            f"{name} are wrong: {item} {i} should be {want[i]}, got {result[i]} (expected{where}"
-            f" {want[lo:hi].tolist()}, got {result[lo:hi].tolist()})"
-        )
+        raise AssertionError(f"{name} are wrong: {_differ(wrong.size, want.size, item, int(wrong[0]))}")
 
 
 def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-7) -> None:
@@ -140,7 +195,8 @@ def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-
     Raises
     ------
     AssertionError
-        With a message that says which part (type, sign of r, range of alpha, value) is wrong.
+        With a message that says which part (type, sign of r, range of alpha, value) is wrong, and the
+        error's order of magnitude (not the expected value).
 
     Examples
     --------
@@ -148,7 +204,7 @@ def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-
     >>> assert_line_result((-2.0, math.pi), 2.0, 0.0)
     Traceback (most recent call last):
     ...
-    AssertionError: r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got -2.0
+    AssertionError: r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got a negative r
     """
     if not isinstance(result, tuple) or len(result) != 2:
         raise AssertionError(f"expected a tuple (r, alpha), got {type(result).__name__}")
@@ -159,19 +215,15 @@ def assert_line_result(result: Any, r: float, alpha: float, *, atol: float = 1e-
             raise AssertionError(f"{name} must be finite, got {value}")
     got_r, got_alpha = float(result[0]), float(result[1])
     if got_r < 0:
-        raise AssertionError(
-            f"r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got {got_r}"
-        )
+        raise AssertionError("r must be >= 0 (turn the normal around: r -> -r, alpha -> alpha + pi), got a negative r")
     if not -math.pi < got_alpha <= math.pi:
-        raise AssertionError(f"alpha must be in (-pi, pi], got {got_alpha} (wrap it)")
+        raise AssertionError("alpha must be in (-pi, pi] (wrap it)")
     if abs(got_r - r) > atol:
-        raise AssertionError(f"r is wrong: should be {r:.9f} m, got {got_r:.9f} m")
+        raise AssertionError(f"r is wrong: off by {_magnitude(abs(got_r - r))} m (allowed: {atol:g} m)")
     gap = abs(math.remainder(got_alpha - alpha, 2 * math.pi))
     if gap > atol:
-        raise AssertionError(
-            f"alpha is wrong: should be {alpha:.9f} rad ({math.degrees(alpha):.4f} deg),"
-            f" got {got_alpha:.9f} rad ({math.degrees(got_alpha):.4f} deg)"
-        )
+        hint = " (off by pi: the normal turned around?)" if abs(gap - math.pi) < 1e-6 else ""
+        raise AssertionError(f"alpha is wrong: off by {_magnitude(gap)} rad (allowed: {atol:g} rad){hint}")
 
 
 class Moved:

@@ -8,7 +8,8 @@ gradebook, the autograded notebooks, the records and ``grades.csv``
 the exit status is 0 when every submission got a verdict (whatever it was).
 
 ``labkit grade --check my.ipynb`` runs one notebook's visible tests with the same trusted grader
-and sandbox and prints a verdict per graded cell.
+and sandbox and prints a verdict per graded cell and function; outside a course (a student with
+only the release) the checks are the notebook's own locked cells, as released.
 
 :func:`add_grade_parser` and :func:`run_grade` are what ``labkit``'s command line calls;
 ``python -m labkit.grading`` runs the same command on its own.
@@ -30,9 +31,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .course import Course, Exercise, find_course
+from .course import Course, Exercise, find_course, release_exercise
 from .notebook import grade_id, read_notebook
-from .protocol import clean_text
 from .records import Records, student_id_problem
 from .runner import (
     GRADER_ERROR,
@@ -46,6 +46,7 @@ from .runner import (
     set_slot,
 )
 from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap, kill_all_workers
+from .text import one_line
 
 __all__ = ["grade", "check", "add_grade_parser", "run_grade", "main", "GradingRun"]
 
@@ -317,7 +318,7 @@ def grade(
                 problem = student_id_problem(student)
                 if problem is not None:  # no file may be named after it: a row in grades.csv only
                     unrecorded.append(_fill(SubmissionResult(name, student, INVALID, [], detail=(
-                        f"student id {clean_text(student)!r} cannot be graded: {problem}; rename the folder")),
+                        f"student id {one_line(student, 200)!r} cannot be graded: {problem}; rename the folder")),
                         exercises[name]))
                     continue
                 notebook, folders[name, student] = _handed_in(course, student, name)
@@ -329,7 +330,7 @@ def grade(
                 run.results.append(records.save(_fill(result, exercises[result.exercise]),
                                                 has_folder=folders[result.exercise, result.student]))
                 bar.update(1)
-                bar.set_postfix_str(f"{result.student}: {result.status}", refresh=False)
+                bar.set_postfix_str(f"{one_line(result.student, 40)}: {result.status}", refresh=False)
         except KeyboardInterrupt as interrupted:  # what the report says: how many were saved of how many
             interrupted.graded, interrupted.total = len(run.results) - len(unrecorded), len(todo)
             raise
@@ -367,20 +368,34 @@ def _exercise_of(course: Course, notebook: Path, wanted: str | None) -> str:
 
 def check(notebook: Path | str, *, course: Course | Path | str | None = None, exercise: str | None = None,
           isolate: bool = True) -> tuple[Exercise, SubmissionResult]:
-    """Run one notebook's visible tests the way the grader runs them (sandbox, trusted tests)."""
+    """Run one notebook's visible checks the way the grader runs them (sandbox, trusted checks).
+
+    With a course (``course``, or ``./exercises``) the checks are the course's; without one -- a student with
+    only the release -- they are the notebook's own locked cells (as released: a changed one is refused), with
+    the functions, points and masked packages its metadata names. The verdicts are the same either way.
+    """
     notebook = Path(notebook)
     if not notebook.is_file():
         raise FileNotFoundError(f"no notebook {notebook}")
-    course = course if isinstance(course, Course) else find_course(course)
+    if course is None:
+        with contextlib.suppress(FileNotFoundError):
+            course = find_course()
+    elif not isinstance(course, Course):
+        course = find_course(course)
     if isolate:
         check_bwrap()
-    name = _exercise_of(course, notebook, exercise)
+    if course is None:
+        job = Job(None, exercise or "", "you", str(notebook.resolve()), None, isolate, visible_only=True)
+    else:
+        job = Job(str(course.root), _exercise_of(course, notebook, exercise), "you", str(notebook.resolve()), None,
+                  isolate, visible_only=True)
     try:
-        result = grade_submission(Job(str(course.root), name, "you", str(notebook.resolve()), None, isolate,
-                                      visible_only=True))
+        result = grade_submission(job)
     except SandboxBroken as broken:
         raise PermissionError(f"labkit grade cannot start its sandbox: {broken}") from None
-    return course.exercise(name), result
+    if course is None:
+        return release_exercise(read_notebook(notebook)), result
+    return course.exercise(job.exercise), result
 
 
 def _check_report(exercise: Exercise, result: SubmissionResult) -> tuple[str, bool]:
@@ -388,17 +403,20 @@ def _check_report(exercise: Exercise, result: SubmissionResult) -> tuple[str, bo
     if result.detail and result.status == "invalid notebook":
         return "\n".join([*lines, f"  invalid notebook: {result.detail}"]), False
     for error in result.cell_errors:
-        raised = f"{error['error']}: {error['message'][:300]}"
-        lines.append(f"  note: the cell that starts `{error['starts']}` raised {raised}")
+        lines.append(f"  note: the cell that starts `{error['starts']}`: {error['error']}: {error['message'][:300]}")
     width = max(len(c.grade_id) for c in exercise.cells)
     passed = True
     for cell, verdict in zip(exercise.cells, result.cells, strict=True):
         if cell.auto and not cell.visible:
-            text = "hidden tests only: graded on inputs you have not seen when you hand in"
-        else:
-            text = verdict.verdict
-            passed &= verdict.points is not None and verdict.points == cell.points
-        lines.append(f"  {cell.grade_id.ljust(width)}  {cell.points:g} points  {text}")
+            lines.append(f"  {cell.grade_id.ljust(width)}  {cell.points:g} points  hidden tests only: graded on inputs "
+                         "you have not seen when you hand in")
+            continue
+        passed &= verdict.points is not None and verdict.points == cell.points
+        lines.append(f"  {cell.grade_id.ljust(width)}  {cell.points:g} points  "
+                     + ("passed" if verdict.verdict == "passed" else f"{verdict.points or 0:g} earned"))
+        for part in verdict.parts:
+            text = "passed" if part.verdict == "passed" else part.verdict.removeprefix(f"{part.function} ")
+            lines.append(f"    {part.function}: {part.points:g} of {part.max_points:g}: {text[:600]}")
     lines.append("all visible tests passed; the hidden tests run when your notebook is graded" if passed
                  else "some visible tests failed: fix them before you hand in")
     return "\n".join(lines), passed
@@ -423,7 +441,8 @@ def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
     parser.add_argument("--student", action="append", metavar="ID", help="grade only this student (repeatable)")
     parser.add_argument("-o", "--output", help="the grades CSV (default: <course>/grades.csv)")
     parser.add_argument("--check", metavar="NOTEBOOK",
-                        help="run one notebook's visible tests the way it will be graded, and print a verdict per test")
+                        help="run one notebook's visible tests the way it will be graded (the release alone is "
+                        "enough), and print a verdict per test and function")
     parser.add_argument("--exercise", dest="check_exercise", metavar="NAME",
                         help="with --check: the exercise, when the notebook's name does not say")
     parser.add_argument("--no-sandbox", action="store_true",
@@ -458,7 +477,7 @@ def run_grade(args: argparse.Namespace) -> int:
     print(run.summary())
     for result in run.results:
         if result.status == GRADER_ERROR:
-            print(f"{result.exercise} {result.student}: {result.detail}", file=sys.stderr)
+            print(f"{result.exercise} {one_line(result.student, 200)}: {one_line(result.detail)}", file=sys.stderr)
     return 0 if run.ok else 1
 
 

@@ -2,17 +2,24 @@
 
 An exercise is three trusted files:
 
-- ``source/<name>/<name>.ipynb``: the instructor notebook. Its solution cells hold the answer,
-  its graded test cells the *visible* tests (code only, no hidden-test markers), which the grader
-  runs on its trusted side against the student's functions;
-- ``release/<name>/<name>.ipynb``: what ``make release`` generated from it (the student copy,
-  also the layout of the autograded notebook and of the gradebook's cells);
-- ``grading/<name>.py``: the *spec*, a Python module with the hidden tests (one function per
-  graded cell, named after its grade id) and what the worker may not import. See
+- ``source/<name>/<name>.ipynb``: the instructor notebook. Its solution cells hold the answer, its
+  visible test cell the *visible checks* (a ``check_<function>(rng)`` per function, run by
+  :func:`labkit.grading.run_checks`), and its metadata (``"labkit"``) what students write and what each
+  function is worth: ``{"exercise": name, "functions": {function: points, ...}, "masked": [package, ...]}``;
+- ``release/<name>/<name>.ipynb``: what ``make release`` generated from it (the student copy, also the
+  layout of the autograded notebook and of the gradebook's cells);
+- ``grading/<name>.py``: the *spec*, a Python module with the hidden tests. The tests of the graded
+  cell ``<grade_id>`` are its functions named ``<grade_id>`` or ``<grade_id>__<anything>``; each takes
+  one of the student's functions (by its name) and ``rng``, and counts for that function. See
   ``exercises/README.md`` for its form.
 
+Points are per function: a graded cell's points are shared among the functions in proportion to their
+points (ex01: ``segment`` 5 and ``adaptive_threshold`` 5 share each cell half and half), and a
+function's share of a cell is earned when its visible check and its hidden tests in that cell all pass.
+
 The spec never runs where student code runs, and nbgrader never copies it (it copies only
-``source/<name>/``).
+``source/<name>/``). :func:`release_exercise` builds an exercise from a release notebook alone (its
+visible checks, no hidden tests): what a student's ``labkit grade --check`` runs.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from __future__ import annotations
 import ast
 import importlib.util
 import inspect
+import math
 import re
 import sys
 from collections.abc import Callable
@@ -30,9 +38,23 @@ from types import ModuleType
 from .notebook import InvalidNotebook, cell_source, grade_id, nbgrader_metadata, read_notebook, same_code
 from .sandbox import Limits
 
-__all__ = ["Course", "Exercise", "GradedCell", "find_course"]
+__all__ = ["Course", "Exercise", "GradedCell", "HiddenTest", "find_course", "release_exercise"]
 
 MARKERS = ("### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
+#: The defaults of the time limits a spec may change (seconds): per call of a student's function, per
+#: function's part of a graded cell, per notebook cell (all cells together: ``LOAD_BUDGET`` times it, see
+#: :mod:`labkit.grading.sandbox`), and for all of one submission's tests together (the student's calls and
+#: the notebook run again after a lost worker).
+TIMEOUTS = {"CALL_TIMEOUT_S": 5.0, "TEST_TIMEOUT_S": 30.0, "LOAD_TIMEOUT_S": 10.0, "SUBMISSION_TIMEOUT_S": 120.0}
+
+
+@dataclass(frozen=True)
+class HiddenTest:
+    """One hidden test of a graded cell: ``test(<function>=..., rng=...)`` counts for ``function``."""
+
+    name: str
+    function: str
+    test: Callable[..., None]
 
 
 @dataclass(frozen=True)
@@ -44,47 +66,49 @@ class GradedCell:
     grade_id : str
     points : float
     code : str
-        The visible tests: the source notebook's code of the cell (empty for a manually graded cell).
-    hidden : callable or None
-        The spec's hidden tests of the cell: called with the student's functions (by parameter
-        name) and ``rng``, a generator seeded per submission.
+        The visible checks: the source notebook's code of the cell (empty for a manually graded cell).
+    hidden : tuple of HiddenTest
+        The spec's hidden tests of the cell.
     auto : bool
         False for a cell nbgrader leaves to a human (a graded answer cell or a markdown cell).
+    shares : dict
+        Function -> the points of this cell it earns (the cell's points in proportion to the functions').
     """
 
     grade_id: str
     points: float
     code: str
-    hidden: Callable[..., None] | None
+    hidden: tuple[HiddenTest, ...] = ()
     auto: bool = True
-
-    @property
-    def parameters(self) -> tuple[str, ...]:
-        """The hidden tests' parameter names (the student's functions and ``rng``)."""
-        return tuple(inspect.signature(self.hidden).parameters) if self.hidden else ()
+    shares: dict[str, float] = field(default_factory=dict)
 
     @property
     def visible(self) -> bool:
         """True when the visible code has a statement (not only comments)."""
         return bool(ast.parse(self.code).body) if self.auto else False
 
+    def tests_of(self, function: str) -> tuple[HiddenTest, ...]:
+        return tuple(test for test in self.hidden if test.function == function)
+
 
 @dataclass(frozen=True)
 class Exercise:
-    """What the grader knows about one exercise; built by :meth:`Course.exercise`."""
+    """What the grader knows about one exercise; built by :meth:`Course.exercise` or :func:`release_exercise`."""
 
     name: str
     source: dict
     release: dict
-    module: ModuleType
+    module: ModuleType | None
     functions: tuple[str, ...]
+    points: dict[str, float]
     masked: tuple[str, ...]
     setup: tuple[str, ...]
     cells: tuple[GradedCell, ...]
     test_cells: dict[str, str]
-    call_timeout_s: float
-    test_timeout_s: float
-    load_timeout_s: float
+    call_timeout_s: float = TIMEOUTS["CALL_TIMEOUT_S"]
+    test_timeout_s: float = TIMEOUTS["TEST_TIMEOUT_S"]
+    load_timeout_s: float = TIMEOUTS["LOAD_TIMEOUT_S"]
+    submission_timeout_s: float = TIMEOUTS["SUBMISSION_TIMEOUT_S"]
     limits: Limits = field(default_factory=Limits)
 
     @property
@@ -117,64 +141,153 @@ def _solution_code(source: str) -> str:
                                                                                    "### END SOLUTION"))
 
 
-def build_exercise(name: str, source: dict, release: dict, module: ModuleType) -> Exercise:
-    """Check a source notebook, its release and its spec against each other; the exercise they make."""
-    functions = tuple(getattr(module, "FUNCTIONS", ()))
-    if not functions or not all(isinstance(f, str) and f.isidentifier() for f in functions):
-        raise _problem(name, "the spec must set FUNCTIONS = (the names of the functions students write, ...)")
-    masked = tuple(getattr(module, "MASKED", ()))
-    if not all(isinstance(m, str) and m.isidentifier() for m in masked):
-        raise _problem(name, "MASKED must be a tuple of top-level package names, e.g. ('sklearn',)")
+def _checked(code: str) -> list[str] | None:
+    """The functions a visible cell's ``run_checks(...)`` call names (None when it has no such call)."""
+    for node in ast.walk(ast.parse(code)):
+        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "run_checks":
+            return [keyword.arg for keyword in node.keywords]
+    return None
+
+
+def exercise_settings(name: str, notebook: dict) -> tuple[dict[str, float], tuple[str, ...]]:
+    """``(points per function, masked packages)`` from a notebook's ``"labkit"`` metadata, checked."""
+    settings = notebook.get("metadata", {}).get("labkit")
+    if type(settings) is not dict or type(settings.get("functions")) is not dict or not settings["functions"]:
+        raise _problem(name, 'the notebook\'s metadata needs "labkit": {"functions": {name: points, ...}} (what '
+                             "students write, and what each function is worth)")
+    points = settings["functions"]
+    for function, value in points.items():
+        if not function.isidentifier() or type(value) not in (int, float) or not value > 0:
+            raise _problem(name, f"labkit.functions: {function!r} must be a Python name worth a positive number "
+                                 f"of points, got {value!r}")
+    masked = settings.get("masked", [])
+    if type(masked) is not list or not all(type(m) is str and m.isidentifier() for m in masked):
+        raise _problem(name, "labkit.masked must be a list of top-level package names, e.g. ['sklearn']")
+    if settings.get("exercise", name) != name:
+        raise _problem(name, f"labkit.exercise says {settings.get('exercise')!r}")
+    return {f: float(v) for f, v in points.items()}, tuple(masked)
+
+
+def _hidden_tests(name: str, module: ModuleType | None, graded: set[str], functions: tuple[str, ...]
+                  ) -> dict[str, list[HiddenTest]]:
+    """The spec's hidden tests by grade id, checked: each named after a graded cell, taking one function and rng."""
+    found: dict[str, list[HiddenTest]] = {gid: [] for gid in graded}
+    for attribute, value in vars(module).items() if module is not None else ():
+        if not attribute.startswith("test_") or not inspect.isfunction(value):
+            continue
+        gid = attribute.partition("__")[0]
+        if gid not in graded:
+            raise _problem(name, f"the spec's {attribute}() matches no graded cell of the notebook ({sorted(graded)})")
+        parameters = list(inspect.signature(value).parameters)
+        taken = [p for p in parameters if p != "rng"]
+        if len(taken) != 1 or taken[0] not in functions or set(parameters) - {"rng", *functions}:
+            raise _problem(name, f"{attribute}() takes {parameters}; a hidden test takes one of the student's "
+                                 f"functions {list(functions)} (the one it grades) and rng")
+        found[gid].append(HiddenTest(attribute, taken[0], value))
+    return found
+
+
+def build_exercise(name: str, source: dict, release: dict, module: ModuleType | None) -> Exercise:
+    """Check a source notebook, its release and its spec against each other; the exercise they make.
+
+    ``module`` None builds the exercise from the notebook's visible checks alone (``source`` may then be
+    the release itself): what ``--check`` runs without the course.
+    """
+    points, masked = exercise_settings(name, source)
+    functions = tuple(points)
+    if module is not None:
+        for old in ("FUNCTIONS", "MASKED"):
+            if hasattr(module, old):
+                raise _problem(name, f"the spec's {old} moved into the notebook's metadata (\"labkit\")")
     written = []
     setup, cells, test_cells = [], [], {}
     for cell in source["cells"]:
         meta, gid, text = nbgrader_metadata(cell), grade_id(cell), cell_source(cell)
+        if not meta or gid in test_cells:  # (a student's copy: their own cells, a test cell pasted twice)
+            continue
         if cell["cell_type"] == "code" and MARKERS[0] in text:
             raise _problem(name, f"cell {gid} has hidden tests in the notebook: move them into its spec's "
                                  f"function {gid}(...), where students never see them")
         if meta.get("solution"):
             written += _defined_functions(_solution_code(text)) if cell["cell_type"] == "code" else []
         if meta.get("grade"):
-            if type(gid) is not str or not gid.isidentifier():
-                raise _problem(name, f"graded cell {gid!r}: its grade id must be a Python name")
+            if type(gid) is not str or not gid.isidentifier() or "__" in gid:
+                raise _problem(name, f"graded cell {gid!r}: its grade id must be a Python name without '__'")
             auto = cell["cell_type"] == "code" and not meta.get("solution")
-            cells.append(GradedCell(gid, float(meta.get("points", 0)), text if auto else "",
-                                    getattr(module, gid, None), auto))
+            cells.append((gid, float(meta.get("points", 0)), text if auto else "", auto))
             if auto:
                 test_cells[gid] = text
         elif cell["cell_type"] == "code" and not meta.get("solution"):
             setup.append(text)
     missing = [f for f in functions if f not in written]
     if missing:
-        raise _problem(name, f"FUNCTIONS names {missing}, which no solution cell defines")
-    graded = {cell.grade_id for cell in cells}
-    for attribute, value in vars(module).items():
-        if attribute.startswith("test_") and inspect.isfunction(value) and attribute not in graded:
-            raise _problem(name, f"the spec's {attribute}() matches no graded cell of the notebook ({sorted(graded)})")
-    for cell in cells:
-        if cell.auto and not cell.visible and cell.hidden is None:
-            raise _problem(name, f"graded cell {cell.grade_id} tests nothing (no code in the notebook, no"
-                                 f" {cell.grade_id}() in the spec): it would give its points away")
-        if cell.hidden is None:
+        raise _problem(name, f"labkit.functions names {missing}, which no solution cell defines")
+    hidden = _hidden_tests(name, module, {gid for gid, *_ in cells}, functions)
+    total = sum(cell_points for _, cell_points, _, auto in cells if auto)
+    if not math.isclose(sum(points.values()), total):
+        raise _problem(name, f"the functions' points ({sum(points.values()):g}) must add up to the graded cells' "
+                             f"({total:g})")
+    built = []
+    for gid, cell_points, code, auto in cells:
+        shares = {f: round(cell_points * points[f] / total, 6) for f in functions} if auto else {}
+        built.append(GradedCell(gid, cell_points, code, tuple(hidden[gid]), auto, shares))
+        if not auto:
             continue
-        parameters = set(inspect.signature(cell.hidden).parameters)
-        unknown = parameters - set(functions) - {"rng"}
-        if unknown:
-            raise _problem(name, f"{cell.grade_id}() takes {sorted(unknown)}; a hidden test may take the"
-                                 f" student's functions {list(functions)} and rng")
+        checked = _checked(code) if built[-1].visible else []
+        if checked is None:
+            raise _problem(name, f"graded cell {gid} has code but no run_checks(...) call: its checks must say which "
+                                 "function each one grades")
+        if checked and sorted(checked) != sorted(functions):
+            raise _problem(name, f"the run_checks(...) of cell {gid} checks {checked}, not the functions "
+                                 f"{list(functions)}")
+        untested = [f for f in functions if f not in checked and not built[-1].tests_of(f)]
+        if module is not None and untested:
+            raise _problem(name, f"graded cell {gid} tests nothing of {untested} (no visible check, no hidden "
+                                 "test): it would give their points away")
     released = {grade_id(c): cell_source(c) for c in release["cells"] if grade_id(c) is not None}
     for gid, text in test_cells.items():
         if gid not in released or not same_code(released[gid], text):
             raise ValueError(f"exercises/release/{name} is stale (cell {gid} differs from the source):"
                              " run `make release`")
+    if release.get("metadata", {}).get("labkit") != source.get("metadata", {}).get("labkit"):
+        raise ValueError(f"exercises/release/{name} is stale (its labkit metadata differs from the source):"
+                         " run `make release`")
+    timeouts = {key: float(getattr(module, key, default)) for key, default in TIMEOUTS.items()}
     return Exercise(
-        name=name, source=source, release=release, module=module, functions=functions,
-        masked=masked, setup=tuple(setup), cells=tuple(cells), test_cells=test_cells,
-        call_timeout_s=float(getattr(module, "CALL_TIMEOUT_S", 5.0)),
-        test_timeout_s=float(getattr(module, "TEST_TIMEOUT_S", 30.0)),
-        load_timeout_s=float(getattr(module, "LOAD_TIMEOUT_S", 10.0)),
+        name=name, source=source, release=release, module=module, functions=functions, points=points,
+        masked=masked, setup=tuple(setup), cells=tuple(built), test_cells=test_cells,
+        call_timeout_s=timeouts["CALL_TIMEOUT_S"], test_timeout_s=timeouts["TEST_TIMEOUT_S"],
+        load_timeout_s=timeouts["LOAD_TIMEOUT_S"], submission_timeout_s=timeouts["SUBMISSION_TIMEOUT_S"],
         limits=getattr(module, "LIMITS", Limits()),
     )
+
+
+def release_exercise(notebook: dict) -> Exercise:
+    """The exercise a release notebook (or a student's copy of it) describes, without the course: its visible
+    checks, functions, points and masked packages, no hidden tests.
+
+    Raises
+    ------
+    ValueError
+        When the notebook is not an exercise of this course, or a locked cell was changed (its nbgrader
+        checksum differs): then its checks are not the ones the grader runs.
+    """
+    from nbformat import from_dict
+    from nbgrader.utils import compute_checksum, is_locked
+
+    settings = notebook.get("metadata", {}).get("labkit")
+    name = settings.get("exercise") if type(settings) is dict else None
+    if type(name) is not str or not re.fullmatch(r"[A-Za-z0-9_]+", name):
+        raise ValueError("this notebook is not an exercise of the course (no labkit metadata): check the release "
+                         "notebook you were given, with your answers in it")
+    for cell in notebook["cells"]:
+        meta = nbgrader_metadata(cell)
+        if not meta or not meta.get("checksum") or not is_locked(from_dict({**cell, "outputs": []})):
+            continue
+        if compute_checksum(from_dict({**cell, "outputs": [], "execution_count": None})) != meta["checksum"]:
+            raise ValueError(f"the locked cell {grade_id(cell)} of your notebook was changed: copy it back from the "
+                             "release (the grader runs the release's copy)")
+    return build_exercise(name, notebook, notebook, None)
 
 
 class Course:

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["random_beams", "random_wall_beams", "random_iepf_trace"]
+__all__ = ["random_beams", "random_wall_beams", "random_iepf_trace", "random_threshold_case", "random_shape",
+           "random_arc", "random_band_segment"]
 
 _INVALID_KINDS = ("nan", "inf", "-inf", "zero", "negative", "at_max", "beyond_max", "below_min")
 
@@ -231,3 +232,113 @@ def random_iepf_trace(rng: np.random.Generator, n_beams: int | None = None, *, t
         max_gap_m=1e9, merge=None, segment_threshold_m=1e9, adaptive_segmentation=False, trace=True,
     )
     return scan, threshold_m, min_points, steps
+
+
+def random_threshold_case(rng: np.random.Generator, n_beams: int | None = None, *,
+                          invalid_fraction: float | None = None, max_beams: int = 720):
+    """Random wall beams and the adaptive breakpoint threshold's parameters, every angle step below the incidence.
+
+    Returns ``(beams, threshold_m, incidence_deg, range_sigma_m)``: beams as :func:`random_wall_beams` draws
+    them (the sweep narrowed where a step would reach 0.8 of the incidence angle), ``threshold_m`` 3 to
+    30 cm, ``incidence_deg`` 5 to 30 degrees and ``range_sigma_m`` up to 3 cm. The cases of exercise 1's
+    ``adaptive_threshold``: labkit's answer is ``labkit.breakpoint_thresholds`` for every pair of
+    neighbours, NaN where either beam is invalid.
+
+    >>> beams, threshold_m, incidence_deg, sigma = random_threshold_case(np.random.default_rng(0), 50)
+    >>> bool(np.diff(beams["angles"]).max() < np.radians(incidence_deg))
+    True
+    """
+    incidence_deg = float(rng.uniform(5.0, 30.0))
+    beams = random_wall_beams(rng, n_beams, invalid_fraction=invalid_fraction, max_beams=max_beams)
+    angles = beams["angles"]
+    widest = np.diff(angles).max() if angles.size > 1 else 0.0
+    if widest >= 0.8 * np.radians(incidence_deg):
+        beams["angles"] = angles[0] + (angles - angles[0]) * (rng.uniform(0.1, 0.8) * np.radians(incidence_deg)
+                                                              / widest)
+    return beams, float(rng.uniform(0.03, 0.3)), incidence_deg, float(rng.uniform(0.0, 0.03))
+
+
+def random_shape(rng: np.random.Generator, kind: str, n: int) -> np.ndarray:
+    """``n`` points (N x 2, metres) of a random noisy ``kind``: ``"arc"`` (radius 5 cm to 2 m, 20 to 340 degrees),
+    ``"line"`` or ``"corner"`` (a V of two legs, 30 to 170 degrees), shifted by up to 5 m: the shapes of
+    exercise 8's inscribed angles, whose answer is ``labkit.inscribed_angles``.
+
+    >>> random_shape(np.random.default_rng(0), "arc", 7).shape
+    (7, 2)
+    """
+    if kind == "arc":
+        radius = float(rng.uniform(0.05, 2.0))
+        span = np.radians(float(rng.uniform(20.0, 340.0)))
+        t = float(rng.uniform(-np.pi, np.pi)) + np.sort(rng.uniform(0.0, span, n))
+        t[0], t[-1] = t[0] - 1e-3, t[-1] + 1e-3  # distinct ends
+        p = radius * np.column_stack([np.cos(t), np.sin(t)])
+        noise = radius * float(rng.choice([0.0, 0.003, 0.01, 0.03, 0.06]))
+    elif kind == "line":
+        heading = float(rng.uniform(-np.pi, np.pi))
+        s = np.sort(rng.uniform(0.0, float(rng.uniform(0.1, 5.0)), n)) + np.arange(n) * 1e-3
+        p = np.column_stack([s * np.cos(heading), s * np.sin(heading)])
+        noise = float(rng.choice([0.0, 0.0, 0.002, 0.01]))
+    elif kind == "corner":  # two legs of random lengths at a random angle
+        opening = np.radians(float(rng.uniform(30.0, 170.0)))
+        k = int(rng.integers(1, n - 1))
+        left = np.linspace(1.0, 0.0, k + 1)[:-1] * float(rng.uniform(0.2, 2.0))
+        right = np.linspace(0.0, 1.0, n - k) * float(rng.uniform(0.2, 2.0))
+        p = np.concatenate([left[:, None] * [[1.0, 0.0]], right[:, None] * [[np.cos(opening), np.sin(opening)]]])
+        noise = float(rng.choice([0.0, 0.005]))
+    else:
+        raise ValueError(f"kind must be 'arc', 'line' or 'corner', got {kind!r}")
+    return p + noise * rng.standard_normal(p.shape) + rng.uniform(-5.0, 5.0, 2)
+
+
+def random_arc(rng: np.random.Generator):
+    """The chord, mean inscribed angle and side of a random arc of a known circle, and that circle:
+    ``((p_first, p_last, mean_angle, side), center, radius)``, closed-form truth for exercise 8's
+    ``circle_from_angle`` (the points of an arc walked counter-clockwise lie right of its chord, ``side < 0``).
+
+    >>> (p_first, p_last, mean_angle, side), center, radius = random_arc(np.random.default_rng(0))
+    >>> bool(np.isclose(np.hypot(*(p_first - center)), radius))
+    True
+    """
+    center = rng.uniform(-5.0, 5.0, 2)
+    radius = float(rng.uniform(0.05, 3.0))
+    start = float(rng.uniform(-np.pi, np.pi))
+    span = np.radians(float(rng.uniform(10.0, 350.0)))
+    p1 = center + radius * np.array([np.cos(start), np.sin(start)])
+    pn = center + radius * np.array([np.cos(start + span), np.sin(start + span)])
+    args = (p1, pn, float(np.pi - span / 2), -float(rng.uniform(0.1, 5.0)))
+    if rng.random() < 0.5:  # walked the other way: the points lie left
+        args = (pn, p1, args[2], -args[3])
+    return args, center, radius
+
+
+def random_band_segment(rng: np.random.Generator, ratio: float | None = None, chord: float | None = None):
+    """Points (N x 2) of a random segment whose middle point (row ``N // 2``) lies ``ratio`` chord lengths from the
+    chord, towards the sensor at the origin (negative: away from it), and that ratio: closed-form truth for
+    exercise 8's band (``in_band``) and legs. ``ratio`` is drawn from [-0.5, 1) and the chord length around
+    5 cm, 20 cm or 1 m where not given.
+
+    >>> points, ratio = random_band_segment(np.random.default_rng(0), 0.3, 0.2)
+    >>> bool(np.isclose(np.hypot(*(points[-1] - points[0])), 0.2)), ratio
+    (True, 0.3)
+    """
+    n = int(rng.integers(3, 31))
+    bearing = float(rng.uniform(-np.pi, np.pi))
+    center = float(rng.uniform(1.0, 6.0)) * np.array([np.cos(bearing), np.sin(bearing)])
+    if chord is None:
+        chord = float(rng.choice([0.05, 0.2, 1.0])) * float(rng.uniform(0.5, 2.0))
+    heading = float(rng.uniform(-np.pi, np.pi))
+    d = chord * np.array([np.cos(heading), np.sin(heading)])
+    p1 = center - d / 2
+    normal = np.array([-d[1], d[0]]) / chord
+    towards = normal if normal @ (-p1) > 0 else -normal  # the unit normal pointing to the sensor's side
+    if ratio is None:
+        ratio = float(rng.uniform(-0.5, 1.0))
+    t = np.sort(rng.uniform(0.05, 0.95, n - 2))
+    inner = p1 + t[:, None] * d + (chord * rng.uniform(-0.3, 0.6, n - 2))[:, None] * towards
+    points = np.concatenate([[p1], inner, [p1 + d]])
+    points[n // 2] = p1 + float(rng.uniform(0.05, 0.95)) * d + ratio * chord * towards
+    if rng.random() < 0.5:  # the same segment walked the other way round, the middle point kept in row n // 2
+        points = points[::-1].copy()
+        other = (n - 1) - n // 2
+        points[[n // 2, other]] = points[[other, n // 2]]
+    return points, ratio

@@ -33,26 +33,207 @@ __all__ = [
 
 #: Larger submissions are refused as invalid notebooks (outputs count: a notebook full of plots is big).
 MAX_NOTEBOOK_BYTES = 100 << 20
-#: More JSON lists and objects than this (counted before parsing, outside strings) make a notebook
-#: invalid: a real notebook has a few per cell and output, and millions would cost the grader
-#: gigabytes to parse.
+#: More JSON lists and objects than this make a notebook invalid: a real notebook has a few per cell and
+#: output, and millions would cost the grader seconds to walk.
 MAX_NOTEBOOK_CONTAINERS = 200_000
-_JSON_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"')
+#: More JSON strings than this (counted by their quotes, before anything is parsed) make a notebook invalid:
+#: 100 MB of ``"ab",`` are 20 million strings, which ``json.loads`` turned into 3.6 GB of Python objects.
+#: A real notebook has a string per line of code, markdown and printed output: tens of thousands.
+MAX_NOTEBOOK_STRINGS = 1_000_000
+#: The parts of a notebook the grader keeps (every cell's type, source, metadata and id, the notebook's
+#: metadata) may take this many bytes together; outputs and attachments are skipped, never built.
+MAX_KEPT_BYTES = 32 << 20
+_STRUCTURE = re.compile(rb'["{}\[\]]')  # the next character that opens or closes a string, list or object
+_SPACE = re.compile(rb"[ \t\r\n]*")
+_SCALAR = re.compile(rb"[^,}\]\s]*")
 #: More student code than this (all code cells together) is refused.
 MAX_CODE_CHARS = 2 << 20
 _CELL_ID = re.compile(r"^[a-zA-Z0-9_-]{1,64}$")
+_CELL_KEYS = frozenset({b'"cell_type"', b'"source"', b'"metadata"', b'"id"'})
+_NOTEBOOK_KEYS = frozenset({b'"cells"', b'"metadata"', b'"nbformat"', b'"nbformat_minor"'})
 
 
 class InvalidNotebook(ValueError):
     """A file that is not a readable Jupyter notebook (nbformat 4)."""
 
 
+class _Reader:
+    """A bounded reader of a notebook's JSON bytes: it walks the structure, builds only the values the grader
+    keeps (with ``json.loads`` on their bytes) and skips the others -- outputs, attachments -- without making
+    a Python object of them. Memory: the file's bytes and the kept values; time: one step per string, list
+    and object of the skipped values (at most :data:`MAX_NOTEBOOK_STRINGS` and :data:`MAX_NOTEBOOK_CONTAINERS`)."""
+
+    def __init__(self, raw: bytes) -> None:
+        self.raw = raw
+        self.containers = 0
+        self.kept = 0
+
+    def fail(self, what: str, at: int) -> InvalidNotebook:
+        return InvalidNotebook(f"the notebook cannot be read as JSON: {what} at byte {at}")
+
+    def space(self, at: int) -> int:
+        return _SPACE.match(self.raw, at).end()
+
+    def expect(self, at: int, char: bytes) -> int:
+        at = self.space(at)
+        if self.raw[at:at + 1] != char:
+            raise self.fail(f"expected {char.decode()}", at)
+        return at + 1
+
+    def count(self, at: int) -> None:
+        self.containers += 1
+        if self.containers > MAX_NOTEBOOK_CONTAINERS:
+            raise InvalidNotebook(f"the notebook holds more than {MAX_NOTEBOOK_CONTAINERS} JSON lists and objects")
+
+    def string_end(self, at: int) -> int:
+        """The end of the string whose opening quote is at ``at`` (found with ``bytes.find``: a regex walks a
+        40 MB plot's base64 a character at a time)."""
+        raw, start = self.raw, at
+        while True:
+            at = raw.find(b'"', at + 1)
+            if at < 0:
+                raise self.fail("an unterminated string", start)
+            backslashes = 0
+            while raw[at - 1 - backslashes] == 0x5C:  # \" is an escaped quote, \\" a backslash and the end
+                backslashes += 1
+            if backslashes % 2 == 0:
+                return at + 1
+
+    def skip(self, at: int) -> int:
+        """The end of the JSON value that starts at ``at`` (after white space)."""
+        at = self.space(at)
+        first = self.raw[at:at + 1]
+        if first == b'"':
+            return self.string_end(at)
+        if first not in (b"{", b"["):  # a number, true, false or null: up to the next delimiter
+            end = _SCALAR.match(self.raw, at).end()
+            if end == at:
+                raise self.fail("a missing value", at)
+            return end
+        depth = 0
+        while True:
+            found = _STRUCTURE.search(self.raw, at)
+            if found is None:
+                raise self.fail("an unclosed list or object", at)
+            char, at = found.group(), found.start()
+            if char == b'"':
+                at = self.string_end(at)
+                continue
+            at += 1
+            if char in (b"{", b"["):
+                depth += 1
+                self.count(at)
+            else:
+                depth -= 1
+                if depth == 0:
+                    return at
+
+    def value(self, at: int) -> tuple[object, int]:
+        """The JSON value at ``at``, built, and its end."""
+        start = self.space(at)
+        end = self.skip(start)
+        self.kept += end - start
+        if self.kept > MAX_KEPT_BYTES:
+            raise InvalidNotebook(f"the notebook's cells and metadata (without outputs) take more than "
+                                  f"{MAX_KEPT_BYTES >> 20} MB")
+        return json.loads(self.raw[start:end]), end
+
+    def items(self, at: int):
+        """Yield ``(key as raw JSON bytes, where its value starts)`` of the object at ``at``; the caller moves
+        ``self.at`` past each value (:meth:`value` or :meth:`skip`)."""
+        at = self.expect(at, b"{")
+        self.count(at)
+        at = self.space(at)
+        if self.raw[at:at + 1] == b"}":
+            self.at = at + 1
+            return
+        while True:
+            at = self.space(at)
+            end = self.string_end(at) if self.raw[at:at + 1] == b'"' else None
+            if end is None:
+                raise self.fail("expected a key", at)
+            key = self.raw[at:end]
+            self.at = self.expect(end, b":")
+            yield key, self.at
+            at = self.space(self.at)
+            if self.raw[at:at + 1] == b"}":
+                self.at = at + 1
+                return
+            at = self.expect(at, b",")
+
+    def elements(self, at: int):
+        """Yield where each element of the list at ``at`` starts; the caller moves ``self.at`` past it."""
+        at = self.expect(at, b"[")
+        self.count(at)
+        at = self.space(at)
+        if self.raw[at:at + 1] == b"]":
+            self.at = at + 1
+            return
+        while True:
+            self.at = at
+            yield at
+            at = self.space(self.at)
+            if self.raw[at:at + 1] == b"]":
+                self.at = at + 1
+                return
+            at = self.expect(at, b",")
+
+    def keep(self, start: int, wanted: frozenset) -> dict:
+        """The object at ``start`` with only the ``wanted`` keys built (the last of a repeated key wins)."""
+        kept = {}
+        for key, at in self.items(start):
+            if key in wanted:
+                kept[key.decode("utf-8")[1:-1]], self.at = self.value(at)
+            else:
+                self.at = self.skip(at)
+        return kept
+
+    def notebook(self) -> dict:
+        top: dict = {}
+        cells = None
+        for key, at in self.items(0):
+            if key == b'"cells"':
+                if self.raw[self.space(at):self.space(at) + 1] != b"[":
+                    cells, self.at = "not a list", self.skip(at)
+                    continue
+                cells = []
+                for element in self.elements(at):
+                    if self.raw[self.space(element):self.space(element) + 1] != b"{":
+                        cells.append(None)
+                        self.at = self.skip(element)
+                    else:
+                        cells.append(self.keep(element, _CELL_KEYS))
+            elif key in _NOTEBOOK_KEYS:
+                top[key.decode()[1:-1]], self.at = self.value(at)
+            else:
+                self.at = self.skip(at)
+        if self.space(self.at) != len(self.raw):
+            raise self.fail("extra data after the notebook", self.space(self.at))
+        if cells is not None:
+            top["cells"] = cells
+        return top
+
+
+def _parse(raw: bytes) -> dict:
+    """The parts of a notebook the grader uses, read within bounds (see :class:`_Reader`)."""
+    quotes = raw.count(b'"') - raw.count(b'\\"')
+    if quotes > 2 * MAX_NOTEBOOK_STRINGS:
+        raise InvalidNotebook(f"the notebook holds more than {MAX_NOTEBOOK_STRINGS} JSON strings")
+    return _Reader(raw).notebook()
+
+
 def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
     """A notebook's JSON, checked to have the nbformat 4 shape the grader relies on.
 
-    Every cell comes back with ``cell_type``, ``source`` (one string) and ``metadata`` (a dict).
-    With ``inside``, the file must be a regular file under that folder, reached without a
-    symbolic link (a submission must not point at another student's notebook or a file of yours).
+    Every cell comes back with ``cell_type``, ``source`` (one string) and ``metadata`` (a dict); outputs
+    and attachments are not read. With ``inside``, the file must be a regular file under that folder,
+    reached without a symbolic link (a submission must not point at another student's notebook or a file
+    of yours).
+
+    Before anything is built, the file's size (:data:`MAX_NOTEBOOK_BYTES`) and its number of strings
+    (:data:`MAX_NOTEBOOK_STRINGS`) are checked; while it is read, its lists and objects
+    (:data:`MAX_NOTEBOOK_CONTAINERS`) and the bytes of what is kept (:data:`MAX_KEPT_BYTES`). So reading
+    one holds at most the file's bytes and 32 MB of cells in memory, however it is built.
 
     Raises
     ------
@@ -68,11 +249,11 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
         if size > MAX_NOTEBOOK_BYTES:
             raise InvalidNotebook(f"the notebook is {size / 1e6:.0f} MB, more than the "
                                   f"{MAX_NOTEBOOK_BYTES / 1e6:.0f} MB allowed (clear its outputs)")
-        raw = path.read_bytes()
-        skeleton = _JSON_STRING.sub(b'""', raw)  # what printed text holds is not structure
-        if skeleton.count(b"{") + skeleton.count(b"[") > MAX_NOTEBOOK_CONTAINERS:
-            raise InvalidNotebook(f"the notebook holds more than {MAX_NOTEBOOK_CONTAINERS} JSON lists and objects")
-        data = json.loads(raw.decode("utf-8"))
+        with open(path, "rb") as f:
+            raw = f.read(MAX_NOTEBOOK_BYTES + 1)
+        if len(raw) > MAX_NOTEBOOK_BYTES:
+            raise InvalidNotebook(f"the notebook is more than the {MAX_NOTEBOOK_BYTES / 1e6:.0f} MB allowed")
+        data = _parse(raw)
     except InvalidNotebook:
         raise
     except (OSError, UnicodeDecodeError, ValueError, RecursionError) as error:

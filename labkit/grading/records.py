@@ -34,11 +34,13 @@ from .course import Course, Exercise
 from .notebook import grade_id, nbgrader_metadata, write_notebook_text
 from .protocol import clean_text
 from .runner import GRADED, GRADER_ERROR, MANUAL, NOT_SUBMITTED, SubmissionResult
+from .text import one_line, printable
 
 __all__ = ["Records", "write_atomic", "student_id_problem", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("assignment", "student_id", "status", "score", "max_score", "detail")
 _FORMULA = ("=", "+", "-", "@", "\t", "\r")
+MAX_CSV_CHARS = 2000
 
 
 def student_id_problem(student: str) -> str | None:
@@ -53,12 +55,16 @@ def student_id_problem(student: str) -> str | None:
         return "it starts or ends with white space"
     if clean_text(student) != student:
         return "it is not valid UTF-8"
+    if printable(student) != student:
+        return "it holds control characters (a terminal escape?)"
     return None
 
 
 def _csv_text(text: str) -> str:
-    """A CSV field a spreadsheet shows as text: a leading ``'`` where it would start a formula."""
-    text = clean_text(text)
+    """A CSV field a terminal and a spreadsheet show as text: on one line, without escape sequences or control
+    characters (``cat grades.csv`` must not be rewritten by a student's message), at most 2000 characters, and
+    a leading ``'`` where it would start a formula."""
+    text = one_line(text, MAX_CSV_CHARS)
     return "'" + text if text.startswith(_FORMULA) else text
 
 
@@ -251,7 +257,9 @@ class Records:
             "score": result.score, "max_score": result.max_score, "detail": result.detail,
             "graded_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "cells": [{"grade_id": c.grade_id, "points": c.points, "max_points": c.max_points, "verdict": c.verdict,
-                       "seconds": round(c.seconds, 4)} for c in result.cells],
+                       "seconds": round(c.seconds, 4),
+                       "functions": {p.function: {"points": p.points, "max_points": p.max_points, "verdict": p.verdict}
+                                     for p in c.parts}} for c in result.cells],
             "cell_errors": result.cell_errors, "timing": result.timing, "seeds": result.seeds,
         }
         path = self.course.records / result.exercise / f"{result.student}.json"

@@ -1,12 +1,18 @@
 """Grade one submission: the trusted tests against the student's functions in their worker.
 
 :func:`grade_submission` is what a grading job runs (in the grader's process or in one of its
-trusted child processes): it reads the submission (as data), starts the student's worker with
-the submission's code cells, and runs every graded cell's tests *here*, on the trusted side:
-first the cell's visible code from the *source* notebook, then the spec's hidden tests with a
-generator seeded from the course secret, the student and the cell. The student's functions are
-:class:`StudentFunction` proxies: plain arguments out, plain results (or a rebuilt built-in
-exception) back. A cell scores its points when both parts pass, 0 otherwise.
+trusted child processes): it reads the submission (as data), starts the student's worker, runs the
+notebook's code cells there once (with their own time budget), and then runs every graded cell's
+tests *here*, on the trusted side, one function at a time: the cell's visible checks from the
+*source* notebook (:func:`labkit.grading.run_checks`) and the spec's hidden tests, each with a
+generator seeded from the course secret, the student, the cell, the test and the submission's code
+(:func:`seed_for`): a regrade of the same code draws the same inputs, any change to it fresh ones. The
+student's functions are :class:`StudentFunction` proxies: plain arguments out, plain results (or a
+rebuilt built-in exception) back. Each function earns its share of a cell when its checks there pass.
+
+What a student reads about a failure names the property that failed; a hidden test's inputs and
+expected values never appear in it, and the student's own exception messages are cut short, without
+their numbers (they could carry the hidden inputs out) and without control characters.
 """
 
 from __future__ import annotations
@@ -14,18 +20,22 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import hmac
+import inspect
 import io
+import json
 import resource
 import time
 import traceback
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .course import Course, Exercise, GradedCell
+from .checks import GRADER
+from .course import Course, Exercise, GradedCell, release_exercise
 from .notebook import (
     InvalidNotebook,
     autograded_notebook,
@@ -37,9 +47,11 @@ from .notebook import (
     student_cells,
 )
 from .sandbox import CallTimedOut, Sandbox, SandboxBroken, Session, WorkerLost
+from .text import one_line, printable, without_numbers
 
 __all__ = [
     "STATUSES",
+    "PartResult",
     "CellResult",
     "SubmissionResult",
     "Job",
@@ -47,6 +59,7 @@ __all__ = [
     "grade_submission",
     "run_cells",
     "seed_for",
+    "code_hash",
 ]
 
 GRADED, NOT_SUBMITTED, TIMED_OUT, CRASHED = "graded", "not submitted", "timed out", "crashed"
@@ -54,14 +67,29 @@ INVALID, MANUAL, GRADER_ERROR = "invalid notebook", "needs manual grade", "grade
 #: Every status a submission can get, in the order the summary shows them.
 STATUSES = (GRADED, NOT_SUBMITTED, TIMED_OUT, CRASHED, INVALID, MANUAL, GRADER_ERROR)
 MAX_SHOWN_CHARS = 2000
+#: How much of the student's own exception message a failure in the hidden tests shows (without its numbers).
+MAX_STUDENT_MESSAGE_CHARS = 160
+#: How much of a hidden test's own message is shown.
+MAX_HIDDEN_MESSAGE_CHARS = 400
+
+
+@dataclass
+class PartResult:
+    """The verdict on one function's part of a graded cell."""
+
+    function: str
+    max_points: float
+    points: float
+    verdict: str
 
 
 @dataclass
 class CellResult:
     """The verdict on one graded cell.
 
-    ``points`` is None for a cell a human grades; ``outputs`` are the nbformat outputs shown
-    under the cell in the autograded notebook; ``verdict`` is one line for the console.
+    ``points`` is None for a cell a human grades; ``parts`` the verdict per function; ``outputs`` are
+    the nbformat outputs shown under the cell in the autograded notebook; ``verdict`` is one line for
+    the console.
     """
 
     grade_id: str
@@ -70,6 +98,7 @@ class CellResult:
     verdict: str
     outputs: list[dict] = field(default_factory=list)
     seconds: float = 0.0
+    parts: list[PartResult] = field(default_factory=list)
 
 
 @dataclass
@@ -89,7 +118,7 @@ class SubmissionResult:
 
     @property
     def score(self) -> float:
-        return sum(cell.points or 0.0 for cell in self.cells)
+        return round(sum(cell.points or 0.0 for cell in self.cells), 6)
 
     @property
     def max_score(self) -> float:
@@ -98,9 +127,13 @@ class SubmissionResult:
 
 @dataclass(frozen=True)
 class Job:
-    """One submission to grade (plain data, so that it can go to a child process)."""
+    """One submission to grade (plain data, so that it can go to a child process).
 
-    course: str
+    ``visible_only`` runs the visible checks only (``--check``); with ``course`` None the exercise is the one
+    the notebook itself describes (``--check`` without the course: see :func:`labkit.grading.course.release_exercise`).
+    """
+
+    course: str | None
     exercise: str
     student: str
     notebook: str | None
@@ -128,24 +161,31 @@ class StudentFunction:
             raise  # the grader's problem, not something the student's function raised
         except Exception as raised:
             raised.add_note(f"(raised by your {self.__name__}(...))")
+            raised.labkit_student_raised = True  # its message is the student's text
             raise
 
     def __repr__(self) -> str:
         return f"<the student's {self.__name__}>"
 
 
-def seed_for(secret: bytes, exercise: str, student: str, cell: str) -> int:
-    """The seed of one cell's hidden inputs: unknown without the course secret, the same on a regrade."""
-    message = "\x00".join((exercise, student, cell)).encode("utf-8")
+def code_hash(code: list[str]) -> str:
+    """A digest of the code cells a submission runs: any change to them draws fresh hidden inputs."""
+    return hashlib.sha256(json.dumps(code, ensure_ascii=False).encode("utf-8", "replace")).hexdigest()
+
+
+def seed_for(secret: bytes, exercise: str, student: str, cell: str, part: str = "", code: str = "") -> int:
+    """The seed of one test's inputs: unknown without the course secret, other for every student, cell, test
+    (``part``) and submitted code (``code``: :func:`code_hash`), the same on a regrade of the same code."""
+    message = "\x00".join((exercise, student, cell, part, code)).encode("utf-8")
     return int.from_bytes(hmac.new(secret, message, hashlib.sha256).digest()[:8], "big")
 
 
-def _shown(text: str) -> str:
-    return text if len(text) <= MAX_SHOWN_CHARS else text[:MAX_SHOWN_CHARS] + " [...]"
+def _student_raised(raised: BaseException) -> bool:
+    return getattr(raised, "labkit_student_raised", False)
 
 
-def _failure(cell: GradedCell, raised: BaseException, part: str) -> tuple[dict, str]:
-    """The error output and the one-line verdict of a cell whose ``part`` ("visible"/"hidden") failed."""
+def _failure(cell: GradedCell, function: str, raised: BaseException, part: str) -> tuple[dict, str]:
+    """The error output and the one-line verdict of ``function``'s ``part`` ("visible"/"hidden") that failed."""
     if isinstance(raised, WorkerLost):
         name = "TimeoutError" if isinstance(raised, CallTimedOut) else "WorkerCrashed"
         message = str(raised.args[0]) if raised.args else name
@@ -153,7 +193,14 @@ def _failure(cell: GradedCell, raised: BaseException, part: str) -> tuple[dict, 
         name = type(raised).__name__
         message = "".join(traceback.format_exception_only(raised)).strip().removeprefix(f"{name}: ")
         message = "" if message == name else message
-    message = _shown(message)
+    if part == "hidden" and _student_raised(raised):  # the student's text, about inputs they have not seen
+        first, _, rest = message.partition("\n")
+        note = rest.strip().splitlines()[-1] if rest.strip() else ""
+        message = printable(without_numbers(first), MAX_STUDENT_MESSAGE_CHARS) + (f" {note}" if note else "")
+    elif part == "hidden":
+        message = printable(message, MAX_HIDDEN_MESSAGE_CHARS)
+    else:
+        message = printable(message, MAX_SHOWN_CHARS)
     lines = [f"{name}: {message}" if message else name]
     if part == "visible":
         frames = [f for f in traceback.extract_tb(raised.__traceback__) if f.filename == f"<{cell.grade_id}>"]
@@ -161,19 +208,27 @@ def _failure(cell: GradedCell, raised: BaseException, part: str) -> tuple[dict, 
             code = cell.code.splitlines()
             where = frames[-1].lineno
             text = code[where - 1].strip() if where <= len(code) else ""
-            lines.insert(0, f"in the visible tests, line {where}: {text}")
+            lines.insert(0, f"{function}, in the visible checks, line {where}: {text}")
+        else:
+            lines.insert(0, f"{function}, in the visible checks:")
     else:
-        lines.insert(0, "in the hidden tests (inputs you have not seen):")
-    return error(name, message, lines), f"failed ({part}): {lines[-1]}"
+        lines.insert(0, f"{function}, in the hidden tests (inputs you have not seen):")
+    return error(name, message, lines), f"{function} failed ({part}): {lines[-1]}"
 
 
-def run_cells(
-    exercise: Exercise, session: Session, *, seeds: dict[str, int] | None
-) -> list[CellResult]:
-    """Run every graded cell's tests against the session's worker, in notebook order.
+def _points_text(points: float) -> str:
+    return f"{points:g} point{'s' if points != 1 else ''}"
 
-    ``seeds`` (grade id -> seed) runs the hidden tests too; None runs the visible tests only.
+
+def run_cells(exercise: Exercise, session: Session, *, seeds: Callable[[str, str], int] | None,
+              functions: tuple[str, ...] | None = None) -> list[CellResult]:
+    """Run every graded cell's tests against the session's worker, in notebook order, a function at a time.
+
+    ``seeds(cell, part)`` gives the seed of a test's inputs (``part``: the hidden test's name, or
+    ``"visible/<function>"``); None runs the visible checks only, each with fresh inputs from the OS.
+    ``functions`` runs the tests of these functions only (the others' parts score 0, "not run").
     """
+    wanted = exercise.functions if functions is None else tuple(functions)
     namespace: dict[str, Any] = {"__name__": f"grader_{exercise.name}"}
     for code in exercise.setup:
         exec(compile(code, "<setup>", "exec"), namespace)
@@ -185,30 +240,78 @@ def run_cells(
             continue
         started = time.perf_counter()
         out = io.StringIO()
-        namespace.update(proxies)
-        session.begin_test(exercise.test_timeout_s)
-        failure = None
-        part = "visible"
-        try:
-            with contextlib.redirect_stdout(out), warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # the instructor's comparisons warn on the student's NaNs
-                exec(compile(cell.code, f"<{cell.grade_id}>", "exec"), namespace)
-                if seeds is not None and cell.hidden is not None:
-                    part = "hidden"
-                    rng = np.random.default_rng(seeds[cell.grade_id])
-                    cell.hidden(**{name: proxies.get(name, rng) for name in cell.parameters})
-        except SandboxBroken:
-            raise  # no worker could start: no verdict on the student (the run calls it a grader error)
-        except (Exception, WorkerLost) as raised:  # noqa: BLE001 -- a failing test is a verdict
-            failure = _failure(cell, raised, part)
-        outputs = [stream(_shown(out.getvalue()))] if out.getvalue() else []
-        if failure is None:
-            points, verdict = cell.points, "passed"
+        failures: dict[str, tuple[dict, str]] = {}
+        checked: set[str] = set()
+
+        def generator(part: str, cell: GradedCell = cell) -> np.random.Generator:
+            return np.random.default_rng(None if seeds is None else seeds(cell.grade_id, part))
+
+        def grade_check(function: str, check: Callable, cell: GradedCell = cell,
+                        failures: dict = failures, checked: set = checked) -> None:
+            checked.add(function)
+            if function not in wanted:
+                return
+            session.begin_test(exercise.test_timeout_s)
+            try:
+                check(generator(f"visible/{function}"))
+            except SandboxBroken:
+                raise
+            except (Exception, WorkerLost) as raised:  # noqa: BLE001 -- a failing check is a verdict
+                failures.setdefault(function, _failure(cell, function, raised, "visible"))
+
+        with contextlib.redirect_stdout(out), warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the instructor's comparisons warn on the student's NaNs
+            if cell.visible:
+                namespace.update(proxies)
+                token = GRADER.set(grade_check)
+                try:
+                    exec(compile(cell.code, f"<{cell.grade_id}>", "exec"), namespace)
+                except SandboxBroken:
+                    raise  # no worker could start: no verdict on the student (the run calls it a grader error)
+                except (Exception, WorkerLost) as raised:  # noqa: BLE001 -- the cell's own code failed: every function
+                    for function in exercise.functions:
+                        failures.setdefault(function, _failure(cell, function, raised, "visible"))
+                finally:
+                    GRADER.reset(token)
+                for function in exercise.functions:  # a check the cell never reached (it raised before) fails
+                    if function not in checked and function not in failures:
+                        failures[function] = _failure(cell, function, AssertionError("its check did not run"),
+                                                      "visible")
+            for function in exercise.functions:
+                if function not in wanted:
+                    failures[function] = ({}, f"{function} not run")
+            if seeds is not None:
+                for function in exercise.functions:
+                    if function in failures:
+                        continue
+                    for test in cell.tests_of(function):
+                        session.begin_test(exercise.test_timeout_s)
+                        rng = generator(test.name)
+                        arguments = {test.function: proxies[test.function], "rng": rng}
+                        try:
+                            test.test(**{p: arguments[p] for p in inspect.signature(test.test).parameters})
+                        except SandboxBroken:
+                            raise
+                        except (Exception, WorkerLost) as raised:  # noqa: BLE001 -- a failing test is a verdict
+                            failures[function] = _failure(cell, function, raised, "hidden")
+                            break
+        parts = [PartResult(f, cell.shares[f], 0.0 if f in failures else cell.shares[f],
+                            failures[f][1] if f in failures else "passed") for f in exercise.functions]
+        earned = sum(part.points for part in parts)
+        points = cell.points if not failures else round(earned, 6)
+        lines = [f"{part.function}: {'passed' if part.points else 'failed'} ({_points_text(part.points)} of "
+                 f"{part.max_points:g})" for part in parts] if len(parts) > 1 else []
+        printed = printable(out.getvalue(), MAX_SHOWN_CHARS)
+        outputs = [stream(printed + ("\n" if printed and not printed.endswith("\n") else "") + "\n".join(lines))] \
+            if printed or lines else []
+        outputs += [failures[f][0] for f in exercise.functions if f in failures and failures[f][0]]
+        if not failures:
+            verdict = "passed"
         else:
-            outputs.append(failure[0])
-            points, verdict = 0.0, failure[1]
+            lost = "; ".join(failures[f][1] for f in exercise.functions if f in failures)
+            verdict = lost if len(parts) == 1 else f"{points:g} of {cell.points:g} points: {lost}"
         results.append(CellResult(cell.grade_id, cell.points, points, verdict, outputs,
-                                  time.perf_counter() - started))
+                                  time.perf_counter() - started, parts))
     return results
 
 
@@ -253,42 +356,74 @@ def forget_courses() -> None:
     _COURSES.clear()
 
 
-def _exercise(job: Job) -> Exercise:
+def _exercise(job: Job, submission: dict | None = None) -> Exercise:
+    if job.course is None:  # --check without the course: the exercise the notebook itself describes
+        return release_exercise(submission)
     if job.course not in _COURSES:
         _COURSES[job.course] = Course(job.course)
     return _COURSES[job.course].exercise(job.exercise)
 
 
+def _notes(errors: list[dict]) -> str:
+    """What happened while the notebook ran, for the detail column: the cells that were stopped or not run."""
+    noted = [f"cell {e['cell'] + 1} ({e['starts'][:40]}): {e['message']}" for e in errors
+             if e["error"] in ("TimeoutError", "WorkerCrashed")]
+    return "; ".join(noted[:3]) + (f"; and {len(noted) - 3} more" if len(noted) > 3 else "")
+
+
 def grade_submission(job: Job) -> SubmissionResult:
-    """Grade one submission; every problem of the submission is part of the result, never an exception."""
-    exercise = _exercise(job)
+    """Grade one submission; every problem of the submission is part of the result, never an exception.
+
+    (Without a course, ``--check`` on a notebook that is not a release of the course is a ValueError.)
+    """
     result = SubmissionResult(job.exercise, job.student, GRADED, [])
+    submission, problem = None, None
+    if job.notebook is not None:
+        try:
+            submission = read_notebook(Path(job.notebook), inside=None if job.visible_only else Path(job.course))
+        except InvalidNotebook as invalid:
+            problem = invalid
+    if job.course is None and submission is None:
+        raise ValueError(f"your notebook cannot be read: {problem}")
+    exercise = _exercise(job, submission)
+    result.exercise = exercise.name
     if job.notebook is None:
         result.status, result.cells = NOT_SUBMITTED, _blank(exercise, "not submitted")
         return result
-    try:
-        submission = read_notebook(Path(job.notebook), inside=None if job.visible_only else Path(job.course))
-    except InvalidNotebook as problem:
+    if problem is not None:
         shown = error("InvalidNotebook", f"your notebook could not be graded: {problem}")
-        result.status, result.detail = INVALID, str(problem)
+        result.status, result.detail = INVALID, one_line(problem)
         result.cells = _blank(exercise, f"invalid notebook: {problem}", shown)
         result.notebook = autograded_notebook(None, exercise.release, exercise.test_cells,
                                               {c.grade_id: c.outputs for c in result.cells})
         return result
     sandbox = Sandbox(exercise.masked, limits=exercise.limits, slot=_SLOT[0], isolate=job.isolate)
     code = student_cells(submission, exercise.test_cells)
-    seeds = None
+    seeds, used = None, {}
     if not job.visible_only:
-        seeds = {c.grade_id: seed_for(job.secret, exercise.name, job.student, c.grade_id) for c in exercise.cells}
+        digest = code_hash(code)
+
+        def seeds(cell: str, part: str) -> int:
+            used[f"{cell}/{part}"] = seed_for(job.secret, exercise.name, job.student, cell, part, digest)
+            return used[f"{cell}/{part}"]
+
     started, cpu = time.perf_counter(), _cpu_seconds()
-    with Session(sandbox, code, load_timeout_s=exercise.load_timeout_s,
-                 call_timeout_s=exercise.call_timeout_s) as session:
+    with Session(sandbox, code, load_timeout_s=exercise.load_timeout_s, call_timeout_s=exercise.call_timeout_s,
+                 submission_timeout_s=exercise.submission_timeout_s) as session:
+        session.load()  # before any test, with its own budget
         result.cells = run_cells(exercise, session, seeds=seeds)
-    result.seeds = seeds or {}
+    result.seeds = used
     result.status = _status(session, result.cells)
-    result.cell_errors = [{**error, "starts": _first_line(code[error["cell"]]) if error["cell"] < len(code) else ""}
+    result.cell_errors = [{**error, "message": printable(error["message"], 500),
+                           "starts": printable(_first_line(code[error["cell"]]) if error["cell"] < len(code) else "")}
                           for error in session.cell_errors or []]
-    result.detail = "; ".join(f"{c.grade_id} {c.verdict}" for c in result.cells if c.verdict != "passed")
+    lost = [f"{c.grade_id} {c.verdict}" for c in result.cells if c.verdict != "passed"]
+    notes = _notes(result.cell_errors)
+    if notes:  # the student reads it under the first graded cell of the feedback, the instructor in grades.csv
+        first = next((c for c in result.cells if c.points is not None), None)
+        if first is not None:
+            first.outputs.insert(0, stream(f"While your notebook ran: {notes}\n"))
+    result.detail = one_line("; ".join([*lost, *([f"notebook: {notes}"] if notes else [])]), 2000)
     total = time.perf_counter() - started
     result.timing = {
         "total_s": total, "start_s": session.timing.start_s, "load_s": session.timing.load_s,

@@ -75,6 +75,7 @@ __all__ = [
     "CallTimedOut",
     "WorkerCrashed",
     "SandboxBroken",
+    "BudgetUsed",
     "check_bwrap",
 ]
 
@@ -86,6 +87,9 @@ STARTUP_TIMEOUT_S = 60.0  # bwrap + python + numpy; generous, as a loaded machin
 LOAD_BUDGET = 6
 #: After SIGINT, how long a cell past its time has to stop before its worker is killed.
 INTERRUPT_GRACE_S = 2.0
+#: Cells that ignore the interrupt or crash the worker while the notebook runs: each is left out and the
+#: notebook run again; beyond this many, none of its functions can be called.
+MAX_STOPPED_CELLS = 3
 #: Processes and threads of a worker where there is no cgroup (RLIMIT_NPROC): each may hold the whole
 #: address-space limit, so together they may hold this many times it.
 UNGROUPED_PROCESSES = 8
@@ -748,33 +752,53 @@ class Timing:
     workers: int = 0
 
 
-class Session:
-    """The student's functions for one submission: a worker started on first use, replaced after a loss.
+class BudgetUsed(CallTimedOut):
+    """The time for all of a submission's calls (:attr:`Session.submission_timeout_s`) is used up."""
 
-    Calls go through :meth:`call` with the deadline of the current test (:meth:`begin_test`). A call
-    that times out or kills its worker raises :class:`WorkerLost`; further calls in the same test
-    fail at once with the same loss, and the next test gets a fresh worker that runs the cells
-    again. When loading the cells itself times out or kills the worker, every later call fails
-    with that loss (running them again would end the same way).
+
+class Session:
+    """The student's functions for one submission: the notebook run once, a worker replaced after a loss.
+
+    :meth:`load` runs the notebook's code cells in a fresh worker before any test, with a time budget of its
+    own: ``load_timeout_s`` per cell and :data:`LOAD_BUDGET` times that for all of them. A cell past its time
+    is interrupted (a KeyboardInterrupt in the cell, as Jupyter's interrupt) and the cells after it still run;
+    one that ignores the interrupt, or crashes the worker, is left out and the notebook runs again without it
+    (at most :data:`MAX_STOPPED_CELLS` times); cells still waiting when the budget is used up are not run. The
+    functions the cells that ran defined are graded either way; :attr:`cell_errors` says what happened.
+
+    Calls go through :meth:`call`, each within ``call_timeout_s``, the current test's calls together within
+    its budget (:meth:`begin_test`), and all the submission's calls, with the notebook run again after a
+    lost worker, within ``submission_timeout_s`` (the trusted side's own work counts against none of them). A
+    call that times out or kills its worker raises :class:`WorkerLost`; further calls in the same test fail at
+    once with the same loss, and the next test gets a fresh worker that runs the cells again. So one
+    submission takes at most the load budget, plus ``submission_timeout_s``, plus an interrupt's grace
+    (:data:`INTERRUPT_GRACE_S`) per stopped cell, the starts of its workers and the trusted side's own work.
     """
 
-    def __init__(self, sandbox: Sandbox, cells: list[str], *, load_timeout_s: float, call_timeout_s: float) -> None:
+    def __init__(self, sandbox: Sandbox, cells: list[str], *, load_timeout_s: float, call_timeout_s: float,
+                 submission_timeout_s: float = float("inf")) -> None:
         self.sandbox = sandbox
         self.cells = cells
         self.load_timeout_s = load_timeout_s
         self.call_timeout_s = call_timeout_s
+        self.submission_timeout_s = submission_timeout_s
         self.worker: Worker | None = None
         self.cell_errors: list[dict] | None = None
         self.load_failure: WorkerLost | None = None
         self.stopped_cells: set[int] = set()
+        self.unrun_cells: set[int] = set()
         self.test_failure: WorkerLost | None = None
-        self.test_deadline = float("inf")
+        self.test_budget_s = float("inf")  # the current test's calls may take this long together
+        self.test_spent_s = 0.0
+        self.spent_s = 0.0  # calls and reloads, counted against submission_timeout_s
         self.timed_out = False
         self.crashed = False
         self.timing = Timing()
 
     def begin_test(self, budget_s: float) -> None:
-        self.test_deadline = time.monotonic() + budget_s
+        """A new test: its calls together may take ``budget_s`` (the trusted side's own work is not counted)."""
+        self.test_budget_s = budget_s
+        self.test_spent_s = 0.0
         self.test_failure = None
 
     def _lose(self, lost: WorkerLost) -> WorkerLost:
@@ -788,68 +812,129 @@ class Session:
             self.worker = None
         return lost
 
+    # ------------------------------------------------------------------ running the notebook
+    def load(self) -> None:
+        """Run the notebook's cells in a fresh worker, within the load budget (see the class); once."""
+        if self.cell_errors is not None:
+            return
+        budget_s = self.load_timeout_s * LOAD_BUDGET
+        budget = time.monotonic() + budget_s
+        errors: dict[int, dict] = {}
+        while True:
+            worker = self._start()
+            stopped = None
+            for index, source in enumerate(self.cells):
+                if index in self.stopped_cells:
+                    continue
+                if time.monotonic() >= budget:
+                    self.unrun_cells = {i for i in range(index, len(self.cells)) if i not in self.stopped_cells}
+                    break
+                stopped = self._run_cell(worker, index, source, min(time.monotonic() + self.load_timeout_s, budget),
+                                         budget_s, errors)
+                if stopped is not None:
+                    break
+            if stopped is None:
+                break
+            errors[stopped["cell"]] = stopped
+            self.stopped_cells.add(stopped["cell"])
+            if len(self.stopped_cells) > MAX_STOPPED_CELLS or time.monotonic() >= budget:
+                self.load_failure = WorkerCrashed(
+                    f"your notebook's cells could not be run ({stopped['message']}; {len(self.stopped_cells)} cells "
+                    f"stopped in {time.monotonic() - budget + budget_s:.0f} s), so none of its functions could be"
+                    " called")
+                break
+        for index in sorted(self.unrun_cells):
+            errors[index] = {"cell": index, "error": "TimeoutError", "message": f"not run: the notebook's cells had"
+                             f" used their {budget_s:g} s (the cells before it ran, and their functions are graded)"}
+        self.cell_errors = [errors[index] for index in sorted(errors)]
+
+    def _run_cell(self, worker: Worker, index: int, source: str, deadline: float, budget_s: float,
+                  errors: dict[int, dict]) -> dict | None:
+        """Run one cell; None when the worker went on (the cell's error noted), else the note of a cell that had to
+        be stopped (the worker is then gone)."""
+        started = time.monotonic()
+        try:
+            for error in worker.load([source], deadline, index):
+                errors[error["cell"]] = error
+            return None
+        except CallTimedOut:
+            ran = time.monotonic() - started
+            whole = (f"the notebook's cells had used their {budget_s:g} s" if ran < self.load_timeout_s - 0.01
+                     else f"the limit is {self.load_timeout_s:g} s per cell")
+            self.timed_out = True
+            if self._interrupted(worker):
+                errors[index] = {"cell": index, "error": "TimeoutError", "message": f"this cell ran {ran:.0f} s and "
+                                 f"was interrupted ({whole}); the cells after it still ran"}
+                return None
+            self._lose(CallTimedOut("a cell ran too long"))
+            return {"cell": index, "error": "TimeoutError", "message": f"this cell ran {ran:.0f} s ({whole}) and went "
+                    "on after the interrupt: it was stopped, and the notebook ran again without it"}
+        except WorkerCrashed as crash:
+            self._lose(crash)
+            return {"cell": index, "error": "WorkerCrashed", "message": f"the process running this cell "
+                    f"{crash.args[0] if crash.args else 'died'}: the notebook ran again without it"}
+        finally:
+            self.timing.load_s += time.monotonic() - started
+
+    def _interrupted(self, worker: Worker) -> bool:
+        """Interrupt the cell that ran past its time; True when the worker then went on."""
+        worker.interrupt()
+        try:
+            worker.receive_load(time.monotonic() + INTERRUPT_GRACE_S)
+        except CallTimedOut:
+            return False  # it ignores KeyboardInterrupt
+        except WorkerCrashed:
+            return False
+        return True
+
+    def _reload(self) -> Worker:
+        """A fresh worker with the cells that ran at first run again (after a lost worker): charged to the
+        submission's time."""
+        started = time.monotonic()
+        try:
+            worker = self._start()
+            for index, source in enumerate(self.cells):
+                if index in self.stopped_cells or index in self.unrun_cells:
+                    continue
+                left = self.submission_timeout_s - self.spent_s - (time.monotonic() - started)
+                deadline = time.monotonic() + min(self.load_timeout_s, max(left, 0.0))
+                try:
+                    worker.load([source], deadline, index)
+                except CallTimedOut:
+                    if time.monotonic() - started + self.spent_s >= self.submission_timeout_s:
+                        raise self._budget_used() from None
+                    if not self._interrupted(worker):
+                        raise
+            return worker
+        finally:
+            self.spent_s += time.monotonic() - started
+            self.timing.load_s += time.monotonic() - started
+
+    def _budget_used(self) -> BudgetUsed:
+        return BudgetUsed(f"not run: the {self.submission_timeout_s:g} s for all of your submission's calls (and the"
+                          " notebook run again after a call that timed out or crashed) were used up")
+
     def _ready_worker(self) -> Worker:
-        """The worker with the notebook's cells run: each cell with ``load_timeout_s``, all of them with
-        :data:`LOAD_BUDGET` times that. A cell that runs too long is stopped and left out (the worker
-        is started again without it; the cells after it still run), as Jupyter's interrupt would."""
+        if self.cell_errors is None:
+            self.load()
         if self.load_failure is not None:
             raise type(self.load_failure)(*self.load_failure.args)
         if self.worker is not None:
             return self.worker
-        budget = time.monotonic() + self.load_timeout_s * LOAD_BUDGET
+        if self.spent_s >= self.submission_timeout_s:
+            raise self._budget_used()
         try:
-            while True:
-                worker = self._start()
-                errors = []
-                for index, source in enumerate(self.cells):
-                    if index in self.stopped_cells:
-                        continue
-                    deadline = min(time.monotonic() + self.load_timeout_s, budget)
-                    started = time.perf_counter()
-                    try:
-                        errors += worker.load([source], deadline, index)
-                    except CallTimedOut:
-                        if self._interrupted(worker, index, errors):
-                            continue
-                        if time.monotonic() >= budget or len(self.stopped_cells) >= 3:
-                            raise
-                        self._lose(CallTimedOut("a cell ran too long"))
-                        self.stopped_cells.add(index)
-                        break
-                    finally:
-                        self.timing.load_s += time.perf_counter() - started
-                else:
-                    break
+            self.worker = self._reload()
+        except BudgetUsed as used:
+            self._lose(used)
+            raise
         except CallTimedOut:
-            self.load_failure = self._lose(CallTimedOut(
-                f"running your notebook's cells took too long ({self.load_timeout_s:g} s per cell,"
-                f" {self.load_timeout_s * LOAD_BUDGET:g} s for all), so none of its functions could be called"
-                " (an endless loop or a long computation outside a function?)"))
-            raise type(self.load_failure)(*self.load_failure.args) from None
+            raise self._lose(CallTimedOut("running your notebook's cells again (after a lost worker) took too"
+                                          " long")) from None
         except WorkerCrashed as crash:
-            self.load_failure = self._lose(WorkerCrashed(
-                f"the process running your notebook {crash.args[0]} while running its cells, so none of"
-                " its functions could be called"))
-            raise type(self.load_failure)(*self.load_failure.args) from None
-        if self.cell_errors is None:
-            stopped = [{"cell": index, "error": "TimeoutError", "message": f"this cell ran longer than"
-                        f" {self.load_timeout_s:g} s and was stopped; the cells after it still ran"}
-                       for index in sorted(self.stopped_cells)]
-            self.cell_errors = sorted(errors + stopped, key=lambda error: error["cell"])
-        return worker
-
-    def _interrupted(self, worker: Worker, index: int, errors: list[dict]) -> bool:
-        """Interrupt the cell ``index`` that ran past its time; True when the worker then went on."""
-        worker.interrupt()
-        try:
-            reply = worker.receive_load(time.monotonic() + INTERRUPT_GRACE_S)
-        except CallTimedOut:
-            return False  # it ignores KeyboardInterrupt: it is stopped for good
-        self.timed_out = True
-        errors += [{**error, "error": "TimeoutError", "message": f"this cell ran longer than {self.load_timeout_s:g} s"
-                    " and was interrupted; the cells after it still ran"} if error["cell"] == index else error
-                   for error in reply]
-        return True
+            raise self._lose(WorkerCrashed(f"the process running your notebook {crash.args[0]} while running its"
+                                           " cells again")) from None
+        return self.worker
 
     def _start(self) -> Worker:
         worker = Worker(self.sandbox)
@@ -858,29 +943,41 @@ class Session:
         self.timing.start_s += worker.start_s
         return worker
 
+    # ------------------------------------------------------------------ calls
     def call(self, name: str, args: tuple, kwargs: dict) -> Any:
         if self.test_failure is not None:
             raise type(self.test_failure)(*self.test_failure.args)
         try:
-            worker = self._ready_worker()
+            worker = self._ready_worker()  # a reload is the submission's time, not this test's
         except WorkerLost as lost:
             self.test_failure = lost
             raise
-        started = time.perf_counter()
-        deadline = min(time.monotonic() + self.call_timeout_s, self.test_deadline)
+        if self.spent_s >= self.submission_timeout_s:
+            self.test_failure = self._budget_used()
+            raise type(self.test_failure)(*self.test_failure.args)
+        started = time.monotonic()
+        limits = {"call": self.call_timeout_s, "test": self.test_budget_s - self.test_spent_s,
+                  "submission": self.submission_timeout_s - self.spent_s}
+        which = min(limits, key=limits.get)
         try:
-            return worker.call(name, args, kwargs, deadline)
+            return worker.call(name, args, kwargs, started + max(limits[which], 0.0))
         except CallTimedOut:
-            limit = "this test's time" if deadline == self.test_deadline else f"{self.call_timeout_s:g} s"
-            self.test_failure = self._lose(CallTimedOut(
-                f"{name}(...) did not return within {limit}; it was stopped and this test scores 0"))
+            if which == "submission":
+                self.test_failure = self._lose(self._budget_used())
+            else:
+                limit = "this test's time" if which == "test" else f"{self.call_timeout_s:g} s"
+                self.test_failure = self._lose(CallTimedOut(
+                    f"{name}(...) did not return within {limit}; it was stopped and this test scores 0"))
             raise type(self.test_failure)(*self.test_failure.args) from None
         except WorkerCrashed as crash:
             self.test_failure = self._lose(WorkerCrashed(
                 f"the process running your code {crash.args[0]} during {name}(...); this test scores 0"))
             raise type(self.test_failure)(*self.test_failure.args) from None
         finally:
-            self.timing.calls_s += time.perf_counter() - started
+            elapsed = time.monotonic() - started
+            self.spent_s += elapsed
+            self.test_spent_s += elapsed
+            self.timing.calls_s += elapsed
 
     def close(self) -> None:
         if self.worker is not None:

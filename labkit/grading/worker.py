@@ -30,7 +30,10 @@ import types
 
 CHANNEL_IN = 0
 CHANNEL_OUT = 1
-_MAGIC = re.compile(r"^\s*(%|!)|\?\s*$", re.M)
+# IPython syntax: a line starting with % or ! (after spaces), or ending with ?. Spaces and tabs only, not \s:
+# `^\s*` runs over every following blank line from every line start, quadratic in a run of blank lines (20 000
+# of them took seconds, where no interrupt reaches).
+_MAGIC = re.compile(r"^[ \t]*[%!]|\?[ \t]*$", re.M)
 _RUN_BODY_MAGICS = frozenset({"time", "timeit", "capture", "prun"})  # cell magics whose body is Python
 
 
