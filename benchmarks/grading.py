@@ -32,7 +32,7 @@ CLASS = 300 * 12  # the class the throughput is extrapolated to: 300 students, e
 sys.path.insert(0, str(REPO))  # the tests' course helpers (tests/ is not installed)
 
 from labkit.grading import grade  # noqa: E402
-from labkit.grading.course import Course  # noqa: E402
+from labkit.grading.exercises import Course  # noqa: E402
 from tests.grading_course import copy_course, notebook_with, release_notebook, solutions, submit  # noqa: E402
 
 ATTACKS = {

@@ -27,8 +27,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._checks import check_positive
 from ._iav_noise import angle_limits, angle_noise_runs, ratio_sd, widen, wider_than_noise
+from ._validate import check_positive
 from .features import Circle, Leg, LineSegment, line_segment
 from .fitting import fit_circle
 from .iav import NOISE_Z, circle_confidence, circle_from_iav, is_v_corner

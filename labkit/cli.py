@@ -255,7 +255,7 @@ def _poses(args: argparse.Namespace):
 
 def cmd_extract(args: argparse.Namespace) -> int:
     from .io import write_features
-    from .io.features import FEATURES_FILE
+    from .io.feature_files import FEATURES_FILE
     from .parallel import recordings_in
     from .pipeline import extract_features
     from .tables import PARQUET_FILE, write_features_table
@@ -466,7 +466,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     from . import experiments as ex
     from ._safe import safe_output
-    from .io.features import json_safe
+    from .io.feature_files import json_safe
     from .lines import LINE_EXTRACTORS
 
     extractors = dict(ex.LINE_EXTRACTORS)

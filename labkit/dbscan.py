@@ -72,8 +72,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._checks import check_int, check_positive
 from ._dbscan_fast import argsort_values, cluster_sorted, is_sorted
+from ._validate import check_int, check_positive
 
 __all__ = ["Cluster", "dbscan1d_reference", "dbscan1d", "DBSCAN1D"]
 

@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._checks import check_int, check_nonneg, check_positive
+from ._validate import check_int, check_nonneg, check_positive
 from .geometry import angle_difference
 from .scan import Scan
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._fastinit import fast_init
 from ._plainfloat import intersect1, wrap1
-from ._records import fast_init
 from .fitting import fit_line_polar
 from .geometry import project_onto_line
 from .params import Params, checked_by, param
@@ -34,7 +34,7 @@ def frozen_array(a) -> np.ndarray:
     return a
 
 
-# ``@fast_init`` (labkit._records) only makes building these frozen records faster.
+# ``@fast_init`` (labkit._fastinit) only makes building these frozen records faster.
 
 
 @fast_init

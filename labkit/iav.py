@@ -63,7 +63,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._checks import check_int
+from ._validate import check_int
 
 __all__ = [
     "IAVStats",

@@ -49,7 +49,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ._checks import check_nonneg, check_positive
+from ._validate import check_nonneg, check_positive
 from .params import AUTO
 from .scan import Scan
 

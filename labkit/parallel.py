@@ -625,7 +625,7 @@ def extract_many(inputs: Iterable[str | Path], out: str | Path, *, config=None, 
         each status. Every output is checked before anything runs (an existing output without
         ``overwrite``, an output that is an input: :class:`labkit.errors.RefusedError`).
     """
-    from .io.features import FEATURES_FILE
+    from .io.feature_files import FEATURES_FILE
     from .pipeline import Config
 
     config = config or Config()
@@ -673,14 +673,14 @@ class _Scratch:
 
 def _partial_of(part: Path) -> Path:
     """Where an interrupted task kept what it wrote of ``part`` (labkit._safe's partial name)."""
-    from .io.features import FEATURES_FILE
+    from .io.feature_files import FEATURES_FILE
 
     return _partial_name(part, FEATURES_FILE)
 
 
 def _one_per_input(paths, outs, ranges, common, *, overwrite, n_workers, split, scans, where) -> list[Result]:
     """One features file per recording; a split recording's ranges write parts, joined here."""
-    from .io.features import FEATURES_FILE
+    from .io.feature_files import FEATURES_FILE
 
     scratch = _Scratch(outs[0].parent)
     try:

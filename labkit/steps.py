@@ -3,7 +3,7 @@
 Every detector that a notebook steps through takes ``trace=True`` and then returns
 ``(result, steps)``, ``steps`` a list of :class:`Step` records in the order the algorithm
 took them. The records are plain data, the same for every algorithm, so one viewer
-(:func:`labkit.viz.steps.step_viewer`, ipywidgets) and one rerun logger
+(:func:`labkit.viz.step_plots.step_viewer`, ipywidgets) and one rerun logger
 (:func:`labkit.viz.rr.log_steps`, a ``step`` timeline) replay any of them.
 
 Kinds shared by all algorithms: ``"accept"`` (a feature the algorithm keeps: its line

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ._checks import check_int, check_positive
+from ._validate import check_int, check_positive
 from .geometry import inverse_transform_points
 from .sim.lidar import EPOCH_NS
 

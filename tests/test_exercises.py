@@ -31,7 +31,7 @@ from pathlib import Path
 
 import pytest
 
-from labkit.grading.course import Course
+from labkit.grading.exercises import Course
 from labkit.grading.notebook import student_cells
 from labkit.grading.runner import Job, grade_submission, run_cells, seed_for
 from tests.grading_course import (

@@ -1,6 +1,6 @@
 """The speed helpers behind labkit.features give what the plain versions give.
 
-``labkit._records.fast_init`` builds the feature records; ``labkit._plainfloat`` holds the
+``labkit._fastinit.fast_init`` builds the feature records; ``labkit._plainfloat`` holds the
 plain-float copies of two geometry functions that :func:`labkit.find_corners` uses.
 """
 

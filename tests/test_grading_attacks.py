@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 
 from labkit.grading import grade
-from labkit.grading.course import Course
+from labkit.grading.exercises import Course
 from labkit.grading.protocol import clean_text
 from labkit.grading.records import Records
 from labkit.grading.sandbox import worker_uid

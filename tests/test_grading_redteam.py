@@ -426,7 +426,7 @@ ESCAPE = f"redteam-escape-{uuid.uuid4().hex[:8]}"
 
 
 def _build_files_class(folder: Path) -> Graded:
-    from labkit.grading.course import Course
+    from labkit.grading.exercises import Course
     from labkit.grading.records import Records
 
     course = copy_course(folder / "course")

@@ -35,7 +35,7 @@ import pytest
 from IPython.core.inputtransformer2 import TransformerManager
 
 import labkit
-from labkit.grading.course import Course
+from labkit.grading.exercises import Course
 from tests.grading_course import EXERCISES, names, solutions
 
 REPO = Path(__file__).resolve().parents[1]

@@ -317,4 +317,4 @@ def test_ctrl_c_keeps_what_the_ranges_of_a_split_recording_wrote(tmp_path, clien
     for k in list(kept)[::25]:
         record = {"scan": k, **labkit.extract_features(scans[k]).as_record()}
         record.pop("timings_ms")
-        assert json.loads(json.dumps(labkit.io.features.json_safe(record))) == kept[k]
+        assert json.loads(json.dumps(labkit.io.feature_files.json_safe(record))) == kept[k]

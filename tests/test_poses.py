@@ -1,5 +1,5 @@
 """Poses: SE(2) geometry and interpolation (labkit.poses), and poses read from recordings
-(labkit.io.poses): odometry, tf chains with a static mounting, CARMEN, labkit's own bags.
+(labkit.io.pose_topics): odometry, tf chains with a static mounting, CARMEN, labkit's own bags.
 
 The truth each test compares with is independent of the code under test: closed-form motion
 (a constant-velocity turn, which linear interpolation reproduces exactly), the simulator's exact

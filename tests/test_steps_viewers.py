@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from labkit import Scan, Step  # noqa: E402
-from labkit.viz.steps import draw_step, step_beams, step_viewer  # noqa: E402
+from labkit.viz.step_plots import draw_step, step_beams, step_viewer  # noqa: E402
 
 
 @pytest.fixture

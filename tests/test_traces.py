@@ -141,7 +141,7 @@ def test_steps_view_in_the_widget_for_every_algorithm():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from labkit.viz.steps import step_viewer
+    from labkit.viz.step_plots import step_viewer
 
     scan, _ = _square_room()
     traces = {
@@ -173,7 +173,7 @@ def test_the_notebook_04_viewer_cell():
 
     room_scan, _ = _square_room()
     # --- the cell ---
-    from labkit.viz.steps import step_viewer
+    from labkit.viz.step_plots import step_viewer
 
     room_traces = {method: labkit.split_and_merge(room_scan, method=method, trace=True)[1]
                    for method in ["endpoints", "fit"]}

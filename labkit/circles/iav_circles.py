@@ -44,7 +44,6 @@ from types import MappingProxyType
 
 import numpy as np
 
-from .._checks import check_int
 from .._iav_batch import (
     ACCEPTED,
     DEGENERATE,
@@ -67,6 +66,7 @@ from .._iav_batch import (
     scan_runs,
 )
 from .._iav_noise import angle_noise, ratio_sd, widen, wider_than_noise
+from .._validate import check_int
 from ..features import Circle, LineSegment
 from ..fitting import fit_circle
 from ..iav import (

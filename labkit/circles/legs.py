@@ -63,7 +63,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_positive
 from .._iav_batch import (
     ACCEPTED,
     DEGENERATE,
@@ -85,6 +84,7 @@ from .._iav_batch import (
     occluded,
 )
 from .._iav_noise import angle_limits
+from .._validate import check_positive
 from ..features import Leg, Person
 from ..iav import IAVStats
 from ..noise import noise_sigma

@@ -31,7 +31,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .course import Course, Exercise, find_course, release_exercise
+from .exercises import Course, Exercise, find_course, release_exercise
 from .notebook import grade_id, read_notebook
 from .records import Records, student_id_problem
 from .runner import (

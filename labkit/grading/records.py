@@ -30,7 +30,7 @@ import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
-from .course import Course, Exercise
+from .exercises import Course, Exercise
 from .notebook import grade_id, nbgrader_metadata, write_notebook_text
 from .protocol import clean_text
 from .runner import GRADED, GRADER_ERROR, MANUAL, NOT_SUBMITTED, SubmissionResult

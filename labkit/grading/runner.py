@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from .checks import GRADER
-from .course import Course, Exercise, GradedCell, release_exercise
+from .exercises import Course, Exercise, GradedCell, release_exercise
 from .notebook import (
     InvalidNotebook,
     autograded_notebook,
@@ -130,7 +130,8 @@ class Job:
     """One submission to grade (plain data, so that it can go to a child process).
 
     ``visible_only`` runs the visible checks only (``--check``); with ``course`` None the exercise is the one
-    the notebook itself describes (``--check`` without the course: see :func:`labkit.grading.course.release_exercise`).
+    the notebook itself describes (``--check`` without the course: see
+    :func:`labkit.grading.exercises.release_exercise`).
     """
 
     course: str | None

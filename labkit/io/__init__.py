@@ -33,8 +33,8 @@ from ..scan import Scan
 from . import bags
 from .bags import StampsChangedWarning, plan_stamps, write_bag
 from .carmen import LASER_MESSAGES, carmen_message_types, default_message, read_carmen
-from .errors import WATCHED, CorruptFileError, EmptyRecordingError, Faults
-from .features import read_features, write_features
+from .faults import WATCHED, CorruptFileError, EmptyRecordingError, Faults
+from .feature_files import read_features, write_features
 from .formats import (
     FORMATS,
     FileFormat,
@@ -45,7 +45,7 @@ from .formats import (
     writable_formats,
 )
 from .jsonscan import JSON_LINES, JSON_SCAN, read_json_lines, read_json_scan, write_json_lines, write_json_scan
-from .poses import PosePlan, plan_poses, read_bag_poses
+from .pose_topics import PosePlan, plan_poses, read_bag_poses
 
 __all__ = [
     "FORMATS",
@@ -127,7 +127,7 @@ class ScanStream:
         Where the scans' poses come from (``"odometry /odom"``, ``"tf /tf, /tf_static, else
         odometry /odom"``, ``"the log's corrected laser poses"``, ...); None when they get none.
     pose_plan : PosePlan or None
-        For bags: the pose topics read (:mod:`labkit.io.poses`).
+        For bags: the pose topics read (:mod:`labkit.io.pose_topics`).
     pose_sources : dict
         After reading a bag: for each scan frame, how its pose was found.
     first, stop : int, int or None
@@ -197,7 +197,7 @@ def _slice_text(scans: slice) -> str:
 def _in_range(scans: Iterable[Scan], path: Path, strict: bool, first: int, stop: int | None) -> Iterator[Scan]:
     """The scans ``first`` .. ``stop - 1`` of ``scans``; reading stops after the last one. A
     record the reader skipped on the way (before or inside the range) is still reported: the
-    reader's :class:`~labkit.io.errors.Faults` are watched, and a :class:`CorruptFileError`
+    reader's :class:`~labkit.io.faults.Faults` are watched, and a :class:`CorruptFileError`
     follows the range's last scan (the reader raises its own when it reaches the file's end)."""
     it = iter(scans)
     watched: list[Faults] = []
@@ -247,7 +247,7 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         Where each scan's :attr:`~labkit.Scan.pose` (the sensor's pose in a world frame) comes
         from. None (default): wherever the recording has poses -- a CARMEN log's corrected
         poses, a JSON scan's ``pose``, a bag's ``/tf`` or its one ``nav_msgs/Odometry`` topic,
-        interpolated to each scan's stamp (:mod:`labkit.io.poses` gives the rules). A bag topic
+        interpolated to each scan's stamp (:mod:`labkit.io.pose_topics` gives the rules). A bag topic
         name: that odometry or tf topic. False: no poses.
     scans : slice, optional
         Read only these scans, as Python slices them: ``slice(100, 200)`` the scans 100 to 199,

@@ -36,7 +36,7 @@ from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_
 
 from .._safe import safe_output
 from . import bags, salvage
-from .errors import Faults
+from .faults import Faults
 
 __all__ = ["copy_bag", "TopicsSkippedWarning"]
 

@@ -29,9 +29,9 @@ from ..errors import RefusedError
 from ..poses import quaternion_from_yaw
 from ..scan import Scan
 from . import salvage
-from .errors import CorruptFileError, EmptyRecordingError, Faults
+from .faults import CorruptFileError, EmptyRecordingError, Faults
 
-#: Where labkit's bag writers put the scans' poses, and the frame they are in (labkit.io.poses reads them).
+#: Where labkit's bag writers put the scans' poses, and the frame they are in (labkit.io.pose_topics reads them).
 ODOM_TOPIC = "/odom"
 ODOM_FRAME = "map"
 
@@ -209,7 +209,7 @@ def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = Fa
     ``expected`` is how many scans the bag's index lists (when it is intact): the scans lost are
     then counted exactly, and a scan the index lists that the walk did not find is a loss too.
 
-    ``poses`` (a :class:`labkit.io.poses.BagPoses`, read beforehand) gives every scan its
+    ``poses`` (a :class:`labkit.io.pose_topics.BagPoses`, read beforehand) gives every scan its
     sensor pose, and brings the faults met while reading the poses: they count with the
     scans' own (once each), and with ``strict`` reading stops at the first scan after the
     last pose read before a fault.

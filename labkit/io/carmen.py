@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..scan import Scan
-from .errors import Faults
+from .faults import Faults
 
 LASER_MESSAGES = ("FLASER", "RLASER", "ROBOTLASER1", "ROBOTLASER2", "RAWLASER1", "RAWLASER2",
                   "RAWLASER3", "RAWLASER4")

@@ -27,7 +27,7 @@ import numpy as np
 
 from .._safe import OutputKind, first_json_line_with, json_object_with, safe_output
 from ..scan import Scan
-from .errors import CorruptFileError, EmptyRecordingError, Faults
+from .faults import CorruptFileError, EmptyRecordingError, Faults
 
 #: The range limit of a JSON scan that does not give its own ``range_max`` (metres).
 DEFAULT_RANGE_MAX_M = 1000.0

@@ -79,7 +79,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import check_int, check_nonneg
+from .._validate import check_int, check_nonneg
 from ..dbscan import dbscan1d
 from ..features import LineSegment, line_segment
 from ..geometry import circular_mean, signed_distance_to_line

@@ -53,7 +53,7 @@ subtractions, and the closed form of :func:`labkit.fitting.fit_line_polar` needs
 worst-point search touches every point.
 
 ``split_and_merge(..., trace=True)`` also returns the steps taken, as :class:`labkit.Step`
-records, so a notebook, a widget (:func:`labkit.viz.steps.step_viewer`) or the rerun viewer
+records, so a notebook, a widget (:func:`labkit.viz.step_plots.step_viewer`) or the rerun viewer
 (:func:`labkit.viz.rr.log_steps`) can replay them.
 """
 

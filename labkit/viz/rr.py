@@ -992,7 +992,7 @@ def steps_blueprint() -> rrb.Blueprint:
 
 def _step_geometry(scan: Scan, step: Step) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(beams' points, line strips (K, 2, 2), circle centres (C, 2), circle radii (C,)) of a step."""
-    from .steps import step_beams
+    from .step_plots import step_beams
 
     run = scan.points[step_beams(scan, step)]
     strips = np.zeros((0, 2, 2))

@@ -26,7 +26,7 @@ import numpy as np
 
 from .._safe import OutputKind, first_json_line_with, safe_output
 from ..features import Features
-from .errors import Faults
+from .faults import Faults
 from .jsonscan import json_lines
 
 __all__ = ["write_features", "read_features", "json_safe"]

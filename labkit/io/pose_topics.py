@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import RefusedError
 from ..poses import FrameTree, PoseTrack, compose, yaw_from_quaternion
 from .bags import ODOM_FRAME, ODOM_TOPIC, read_messages
-from .errors import Faults
+from .faults import Faults
 
 __all__ = ["ODOMETRY_TYPES", "TF_TYPES", "ODOM_TOPIC", "ODOM_FRAME", "PosePlan", "BagPoses", "plan_poses",
            "read_bag_poses"]
