@@ -1,6 +1,6 @@
 """Nguyen-style comparison of the line extractors, circles and legs, and ray-axis RMSE on real logs.
 
-Four parts, every number computed here by :mod:`labkit.experiments` (the same code as
+Four parts, every number computed here by :mod:`labkit.app.experiments` (the same code as
 ``labkit evaluate`` and notebook 10):
 
 (a) every line extractor at its defaults on ``--scans`` simulated scans of 722 beams per noise
@@ -21,7 +21,7 @@ Four parts, every number computed here by :mod:`labkit.experiments` (the same co
 (d) split-and-merge's true- against false-positive rate as a fixed split threshold varies (with
     the fixed range noise of 1 cm and every line reported), against its default (``AUTO_LINES``);
 (e) what the data allows: the lines of an extractor that knew which beams hit which wall
-    (``labkit.experiments.truth_lines``) against ``AUTO_LINES``, both keeping the lines they can
+    (``labkit.app.experiments.truth_lines``) against ``AUTO_LINES``, both keeping the lines they can
     place with a confidence from 0 to 0.9 (``placement_frontier``).
 
 The goals of issues 7 and 16 are checked at the end against the measured numbers.
@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from labkit import Config, angular_segmentation, split_and_merge
-from labkit import experiments as ex
+from labkit.app import experiments as ex
 from labkit.lines.hough import hough_lines
 from labkit.lines.incremental import incremental_lines
 from labkit.lines.ransac import ransac_lines

@@ -69,7 +69,7 @@ with open("/proc/self/status") as fh:
 def view_memory(counts: list[int], bag: Path | None = None) -> None:
     """Peak RSS of labkit view of the first n scans of one simulated recording (``bag``, else
     simulated here: the corridor, with its ground truth), each in a fresh process."""
-    from labkit.data import write_simulation
+    from labkit.app.data import write_simulation
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

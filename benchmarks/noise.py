@@ -34,7 +34,7 @@ import numpy as np
 from common import per_scan, world_scans
 
 from labkit import estimate_range_noise, extract_features, read_scans
-from labkit import experiments as ex
+from labkit.app import experiments as ex
 from labkit.noise import range_noise_residuals
 from labkit.sim import LIDARS, make_world
 
@@ -46,7 +46,7 @@ BEAMS = (361, 722, 2881)
 
 def markdown_table(rows: list[dict], columns: dict[str, str]) -> str:
     """``rows`` as a Markdown table; ``columns`` maps a row key to ``header`` or ``header|format``.
-    (Not labkit.experiments.markdown_table, which rescales any "(mm)" column from metres.)"""
+    (Not labkit.app.experiments.markdown_table, which rescales any "(mm)" column from metres.)"""
     specs = [(key, *spec.partition("|")[::2]) for key, spec in columns.items()]
     lines = ["| " + " | ".join(head for _, head, _ in specs) + " |", "|" + "---|" * len(specs)]
     for row in rows:

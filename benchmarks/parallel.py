@@ -1,6 +1,6 @@
 """Many recordings on Dask: scans per second with 1 and 2 workers, Dask's overhead, memory.
 
-Part 1 -- ``labkit.parallel.extract_many`` (read, extract every feature, write JSON lines) on two
+Part 1 -- ``labkit.app.parallel.extract_many`` (read, extract every feature, write JSON lines) on two
 sets, each with a local Dask cluster of 1 and of 2 single-threaded worker processes, started before
 the clock runs (its start-up is printed apart):
 
@@ -9,7 +9,7 @@ the clock runs (its start-up is printed apart):
   absent). Their sizes are uneven -- freiburg-079 alone is about two thirds of the work -- so with
   one task per recording two workers could not halve the time (the bound total / largest is
   printed). With 2 workers, ``extract_many`` splits a recording longer than its share into scan
-  ranges (``labkit.parallel.split_ranges``): the ranges it cut are printed, and the outputs of
+  ranges (``labkit.app.parallel.split_ranges``): the ranges it cut are printed, and the outputs of
   the 2-worker runs are checked against the 1-worker run's, record for record. The 2 workers run
   twice: before (``split=False``, one task per recording, as before issue 30) and after.
 
@@ -40,8 +40,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from labkit import parallel
-from labkit.data import write_simulation
+from labkit.app import parallel
+from labkit.app.data import write_simulation
 
 SHARED = Path(os.environ.get("LABKIT_SHARED_DATASETS", Path(__file__).resolve().parents[2] / "shared" / "datasets"))
 
@@ -83,7 +83,7 @@ def cluster(n: int):
     c = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                      silence_logs=logging.ERROR)
     client = Client(c)
-    client.run(lambda: __import__("labkit.parallel"))  # every worker has imported labkit before the clock runs
+    client.run(lambda: __import__("labkit.app.parallel"))  # every worker has imported labkit before the clock runs
     return c, client, time.perf_counter() - t0
 
 

@@ -41,7 +41,7 @@ from labkit import (
     split_and_merge,
     write_bag,
 )
-from labkit.bench import time_recording
+from labkit.app.bench import time_recording
 from labkit.noise import FIXED_CONFIG
 from labkit.viz import rr as lkrr
 
@@ -101,7 +101,7 @@ def end_to_end(n_scans: int) -> None:
     for label, rate in rows:
         print(f"{label:28s} {rate:8.0f}")
     r, total = phases.rates(), phases.total_s
-    print(f"phases (labkit.bench.time_recording, as `labkit bench`): read {r['read']:,.0f} scans/s "
+    print(f"phases (labkit.app.bench.time_recording, as `labkit bench`): read {r['read']:,.0f} scans/s "
           f"({phases.read_s / total:.0%}), extract {r['extract']:,.0f} scans/s ({phases.extract_s / total:.0%}), "
           f"log .rrd {r['log']:,.0f} scans/s ({phases.log_s / total:.0%})")
 

@@ -19,7 +19,6 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.dbscan` DBSCAN on 1-D data in linear time (:func:`dbscan1d`)
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
 - :mod:`labkit.evaluation` scores against ground truth (Nguyen's line metrics, circles, legs) and ray-axis RMSE
-- :mod:`labkit.experiments` the evaluation experiments (simulated sets, comparisons, sweeps)
 - :mod:`labkit.pipeline` one :class:`Config` and :func:`extract_features` for every feature
 - :mod:`labkit.tracking` people and moving circles followed over time (Kalman filters, gating,
   assignment, a track life cycle); :mod:`labkit.tracking_metrics` CLEAR MOT and IDF1
@@ -27,15 +26,15 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.poses` SE(2) poses: composition, interpolation to a scan's stamp, frame trees
 - :mod:`labkit.io` bags, CARMEN logs, JSON (and the poses they carry)
 - :mod:`labkit.tables` features as a pandas DataFrame / Parquet table (needs ``labkit[research]``)
-- :mod:`labkit.parallel` many recordings on Dask (needs ``labkit[research]``; import explicitly)
-- :mod:`labkit.data` the bundled recordings
+- :mod:`labkit.app` the applications: the command line, the demo, the benchmark, the evaluation
+  experiments, many recordings on Dask, the bundled recordings (import explicitly)
 - :mod:`labkit.viz` matplotlib, rerun and ipywidgets viewers (import explicitly)
 """
 
 
 from . import circles, evaluation, geometry, iav, lines, poses, sim, tracking, tracking_metrics
+from .app.data import bundled_data
 from .circles import ArcParams, CircleParams, LegsParams, detect_arcs, detect_circles, detect_legs, pair_legs
-from .data import bundled_data
 from .dbscan import DBSCAN1D, dbscan1d, dbscan1d_reference
 from .evaluation import match_circles, match_legs, match_lines, ray_errors, score_detections, score_lines
 from .features import Circle, Corner, CornerParams, Features, Leg, LineSegment, Person, find_corners, line_segment

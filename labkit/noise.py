@@ -175,7 +175,7 @@ MIN_SPLIT_M = 0.02
 #: :data:`MIN_SPLIT_M`): an inlier band, not a test every point of a wall must pass -- a wall point
 #: outside it is only left out of the line -- so it needs to hold most of a wall's points (98.8 %
 #: at 2.5 sigma), and a wider band takes the next wall's first points past a corner and tilts the
-#: line. On the 408 simulated scans of ``labkit.experiments.nguyen_set`` at 2 cm of noise, RANSAC
+#: line. On the 408 simulated scans of ``labkit.app.experiments.nguyen_set`` at 2 cm of noise, RANSAC
 #: with 2.5 / 3 / 4 / 5 sigma finds 0.84 / 0.80 / 0.78 / 0.74 of the walls with 0.06 / 0.09 / 0.11 /
 #: 0.14 false lines (the Hough transform 0.85 / 0.83 / 0.80 / 0.77 and 0.05 / 0.06 / 0.10 / 0.12).
 INLIER_SIGMAS = 2.5

@@ -13,7 +13,7 @@ import pytest
 
 from labkit import read_scans
 
-LABKIT = [sys.executable, "-m", "labkit.cli"]
+LABKIT = [sys.executable, "-m", "labkit.app.cli"]
 
 
 def run(*args, cwd=None, ok=True):

@@ -37,7 +37,7 @@ from rosbags import rosbag1, rosbag2
 from labkit import Scan, read_scans, sim
 from labkit.io import EmptyRecordingError, salvage
 
-# The installed command, as users run it. (`python -m labkit.cli` would do for most cases, but
+# The installed command, as users run it. (`python -m labkit.app.cli` would do for most cases, but
 # CPython run with -m sometimes ends with SIGINT although main() caught the Ctrl-C and returned 130.)
 LABKIT = [str(Path(sys.executable).parent / "labkit")]
 N = 30  # scans in every test recording
@@ -295,7 +295,7 @@ def _as_nobody():
         pytest.skip(f"running as root, and {system} (the same Python minor version, reachable by nobody) or "
                     "setpriv is missing: cannot test permissions")
     site = next(Path(sys.prefix).glob("lib/python*/site-packages"))
-    code = (f"import site, sys; site.addsitedir({str(site)!r}); from labkit.cli import main; "
+    code = (f"import site, sys; site.addsitedir({str(site)!r}); from labkit.app.cli import main; "
             "sys.exit(main(sys.argv[1:]))")
     return ["setpriv", f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups", str(system), "-c", code], None
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit import read_scans
-from labkit.cli import main
+from labkit.app.cli import main
 from tests.test_scan_ranges import carmen_log
 
 

@@ -26,8 +26,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from labkit import parallel, read_table
-from labkit.data import write_simulation
+from labkit.app import parallel, read_table
+from labkit.app.data import write_simulation
 
 BIN = Path(sys.executable).parent
 LABKIT = [str(BIN / "labkit")]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from labkit import bundled_data, read_scans, sim
-from labkit.data import BUNDLED, generate_bundled
+from labkit.app.data import BUNDLED, generate_bundled
 
 from .conftest import DATA
 

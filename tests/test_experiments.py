@@ -9,10 +9,10 @@ from functools import partial
 import numpy as np
 import pytest
 
-from labkit import experiments as ex
 from labkit import split_and_merge
-from labkit.cli import main
-from labkit.data import bundled_data
+from labkit.app import experiments as ex
+from labkit.app.cli import main
+from labkit.app.data import bundled_data
 from labkit.geometry import angle_difference
 from labkit.noise import AUTO_LINES
 

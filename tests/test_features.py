@@ -15,7 +15,7 @@ import pytest
 
 from labkit import Circle, Corner, Leg, LineSegment, find_corners, read_scans, split_and_merge
 from labkit._plainfloat import intersect1, wrap1
-from labkit.data import bundled_data
+from labkit.app.data import bundled_data
 from labkit.geometry import intersect_lines, wrap_angle
 
 RECORDS = (LineSegment, Corner, Circle, Leg)

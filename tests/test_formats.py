@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import labkit
-from labkit import cli, parallel
+from labkit.app import cli, parallel
 from labkit.errors import RefusedError
 from labkit.io import FORMATS, FileFormat, detect_format, read_scans, register_format, unregister_format
 

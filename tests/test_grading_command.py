@@ -153,7 +153,7 @@ def test_add_grade_parser_plugs_into_a_command_line():
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS)
     commands = parser.add_subparsers(dest="command", required=True)
-    commands.add_parser = partial(commands.add_parser, parents=[common])  # as labkit/cli.py does
+    commands.add_parser = partial(commands.add_parser, parents=[common])  # as labkit/app/cli.py does
     add_grade_parser(commands)
     args = parser.parse_args(["grade", "ex01", "-j", "2", "-q", "--student", "a", "--student", "b"])
     assert (args.func, args.exercise, args.jobs, args.quiet, args.student) == (run_grade, "ex01", 2, True, ["a", "b"])

@@ -799,7 +799,7 @@ def test_the_residual_tests_early_decision_is_the_converged_fits(monkeypatch):
     # meets in the simulated hall at 5 mm to 3 cm, every decision is the converged one's, and the
     # early mean square is never more than half the factor it relies on over its minimum
     from labkit import Config, _iav_batch, _iav_noise, extract_features
-    from labkit.experiments import nguyen_lidar, world_scans
+    from labkit.app.experiments import nguyen_lidar, world_scans
     from labkit.fitting import fit_circles
     from labkit.iav import NOISE_Z
     from labkit.noise import AUTO_CONFIG, chi2_upper_over_dof

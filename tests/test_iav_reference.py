@@ -36,8 +36,8 @@ from hypothesis import strategies as st
 
 import labkit
 from labkit import Scan, sim
+from labkit.app.experiments import nguyen_lidar, world_scans
 from labkit.circles import iav_circles, legs
-from labkit.experiments import nguyen_lidar, world_scans
 from labkit.lines import iav_lines
 
 RADISH = ("aces", "csail", "freiburg-079", "infinite-corridor", "intel", "orebro")

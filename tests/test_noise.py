@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 
 from labkit import Scan, read_scans
-from labkit.experiments import world_scans
+from labkit.app.experiments import world_scans
 from labkit.noise import MIN_RESIDUALS, estimate_range_noise, range_noise_residuals
 from labkit.sim import LIDARS, Column, World, make_world, random_polygons, scan_at, scenario, simulate
 

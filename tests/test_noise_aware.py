@@ -375,7 +375,7 @@ def test_a_noise_given_as_a_number_reaches_the_detectors_own_segmentation():
     # simulated set against 0.80 / 0.04 with the estimate). The estimate given as a number gives
     # what "auto" gives; a number gives what the segmentation at that number gives.
     from labkit import detect_circles, detect_legs
-    from labkit.experiments import nguyen_set
+    from labkit.app.experiments import nguyen_set
 
     items = [it for it in nguyen_set(6, noise_levels=(0.03,))]
     for item in items:
@@ -479,7 +479,7 @@ def test_the_prerequisite_allowance_matches_the_noise_it_models():
 
 
 def _hall_scores(noise, n, config):
-    from labkit.experiments import score_round_objects
+    from labkit.app.experiments import score_round_objects
 
     return score_round_objects(n, noise_std_m=noise, config=config)
 
@@ -661,7 +661,7 @@ def test_auto_angular_follows_the_noise_and_loses_nothing_at_5_mm():
     from functools import partial
 
     from labkit import angular_segmentation
-    from labkit.experiments import SENSOR_NOISE_LEVELS_M, compare_lines, nguyen_set
+    from labkit.app.experiments import SENSOR_NOISE_LEVELS_M, compare_lines, nguyen_set
     from labkit.noise import FIXED_ANGULAR
 
     rows = compare_lines(nguyen_set(30, noise_levels=SENSOR_NOISE_LEVELS_M),
@@ -723,7 +723,7 @@ def test_the_other_extractors_auto_setting_has_fewer_false_lines_at_2_cm(name):
     # of their lines false on 408 scans), the auto settings (the defaults) 0.05-0.07
     from functools import partial
 
-    from labkit.experiments import compare_lines, nguyen_set
+    from labkit.app.experiments import compare_lines, nguyen_set
 
     fn, _, auto, _ = _others()[name]
     rows = compare_lines(nguyen_set(12, noise_levels=(0.02,)), {"default": partial(fn, **_FIXED[name]), "auto": fn})

@@ -1,4 +1,4 @@
-"""Many recordings on Dask (labkit.parallel): the same results as the serial run, one output per
+"""Many recordings on Dask (labkit.app.parallel): the same results as the serial run, one output per
 input or one table, a damaged recording reported while the others finish, refusals before
 anything runs, and Ctrl-C that leaves only finished outputs and valid partials.
 
@@ -21,8 +21,8 @@ import pandas as pd
 import pytest
 
 import labkit
-from labkit import parallel, sim, write_bag
-from labkit.data import write_simulation
+from labkit.app import parallel, sim, write_bag
+from labkit.app.data import write_simulation
 
 LABKIT = [str(Path(sys.executable).parent / "labkit")]
 
@@ -111,7 +111,7 @@ def test_one_output_per_input_on_dask_is_the_serial_output(recordings, client, t
 
 
 def test_evaluate_on_dask_gives_the_serial_rows(recordings, client):
-    from labkit.experiments import LINE_EXTRACTORS
+    from labkit.app.experiments import LINE_EXTRACTORS
 
     extractors = {k: LINE_EXTRACTORS[k] for k in ("incremental", "RANSAC")}
     on_dask = parallel.evaluate_many([recordings], extractors, n_scans=15, client=client)

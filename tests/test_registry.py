@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import labkit
-from labkit import experiments, sim
-from labkit.cli import build_parser
+from labkit.app import experiments, sim
+from labkit.app.cli import build_parser
 from labkit.lines import LINE_EXTRACTORS, Params, register, unregister
 
 

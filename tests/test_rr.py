@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from labkit import geometry, sim, write_bag
-from labkit.data import write_simulation
+from labkit.app.data import write_simulation
 from labkit.viz import rr as lkrr
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from labkit import Scan
-from labkit.data import write_simulation
+from labkit.app.data import write_simulation
 from labkit.viz import rr as lkrr
 from tests.test_rr import _batches, _blueprint, rrd_rows
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from labkit import CorruptFileError, Scan, read_scans, sim, write_scans
-from labkit.data import write_simulation
+from labkit.app.data import write_simulation
 from labkit.errors import RefusedError
 from labkit.io import FileFormat, register_format, unregister_format
 
@@ -216,7 +216,7 @@ def test_convert_a_range_between_bags_is_a_scans_only_copy(recordings, tmp_path)
 @pytest.fixture
 def labkit_cli(capsys):
     """The command line in this process (a process of its own costs seconds of imports each)."""
-    from labkit.cli import main
+    from labkit.app.cli import main
 
     def run(*args):
         try:

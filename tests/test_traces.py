@@ -308,7 +308,7 @@ def _scenes():
     import itertools
 
     from labkit import bundled_data, read_scans
-    from labkit.data import BUNDLED
+    from labkit.app.data import BUNDLED
 
     for name in ("hall", "corridor", "office", "random_polygons_2"):
         for k, (scan, _) in enumerate(sim.simulate(name, seed=1, n_scans=3)):

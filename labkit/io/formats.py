@@ -2,7 +2,7 @@
 
 Everything that reads or writes recordings asks this table: :func:`labkit.read_scans`,
 :func:`labkit.write_scans`, :func:`labkit.convert`, :func:`labkit.io.detect_format`, the
-recordings :mod:`labkit.parallel` picks up in a folder, and the command line (``labkit convert
+recordings :mod:`labkit.app.parallel` picks up in a folder, and the command line (``labkit convert
 --format`` choices, help texts, ``labkit info``). Adding a format is one module and one call::
 
     from labkit.io import FileFormat, register_format

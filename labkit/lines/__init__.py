@@ -8,7 +8,7 @@
 
 :data:`LINE_EXTRACTORS` maps one name per method to a :class:`LineExtractor` (function,
 parameter record, one-line description, display label). The pipeline's ``lines.method``,
-``labkit extract --method``, ``labkit evaluate --method``, :mod:`labkit.experiments` and the
+``labkit extract --method``, ``labkit evaluate --method``, :mod:`labkit.app.experiments` and the
 contract tests all read it: adding an extractor is one :func:`register` line below.
 
 >>> sorted(LINE_EXTRACTORS)[:3]

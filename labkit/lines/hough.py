@@ -150,7 +150,7 @@ def hough_lines(
     place_dr_m, place_dalpha_deg, place_confidence : float
         Report only the lines the data can place, as :func:`labkit.split_and_merge` does (default
         ``place_confidence`` 0.8; 0: every line, as in :data:`labkit.noise.FIXED_HOUGH`). On the 408
-        simulated scans of :func:`labkit.experiments.nguyen_set` at 2 cm of range noise,
+        simulated scans of :func:`labkit.app.experiments.nguyen_set` at 2 cm of range noise,
         :data:`labkit.noise.AUTO_HOUGH` reports 0.05 false lines instead of the fixed setting's 0.37, and
         finds 0.85 of the walls instead of 0.90.
     segments : ndarray of per-beam labels or list of RangeSegment, optional

@@ -158,7 +158,7 @@ def ransac_lines(
         :data:`labkit.noise.FIXED_RANSAC`): :func:`labkit.fitting.placement_probability`. A short
         piece whose angle the data cannot fix to a few degrees is dropped (a ``"reject"`` step
         with ``test="place_confidence"``). On the 408 simulated scans of
-        :func:`labkit.experiments.nguyen_set` at 2 cm of range noise, :data:`labkit.noise.AUTO_RANSAC`
+        :func:`labkit.app.experiments.nguyen_set` at 2 cm of range noise, :data:`labkit.noise.AUTO_RANSAC`
         reports 0.06 false lines instead of the fixed setting's 0.41, and finds 0.84 of the
         walls instead of 0.91.
     segments : ndarray of per-beam labels or list of RangeSegment, optional

@@ -53,7 +53,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ._safe import (
+from labkit._safe import (
     TEMP_MARK,
     OutputInterrupted,
     _make_parents,
@@ -62,7 +62,7 @@ from ._safe import (
     check_output,
     safe_output,
 )
-from .errors import CorruptFileError, RefusedError
+from labkit.errors import CorruptFileError, RefusedError
 
 __all__ = ["Result", "recordings_in", "output_paths", "preflight", "split_ranges", "extract_many", "evaluate_many",
            "extract_one", "run_tasks", "report", "MIN_PIECE_SCANS"]
@@ -128,7 +128,7 @@ def _is_recording(p: Path) -> bool:
         return False
     if p.is_dir():
         return (p / "metadata.yaml").is_file()
-    from .io.formats import recording_suffixes
+    from labkit.io.formats import recording_suffixes
 
     return p.name.lower().endswith(recording_suffixes(in_folders_only=True))
 
@@ -146,7 +146,7 @@ def recordings_in(paths: Iterable[str | Path]) -> list[Path]:
         if p.is_dir() and not (p / "metadata.yaml").is_file():
             found = sorted(q for q in p.iterdir() if _is_recording(q))
             if not found:
-                from .io import FORMATS
+                from labkit.io import FORMATS
 
                 kinds = ", ".join(f.label for f in FORMATS.values() if f.in_folders)
                 raise RefusedError(f"{p} holds no recordings ({kinds})")
@@ -171,7 +171,7 @@ def _absolute(p: str | Path) -> Path:
 def _stem(p: Path) -> str:
     name = p.name
     low = name.lower()
-    from .io.formats import recording_suffixes
+    from labkit.io.formats import recording_suffixes
 
     for end in sorted(recording_suffixes(), key=len, reverse=True):
         if low.endswith(end):
@@ -305,9 +305,9 @@ def extract_one(path: str | Path, out: str | Path | None, *, config=None, topic:
     ``scans`` of it, numbered as in the whole recording) into ``out`` (a features ``.jsonl`` or a
     ``.parquet`` table, through :mod:`labkit._safe`). Never raises: what goes wrong is the
     result's status. ``stop`` is the name of the Dask Event that interrupts it."""
-    from .io import read_scans, write_features
-    from .pipeline import Config, extract_features
-    from .tables import write_features_table
+    from labkit.io import read_scans, write_features
+    from labkit.pipeline import Config, extract_features
+    from labkit.tables import write_features_table
 
     config = config or Config()
     halt = _Stop(stop)
@@ -341,7 +341,7 @@ def extract_one(path: str | Path, out: str | Path | None, *, config=None, topic:
 def _evaluate_one(path: str | Path, extractors: dict, *, n_scans: int, topic: str | None = None,
                   strict: bool = False, stop: str | None = None, scans: slice | None = None) -> Result:
     """The task of :func:`evaluate_many`: ray-axis RMSE of every extractor on one recording."""
-    from .experiments import compare_on_logs
+    from labkit.app.experiments import compare_on_logs
 
     def run(result: Result) -> None:
         damage: list[Exception] = []
@@ -504,7 +504,7 @@ def _on_dask(client, task, jobs, results, bar, steps, grace_s: float) -> None:
 
 def _ranges(paths: Sequence[Path], topic, poses, scans: slice | None) -> list[tuple[int | None, int, int | None]]:
     """Open every recording (see :func:`preflight`): ``(scans in the range or None, first, stop)``."""
-    from .io import read_scans
+    from labkit.io import read_scans
 
     out: list[tuple[int | None, int, int | None]] = []
     for p in paths:
@@ -625,8 +625,8 @@ def extract_many(inputs: Iterable[str | Path], out: str | Path, *, config=None, 
         each status. Every output is checked before anything runs (an existing output without
         ``overwrite``, an output that is an input: :class:`labkit.errors.RefusedError`).
     """
-    from .io.feature_files import FEATURES_FILE
-    from .pipeline import Config
+    from labkit.io.feature_files import FEATURES_FILE
+    from labkit.pipeline import Config
 
     config = config or Config()
     paths = [_absolute(p) for p in recordings_in(inputs)]
@@ -635,7 +635,7 @@ def extract_many(inputs: Iterable[str | Path], out: str | Path, *, config=None, 
     common = {"config": config, "topic": topic, "poses": poses, "strict": strict}
     table = str(out).lower().endswith(".parquet")
     if table:
-        from .tables import PARQUET_FILE
+        from labkit.tables import PARQUET_FILE
 
         check_output(out, PARQUET_FILE, overwrite=overwrite, inputs=paths)
     else:
@@ -673,14 +673,14 @@ class _Scratch:
 
 def _partial_of(part: Path) -> Path:
     """Where an interrupted task kept what it wrote of ``part`` (labkit._safe's partial name)."""
-    from .io.feature_files import FEATURES_FILE
+    from labkit.io.feature_files import FEATURES_FILE
 
     return _partial_name(part, FEATURES_FILE)
 
 
 def _one_per_input(paths, outs, ranges, common, *, overwrite, n_workers, split, scans, where) -> list[Result]:
     """One features file per recording; a split recording's ranges write parts, joined here."""
-    from .io.feature_files import FEATURES_FILE
+    from labkit.io.feature_files import FEATURES_FILE
 
     scratch = _Scratch(outs[0].parent)
     try:
@@ -755,7 +755,7 @@ def _one_table(paths: list[Path], out: Path, ranges, common: dict, *, overwrite:
     """One Parquet table for many recordings: each task writes its part in a scratch folder
     beside ``out``; the parts are joined in input order into ``out`` (through labkit._safe).
     When no recording could be read, nothing is written."""
-    from .tables import PARQUET_FILE, _need
+    from labkit.tables import PARQUET_FILE, _need
 
     pq = _need("pyarrow.parquet")
     results: list[Result | None] = []
@@ -818,7 +818,7 @@ def _one_table(paths: list[Path], out: Path, ranges, common: dict, *, overwrite:
 def evaluate_many(inputs: Iterable[str | Path], extractors: dict, *, n_scans: int = 100, topic: str | None = None,
                   strict: bool = False, workers: int | None = None, scheduler: str | None = None, client=None,
                   progress: Callable | None = None, scans: slice | None = None) -> list[Result]:
-    """:func:`labkit.experiments.compare_on_logs` on many recordings, one task per recording, on
+    """:func:`labkit.app.experiments.compare_on_logs` on many recordings, one task per recording, on
     Dask (see :func:`extract_many` for where); each result's ``rows`` are that recording's.
     ``scans``: score this range of every recording instead of its first ``n_scans``."""
     paths = [_absolute(p) for p in recordings_in(inputs)]

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .evaluation import (
+from labkit.evaluation import (
     LineScores,
     RayErrors,
     match_circles,
@@ -40,15 +40,15 @@ from .evaluation import (
     score_detections,
     score_lines,
 )
-from .features import LineSegment, line_segment
-from .geometry import angle_difference
-from .lines import LINE_EXTRACTORS as REGISTRY
-from .lines.placing import placed as place_lines
-from .lines.split_merge import SplitMergeParams, split_and_merge
-from .noise import AUTO_LINES, FIXED_LINES
-from .pipeline import Config, extract_features
-from .scan import Scan
-from .sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenario, simulate
+from labkit.features import LineSegment, line_segment
+from labkit.geometry import angle_difference
+from labkit.lines import LINE_EXTRACTORS as REGISTRY
+from labkit.lines.placing import placed as place_lines
+from labkit.lines.split_merge import SplitMergeParams, split_and_merge
+from labkit.noise import AUTO_LINES, FIXED_LINES
+from labkit.pipeline import Config, extract_features
+from labkit.scan import Scan
+from labkit.sim import Lidar, ScanTruth, make_world, random_polygons, scan_at, scenario, simulate
 
 __all__ = [
     "LINE_EXTRACTORS",
@@ -277,7 +277,7 @@ def _first_scans(path, n_scans: int, topic, strict: bool, damage: list, on_damag
     :class:`labkit.CorruptFileError` goes to ``damage`` and to ``on_damage`` (if given), and the
     scans read before it are kept. A record skipped among them is reported although reading
     stops after them (:func:`labkit.read_scans`' ``scans``)."""
-    from .io import CorruptFileError, read_scans  # I/O stays out of the algorithm imports above
+    from labkit.io import CorruptFileError, read_scans  # I/O stays out of the algorithm imports above
 
     chosen: list[Scan] = []
     try:
@@ -297,7 +297,7 @@ def round_objects_on_logs(paths: Iterable[str | Path], configs: Mapping[str, Con
     scans of each recording, and the median range noise of those scans
     (:func:`labkit.noise.scan_sigma`). Real recordings have no truth: this counts, it does not
     score. Damaged recordings as :func:`compare_on_logs`."""
-    from .noise import scan_sigma
+    from labkit.noise import scan_sigma
 
     rows = []
     damage: list[Exception] = []

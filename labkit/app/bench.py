@@ -4,7 +4,7 @@
 end-to-end part measures: one streaming pass that reads a scan, extracts its features and
 hands both to the rerun logger, with the time of each phase kept apart.
 
->>> from labkit.data import bundled_data
+>>> from labkit.app.data import bundled_data
 >>> result = time_recording(bundled_data("hall.bag"), n_scans=30, warmup=5)
 >>> result.n_scans, "lines" in result.stages
 (30, True)
@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CorruptFileError, RefusedError
-from .io import read_scans
-from .pipeline import Config, extract_features
+from labkit.errors import CorruptFileError, RefusedError
+from labkit.io import read_scans
+from labkit.pipeline import Config, extract_features
 
 __all__ = ["BenchResult", "time_recording"]
 
@@ -80,11 +80,11 @@ def time_recording(source: str | Path, config: Config | None = None, *, topic: s
     Raises :class:`RefusedError` when the recording holds no scans; a damaged recording is
     timed on what could be read and its error kept in ``result.error``.
     """
-    from .viz import rr as lkrr  # the logger is a consumer, imported when timing
+    from labkit.viz import rr as lkrr  # the logger is a consumer, imported when timing
 
     config = config or Config()
     source = Path(source)
-    from .io import FORMATS
+    from labkit.io import FORMATS
 
     stream = read_scans(source, topic=topic, strict=strict, scans=scans)
     items = iter(stream)

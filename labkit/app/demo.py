@@ -12,12 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import sim
-from ._safe import OutputKind, check_output, safe_output, starts_with
-from .errors import CorruptFileError, RefusedError
-from .features import Features
-from .io import read_scans
-from .pipeline import Config, extract_features
+from labkit import sim
+from labkit._safe import OutputKind, check_output, safe_output, starts_with
+from labkit.errors import CorruptFileError, RefusedError
+from labkit.features import Features
+from labkit.io import read_scans
+from labkit.pipeline import Config, extract_features
 
 __all__ = ["DemoResult", "PNG_FILE", "richest_scan", "run_demo"]
 
@@ -84,8 +84,8 @@ def run_demo(source: str | Path, out: str | Path, config: Config | None = None, 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .viz import plot
-    from .viz import rr as lkrr
+    from labkit.viz import plot
+    from labkit.viz import rr as lkrr
 
     config = config or Config()
     source, out = Path(source), Path(out)

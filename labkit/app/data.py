@@ -25,11 +25,11 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from . import sim
-from ._safe import check_output
-from .io import write_bag
-from .io.bags import bag_format
-from .io.bags import output_kind as bag_output_kind
+from labkit import sim
+from labkit._safe import check_output
+from labkit.io import write_bag
+from labkit.io.bags import bag_format
+from labkit.io.bags import output_kind as bag_output_kind
 
 __all__ = ["BUNDLED", "bundled_data", "data_dir", "write_simulation", "generate_bundled"]
 

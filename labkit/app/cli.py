@@ -35,12 +35,12 @@ import warnings
 from functools import partial
 from pathlib import Path
 
-from . import __version__, sim
-from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with
-from .errors import CorruptFileError, RefusedError
-from .grading import add_grade_parser
-from .io import FORMATS, detect_format, read_scans
-from .io.formats import writable_formats
+from labkit import __version__, sim
+from labkit._safe import OutputInterrupted, OutputKind, check_output, json_object_with
+from labkit.errors import CorruptFileError, RefusedError
+from labkit.grading import add_grade_parser
+from labkit.io import FORMATS, detect_format, read_scans
+from labkit.io.formats import writable_formats
 
 EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
 
@@ -71,7 +71,7 @@ def _rerun_command() -> str:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .data import generate_bundled, write_simulation
+    from labkit.app.data import generate_bundled, write_simulation
 
     if args.bundled:
         if args.sensor or args.beams:
@@ -112,7 +112,7 @@ def _with_sensor(sc: sim.Scenario, sensor: str | None, beams: int | None) -> sim
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    from .io import convert_recording
+    from labkit.io import convert_recording
 
     done = convert_recording(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
                              progress=not args.quiet, strict=args.strict, poses=_poses(args),
@@ -126,7 +126,7 @@ def cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _config(args: argparse.Namespace):
-    from .pipeline import Config
+    from labkit.pipeline import Config
 
     config = Config.load(args.config) if getattr(args, "config", None) else Config()
     if getattr(args, "method", None):
@@ -136,7 +136,7 @@ def _config(args: argparse.Namespace):
 
 def _with_noise(config, args: argparse.Namespace):
     """``--range-noise``: every stage's noise-following setting (labkit.noise.noise_config)."""
-    from .noise import noise_config
+    from labkit.noise import noise_config
 
     noise = getattr(args, "range_noise", None)
     return config if noise is None else config.updated(noise_config(noise))
@@ -144,7 +144,7 @@ def _with_noise(config, args: argparse.Namespace):
 
 def _range_noise(text: str):
     """``--range-noise``'s value: "auto", "fixed" or a positive number of metres (as noise_config checks it)."""
-    from .noise import AUTO, FIXED, noise_config
+    from labkit.noise import AUTO, FIXED, noise_config
 
     try:
         value = text if text in (AUTO, FIXED) else float(text)
@@ -227,7 +227,7 @@ def _counts_line(counts: dict, n: int) -> str:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    from .viz import rr as lkrr
+    from labkit.viz import rr as lkrr
 
     config = None if args.no_features else _config(args)
     summary = lkrr.record(args.input, args.output, topic=args.topic, config=config,
@@ -254,11 +254,11 @@ def _poses(args: argparse.Namespace):
 
 
 def cmd_extract(args: argparse.Namespace) -> int:
-    from .io import write_features
-    from .io.feature_files import FEATURES_FILE
-    from .parallel import recordings_in
-    from .pipeline import extract_features
-    from .tables import PARQUET_FILE, write_features_table
+    from labkit.app.parallel import recordings_in
+    from labkit.io import write_features
+    from labkit.io.feature_files import FEATURES_FILE
+    from labkit.pipeline import extract_features
+    from labkit.tables import PARQUET_FILE, write_features_table
 
     inputs = recordings_in(args.inputs)
     chosen = _chosen_scans(args, inputs)
@@ -301,7 +301,7 @@ def cmd_extract(args: argparse.Namespace) -> int:
 
 def _extract_many(args: argparse.Namespace, inputs: list[Path], chosen: slice | None) -> int:
     """``labkit extract`` of several recordings (or with --workers/--scheduler): on Dask."""
-    from . import parallel
+    from labkit.app import parallel
 
     out = args.output
     if out == "-" or out.lower().endswith(".jsonl"):
@@ -346,7 +346,7 @@ def _set_bar(desc: str):
 
 def _interrupted_many(exc: KeyboardInterrupt) -> int:
     """Ctrl-C during a run over several recordings: what finished, and what was kept, then 130."""
-    from . import parallel
+    from labkit.app import parallel
 
     if isinstance(exc, OutputInterrupted):
         raise exc
@@ -357,7 +357,7 @@ def _interrupted_many(exc: KeyboardInterrupt) -> int:
 
 
 def cmd_config(args: argparse.Namespace) -> int:
-    from .pipeline import Config
+    from labkit.pipeline import Config
 
     config = _with_noise(Config.load(args.input) if args.input else Config(), args)
     if args.output:
@@ -370,8 +370,8 @@ def cmd_config(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import time_recording
-    from .data import bundled_data
+    from labkit.app.bench import time_recording
+    from labkit.app.data import bundled_data
 
     source = Path(args.input) if args.input else bundled_data("hall.bag")
     result = time_recording(source, _config(args), topic=args.topic, strict=args.strict,
@@ -387,8 +387,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     (a damaged file: exit 1 with the scans kept and lost, as every command says it)."""
     import numpy as np
 
-    from .errors import RefusedError as Refused
-    from .io import salvage
+    from labkit.errors import RefusedError as Refused
+    from labkit.io import salvage
 
     path = Path(args.input)
     fmt = detect_format(path)
@@ -398,7 +398,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         topics, readable = row.list_topics(path)
         found = None
         if fmt in salvage.WALKERS:  # what a walk through the file finds, beside what its index says
-            from .io.bags import _storage_file
+            from labkit.io.bags import _storage_file
 
             found = salvage.walk_topics(_storage_file(path, fmt), fmt)[0].found
         if not readable:
@@ -449,8 +449,8 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from .data import bundled_data
-    from .demo import run_demo
+    from labkit.app.data import bundled_data
+    from labkit.app.demo import run_demo
 
     source = Path(args.input) if args.input else bundled_data("hall.bag")
     result = run_demo(source, args.output, _config(args), topic=args.topic, strict=args.strict)
@@ -464,10 +464,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def cmd_evaluate(args: argparse.Namespace) -> int:
     import json
 
-    from . import experiments as ex
-    from ._safe import safe_output
-    from .io.feature_files import json_safe
-    from .lines import LINE_EXTRACTORS
+    from labkit._safe import safe_output
+    from labkit.app import experiments as ex
+    from labkit.io.feature_files import json_safe
+    from labkit.lines import LINE_EXTRACTORS
 
     extractors = dict(ex.LINE_EXTRACTORS)
     if args.method:  # the registry's names, as for extract --method (its labels are accepted too)
@@ -486,7 +486,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     damage: list[CorruptFileError] = []
     results = []
     if args.inputs:
-        from . import parallel
+        from labkit.app import parallel
 
         inputs = parallel.recordings_in(args.inputs)
         alone = len(inputs) == 1 and args.workers is None and not args.scheduler  # one file: no Dask
@@ -534,7 +534,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if damage:
         raise damage[0]
     if results:
-        from . import parallel
+        from labkit.app import parallel
 
         return parallel.report(results)
     return 0
@@ -564,7 +564,7 @@ def _readable_help() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .pipeline import line_methods  # the registered line extractors, read when the parser is built
+    from labkit.pipeline import line_methods  # the registered line extractors, read when the parser is built
 
     p = argparse.ArgumentParser(prog="labkit", description=__doc__.splitlines()[0],
                                 epilog="Exit status: 0 done; 1 done, but an input was damaged (every readable "
@@ -690,7 +690,7 @@ def build_parser() -> argparse.ArgumentParser:
     choose.add_argument("--time", type=_time_range, metavar="T0:T1", help=TIME_HELP)
     ev.add_argument("--noise", type=float, nargs="+", metavar="M",
                     help="range noise levels of the simulated sets, metres (default: 5 mm, 1 cm, 2 cm and 3 cm, "
-                         "labkit.experiments.SENSOR_NOISE_LEVELS_M)")
+                         "labkit.app.experiments.SENSOR_NOISE_LEVELS_M)")
     ev.add_argument("--method", action="append", metavar="NAME",
                     help=f"only this line extractor (repeatable): {', '.join(line_methods()[:-1])}")
     ev.add_argument("--sweep", action="store_true", help="also sweep split-and-merge's split threshold")
