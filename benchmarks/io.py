@@ -8,7 +8,7 @@ builds on), labkit's ``read_scans`` (which also builds a validated ``Scan`` per 
 and the CARMEN/JSON-lines readers for scale. The ratio column is labkit's time over
 rosbags' time for the same file: the cost of turning messages into Scans.
 
-Memory: the peak resident memory of ``labkit view`` (``labkit.viz.rr.record``: read, extract every
+Memory: the peak resident memory of ``labkit view`` (``labkit.app.record.record``: read, extract every
 feature, write the ``.rrd`` with the ground truth beside the recording) of the first 10,000 and of
 all 100,000 scans of one simulated recording (the corridor, 541 beams), each in a fresh process,
 beside the floor (a process that has only imported what ``view`` imports). The goal (issue 30):
@@ -31,7 +31,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 from labkit import read_scans, sim, write_scans
-from labkit.viz import rr as lkrr
+from labkit.app.record import record
 
 
 def best_of(repeat: int, fn) -> float:
@@ -56,10 +56,10 @@ def rosbags_only(path: Path) -> int:
 # parent's resident memory at the fork as well.
 VIEW = """
 import sys
-from labkit.viz import rr as lkrr
+from labkit.app.record import record
 n = int(sys.argv[3])
 if n:
-    summary = lkrr.record(sys.argv[1], sys.argv[2], scans=slice(0, n))
+    summary = record(sys.argv[1], sys.argv[2], scans=slice(0, n))
     assert (summary.n_scans, summary.n_truth) == (n, n), summary
 with open("/proc/self/status") as fh:
     print(next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:")) / 1024)
@@ -128,7 +128,7 @@ def main() -> None:
             else:
                 t_peer = best_of(args.repeat, lambda p=path: rosbags_only(p))
             rows.append((label, n / t_write, n / t_peer, n / t_labkit, t_labkit / t_peer))
-        t_rrd = best_of(1, lambda: lkrr.record(tmp / "a.bag", tmp / "a.rrd"))
+        t_rrd = best_of(1, lambda: record(tmp / "a.bag", tmp / "a.rrd"))
     print(f"{'format':14s} {'write/s':>10s} {'rosbags read/s':>15s} {'labkit read/s':>14s} {'labkit/rosbags':>15s}")
     for label, w, peer, ours, ratio in rows:
         print(f"{label:14s} {w:10,.0f} {peer:15,.0f} {ours:14,.0f} {ratio:15.2f}")

@@ -13,7 +13,7 @@ table has the papers' fixed thresholds (``labkit.noise.FIXED_CONFIG``, the defau
 the defaults' time against theirs (issue 16's goal: no more than 10 % slower).
 
 Part 2 -- end to end: a bag of 722-beam scans written with labkit, then
-``labkit.viz.rr.record`` (read -> extract_features -> .rrd with every feature layer, counts
+``labkit.app.record.record`` (read -> extract_features -> .rrd with every feature layer, counts
 and stage times) timed as a whole and by phase.
 
 Goals (issue 6): >= 1000 scans/s through the pipeline at 722 beams on one core; 8x the beams
@@ -42,8 +42,8 @@ from labkit import (
     write_bag,
 )
 from labkit.app.bench import time_recording
+from labkit.app.record import record
 from labkit.noise import FIXED_CONFIG
-from labkit.viz import rr as lkrr
 
 BEAMS = (361, 722, 1441, 2881)
 STAGES = ("segmentation", "legs", "circles", "lines", "corners", "total")
@@ -94,7 +94,7 @@ def end_to_end(n_scans: int) -> None:
         rows = []
         for label, kwargs in (("scans only (no features)", {"features": False}), ("every feature", {})):
             t0 = time.perf_counter()
-            summary = lkrr.record(bag, Path(tmp) / "out.rrd", overwrite=True, **kwargs)
+            summary = record(bag, Path(tmp) / "out.rrd", overwrite=True, **kwargs)
             rows.append((label, summary.n_scans / (time.perf_counter() - t0)))
         phases = time_recording(bag, warmup=0)
     print(f"{'recording':28s} {'scans/s':>8s}")

@@ -200,7 +200,7 @@ def check_output(target: str | Path, kind: OutputKind, *, overwrite: bool = Fals
 
 
 # ---------------------------------------------------------------------------- writing
-def _make_parents(folder: Path) -> list[Path]:
+def make_parents(folder: Path) -> list[Path]:
     """Create ``folder`` and its missing parents; return the ones this call created, innermost first.
     Another writer may create the same folder at the same moment (parallel tasks writing into one new
     output folder): that folder is then theirs, not an error."""
@@ -223,13 +223,13 @@ def _make_parents(folder: Path) -> list[Path]:
     return created[::-1]
 
 
-def _remove_empty(folders: list[Path]) -> None:
+def remove_empty(folders: list[Path]) -> None:
     for p in folders:
         with contextlib.suppress(OSError):
             p.rmdir()
 
 
-def _partial_name(target: Path, kind: OutputKind) -> Path:
+def partial_name(target: Path, kind: OutputKind) -> Path:
     suffix = kind.suffix_of(target)
     stem = target.name[: len(target.name) - len(suffix)] if suffix else target.name
     return target.with_name(f"{stem}.partial{target.name[len(stem):]}")
@@ -260,10 +260,10 @@ def safe_output(target: str | Path, kind: OutputKind, *, overwrite: bool = False
     target = check_output(target, kind, overwrite=overwrite, inputs=inputs)
     created: list[Path] = []
     try:
-        created = _make_parents(target.parent)
+        created = make_parents(target.parent)
         scratch = Path(tempfile.mkdtemp(prefix=f".{target.name}{TEMP_MARK}", dir=target.parent))
     except OSError as exc:
-        _remove_empty(created)
+        remove_empty(created)
         raise type(exc)(exc.errno, f"{exc.strerror} (cannot write in {target.parent})", str(target)) from None
     tmp = scratch / target.name
     try:
@@ -271,13 +271,13 @@ def safe_output(target: str | Path, kind: OutputKind, *, overwrite: bool = False
     except KeyboardInterrupt:
         partial = None
         if tmp.exists():
-            candidate = _partial_name(target, kind)
+            candidate = partial_name(target, kind)
             if not candidate.exists() or (candidate.is_dir() == kind.folder and kind.recognise(candidate)):
                 with contextlib.suppress(OSError):
                     _put_in_place(tmp, candidate, kind, scratch)
                     partial = candidate
         shutil.rmtree(scratch, ignore_errors=True)
-        _remove_empty(created if partial is None else [])
+        remove_empty(created if partial is None else [])
         raise OutputInterrupted(target, partial) from None
     except BaseException as exc:
         if getattr(exc, "keeps_output", False) and tmp.exists():
@@ -285,13 +285,13 @@ def safe_output(target: str | Path, kind: OutputKind, *, overwrite: bool = False
             shutil.rmtree(scratch, ignore_errors=True)
         else:
             shutil.rmtree(scratch, ignore_errors=True)
-            _remove_empty(created)
+            remove_empty(created)
         if isinstance(exc, OSError) and exc.filename and TEMP_MARK in str(exc.filename):
             exc.filename = str(target)  # speak of the file the user asked for, not our temporary one
         raise
     if not tmp.exists():
         shutil.rmtree(scratch, ignore_errors=True)
-        _remove_empty(created)
+        remove_empty(created)
         raise RuntimeError(f"the writer of {target} wrote nothing")  # a bug in labkit, not the user's
     try:
         _put_in_place(tmp, target, kind, scratch)

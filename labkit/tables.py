@@ -70,7 +70,7 @@ _NAN = float("nan")
 PARQUET_FILE = OutputKind("a Parquet table (.parquet)", (".parquet",), starts_with(b"PAR1"))
 
 
-def _need(module: str):
+def research_module(module: str):
     import importlib
 
     try:
@@ -148,14 +148,14 @@ def feature_rows(scan_index: int, features: Features, pose=None) -> list[tuple]:
 
 
 def _schema(recording: bool, method: bool):
-    pa = _need("pyarrow")
+    pa = research_module("pyarrow")
     types = {_F: pa.float64(), _I: pa.int64(), _S: pa.string(), _B: pa.bool_()}
     head = [pa.field("recording", pa.string())] * recording + [pa.field("method", pa.string())] * method
     return pa.schema(head + [pa.field(name, types[t]) for name, t in COLUMNS.items()])
 
 
 def _arrow(rows: list[tuple], schema, constants: tuple):
-    pa = _need("pyarrow")
+    pa = research_module("pyarrow")
     columns = list(zip(*rows, strict=True)) if rows else [()] * _N
     n = len(rows)
     arrays = [pa.array([value] * n, type=pa.string()) for value in constants]
@@ -215,7 +215,7 @@ def features_table(features: Iterable[Features], scans: Iterable[Scan] | None = 
 
 
 def _to_pandas(table):
-    pa, pd = _need("pyarrow"), _need("pandas")
+    pa, pd = research_module("pyarrow"), research_module("pandas")
     mapping = {pa.int64(): pd.Int64Dtype(), pa.bool_(): pd.BooleanDtype(), pa.string(): pd.StringDtype()}
     return table.to_pandas(types_mapper=mapping.get)
 
@@ -233,7 +233,7 @@ def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path
     the error propagates; interrupted, what was written so far is a valid ``<name>.partial.parquet``.
     ``overwrite`` replaces only a Parquet file.
     """
-    pq = _need("pyarrow.parquet")
+    pq = research_module("pyarrow.parquet")
     schema = _schema(recording is not None, method is not None)
     constants = tuple(v for v in (recording, method) if v is not None)
     n_scans = n_rows = 0
@@ -258,5 +258,5 @@ def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path
 def read_table(path: str | Path):
     """A Parquet feature table (:func:`write_features_table`, ``labkit extract -o x.parquet``) as a
     pandas DataFrame with :func:`features_table`'s column types."""
-    pq = _need("pyarrow.parquet")
+    pq = research_module("pyarrow.parquet")
     return _to_pandas(pq.read_table(path))

@@ -26,7 +26,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from labkit.app import parallel, read_table
+from labkit import read_table
+from labkit.app import parallel
 from labkit.app.data import write_simulation
 
 BIN = Path(sys.executable).parent

@@ -13,7 +13,7 @@ LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 
 #: the model and the algorithms (modules, or whole family packages): each may import the
 #: others, numpy and the standard library
-ALGORITHMS = ["_checks", "_safe", "iav", "_iav_batch", "_iav_noise", "params", "_records", "_plainfloat",
+ALGORITHMS = ["_validate", "_safe", "iav", "_iav_batch", "_iav_noise", "params", "_fastinit", "_plainfloat",
               "_dbscan_fast", "errors", "scan", "steps", "geometry", "noise", "segmentation", "fitting",
               "features", "dbscan", "pipeline", "evaluation", "poses", "lines", "circles", "sim",
               "tracking", "tracking_metrics"]
@@ -220,6 +220,20 @@ def test_no_two_modules_share_a_name():
         seen.setdefault(path.stem.lstrip("_"), []).append(str(path.relative_to(LABKIT)))
     twice = {k: v for k, v in seen.items() if len(v) > 1}
     assert not twice, f"modules sharing a name: {twice}"
+
+
+def test_the_library_never_imports_the_applications():
+    """``labkit.app`` (command line, demo, bench, experiments, Dask, bundled data) sits above the library:
+    no module outside it imports it, inside functions either (``labkit/__init__`` re-exports
+    ``bundled_data`` for the notebooks)."""
+    bad = []
+    for m, path in _modules().items():
+        if m == "labkit" or m == "labkit.app" or m.startswith("labkit.app."):
+            continue
+        for module, _names, node in _import_nodes(path):
+            if module == "labkit.app" or module.startswith("labkit.app."):
+                bad.append(f"{path.relative_to(LABKIT.parent)}:{node.lineno} imports {module}")
+    assert not bad, "the library imports its applications:\n" + "\n".join(bad)
 
 
 def test_every_name_in___all___resolves():

@@ -21,7 +21,8 @@ import pandas as pd
 import pytest
 
 import labkit
-from labkit.app import parallel, sim, write_bag
+from labkit import sim, write_bag
+from labkit.app import parallel
 from labkit.app.data import write_simulation
 
 LABKIT = [str(Path(sys.executable).parent / "labkit")]

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import labkit
-from labkit.app import experiments, sim
+from labkit import sim
+from labkit.app import experiments
 from labkit.app.cli import build_parser
 from labkit.lines import LINE_EXTRACTORS, Params, register, unregister
 

@@ -10,6 +10,7 @@ import pytest
 
 from labkit import geometry, sim, write_bag
 from labkit.app.data import write_simulation
+from labkit.app.record import record
 from labkit.viz import rr as lkrr
 
 
@@ -34,7 +35,7 @@ def test_importing_sets_the_offline_asset_mode():
 
 def test_record_a_simulated_bag_with_truth(tmp_path):
     bag, _, n = write_simulation("hall", tmp_path / "hall.bag", n_scans=30)
-    summary = lkrr.record(bag, tmp_path / "hall.rrd")
+    summary = record(bag, tmp_path / "hall.rrd")
     assert (summary.n_scans, summary.n_truth, summary.error) == (30, 30, None)
     rows, timelines = rrd_rows(tmp_path / "hall.rrd")
     for entity in ["/world/scan/points", "/world/scan/invalid", "/world/segments", "/metrics/valid_beams",
@@ -55,7 +56,7 @@ def test_points_in_the_rrd_are_the_valid_beams(tmp_path):
 
     scans = [s for s, _ in sim.simulate("office", seed=0, n_scans=12)]  # NaN dropouts
     write_bag(scans, tmp_path / "o.bag")
-    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False, segment_threshold_m=None)
+    record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False, segment_threshold_m=None)
     got = {}
     for chunk in RrdReader(tmp_path / "o.rrd").store().stream():
         if chunk.entity_path == "/world/scan/points":
@@ -74,7 +75,7 @@ def test_a_damaged_bag_still_gives_an_rrd_with_every_readable_scan(tmp_path):
     bag = tmp_path / "cut.bag"
     write_bag(scans, bag)
     bag.write_bytes(bag.read_bytes()[: bag.stat().st_size // 2])
-    summary = lkrr.record(bag, tmp_path / "cut.rrd")
+    summary = record(bag, tmp_path / "cut.rrd")
     assert summary.error is not None and "cut.bag" in str(summary.error)
     rows, _ = rrd_rows(tmp_path / "cut.rrd")
     assert rows["/world/scan/points"] == summary.n_scans == summary.error.n_read
@@ -104,7 +105,7 @@ def _views(path):
 def test_the_rrd_carries_the_default_layout(tmp_path):
     """The saved file opens with a 2D scan view, counts and stage times, a log and the notes."""
     bag, _, _ = write_simulation("office", tmp_path / "o.bag", n_scans=3)
-    lkrr.record(bag, tmp_path / "o.rrd")
+    record(bag, tmp_path / "o.rrd")
     assert _views(tmp_path / "o.rrd") == {("2D", ""), ("TimeSeries", "metrics/count"),
                                           ("TimeSeries", "metrics/time_ms"), ("TextLog", "log"),
                                           ("TextDocument", "description")}
@@ -130,7 +131,7 @@ def test_the_features_in_the_rrd_are_those_of_the_pipeline(tmp_path):
 
     bag, _, _ = write_simulation("hall", tmp_path / "h.bag", n_scans=12)
     config = Config().updated({"lines.method": "angular"})
-    lkrr.record(bag, tmp_path / "h.rrd", config=config)
+    record(bag, tmp_path / "h.rrd", config=config)
     lines = _batches(tmp_path / "h.rrd", "/world/lines")
     legs = _batches(tmp_path / "h.rrd", "/world/legs")
     counts = _batches(tmp_path / "h.rrd", "/metrics/count/corners")
@@ -202,7 +203,7 @@ def test_a_recording_with_poses_gets_the_map_view(tmp_path):
     accumulated map is decimated and lies on the world's walls, and the map view sits beside the scan view."""
     data = list(sim.simulate("corridor", seed=0, n_scans=45))
     write_bag([s for s, _ in data], tmp_path / "c.bag")
-    summary = lkrr.record(tmp_path / "c.bag", tmp_path / "c.rrd")
+    summary = record(tmp_path / "c.bag", tmp_path / "c.rrd")
     assert summary.n_scans == 45
     rrd = tmp_path / "c.rrd"
     transforms = _transforms(rrd)
@@ -237,13 +238,13 @@ def _view_names(path):
 
 def test_without_poses_the_layout_is_as_before(tmp_path):
     write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "o.bag", pose_topic=None)
-    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd")
+    record(tmp_path / "o.bag", tmp_path / "o.rrd")
     rows, _ = rrd_rows(tmp_path / "o.rrd")
     assert not any(e.startswith("/map") for e in rows)
     assert "Map (world frame)" not in _view_names(tmp_path / "o.rrd")
     # and a bag with poses read with poses=False too
     write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "p.bag")
-    lkrr.record(tmp_path / "p.bag", tmp_path / "p.rrd", poses=False)
+    record(tmp_path / "p.bag", tmp_path / "p.rrd", poses=False)
     assert not any(e.startswith("/map") for e in rrd_rows(tmp_path / "p.rrd")[0])
 
 
@@ -322,7 +323,7 @@ def test_every_entity_and_panel_of_a_recording_can_be_drawn(tmp_path):
     """A recording with features: every entity carries the component its archetype needs, and every
     panel of the default layout has data (no error badge, no empty panel)."""
     bag, _, _ = write_simulation("hall", tmp_path / "h.bag", n_scans=5)
-    lkrr.record(bag, tmp_path / "h.rrd")
+    record(bag, tmp_path / "h.rrd")
     assert blueprint_gaps(tmp_path / "h.rrd") == []
 
 
@@ -352,18 +353,18 @@ def test_a_recording_without_features_has_no_empty_panel(tmp_path):
     """``record(..., features=False)``: scans and segments only, with and without poses. No stage-time
     panel without stage times, no accumulated feature layer declared without features to fill it."""
     write_bag([s for s, _ in sim.simulate("office", seed=0, n_scans=6)], tmp_path / "o.bag", pose_topic=None)
-    lkrr.record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False)
+    record(tmp_path / "o.bag", tmp_path / "o.rrd", features=False)
     assert blueprint_gaps(tmp_path / "o.rrd") == []
     assert "Milliseconds per stage" not in _view_names(tmp_path / "o.rrd")
     write_bag([s for s, _ in sim.simulate("corridor", seed=0, n_scans=12)], tmp_path / "c.bag")
-    lkrr.record(tmp_path / "c.bag", tmp_path / "c.rrd", features=False)
+    record(tmp_path / "c.bag", tmp_path / "c.rrd", features=False)
     assert blueprint_gaps(tmp_path / "c.rrd") == []
     rows, _ = rrd_rows(tmp_path / "c.rrd")
     assert rows["/map/accumulated/points"] == 2  # scans 0 and 10
     assert not any(e.startswith("/map/accumulated/") and e != "/map/accumulated/points" for e in rows)
     assert {"Scan (sensor frame)", "Map (world frame)"} <= _view_names(tmp_path / "c.rrd")
     # with features, every panel stays, the map's feature layers too
-    lkrr.record(tmp_path / "c.bag", tmp_path / "f.rrd")
+    record(tmp_path / "c.bag", tmp_path / "f.rrd")
     assert blueprint_gaps(tmp_path / "f.rrd") == []
     assert "Milliseconds per stage" in _view_names(tmp_path / "f.rrd")
     assert "/map/accumulated/legs" in rrd_rows(tmp_path / "f.rrd")[0]

@@ -16,7 +16,9 @@ import pytest
 
 from labkit import Scan
 from labkit.app.data import write_simulation
+from labkit.app.record import record
 from labkit.viz import rr as lkrr
+from labkit.viz.rr.recording import _TruthFeed
 from tests.test_rr import _batches, _blueprint, rrd_rows
 
 BIN = Path(sys.executable).parent
@@ -25,7 +27,7 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 
 def test_the_rrd_is_complete_and_valid(tmp_path):
     bag, truth, _ = write_simulation("hall", tmp_path / "h.bag", n_scans=40)
-    summary = lkrr.record(bag, tmp_path / "h.rrd")
+    summary = record(bag, tmp_path / "h.rrd")
     assert (summary.n_scans, summary.n_truth) == (40, 40)
     p = subprocess.run([str(BIN / "rerun"), "rrd", "verify", str(tmp_path / "h.rrd")], capture_output=True, text=True,
                        timeout=120)
@@ -38,7 +40,7 @@ def test_the_rrd_is_complete_and_valid(tmp_path):
 
 def test_a_range_keeps_the_recordings_scan_numbers_and_its_truth(tmp_path):
     bag, _, _ = write_simulation("hall", tmp_path / "h.bag", n_scans=30)
-    summary = lkrr.record(bag, tmp_path / "r.rrd", scans=slice(10, 20))
+    summary = record(bag, tmp_path / "r.rrd", scans=slice(10, 20))
     assert (summary.n_scans, summary.n_truth) == (10, 10)
     assert sorted(_batches(tmp_path / "r.rrd", "/world/scan/points")) == list(range(10, 20))
     assert sorted(_batches(tmp_path / "r.rrd", "/world/truth/walls")) == list(range(10, 20))
@@ -54,7 +56,7 @@ def test_truth_is_read_along_with_the_scans():
             read.append(k)
             yield SimpleNamespace(stamp_ns=10 * k)
 
-    feed = lkrr._TruthFeed(truths())
+    feed = _TruthFeed(truths())
     for first in range(0, 2000, 256):
         stamps = [10 * k for k in range(first, min(first + 256, 2000)) if k % 7]  # scans k % 7 == 0 were lost
         got = feed.take(stamps)
@@ -99,9 +101,9 @@ def _unshare_works() -> bool:
 
 API_ON_A_FULL_DISK = """
 import errno, sys
-from labkit.viz import rr as lkrr
+from labkit.app.record import record
 try:
-    lkrr.record(sys.argv[1], sys.argv[2] + "/api.rrd", features=False)
+    record(sys.argv[1], sys.argv[2] + "/api.rrd", features=False)
 except OSError as exc:
     print("OSError", errno.errorcode[exc.errno], exc.filename)
 """

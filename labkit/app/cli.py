@@ -227,12 +227,12 @@ def _counts_line(counts: dict, n: int) -> str:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    from labkit.viz import rr as lkrr
+    from labkit.app.record import record
 
     config = None if args.no_features else _config(args)
-    summary = lkrr.record(args.input, args.output, topic=args.topic, config=config,
-                          features=not args.no_features, progress=not args.quiet, overwrite=args.force,
-                          strict=args.strict, poses=_poses(args), scans=_chosen_scans(args, [args.input]))
+    summary = record(args.input, args.output, topic=args.topic, config=config,
+                     features=not args.no_features, progress=not args.quiet, overwrite=args.force,
+                     strict=args.strict, poses=_poses(args), scans=_chosen_scans(args, [args.input]))
     extra = f" and ground truth for {summary.n_truth}" if summary.n_truth else ""
     print(f"wrote {summary.n_scans} scans{extra} to {summary.path}")
     if summary.counts:
@@ -398,9 +398,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         topics, readable = row.list_topics(path)
         found = None
         if fmt in salvage.WALKERS:  # what a walk through the file finds, beside what its index says
-            from labkit.io.bags import _storage_file
+            from labkit.io.bags import storage_file
 
-            found = salvage.walk_topics(_storage_file(path, fmt), fmt)[0].found
+            found = salvage.walk_topics(storage_file(path, fmt), fmt)[0].found
         if not readable:
             print("  damaged: rosbags cannot open its index; labkit reads it record by record")
         for name, msgtype, count in topics:

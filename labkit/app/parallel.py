@@ -56,10 +56,10 @@ from pathlib import Path
 from labkit._safe import (
     TEMP_MARK,
     OutputInterrupted,
-    _make_parents,
-    _partial_name,
-    _remove_empty,
     check_output,
+    make_parents,
+    partial_name,
+    remove_empty,
     safe_output,
 )
 from labkit.errors import CorruptFileError, RefusedError
@@ -661,21 +661,21 @@ class _Scratch:
 
     def part(self, name: str) -> Path:
         if self.path is None:
-            self.created = _make_parents(self.folder)
+            self.created = make_parents(self.folder)
             self.path = Path(tempfile.mkdtemp(prefix=f".parts{TEMP_MARK}", dir=self.folder))
         return self.path / name
 
     def remove(self) -> None:
         if self.path is not None:
             shutil.rmtree(self.path, ignore_errors=True)
-            _remove_empty(self.created)
+            remove_empty(self.created)
 
 
 def _partial_of(part: Path) -> Path:
     """Where an interrupted task kept what it wrote of ``part`` (labkit._safe's partial name)."""
     from labkit.io.feature_files import FEATURES_FILE
 
-    return _partial_name(part, FEATURES_FILE)
+    return partial_name(part, FEATURES_FILE)
 
 
 def _one_per_input(paths, outs, ranges, common, *, overwrite, n_workers, split, scans, where) -> list[Result]:
@@ -755,9 +755,9 @@ def _one_table(paths: list[Path], out: Path, ranges, common: dict, *, overwrite:
     """One Parquet table for many recordings: each task writes its part in a scratch folder
     beside ``out``; the parts are joined in input order into ``out`` (through labkit._safe).
     When no recording could be read, nothing is written."""
-    from labkit.tables import PARQUET_FILE, _need
+    from labkit.tables import PARQUET_FILE, research_module
 
-    pq = _need("pyarrow.parquet")
+    pq = research_module("pyarrow.parquet")
     results: list[Result | None] = []
     interrupted = None
     try:

@@ -68,7 +68,7 @@ def _source(path: Path, fmt: str) -> tuple[list[Connection], object, Counter | N
                             ConnectionExtRosbag2("cdr", []), None)
                  for k, (name, msgtype, count) in enumerate(bags._metadata(path), start=1)]
         return conns, ts, Counter({c.topic: c.msgcount for c in conns}) or None
-    walker, _faults = salvage.walk_topics(bags._storage_file(path, fmt), fmt)
+    walker, _faults = salvage.walk_topics(bags.storage_file(path, fmt), fmt)
     types: dict = {}
     conns = []
     for c in walker.connections.values():
@@ -92,7 +92,7 @@ def _source(path: Path, fmt: str) -> tuple[list[Connection], object, Counter | N
 def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults) -> Iterator[tuple[str, int, bytes]]:
     """``(topic, receive_ns, raw)`` of every message on ``topics``; damage noted in ``faults``."""
     if fmt in salvage.WALKERS:
-        walker = salvage.WALKERS[fmt](bags._storage_file(path, fmt), topics)
+        walker = salvage.WALKERS[fmt](bags.storage_file(path, fmt), topics)
         for item in walker.messages():
             if isinstance(item, salvage.Fault):
                 if not faults.skip(item.where, item.reason, item.count, known=False, open_end=item.open_end):
@@ -119,7 +119,7 @@ def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults) -> I
                 return
         finally:
             reader.close()
-    gen = salvage.salvage_sqlite3(bags._storage_file(path, fmt), topics, known=bags._metadata_topics(path))
+    gen = salvage.salvage_sqlite3(bags.storage_file(path, fmt), topics, known=bags._metadata_topics(path))
     while True:
         try:
             item = next(gen)

@@ -86,7 +86,7 @@ def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None
     return sorted((name, msgtype, None) for name, msgtype in seen.items())
 
 
-def _storage_file(path: Path, fmt: str) -> Path:
+def storage_file(path: Path, fmt: str) -> Path:
     """The file a salvage reader walks: the bag itself or the storage file in a folder."""
     if path.is_file():
         return path
@@ -105,7 +105,7 @@ def list_topics(path: str | Path, fmt: str) -> tuple[list[tuple[str, str, int | 
     try:
         return _topics_via_rosbags(path), True
     except Exception:  # noqa: BLE001 - any failure to open means: try the sequential reader
-        topics = _topics_via_salvage(_storage_file(path, fmt), fmt)
+        topics = _topics_via_salvage(storage_file(path, fmt), fmt)
     counts = _metadata_counts(path) if path.is_dir() else {}
     return [(name, msgtype, counts.get(name)) for name, msgtype, _ in topics], False
 
@@ -275,7 +275,7 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
             reader.close()
         if failure is None or not faults.skip(*failure, count=0, known=False):
             return
-    gen = salvage.salvage_sqlite3(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None
+    gen = salvage.salvage_sqlite3(storage_file(path, fmt), frozenset(topics) if salvage_topic is None
                                   else salvage_topic, known=_metadata_topics(path) if path.is_dir() else ())
     k = 0
     try:
@@ -309,7 +309,7 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
 def _walk_messages(path: Path, fmt: str, topics: dict[str, str], faults: Faults, convert: Callable, what: str,
                    chosen) -> Iterator:
     """:func:`read_messages` for ROS1 and MCAP: the walker's messages and faults, then its books."""
-    walker = salvage.WALKERS[fmt](_storage_file(path, fmt), chosen)
+    walker = salvage.WALKERS[fmt](storage_file(path, fmt), chosen)
     k = 0
     messages = walker.messages()
     try:

@@ -1,0 +1,68 @@
+"""A recording file to a rerun ``.rrd``: read it, run the pipeline on every scan, log what it finds.
+
+What :command:`labkit view` runs; :mod:`labkit.viz.rr` is the logging it builds on.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from labkit._safe import check_output
+from labkit.io import read_scans
+from labkit.pipeline import Config
+from labkit.sim import TruthStream, truth_path_for
+from labkit.viz.rr import RRD_FILE, RecordSummary, describe, record_scans
+
+__all__ = ["record"]
+
+
+def record(
+    source,
+    out: str | Path,
+    *,
+    topic: str | None = None,
+    config: Config | None = None,
+    features: bool = True,
+    progress: bool = False,
+    segment_threshold_m: float | None = 0.08,
+    description: str | None = None,
+    overwrite: bool = False,
+    strict: bool = False,
+    poses: str | bool | None = None,
+    scans: slice | None = None,
+) -> RecordSummary:
+    """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
+    ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
+    (``config``, default :class:`labkit.Config` (); ``features=False``: scans and range
+    segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it (read
+    along with the scans). ``scans``: only this range of scans (a slice, as
+    :func:`labkit.read_scans` takes it), numbered on the ``scan`` timeline as in the whole
+    recording. See :func:`labkit.viz.rr.record_scans` for damaged inputs, for ``overwrite`` and for memory;
+    ``strict`` stops reading at the first bad record. When the recording has poses (``poses``
+    as in :func:`labkit.read_scans`), the map view is logged too (see :mod:`labkit.viz.rr`).
+    """
+    check_output(out, RRD_FILE, overwrite=overwrite, inputs=[source])  # before any reading
+    stream = read_scans(source, topic=topic, strict=strict, poses=poses, scans=scans)
+    name = Path(source).name
+    if features and config is None:
+        config = Config()
+    truth_file = truth_path_for(source)
+    truth = TruthStream(truth_file) if truth_file.exists() else None
+    if description is None:
+        origin = f"Format: `{stream.format}`, topic: `{stream.topic}`, poses: {stream.poses or 'none'}."
+        if scans is not None:
+            origin += f" Scans {stream.first} to {'the end' if stream.stop is None else stream.stop - 1}."
+        if not features:
+            origin += f" Range segments: adaptive breakpoints, {segment_threshold_m} m floor."
+        description = describe(name, source=origin, config=config if features else None, truth=truth is not None,
+                               world_map=stream.poses is not None)
+    items = iter(stream)
+    if progress:
+        from tqdm.auto import tqdm
+
+        items = tqdm(items, total=stream.count, unit="scan", desc=f"view {name}")
+    inputs = [source, truth_file] if truth is not None else [source]
+    return record_scans(items, out, name=name, truth=truth, config=config if features else None,
+                        segment_threshold_m=segment_threshold_m, description=description, overwrite=overwrite,
+                        inputs=inputs, with_map=None if stream.poses is not None else False,
+                        start_index=stream.first)

@@ -1,0 +1,94 @@
+"""The viewer's layouts (rerun blueprints) and the timelines every labkit recording shares."""
+
+from __future__ import annotations
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+__all__ = ["APP_ID", "TIME", "SEQUENCE", "STEP", "map_view", "blueprint", "steps_blueprint", "show_inline"]
+
+APP_ID = "labkit"
+TIME = "ros_time"
+SEQUENCE = "scan"
+#: The timeline of an algorithm's steps on one scan (:func:`log_steps`).
+STEP = "step"
+_ACCUMULATED = ("points", "lines", "corners", "circles", "legs")
+# rerun's 2D views have y pointing down; mirror so that y points up as in matplotlib.
+_Y_UP = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]
+# The time-series panels are small beside the scan view, and a legend of five to seven series
+# covers most of one: no legend (hovering a curve names it, the entity tree lists them all).
+_NO_LEGEND = rrb.PlotLegend(visible=False)
+
+
+def map_view() -> rrb.Spatial2DView:
+    """The world-frame view: ``map/**``, the accumulated map shown from the start up to the cursor."""
+    grow = rrb.VisibleTimeRanges([
+        rrb.VisibleTimeRange(timeline, start=rrb.TimeRangeBoundary.infinite(),
+                             end=rrb.TimeRangeBoundary.cursor_relative())
+        for timeline in (SEQUENCE, TIME)])
+    return rrb.Spatial2DView(origin="/", contents="map/**", name="Map (world frame)",
+                             overrides={f"/map/accumulated/{layer}": grow for layer in _ACCUMULATED})
+
+
+def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False,
+              with_times: bool = True, timeline: str | None = None) -> rrb.Blueprint:
+    """The default layout: the scan view on the left; counts, stage times, log and notes on
+    the right. ``with_map``: the map view (world frame) beside the scan view; ``with_times=False``
+    leaves out the stage-time panel (a recording without features has no stage times);
+    ``timeline``: the timeline the viewer opens on (:data:`SEQUENCE` for a recording whose
+    stamps do not advance). With
+    ``compare=("A", "B")`` there is one scan view per named configuration
+    (features logged with ``log_features(..., name="A")``), side by side, each showing the
+    scan, the ground truth and that configuration's features."""
+    if compare:
+        others = {n: [f"- /world/{m}/**" for m in compare if m != n] for n in compare}
+        views = [rrb.Spatial2DView(origin="/", contents=["+ /world/**", *others[n]], name=f"{n}")
+                 for n in compare]
+        plots = [rrb.Tabs(rrb.TimeSeriesView(origin=f"metrics/{n}/count", name=f"{n}: counts", plot_legend=_NO_LEGEND),
+                          rrb.TimeSeriesView(origin=f"metrics/{n}/time_ms", name=f"{n}: ms per stage",
+                                            plot_legend=_NO_LEGEND))
+                 for n in compare]
+        below = rrb.Horizontal(*plots, rrb.TextDocumentView(origin="description", name="About"))
+        return rrb.Blueprint(rrb.Vertical(rrb.Horizontal(*views), below, row_shares=[3, 2]), collapse_panels=False)
+    views = [rrb.Spatial2DView(origin="/", contents="world/**", name="Scan (sensor frame)")]
+    if with_map:
+        views.append(map_view())
+    panels = [(rrb.TimeSeriesView(origin="metrics/count", name="Per-scan counts", plot_legend=_NO_LEGEND), 2),
+              (rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage", plot_legend=_NO_LEGEND), 2),
+              (rrb.TextLogView(origin="log", name="Log"), 1),
+              (rrb.TextDocumentView(origin="description", name="About"), 2)]
+    if not with_times:
+        del panels[1]
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            *views,
+            rrb.Vertical(*[view for view, _ in panels], row_shares=[share for _, share in panels]),
+            column_shares=[3, 3, 2] if with_map else [3, 2],
+        ),
+        *([rrb.TimePanel(timeline=timeline)] if timeline else []),
+        collapse_panels=False,
+    )
+
+
+def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=(),
+                with_map: bool = False) -> None:
+    """Show a recording in the notebook with the default blueprint (``with_map``: and the map
+    view), or the side-by-side one for ``compare``; works offline."""
+    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map))
+
+
+def steps_blueprint() -> rrb.Blueprint:
+    """The layout of :func:`log_steps`: the scan and the current step on the left; the step's
+    value against its threshold over the steps, and the steps' log, on the right."""
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial2DView(origin="/", contents="world/**", name="Steps (sensor frame)"),
+            rrb.Vertical(
+                rrb.TimeSeriesView(origin="steps/compared", name="Value and threshold per step"),
+                rrb.TextLogView(origin="steps/log", name="Steps"),
+                row_shares=[1, 2],
+            ),
+            column_shares=[3, 2],
+        ),
+        collapse_panels=False,
+    )
