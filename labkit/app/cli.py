@@ -722,7 +722,7 @@ def _raised_by_labkit(exc: BaseException) -> bool:
     while tb is not None:
         last = tb.tb_frame.f_code.co_filename
         tb = tb.tb_next
-    here = os.path.dirname(os.path.abspath(__file__))
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the labkit package
     return last is None or os.path.abspath(last).startswith(here + os.sep)
 
 

@@ -42,7 +42,7 @@ BUNDLED: dict[str, tuple[str, str, int]] = {
 
 
 def _repo_data() -> Path:
-    return Path(__file__).resolve().parent.parent / "data"
+    return Path(__file__).resolve().parents[2] / "data"
 
 
 def data_dir() -> Path:

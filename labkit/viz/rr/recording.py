@@ -205,7 +205,7 @@ class _TruthFeed:
     by lookup, or read along from a stream of truths in time order (memory stays flat)."""
 
     def __init__(self, truth) -> None:
-        from ..sim import GroundTruth
+        from ...sim import GroundTruth
 
         self.lookup = truth if isinstance(truth, GroundTruth) else None
         self.items = None if self.lookup is not None else iter(truth)
