@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._segmentation_engine import labels as engine_labels
 from .noise import RANGE_SIGMA_M, scan_sigma
 from .params import AUTO, Params, checked_by, param
 from .scan import Scan
@@ -172,6 +173,20 @@ def segment_labels(
     >>> segment_labels(s, adaptive=False).tolist()
     [0, 0, 0, 1, 1, -1, -1]
     """
+    if adaptive and range_sigma_m == AUTO:
+        range_sigma_m = scan_sigma(scan)
+    # one compiled pass over the beams (labkit._segmentation_engine), the labels of
+    # _segment_labels_reference below bit for bit
+    return engine_labels(scan.points, scan.ranges, scan.angles, scan.valid, float(threshold_m), int(min_points),
+                         bool(adaptive), math.radians(incidence_deg), float(range_sigma_m) if adaptive else 0.0,
+                         scan.is_full_circle, scan.angle_increment)
+
+
+def _segment_labels_reference(scan: Scan, threshold_m: float, min_points: int, adaptive: bool, incidence_deg: float,
+                              range_sigma_m) -> np.ndarray:
+    """:func:`segment_labels` in numpy, as the paper reads: link neighbouring beams closer than the
+    threshold, start a segment at every valid beam not linked to the one before, join the runs
+    either side of the seam of a full circle, drop the segments with too few points."""
     n = scan.n_beams
     if n == 0:
         return np.full(n, -1, dtype=np.int64)

@@ -72,6 +72,7 @@ from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
 from ..segmentation import SegmentationParams, detector_labels, segment_labels, segment_order
 from ..steps import Step
+from . import _split_merge_engine as engine
 from ._runs import _ends_off, _Trace
 from ._split_merge_fast import (
     GRAZING_DEG,
@@ -341,6 +342,13 @@ def split_and_merge(
 
     # step 1: the list of lists L, one list per range segment
     labels = _range_segments(scan, segments, segment_threshold_m, adaptive_segmentation, min_points, sigma)
+    if not trace and merge != "chi2" and engine.READY:  # steps 1-6 and placing in one compiled pass: the same lines
+        return engine.split_and_merge(
+            scan, labels, fit=method == "fit", threshold_m=test.threshold, noise_sigma=test.noise_sigma,
+            absorb_m=test.absorb_m, sigma=sigma, min_points=min_points, min_length_m=min_length_m, max_gap_m=max_gap_m,
+            merge=merge, merge_dr_m=merge_dr_m, merge_dalpha_deg=merge_dalpha_deg, weights=weights,
+            floor_m=SegmentationParams.threshold_m if segment_threshold_m is None else segment_threshold_m,
+            place_dr_m=place_dr_m, place_dalpha_deg=place_dalpha_deg, place_confidence=place_confidence)
     L = _Lists(scan, labels, weights, max_gap_m, test, segment_threshold_m, min_points)
     # steps 2-5 on every list: fit a line, find the worst point, accept the line or split there
     spans: list[tuple[int, int]] = []
@@ -652,7 +660,7 @@ def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
     sd /= rho
     np.maximum(sd, MIN_SPLIT_M / SPLIT_SIGMAS, out=sd)
     z = res / sd
-    total = float(z @ z)
+    total = float(np.sum(z * z))  # (numpy's pairwise sum, the same on every machine, unlike BLAS's z @ z)
     if total > n - 2 and total > (n - 2) * chi2_upper_over_dof(n - 2, RESIDUAL_Z):
         return "residual", math.sqrt(float(res @ res) / n)
     if n < 8 or total <= SHIFT_Z * SHIFT_Z:  # (a shifted stretch's z squared is at most the total)
@@ -824,7 +832,8 @@ class _Merging:
 
     def _neighbours(self, a: Line, b: Line) -> bool:
         """Whether the facing ends of ``a`` and ``b`` are close enough to merge them (a "keep" step if not)."""
-        gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
+        dx, dy = b.start[0] - a.end[0], b.start[1] - a.end[1]
+        gap = math.sqrt(dx * dx + dy * dy)  # (not math.hypot, whose rounding differs between Pythons)
         if gap <= self.max_gap_m or (self.test.noise_sigma and b.first == a.last + 1 and grazing_links(
                 self.points, self.ranges, self.angles, np.array([a.last]), self.floor, self.test.noise_sigma).item(0)):
             return True
