@@ -36,8 +36,8 @@ from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-__all__ = ["jit", "jit_inline", "pairwise_sum", "remainder_2pi", "line_from_sums", "dot2", "blas_dot_rounding",
-           "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
+__all__ = ["jit", "jit_inline", "pairwise_sum", "sum_at", "segment_sum", "remainder_2pi", "line_from_sums", "dot2",
+           "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
 
 PI = math.pi
 TWO_PI = 2 * math.pi
@@ -56,20 +56,41 @@ def jit_inline(fn):
 
 
 @jit
-def pairwise_sum(a, n):
-    """``numpy.sum(a[:n])`` bit for bit (float64, contiguous): ``0.0 +`` numpy's pairwise sum.
+def segment_sum(a, lo, n):
+    """A segment's sum as ``numpy.add.reduceat`` gives it: its first value plus numpy's pairwise
+    sum of the others (``n >= 1`` values from ``a[lo]``)."""
+    if n == 1:
+        return a[lo]
+    return a[lo] + _pairwise(a, lo + 1, n - 1)
 
-    Blocks of up to 128 values are summed by eight accumulators (:func:`_block`); a longer run
-    is split in two, the first half a multiple of 8, and the halves' sums added. The recursion
-    is unrolled onto a stack (numba cannot cache a recursive function)."""
+
+@jit
+def sum_at(a, lo, n):
+    """``numpy.sum(a[lo:lo + n])`` bit for bit (see :func:`pairwise_sum`)."""
+    return 0.0 + _pairwise(a, lo, n)
+
+
+@jit
+def pairwise_sum(a, n):
+    """``numpy.sum(a[:n])`` bit for bit (float64, contiguous): ``0.0 +`` numpy's pairwise sum
+    (:func:`_pairwise`)."""
+    return 0.0 + _pairwise(a, n - n, n)
+
+
+@jit
+def _pairwise(a, lo, n):
+    """numpy's pairwise sum of ``a[lo:lo + n]``: blocks of up to 128 values are summed by eight
+    accumulators (:func:`_block`); a longer run is split in two, the first half a multiple of 8,
+    and the halves' sums added. The recursion is unrolled onto a stack (numba cannot cache a
+    recursive function)."""
     if n <= 128:
-        return 0.0 + _block(a, n - n, n)
+        return _block(a, lo, n)
     node_lo = np.empty(192, np.int64)
     node_n = np.empty(192, np.int64)
     node_split = np.zeros(192, np.bool_)
     sums = np.empty(96)
     n_sums = 0
-    node_lo[0], node_n[0] = 0, n
+    node_lo[0], node_n[0] = lo, n
     top = 1
     while top:
         top -= 1
@@ -87,7 +108,7 @@ def pairwise_sum(a, n):
             node_lo[top + 1], node_n[top + 1], node_split[top + 1] = at + half, size - half, False
             node_lo[top + 2], node_n[top + 2], node_split[top + 2] = at, half, False
             top += 3
-    return 0.0 + sums[0]
+    return sums[0]
 
 
 @jit_inline

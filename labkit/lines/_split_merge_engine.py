@@ -28,13 +28,25 @@ import math
 
 import numpy as np
 
-from .._kernels import FUSED_DOT, HALF_PI, PI, dot2, jit, jit_inline, line_from_sums, pairwise_sum, remainder_2pi
+from .._kernels import (
+    FUSED_DOT,
+    HALF_PI,
+    PI,
+    dot2,
+    jit,
+    jit_inline,
+    line_from_sums,
+    pairwise_sum,
+    remainder_2pi,
+    segment_sum,
+    sum_at,
+)
 from .._segmentation_engine import threshold as breakpoint_threshold
 from ..features import LineSegment
+from ..fitting import placement_probability
 from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS
 from ..segmentation import SegmentationParams
-from ._split_merge_fast import GRAZING_DEG, covariances
-from .placing import placed
+from ._split_merge_fast import GRAZING_DEG
 
 __all__ = ["extract", "line_records", "split_and_merge", "READY"]
 
@@ -704,31 +716,160 @@ def _attempt(a, b, S, R, AL, ENDS, PF, PL, FIRST, LAST, HEAD, TAIL, NEXT, span_a
 
 
 # ---------------------------------------------------------------------------- records
-def line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma: float) -> list[LineSegment]:
-    """:class:`labkit.LineSegment` records of the engine's lines, built in bulk: every line's
-    covariance and RMS error in one vectorised pass (as the reference's ``line_segments``)."""
+@jit
+def _covariances(points, ranges, beams, offsets, alpha, r, uniform, sigma):
+    """:func:`labkit.fitting.line_covariances_rms` of the lines (ray noise ``sigma``, weights
+    ``1 / rho`` or uniform), line by line with its sums as numpy forms them: ``numpy.sum`` for a
+    single line, ``numpy.add.reduceat`` for several (and for the RMS errors always)."""
+    k_lines = len(r)
+    n_all = offsets[k_lines]
+    cov = np.empty((k_lines, 2, 2))
+    rms = np.empty(k_lines)
+    X = np.empty(n_all)
+    Y = np.empty(n_all)
+    W = np.empty(n_all)
+    T = np.empty((6, n_all))
+    for i in range(n_all):
+        j = beams[i]
+        X[i], Y[i] = points[j, 0], points[j, 1]
+        W[i] = 1.0 if uniform else 1.0 / ranges[j]
+    single = k_lines == 1
+    var = sigma * sigma
+    for k in range(k_lines):
+        lo, hi = offsets[k], offsets[k + 1]
+        n = hi - lo
+        for i in range(lo, hi):
+            T[0, i] = W[i] * X[i]
+            T[1, i] = W[i] * Y[i]
+        if single:
+            sw = sum_at(W, lo, n)
+            xm, ym = sum_at(T[0], lo, n) / sw, sum_at(T[1], lo, n) / sw
+        else:
+            sw = segment_sum(W, lo, n)
+            xm, ym = segment_sum(T[0], lo, n) / sw, segment_sum(T[1], lo, n) / sw
+        for i in range(lo, hi):
+            dx, dy = X[i] - xm, Y[i] - ym
+            T[0, i] = W[i] * dx * dy
+            T[1, i] = W[i] * (dx * dx - dy * dy)
+        if single:
+            num, den = 2.0 * sum_at(T[0], lo, n), sum_at(T[1], lo, n)
+        else:
+            num, den = 2.0 * segment_sum(T[0], lo, n), segment_sum(T[1], lo, n)
+        q = num * num + den * den
+        ca, sa = math.cos(alpha[k]), math.sin(alpha[k])
+        lever = -xm * sa + ym * ca
+        for i in range(lo, hi):
+            w = W[i]
+            dx, dy = X[i] - xm, Y[i] - ym
+            ax = w * (den * dy - num * dx) / q
+            ay = w * (den * dx + num * dy) / q
+            share = w / sw
+            rx = share * ca + lever * ax
+            ry = share * sa + lever * ay
+            rho = math.hypot(X[i], Y[i])
+            c, s = X[i] / rho, Y[i] / rho
+            jr, ja = rx * c + ry * s, ax * c + ay * s
+            var_jr = var * jr
+            T[2, i] = var_jr * jr
+            T[3, i] = var_jr * ja
+            T[4, i] = var * ja * ja
+            d = X[i] * ca + Y[i] * sa - r[k]
+            T[5, i] = d * d
+        for a, b, row in ((0, 0, 2), (0, 1, 3), (1, 1, 4)):
+            cov[k, a, b] = sum_at(T[row], lo, n) if single else segment_sum(T[row], lo, n)
+        cov[k, 1, 0] = cov[k, 0, 1]
+        if q == 0:
+            for a in range(2):
+                for b in range(2):
+                    cov[k, a, b] = np.nan
+        rms[k] = math.sqrt(segment_sum(T[5], lo, n) / n)
+    return cov, rms
+
+
+_GL_U, _GL_W = np.polynomial.legendre.leggauss(24)  # (= labkit.fitting's nodes and weights)
+_NEAR = 1e-9  # a probability this close to place_confidence is decided by the reference itself
+
+
+@jit
+def _normal_cdf(x):
+    z = abs(x) / math.sqrt(2.0)
+    t = 1.0 / (1.0 + 0.3275911 * z)
+    poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))))
+    erf = 1.0 - poly * math.exp(-z * z)
+    return 0.5 * (1.0 + math.copysign(erf, x))
+
+
+@jit
+def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
+    """Per line: placed by :func:`labkit.fitting.placement_probability` (1), not (0), or too
+    close to ``confidence`` to tell without the reference's own summation order (2). The
+    probability is the reference's integral (the same nodes and pieces) summed in another order:
+    it differs by a few units in the 15th digit at most."""
+    k_lines = len(cov)
+    out = np.empty(k_lines, np.int64)
+    lo = np.empty(3)
+    hi = np.empty(3)
+    for k in range(k_lines):
+        var_r, var_a, c_ra = cov[k, 0, 0], cov[k, 1, 1], cov[k, 0, 1]
+        if not (math.isfinite(var_r) and math.isfinite(var_a) and math.isfinite(c_ra)):
+            out[k] = 0  # (a NaN covariance: probability 0)
+            continue
+        sd_a = math.sqrt(var_a)
+        half = min(max_dalpha / sd_a, 8.0)
+        va = var_a if var_a > 0 else 1.0
+        slope = c_ra / va * sd_a
+        sd_r = math.sqrt(max(var_r - c_ra * c_ra / va, 1e-300))
+        b = min(max_dr_m / abs(slope), half)
+        lo[0], lo[1], lo[2] = -half, -b, b
+        hi[0], hi[1], hi[2] = -b, b, half
+        p = 0.0
+        for piece in range(3):
+            mid, rad = (hi[piece] + lo[piece]) / 2, (hi[piece] - lo[piece]) / 2
+            acc = 0.0
+            for j in range(len(nodes)):
+                u = mid + rad * nodes[j]
+                mu = slope * u
+                inside = _normal_cdf((max_dr_m - mu) / sd_r) - _normal_cdf((-max_dr_m - mu) / sd_r)
+                acc += math.exp(-0.5 * u * u) / math.sqrt(2 * math.pi) * inside * weights[j]
+            p += acc * rad
+        if not math.isfinite(p):
+            p = 0.0
+        p = min(max(p, 0.0), 1.0)
+        if abs(p - confidence) <= _NEAR:
+            out[k] = 2
+        else:
+            out[k] = 1 if p >= confidence else 0
+    return out
+
+
+def line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma: float, place_dr_m: float,
+                 place_dalpha_deg: float, place_confidence: float) -> list[LineSegment]:
+    """:class:`labkit.LineSegment` records of the engine's lines, less those the data cannot place
+    (:func:`labkit.lines.placing.placed`), built in bulk."""
     k = len(r)
     if not k:
         return []
-    counts = np.diff(offsets)
-    starts = offsets[:-1]
-    p = scan.points.take(beams, axis=0)
-    cov, rms = covariances(beams, starts, alpha, p, scan.ranges, weights, sigma, r)
+    cov, rms = _covariances(scan.points, scan.ranges, beams, offsets, alpha, r, weights == "uniform", float(sigma))
+    keep = range(k)
+    if place_confidence > 0:
+        verdict = _placing(cov, float(place_dr_m), math.radians(place_dalpha_deg), float(place_confidence), _GL_U,
+                           _GL_W)
+        if (verdict == 2).any():  # a near tie: the reference's own sum decides
+            chance = placement_probability(cov, place_dr_m, math.radians(place_dalpha_deg))
+            verdict = np.where(verdict == 2, chance >= place_confidence, verdict)
+        keep = np.flatnonzero(verdict).tolist()
     cov.setflags(write=False)
     ends.setflags(write=False)
     beams.setflags(write=False)
     pairs = ends.reshape(-1, 2)
-    o = offsets.tolist()
-    return [LineSegment(ri, ai, cov[i], pairs[2 * i], pairs[2 * i + 1], fi, li, ni, ei, beams[o[i]:o[i + 1]])
-            for i, (ri, ai, fi, li, ni, ei) in enumerate(zip(r.tolist(), alpha.tolist(), first.tolist(),
-                                                              last.tolist(), counts.tolist(), rms.tolist(),
-                                                              strict=True))]
+    o, rl, al, fl, ll, el = offsets.tolist(), r.tolist(), alpha.tolist(), first.tolist(), last.tolist(), rms.tolist()
+    return [LineSegment(rl[i], al[i], cov[i], pairs[2 * i], pairs[2 * i + 1], fl[i], ll[i], o[i + 1] - o[i], el[i],
+                        beams[o[i]:o[i + 1]]) for i in keep]
 
 
 def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma: float, absorb_m: float, sigma: float,
-                    min_points: int,
-                    min_length_m: float, max_gap_m: float, merge: str, merge_dr_m: float, merge_dalpha_deg: float,
-                    weights, floor_m: float, place_dr_m: float, place_dalpha_deg: float,
+                    min_points: int, min_length_m: float, max_gap_m: float, merge: str, merge_dr_m: float,
+                    merge_dalpha_deg: float, weights, floor_m: float, place_dr_m: float, place_dalpha_deg: float,
                     place_confidence: float) -> list[LineSegment]:
     """The default path of :func:`labkit.lines.split_and_merge` on the range segments ``labels``
     (the arguments resolved as it resolves them)."""
@@ -737,7 +878,5 @@ def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma:
         float(absorb_m), int(min_points), float(max_gap_m), merge != "none" and merge is not None, float(merge_dr_m),
         math.radians(merge_dalpha_deg), float(min_length_m), weights == "uniform", float(floor_m),
         math.radians(SegmentationParams.incidence_deg), math.radians(GRAZING_DEG), scan.is_full_circle, FUSED_DOT)
-    out = line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma)
-    if place_confidence > 0 and out:
-        out = placed(out, place_dr_m, place_dalpha_deg, place_confidence)
-    return out
+    return line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma, place_dr_m,
+                        place_dalpha_deg, place_confidence)
