@@ -880,3 +880,30 @@ def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma:
         math.radians(SegmentationParams.incidence_deg), math.radians(GRAZING_DEG), scan.is_full_circle, FUSED_DOT)
     return line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma, place_dr_m,
                         place_dalpha_deg, place_confidence)
+
+
+def compile_all() -> None:
+    """Compile (or load from numba's cache) every kernel of the engines, on a small made-up scan.
+    The Makefile's set-up runs it, so that no notebook, test or command pays the compilation on
+    its first scan."""
+    from .._noise_engine import residuals
+    from .._segmentation_engine import labels as segment
+
+    angles = np.radians(np.arange(-90.0, 90.5, 1.0))
+    ranges = 2.0 / np.maximum(np.cos(angles), 0.3) + 0.002 * np.sin(7.0 * angles)
+    points = np.stack([ranges * np.cos(angles), ranges * np.sin(angles)], axis=1)
+    valid = np.ones(len(ranges), dtype=bool)
+    for arrays in ((ranges, angles, valid, points), tuple(_read_only(a) for a in (ranges, angles, valid, points))):
+        r, a, v, p = arrays
+        residuals(r, a, v, False)
+        labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
+        out = extract(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15, False,
+                      0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, bool(FUSED_DOT))
+        cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
+        _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a = a.copy()
+    a.setflags(write=False)
+    return a
