@@ -50,9 +50,10 @@ def jit(fn):
 
 
 def jit_inline(fn):
-    """:func:`jit` for a small helper: typed and compiled inside each caller (no compilation of
-    its own, nor one per constant argument)."""
-    return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
+    """:func:`jit` for a small helper that LLVM inlines into its callers. (numba's own
+    ``inline="always"`` copies the helper into each caller before typing: a fifth more
+    compilation time for the engines, measured, and no faster code.)"""
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 @jit
