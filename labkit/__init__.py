@@ -19,6 +19,8 @@ The library's public names are re-exported here; modules:
 - :mod:`labkit.evaluation` scores against ground truth (Nguyen's line metrics, circles, legs) and ray-axis RMSE
 - :mod:`labkit.experiments` the evaluation experiments (simulated sets, comparisons, sweeps)
 - :mod:`labkit.pipeline` one :class:`Config` and :func:`extract_features` for every feature
+- :mod:`labkit.tracking` people and moving circles followed over time (Kalman filters, gating,
+  assignment, a track life cycle); :mod:`labkit.tracking_metrics` CLEAR MOT and IDF1
 - :mod:`labkit.sim` the simulator with ground truth (worlds, people, lidar, truth files)
 - :mod:`labkit.poses` SE(2) poses: composition, interpolation to a scan's stamp, frame trees
 - :mod:`labkit.io` bags, CARMEN logs, JSON (and the poses they carry)
@@ -29,7 +31,7 @@ The library's public names are re-exported here; modules:
 """
 
 
-from . import circles, evaluation, geometry, lines, poses, sim
+from . import circles, evaluation, geometry, lines, poses, sim, tracking, tracking_metrics
 from .circles import (
     ArcParams,
     CircleParams,
@@ -82,11 +84,13 @@ from .lines import (
     split_and_merge,
 )
 from .noise import estimate_range_noise, range_noise_residuals
-from .pipeline import Config, extract_all, extract_features
+from .pipeline import Config, extract_all, extract_features, track_scans
 from .scan import Scan, polar_to_cartesian
 from .segmentation import RangeSegment, SegmentationParams, breakpoint_thresholds, range_segments, segment_labels
 from .steps import Step
 from .tables import features_table, read_table
+from .tracking import Tracker, TrackingParams, TrackTable, track
+from .tracking_metrics import clear_mot
 
 __version__ = "0.1.0"
 
@@ -184,5 +188,13 @@ __all__ = [
     "poses",
     "features_table",
     "read_table",
+    "tracking",
+    "tracking_metrics",
+    "TrackingParams",
+    "Tracker",
+    "TrackTable",
+    "track",
+    "track_scans",
+    "clear_mot",
     "__version__",
 ]

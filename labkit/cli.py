@@ -6,10 +6,10 @@ Run ``labkit --help`` or ``labkit COMMAND --help``. Every expected problem print
 ====  ==========================================================================================
 0     done
 1     done, but an input was damaged: the output holds every record that could be read, and
-      the line says how many records were skipped and where the first one was
+      the line says where the first damage is and how many scans were kept and lost
 2     nothing was done: the command line or an input was refused (unknown format, missing
-      file, an output that exists without ``-f`` or is not labkit's kind of file, an output
-      that is the input, a wrong suffix, a bad value)
+      file, an input without any scan, an output that exists without ``-f`` or is not labkit's
+      kind of file, an output that is the input, a wrong suffix, a bad value)
 3     nothing was done: the system refused (permission denied, disk full, read-only folder)
 70    a bug in labkit: the traceback is shown; please report it with the command line
 130   interrupted (Ctrl-C): the output is unchanged; what was written so far is kept as
@@ -38,7 +38,7 @@ from . import __version__, sim
 from ._safe import OutputInterrupted, OutputKind, check_output, json_object_with
 from .errors import CorruptFileError, RefusedError
 from .grading import add_grade_parser
-from .io import FORMATS, convert, detect_format, read_scans
+from .io import FORMATS, detect_format, read_scans
 from .io.formats import writable_formats
 
 EXIT_OK, EXIT_DAMAGED, EXIT_REFUSED, EXIT_SYSTEM, EXIT_BUG, EXIT_INTERRUPTED, EXIT_PIPE = 0, 1, 2, 3, 70, 130, 141
@@ -92,9 +92,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_convert(args: argparse.Namespace) -> int:
-    n = convert(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
-                progress=not args.quiet, strict=args.strict, poses=_poses(args))
-    print(f"wrote {n} scans to {args.output}")
+    from .io import convert_recording
+
+    done = convert_recording(args.input, args.output, topic=args.topic, format=args.format, overwrite=args.force,
+                             progress=not args.quiet, strict=args.strict, poses=_poses(args),
+                             only_scans=args.only_scans)
+    if done.messages:
+        print(f"wrote {sum(done.messages.values())} messages of {len(done.messages)} topics ({done.scans} scans) "
+              f"to {args.output}")
+    else:
+        print(f"wrote {done.scans} scans to {args.output}")
     return 0
 
 
@@ -284,19 +291,68 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    row = FORMATS[detect_format(args.input)]
-    print(f"{args.input}: {row.description}")
+    """Format, topics, and what the scans are: read in full, so the counts are what can be read
+    (a damaged file: exit 1 with the scans kept and lost, as every command says it)."""
+    import numpy as np
+
+    from .errors import RefusedError as Refused
+    from .io import salvage
+
+    path = Path(args.input)
+    fmt = detect_format(path)
+    row = FORMATS[fmt]
+    print(f"{path}: {row.description}")
     if row.list_topics is not None:
-        topics, readable = row.list_topics(Path(args.input))
+        topics, readable = row.list_topics(path)
+        found = None
+        if fmt in salvage.WALKERS:  # what a walk through the file finds, beside what its index says
+            from .io.bags import _storage_file
+
+            found = salvage.walk_topics(_storage_file(path, fmt), fmt)[0].found
         if not readable:
-            print("  damaged: rosbags cannot open it; labkit reads it sequentially")
+            print("  damaged: rosbags cannot open its index; labkit reads it record by record")
         for name, msgtype, count in topics:
-            print(f"  {name:30s} {msgtype:35s} {count if count is not None else '?'} messages")
-    else:
-        stream = read_scans(args.input)
-        first = next(iter(stream), None)
-        print(f"  {stream.count if stream.count is not None else '?'} scans" +
-              (f"; first: {first!r}" if first is not None else ""))
+            listed = count if count is not None else "?"
+            seen = "" if found is None or found[name] == count else f" ({found[name]} found intact)"
+            print(f"  {name:30s} {msgtype:35s} {listed} messages{seen}")
+    try:
+        stream = read_scans(path, topic=args.topic)
+    except Refused as exc:
+        if "several LaserScan topics" not in str(exc):
+            raise
+        print("  several LaserScan topics: labkit info --topic TOPIC describes one")
+        return 0
+    n, beams, first, last, span, damage, posed = 0, set(), None, None, None, None, 0
+    try:
+        for scan in stream:
+            n += 1
+            beams.add(scan.n_beams)
+            first = scan.stamp_ns if first is None else first
+            last = scan.stamp_ns
+            posed += scan.pose is not None
+            if span is None and scan.n_beams > 1:
+                span = (float(np.degrees(scan.angles[0])), float(np.degrees(scan.angles[-1])),
+                        float(np.degrees(scan.angle_increment)))
+    except CorruptFileError as exc:
+        damage = exc
+    what = f" ({stream.topic})" if stream.topic else ""
+    print(f"  scans{what}: {n}" + ("" if damage is None else f" kept, {damage.lost_text}"))
+    if n:
+        lo, hi = min(beams), max(beams)
+        print(f"  beams: {lo}" + (f" to {hi}" if hi != lo else ""))
+        if span is not None:  # as sensor_msgs/LaserScan: from the first beam to the last
+            fov = span[1] - span[0]
+            full = " (a full circle)" if fov + span[2] >= 360 - 1e-6 else ""
+            print(f"  field of view: {fov:.4g} deg{full} ({span[0]:.4g} to {span[1]:.4g} deg, {span[2]:.4g} deg "
+                  "per beam)")
+        duration = (last - first) / 1e9
+        rate = f", {(n - 1) / duration:.4g} scans/s" if duration > 0 and n > 1 else ""
+        print(f"  duration: {duration:.6g} s{rate}")
+        sources = "; ".join(f"{frame}: {how}" for frame, how in stream.pose_sources.items())
+        print(f"  poses: {stream.poses or 'none'}" + (f" ({posed} of {n} scans have one" +
+                                                      (f"; {sources})" if sources else ")") if stream.poses else ""))
+    if damage is not None:
+        raise damage
     return 0
 
 
@@ -444,12 +500,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_simulate)
 
     c = sub.add_parser("convert", parents=[common, reading],
-                       help="convert between bag formats, CARMEN logs and JSON")
+                       help="convert between bag formats (every topic, names kept), CARMEN logs and JSON (the scans)")
     c.add_argument("input", help=f"recording ({_readable_help()})")
     c.add_argument("output", help=_either([f.label for f in FORMATS.values() if f.writable]))
     c.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN)")
     c.add_argument("--format", choices=writable_formats(),
                    help="output format (default: from the name; must agree with it)")
+    c.add_argument("--only-scans", action="store_true",
+                   help="between bags, copy the scans alone (the LaserScan topic as /scan, their poses as /odom) "
+                   "instead of every topic under its own name")
     c.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     c.set_defaults(func=cmd_convert)
 
@@ -499,8 +558,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     g.set_defaults(func=cmd_config)
 
-    i = sub.add_parser("info", help="format, topics and scan counts of a file")
+    i = sub.add_parser("info", help="format, topics, scans (read in full: kept and lost), beams, field of view, "
+                       "duration, scan rate and pose sources of a recording")
     i.add_argument("input", help=f"recording ({_readable_help()})")
+    i.add_argument("--topic", help="LaserScan topic (bags) or laser message (CARMEN) to describe")
     i.set_defaults(func=cmd_info)
 
     ev = sub.add_parser("evaluate", parents=[common, reading, many],

@@ -59,6 +59,10 @@ class CorruptFileError(ValueError):
     where it breaks. Nothing readable is lost and nothing is lost silently. With
     ``strict=True`` readers raise it at the first bad record instead.
 
+    The message names the file, where the first damage is, the scans kept and the scans lost:
+    exactly when the file says how many it held (a bag's intact index), else as "at least N"
+    (a file cut short: what came after the cut is unknown).
+
     Attributes
     ----------
     path : Path
@@ -69,25 +73,51 @@ class CorruptFileError(ValueError):
         How many scans were read (yielded).
     reason : str
         What is wrong at ``where``.
+    n_lost : int
+        Scans lost: exactly (``lost_exact``) or at least this many.
+    lost_exact : bool
+        Whether ``n_lost`` is the exact count (the file's index said how many scans it held, or
+        every damaged record was one scan) rather than a lower bound.
+    n_other : int
+        Records of other topics read along with the scans (poses) that were lost.
+    places : int
+        How many damaged places were found.
+    stopped : bool
+        Reading stopped at the first fault (``strict``); the scans after it were not read.
     n_skipped : int
-        How many records could not be read (0 when the only fault is a missing index or footer).
+        ``n_lost + n_other``: every record known lost.
     """
 
     #: the output of a command that read this file is complete: keep it (see labkit._safe)
     keeps_output = True
 
-    def __init__(self, path: str | Path, where: str, n_read: int, reason: str = "", n_skipped: int = 0) -> None:
+    def __init__(self, path: str | Path, where: str, n_read: int, reason: str = "", n_skipped: int = 0, *,
+                 lost_exact: bool = True, n_other: int = 0, places: int = 1, stopped: bool = False,
+                 n_unread: int | None = None) -> None:
         self.path = Path(path)
         self.where = where
         self.n_read = n_read
         self.reason = reason
-        self.n_skipped = n_skipped
+        self.n_lost = n_skipped
+        self.lost_exact = lost_exact
+        self.n_other = n_other
+        self.places = places
+        self.stopped = stopped
+        self.n_skipped = n_skipped + n_other
         detail = f": {reason}" if reason else ""
-        if n_skipped > 1:
-            text = (f"{self.path} is damaged: {n_skipped} records were skipped, the first {where}{detail}; "
-                    f"{n_read} scan(s) were read")
-        elif n_skipped == 1:
-            text = f"{self.path} is damaged {where}{detail}; {n_read} scan(s) were read, 1 record was lost"
+        head = (f"{self.path} is damaged in {places} places, the first {where}{detail}" if places > 1
+                else f"{self.path} is damaged {where}{detail}")
+        if stopped:
+            unread = f", {n_unread} not read" if n_unread else ""
+            counts = f"reading stopped there (strict): {n_read} scans kept{unread}"
         else:
-            text = f"{self.path} is damaged {where}{detail}; {n_read} scan(s) were read"
-        super().__init__(text)
+            counts = f"{n_read} scans kept, {self.lost_text}"
+        other = f"; also {n_other} record{'s' if n_other > 1 else ''} of other topics lost" if n_other else ""
+        super().__init__(f"{head}; {counts}{other}")
+
+    @property
+    def lost_text(self) -> str:
+        """``"3 lost"``, ``"none lost"``, ``"at least 2 lost"`` or ``"an unknown number lost"``."""
+        if self.lost_exact:
+            return f"{self.n_lost or 'none'} lost"
+        return f"at least {self.n_lost} lost" if self.n_lost else "an unknown number lost"

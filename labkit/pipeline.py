@@ -22,6 +22,9 @@ al.'s 80 mm as its floor) and run in this order:
    long lines (:data:`labkit.circles.iav.ARC_LINE_PARAMS`), a second line pass that doubles the
    cost of a scan.
 
+Over time, :func:`track_scans` also follows the people and circles from scan to scan
+(:mod:`labkit.tracking`, the ``[tracking]`` section).
+
 The sections of a :class:`Config` are the detectors' parameter records (one default per
 parameter, held in the detector's module; see :mod:`labkit._params`), plus the pipeline's
 switches (``enabled``, ``lines.method``, ``lines.skip_round``): each stage calls its detector
@@ -69,6 +72,7 @@ from .lines import (
 from .params import param
 from .scan import Scan
 from .segmentation import SegmentationParams, segment_labels
+from .tracking import Tracker, TrackingParams, TrackTable
 
 __all__ = [
     "Config",
@@ -78,10 +82,12 @@ __all__ = [
     "CirclesConfig",
     "ArcsConfig",
     "LegsConfig",
+    "TrackingConfig",
     "LINE_METHODS",
     "line_methods",
     "extract_features",
     "extract_all",
+    "track_scans",
 ]
 
 
@@ -179,6 +185,13 @@ class ArcsConfig(ArcParams):
                                  "without any)")
 
 
+@dataclass(frozen=True)
+class TrackingConfig(TrackingParams):
+    """Tracking over time (:class:`labkit.tracking.Tracker`), run by :func:`track_scans`."""
+
+    _name = "tracking"
+
+
 for _cls in (LegsConfig, CirclesConfig, CornersConfig, ArcsConfig):
     _cls._not_passed = (*_cls.__mro__[1]._not_passed, "enabled")
 del _cls
@@ -190,6 +203,7 @@ _SECTIONS = {  # the order the stages run in, and the order of a TOML file
     "lines": LinesConfig,
     "corners": CornersConfig,
     "arcs": ArcsConfig,
+    "tracking": TrackingConfig,
 }
 
 
@@ -257,6 +271,7 @@ class Config:
     lines: LinesConfig = field(default_factory=LinesConfig)
     corners: CornersConfig = field(default_factory=CornersConfig)
     arcs: ArcsConfig = field(default_factory=ArcsConfig)
+    tracking: TrackingConfig = field(default_factory=TrackingConfig)
 
     def __post_init__(self) -> None:
         for name in _SECTIONS:
@@ -448,3 +463,19 @@ def extract_all(scans: Iterable[Scan], config: Config | None = None) -> Iterator
     cfg = _DEFAULT if config is None else config
     for scan in scans:
         yield extract_features(scan, cfg)
+
+
+def track_scans(scans: Iterable[Scan], config: Config | None = None, *,
+                trace: bool = False) -> Iterator[tuple[Features, TrackTable]]:
+    """:func:`extract_features` and tracking (:class:`labkit.tracking.Tracker` with the
+    ``[tracking]`` section) over a stream of scans, lazily: ``(features, tracks)`` per scan,
+    ``tracks`` a :class:`labkit.tracking.TrackTable` (``(features, (tracks, steps))`` with
+    ``trace``). The scans' poses (:attr:`Scan.pose`) place them in the map frame when
+    ``tracking.frame`` is ``"map"``, or ``"auto"`` and the first scan has one."""
+    cfg = _DEFAULT if config is None else config
+    if not isinstance(cfg, Config):
+        raise ValueError(f"config must be a labkit.Config, got {type(cfg).__name__}")
+    tracker = Tracker(**cfg.tracking.kwargs())
+    for scan in scans:
+        features = extract_features(scan, cfg)
+        yield features, tracker.step(features, pose=scan.pose, trace=trace)

@@ -29,7 +29,7 @@ __all__ = ["Step", "ALGORITHMS"]
 
 #: The algorithms that return steps, by the ``algorithm`` name their steps carry.
 ALGORITHMS = ("split_and_merge", "iepf", "angular", "iav_circles", "iav_lines", "iav_arcs", "legs", "incremental",
-              "ransac", "regression", "hough")
+              "ransac", "regression", "hough", "tracking")
 
 
 @dataclass(frozen=True)
@@ -41,8 +41,9 @@ class Step:
     algorithm : str
         Which algorithm took it (one of :data:`ALGORITHMS`): ``"split_and_merge"``
         (``method="fit"``) or ``"iepf"`` (``method="endpoints"``), ``"angular"``,
-        ``"iav_circles"``, ``"iav_lines"``, ``"iav_arcs"``, ``"legs"``, and the reference
-        line extractors ``"incremental"``, ``"ransac"``, ``"regression"``, ``"hough"``.
+        ``"iav_circles"``, ``"iav_lines"``, ``"iav_arcs"``, ``"legs"``, the reference
+        line extractors ``"incremental"``, ``"ransac"``, ``"regression"``, ``"hough"``, and
+        ``"tracking"`` (:mod:`labkit.tracking`, over time: ``track`` and ``detection`` say which).
     kind : str
         The action; each algorithm documents its kinds. ``"accept"`` and ``"reject"`` mean
         the same everywhere.
@@ -70,6 +71,10 @@ class Step:
         The beams concerned when they are not the run ``first..last`` (angular clusters are
         spread over the scan, RANSAC's and Hough's consensus sets have holes); may also be
         given when they are (a line's own beams); empty otherwise.
+    track : int
+        The track concerned (:mod:`labkit.tracking`), -1 if none.
+    detection : int
+        The detection concerned, its index among the scan's detections, -1 if none.
     """
 
     algorithm: str
@@ -86,6 +91,8 @@ class Step:
     reason: str = ""
     test: str = ""
     beams: tuple[int, ...] = ()
+    track: int = -1
+    detection: int = -1
 
     @property
     def beam_range(self) -> tuple[int, int]:

@@ -35,7 +35,7 @@ import pytest
 from rosbags import rosbag1, rosbag2
 
 from labkit import Scan, read_scans, sim
-from labkit.io import salvage
+from labkit.io import EmptyRecordingError, salvage
 
 # The installed command, as users run it. (`python -m labkit.cli` would do for most cases, but
 # CPython run with -m sometimes ends with SIGINT although main() caught the Ctrl-C and returned 130.)
@@ -344,19 +344,37 @@ def test_unreadable_input(rec, open_tmp, command):
     assert "Permission denied" in one_error_line(p)
 
 
-def test_disk_full_leaves_no_half_file(rec, tmp_path):
+DISK_FULL = {  # every writer of a recording or a table: arguments, given the output folder
+    "convert-jsonl": lambda r, d: ["convert", r.bag, f"{d}/o.jsonl"],
+    "convert-bag": lambda r, d: ["convert", r.mcap, f"{d}/o.bag"],
+    "convert-mcap": lambda r, d: ["convert", r.bag, f"{d}/o.mcap"],
+    "convert-ros2": lambda r, d: ["convert", r.bag, f"{d}/o_ros2"],
+    "extract-jsonl": lambda r, d: ["extract", r.bag, "-o", f"{d}/o.jsonl"],
+    "extract-parquet": lambda r, d: ["extract", r.bag, "-o", f"{d}/o.parquet"],
+}
+
+
+def test_disk_full_is_exit_3_with_one_line_and_leaves_nothing(rec, tmp_path):
+    """Each writer on a full disk (a 24 KiB tmpfs, smaller than every output): exit 3, one line
+    saying no space is left, no traceback, nothing left behind. A ROS2 folder gave exit 70 and
+    sqlite's traceback ("database or disk is full")."""
     if os.geteuid() != 0 or not shutil.which("unshare"):
         pytest.skip("a full disk is made with a tiny tmpfs in a private mount namespace, which needs root")
     small = tmp_path / "small"
     small.mkdir()
-    script = (f"mount -t tmpfs -o size=64k none {small} && "
-              f"{' '.join(map(str, LABKIT))} -q convert {rec.bag} {small}/out.jsonl; echo rc=$?; ls -a {small}")
-    p = subprocess.run(["unshare", "--mount", "sh", "-c", script], capture_output=True, text=True, timeout=120)
+    runs = "; ".join(f"echo '== {name}'; {' '.join(map(str, LABKIT))} -q {' '.join(map(str, args(rec, small)))}; "
+                     f"echo rc=$?; ls -A {small} | wc -l" for name, args in DISK_FULL.items())
+    script = f"mount -t tmpfs -o size=24k none {small} && {{ {runs}; }}"
+    p = subprocess.run(["unshare", "--mount", "sh", "-c", script], capture_output=True, text=True, timeout=600)
     if "mount" in p.stderr and "rc=" not in p.stdout:
         pytest.skip(f"cannot mount a tmpfs here: {p.stderr.strip()}")
-    assert "Traceback" not in p.stderr and "rc=3" in p.stdout, p.stdout + p.stderr
-    assert "No space left on device" in p.stderr
-    assert p.stdout.split("rc=3")[1].split() == [".", ".."]  # no output, no temporary left
+    assert "Traceback" not in p.stderr, p.stderr
+    results = dict(part.split("\n", 1) for part in p.stdout.split("== ")[1:])
+    assert set(results) == set(DISK_FULL)
+    for name, out in results.items():
+        assert out.split() == ["rc=3", "0"], f"{name}: {out} {p.stderr}"  # exit 3, and the folder is empty
+    errors = [ln for ln in p.stderr.splitlines() if ln.startswith("labkit: error:")]
+    assert len(errors) == len(DISK_FULL) and all("No space left on device" in ln for ln in errors), p.stderr
 
 
 # -- Ctrl-C in the middle of a run
@@ -393,7 +411,10 @@ def _valid(path: Path, suffix: str) -> int:
         return 1
     if suffix == ".jsonl" and '"features"' in path.read_text()[:10_000]:
         return sum(1 for line in path.read_text().splitlines() if json.loads(line)["features"] is not None)
-    return sum(1 for _ in read_scans(path))  # raises CorruptFileError if damaged
+    try:
+        return sum(1 for _ in read_scans(path))  # raises CorruptFileError if damaged
+    except EmptyRecordingError:  # interrupted before the first scan: a valid file that holds none
+        return 0
 
 
 @pytest.mark.parametrize("writer", list(INTERRUPTIBLE))
@@ -437,7 +458,7 @@ def _read_through_cli(path: Path, tmp_path: Path) -> tuple[subprocess.CompletedP
     """``labkit convert`` the file to JSON lines: the exit status and the scans kept."""
     out = tmp_path / "kept.jsonl"
     p = labkit("convert", path, out)
-    kept = list(read_scans(out)) if out.exists() else []
+    kept = list(read_scans(out)) if out.exists() and out.stat().st_size else []  # 0 bytes: refused as empty
     return p, kept
 
 
@@ -513,7 +534,7 @@ def test_one_malformed_record_costs_that_record_only(rec, tmp_path, fmt):
     p, kept = _read_through_cli(path, tmp_path)
     assert p.returncode == 1, p.stderr
     line = one_error_line(p)
-    assert "was lost" in line or "skipped" in line
+    assert f"{N - 1} scans kept, 1 lost" in line
     assert len(kept) == N - 1
     assert _assert_in_order(kept, rec.scans, fmt) == [k for k in range(N) if k != bad]
     p = labkit("convert", path, tmp_path / "strict.jsonl", "--strict")
@@ -556,7 +577,7 @@ def test_garbled_bytes_cost_only_the_records_they_hit(rec, tmp_path, fmt):
                 readable.append(False)
         con.close()
         assert not all(readable) and positions == [k for k in range(N) if readable[k]]
-        assert p.returncode == 1 and f"{N - sum(readable)} record" in one_error_line(p)
+        assert p.returncode == 1 and f"{sum(readable)} scans kept, {N - sum(readable)} lost" in one_error_line(p)
     elif fmt == "carmen-gz":  # every line before the garbled bytes
         before = zlib.decompressobj(wbits=31).decompress(bytes(data[: len(data) // 2]))
         assert len(kept) >= _complete_lines(before) - 1 and positions == list(range(len(kept)))
@@ -564,16 +585,17 @@ def test_garbled_bytes_cost_only_the_records_they_hit(rec, tmp_path, fmt):
         assert len(kept) >= N // 3, f"{fmt}: only {len(kept)} of {N} scans kept"
 
 
-@pytest.mark.parametrize("name, status", [("e.bag", 1), ("e.mcap", 1), ("e.jsonl", 0), ("e.json", 1),
-                                          ("e.log", 2), ("e.log.gz", 2)])
-def test_empty_files(tmp_path, name, status):
+@pytest.mark.parametrize("name", ["e.bag", "e.mcap", "e.jsonl", "e.json", "e.log", "e.log.gz", "blank.jsonl"])
+def test_empty_inputs_are_refused_with_one_status(tmp_path, name):
+    """An input that holds no scan at all is exit 2, whatever its format (it was 0 for .jsonl,
+    1 for bags and .json, 2 for logs)."""
     path = tmp_path / name
-    path.write_bytes(b"")
+    path.write_bytes(b"\n\n" if name.startswith("blank") else b"")
     p, kept = _read_through_cli(path, tmp_path)
-    assert p.returncode == status, p.stderr
-    assert kept == []
-    if status:
-        one_error_line(p)
+    assert p.returncode == 2, p.stderr
+    assert kept == [] and not (tmp_path / "kept.jsonl").exists()
+    line = one_error_line(p)
+    assert "empty" in line or "no scans" in line or "no laser messages" in line, line
 
 
 def test_an_empty_bag_says_it_is_empty(tmp_path):
@@ -581,7 +603,7 @@ def test_an_empty_bag_says_it_is_empty(tmp_path):
     writer.open()
     writer.close()
     p = labkit("info", tmp_path / "empty.bag")
-    assert p.returncode == 0
+    assert p.returncode == 2 and "is an empty bag" in one_error_line(p)  # as every command says it
     p = labkit("convert", tmp_path / "empty.bag", tmp_path / "x.jsonl")
     assert p.returncode == 2 and "is an empty bag" in one_error_line(p)
 

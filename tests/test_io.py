@@ -77,27 +77,41 @@ def test_truncated_bag_yields_every_scan_before_the_fault(tmp_path, office_scans
         assert len(got) >= int(fraction * N_SCANS) - 2
 
 
-def test_garbled_ros1_bag_stops_with_the_offset(tmp_path, office_scans):
-    """A garbled record header (not just garbled float values, which no ROS1 reader can
-    detect: the format has no checksums) stops reading at that message."""
-    from labkit.io.salvage import _ROS1_MAGIC, _ros1_records
+def _message_offsets(data: bytes) -> list[int]:
+    """File offsets of the message records (op 2) of an uncompressed ROS1 bag, found by the
+    test's own reading of the format: every record header holding the field ``op=\\x02``."""
+    offsets, pos = [], 13
+    while pos + 8 <= len(data):
+        hlen = int.from_bytes(data[pos : pos + 4], "little")
+        header = data[pos + 4 : pos + 4 + hlen]
+        dlen = int.from_bytes(data[pos + 4 + hlen : pos + 8 + hlen], "little")
+        if b"op=\x05" in header:  # a chunk: its records follow in the file (no compression)
+            pos += 8 + hlen
+            continue
+        if b"op=\x02" in header:
+            offsets.append(pos)
+        pos += 8 + hlen + dlen
+    return offsets
 
+
+def test_a_garbled_ros1_record_header_costs_that_message_only(tmp_path, office_scans):
+    """A garbled record header (not just garbled float values, which no ROS1 reader can
+    detect: the format has no checksums) costs that message; reading resumes at the next."""
     path = tmp_path / "g.bag"
-    write_bag(office_scans, path)
+    write_bag(office_scans, path, pose_topic=None)
     data = bytearray(path.read_bytes())
-    (chunk_at, fields, chunk, _), *_ = [r for r in _ros1_records(data, len(_ROS1_MAGIC), len(data))
-                                        if r[1]["op"] == b"\x05"]
-    chunk_data_start = chunk_at + 4 + int.from_bytes(data[chunk_at:chunk_at + 4], "little") + 4
-    messages = [off for off, f, _, _ in _ros1_records(bytes(chunk), 0, len(chunk)) if f["op"] == b"\x02"]
-    target = chunk_data_start + messages[N_SCANS // 2]
+    offsets = _message_offsets(bytes(data))
+    assert len(offsets) == N_SCANS
+    target = offsets[N_SCANS // 2]
     data[target : target + 4] = b"\xff\xff\xff\x7f"  # an absurd header length
     path.write_bytes(bytes(data))
     got = []
-    with pytest.raises(CorruptFileError, match="g.bag"):
+    with pytest.raises(CorruptFileError, match=f"g.bag is damaged at byte {target}") as info:
         for scan in read_scans(path):
             got.append(scan)
-    assert 0 < len(got) < N_SCANS
-    assert_same_scans(office_scans[: len(got)], got)
+    assert info.value.n_read == N_SCANS - 1 and info.value.n_lost == 1 and info.value.lost_exact
+    assert f"{N_SCANS - 1} scans kept, 1 lost" in str(info.value)
+    assert_same_scans([s for k, s in enumerate(office_scans) if k != N_SCANS // 2], got)
 
 
 def test_convert_a_damaged_bag_keeps_every_readable_scan(tmp_path, office_scans):
@@ -198,6 +212,46 @@ def test_json_errors(tmp_path):
         for s in read_scans(lines):
             got.append(s)
     assert len(got) == 2 and info.value.n_read == 2
+
+
+def test_a_json_scan_without_range_max_refuses_absurd_readings(tmp_path):
+    """A reading of 1e30 m (a placeholder for "no return") is invalid; it counted as a wall."""
+    from labkit.io.jsonscan import DEFAULT_RANGE_MAX_M
+
+    p = tmp_path / "s.json"
+    p.write_text('{"ranges": [1.0, 1e30, 999.0, 1001.0], "bearings": [0.0, 0.1, 0.2, 0.3]}')
+    scan = read_json_scan(p)
+    assert scan.range_max == DEFAULT_RANGE_MAX_M == 1000.0
+    assert scan.valid.tolist() == [True, False, True, False]
+    p.write_text('{"ranges": [1.0, 1e30], "bearings": [0.0, 0.1], "range_max": 2.0}')
+    assert read_json_scan(p).valid.tolist() == [True, False]
+    p.write_text('{"ranges": [1.0, 1e30], "bearings": [0.0, 0.1], "range_max": null}')  # null: no limit
+    assert read_json_scan(p).valid.tolist() == [True, True]
+
+
+def test_a_laserscan_whose_beams_disagree_with_its_span_is_skipped_and_counted(tmp_path):
+    """20 LaserScans, one of which holds 90 ranges for a span of 181 beams: it is not read with its
+    angle_max quietly changed, it is a lost scan of the error."""
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    t = ts.types
+    path = tmp_path / "span.bag"
+    with rosbag1.Writer(path) as writer:
+        conn = writer.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        for k in range(20):
+            n = 90 if k == 7 else 181
+            header = t["std_msgs/msg/Header"](seq=k, stamp=t["builtin_interfaces/msg/Time"](sec=10 + k, nanosec=0),
+                                              frame_id="laser")
+            msg = t["sensor_msgs/msg/LaserScan"](
+                header=header, angle_min=-np.pi / 2, angle_max=np.pi / 2, angle_increment=np.pi / 180,
+                time_increment=0.0, scan_time=0.0, range_min=0.0, range_max=10.0,
+                ranges=np.full(n, 2.0, np.float32), intensities=np.zeros(0, np.float32))
+            writer.write(conn, (10 + k) * 10**9, ts.serialize_ros1(msg, "sensor_msgs/msg/LaserScan"))
+    got = []
+    with pytest.raises(CorruptFileError, match="has 90 ranges but its angles span 180 deg") as info:
+        got.extend(read_scans(path))
+    assert [s.stamp_ns // 10**9 for s in got] == [10 + k for k in range(20) if k != 7]
+    assert info.value.n_lost == 1 and info.value.lost_exact and "19 scans kept, 1 lost" in str(info.value)
+    assert all(s.n_beams == 181 and np.isclose(s.angles[-1], np.pi / 2) for s in got)
 
 
 # ---------------------------------------------------------------- CARMEN

@@ -41,9 +41,12 @@ def test_defaults_are_the_sources_values():
 
 def test_toml_round_trip_keeps_every_value(tmp_path):
     c = Config().updated({"lines.method": "angular", "circles": {"max_chord_m": 1.5, "mean_range_deg": [95, 130]},
-                          "legs.iav_std_max_deg": 12.0, "arcs.enabled": True})
+                          "legs.iav_std_max_deg": 12.0, "arcs.enabled": True,
+                          "tracking": {"frame": "map", "max_coast_s": 2.5, "confirm_hits": 4, "single_legs": False}})
     text = c.to_toml()
     assert "# largest gap between neighbouring points" in text and "max_chord_m = 1.5" in text
+    assert '[tracking]' in text and 'frame = "map"' in text and "single_legs = false" in text
+    assert (c.tracking.max_coast_s, c.tracking.confirm_hits) == (2.5, 4)
     assert Config.from_toml(text) == c
     assert Config.load(c.save(tmp_path / "c.toml")) == c
     assert Config.from_toml(Config().to_toml()) == Config()  # inf survives ("inf" is TOML)
@@ -64,6 +67,10 @@ def test_toml_round_trip_keeps_every_value(tmp_path):
     ({"circles.mean_range_deg": [90, 200]}, "circles.mean_range_deg"),
     ({"legs.chord_range_m": [0.1]}, "legs.chord_range_m"),
     ({"segmentation": 0.08}, "'segmentation'"),
+    ({"tracking.frame": "world"}, "tracking.frame"),
+    ({"tracking.gate_probability": 1.0}, "tracking.gate_probability"),
+    ({"tracking.confirm_hits": 9}, "tracking.confirm_hits must be <= tracking.confirm_scans"),
+    ({"tracking.max_coast": 1.0}, "tracking.max_coast"),
 ])
 def test_bad_values_are_named(changes, named):
     with pytest.raises(ValueError, match=named.replace(".", r"\.").replace("[", r"\[")):

@@ -300,7 +300,7 @@ def test_a_bad_pose_record_is_counted_with_the_scans(tmp_path):
               odometry_msg(T0 + k * S // 10, "odom", "laser", (np.nan if k == 12 else k, 0.0, 0.0))) for k in range(20)]
     bag = write_raw_bag(tmp_path / "nan.bag", "ros1", msgs)
     got = []
-    with pytest.raises(CorruptFileError, match="in message 13 of /odom: the pose is not finite") as info:
+    with pytest.raises(CorruptFileError, match=r"message 13 of /odom\): the pose is not finite") as info:
         got.extend(read_scans(bag))
     assert len(got) == 20 and info.value.n_skipped == 1 and info.value.n_read == 20
     assert got[12].pose == (12.0, 0.0, 0.0)  # interpolated across the lost record

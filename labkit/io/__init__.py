@@ -6,9 +6,11 @@ One entry point reads them all::
         ...
 
 The format is told from the path (see :func:`detect_format`). A damaged file yields every
-scan that could be read -- a record that does not decode is skipped and counted, and reading
-goes on -- and then raises :class:`CorruptFileError` naming the file, how many records were
-skipped and where the first was (``strict=True``: reading stops at the first bad record).
+scan that could be read -- a record that does not decode is skipped and counted, ROS1 bags and
+MCAP files are read record by record and pick up again after a garbled stretch
+(:mod:`labkit.io.salvage`) -- and then raises :class:`CorruptFileError` naming the file, where
+the first damage is, and the scans kept and lost (exactly when the file's index says how many it
+held; ``strict=True``: reading stops at the first damage).
 
 Writers never lose data (:mod:`labkit._safe`): they write under a temporary name and
 rename when complete, replace an existing output only when asked and only when it is their
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
@@ -114,7 +117,8 @@ class ScanStream:
     count : int or None
         How many scans the file says it holds (for progress bars), when known up front.
     readable : bool
-        False when the file is damaged and is being read sequentially.
+        Whether rosbags could open the file's index (bags); False for a bag whose index or
+        database is damaged (labkit reads it all the same, record by record or row by row).
     strict : bool
         Stop at the first bad record instead of skipping it.
     poses : str or None
@@ -133,6 +137,7 @@ class ScanStream:
         self.poses = poses
         self.pose_plan = pose_plan
         self.pose_sources: dict[str, str] = {}
+        self.pose_count: int | None = None  # pose messages the bag's index lists
 
     def __iter__(self) -> Iterator[Scan]:
         scans = FORMATS[self.format].read(self)
@@ -181,7 +186,9 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         Unknown format (the message lists the supported ones); no LaserScan topic (it
         lists the bag's topics); several LaserScan topics and no ``topic`` (it lists them);
         ``poses`` names no pose topic, or a bag has several odometry topics and no tf.
-        :class:`EmptyRecordingError` (a ValueError) for a bag without any topic.
+        :class:`EmptyRecordingError` (a ValueError) for an input that holds no scans at all: a
+        file of 0 bytes, a bag without any topic, a log without laser messages, a ``.jsonl``
+        without a line (the command line's exit status 2).
     CorruptFileError
         While iterating, after the last scan that could be read from a damaged file: every
         record that could not be decoded was skipped and counted.
@@ -195,6 +202,8 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
     """
     p = Path(path)
     fmt = detect_format(p)
+    if fmt in _BUILT_IN and p.is_file() and p.stat().st_size == 0:
+        raise EmptyRecordingError(f"{p} is empty (0 bytes): there is nothing to read")
     if poses is not None and not isinstance(poses, (bool, str)):
         raise ValueError(f"poses must be None, True, False or a topic name, got {poses!r}")
     row = FORMATS[fmt]
@@ -275,11 +284,16 @@ def __getattr__(name: str):
 
 def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
             overwrite: bool = False, progress: bool = False, strict: bool = False,
-            poses: str | bool | None = None) -> int:
-    """Copy the scans of ``src`` into ``dst`` (formats from the names); return the count.
+            poses: str | bool | None = None, only_scans: bool = False) -> int:
+    """Copy the recording ``src`` into ``dst`` (formats from the names); return the scans copied.
 
-    The scans keep their poses (``poses`` as in :func:`read_scans`): a bag written gets them as
-    ``nav_msgs/Odometry`` on ``/odom``, JSON lines as ``pose`` fields.
+    Between bags (ROS1 ``.bag``, ROS2 folder, MCAP) the whole recording is copied: every topic,
+    under its own name, converted between ROS1 and ROS2 definitions (:mod:`labkit.io.bagcopy`;
+    a topic whose type does not convert is left out with a :class:`~labkit.io.bagcopy.TopicsSkippedWarning`);
+    ``topic`` and ``poses`` do not apply then. With ``only_scans=True``, and whenever either
+    side is not a bag, the scans alone are copied: the LaserScan topic (``topic``) as ``/scan``,
+    with their poses (``poses`` as in :func:`read_scans`) as ``nav_msgs/Odometry`` on ``/odom``
+    in a bag, as ``pose`` fields in JSON lines.
 
     A damaged ``src`` still produces a complete ``dst`` holding every readable scan, then
     the :class:`CorruptFileError` propagates. ``progress=True`` shows a tqdm bar. ``dst``
@@ -290,8 +304,40 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     negative stamps, or garbage) are changed on purpose, as :func:`labkit.io.bags.plan_stamps`
     describes, and a :class:`StampsChangedWarning` says how.
     """
+    return convert_recording(src, dst, topic=topic, format=format, overwrite=overwrite, progress=progress,
+                             strict=strict, poses=poses, only_scans=only_scans).scans
+
+
+@dataclass(frozen=True)
+class Conversion:
+    """What :func:`convert_recording` wrote: the scans, and for a whole-bag copy every message
+    per topic (empty for a scans-only copy)."""
+
+    scans: int
+    messages: dict = field(default_factory=dict)
+
+
+def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = None, format: str | None = None,
+                      overwrite: bool = False, progress: bool = False, strict: bool = False,
+                      poses: str | bool | None = None, only_scans: bool = False) -> Conversion:
+    """:func:`convert`, saying what it wrote (:class:`Conversion`)."""
     src, dst = Path(src), Path(dst)
     fmt = output_format(dst, format)
+    src_fmt = detect_format(src)
+    if not only_scans and src_fmt in bags.BAG_FORMATS and fmt in bags.BAG_FORMATS:
+        if topic is not None or poses not in (None, True):
+            raise RefusedError("topic and poses choose what a scans-only copy holds; a bag-to-bag copy carries every "
+                               "topic as it is (only_scans=True for the scans alone)",
+                               "--topic and --poses choose what --only-scans copies; without it a bag-to-bag copy "
+                               "carries every topic as it is")
+        if src.is_file() and src.stat().st_size == 0:
+            raise EmptyRecordingError(f"{src} is empty (0 bytes): there is nothing to read")
+        bags.list_topics(src, src_fmt)  # an empty bag, or one too damaged to declare a topic: refused here
+        check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])
+        from .bagcopy import copy_bag
+
+        n_scans, _n, written = copy_bag(src, src_fmt, dst, fmt, overwrite=overwrite, strict=strict, progress=progress)
+        return Conversion(n_scans, dict(written))
     stream = read_scans(src, topic=topic, strict=strict, poses=poses)
     check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
     restamp = None
@@ -309,7 +355,7 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
         from tqdm.auto import tqdm
 
         scans = tqdm(scans, total=stream.count, unit="scan", desc=f"convert {src.name}")
-    return write_scans(scans, dst, fmt, overwrite=overwrite, inputs=[src])
+    return Conversion(write_scans(scans, dst, fmt, overwrite=overwrite, inputs=[src]))
 
 
 def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
@@ -323,17 +369,23 @@ def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
 def _read_bag(stream: ScanStream) -> Iterator[Scan]:
     poses = None
     if stream.pose_plan is not None:
-        poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict)
+        poses = read_bag_poses(stream.path, stream.format, stream.pose_plan, stream.readable, stream.strict,
+                               expected=stream.pose_count)
         stream.pose_sources = poses.sources  # filled in as scan frames are met
-    yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses)
+    yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses,
+                             expected=stream.count)
 
 
 def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | bool | None) -> ScanStream:
     topics, readable = bags.list_topics(p, fmt)
     chosen = bags.resolve_topic(p, topics, topic)
-    count = next((c for name, _t, c in topics if name == chosen), None) if readable else None
+    count = next((c for name, _t, c in topics if name == chosen), None)  # the index's, when it can be read
     plan = plan_poses(p, topics, None if poses is True else poses)
-    return ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
+    stream = ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
+    pose_counts = [c for name, _t, c in topics if plan is not None and name in plan.msgtypes]
+    if pose_counts and None not in pose_counts:
+        stream.pose_count = sum(pose_counts)
+    return stream
 
 
 def _write_bag(fmt: str):
@@ -424,3 +476,4 @@ register_format(FileFormat("json", (".json",), "one scan as JSON {ranges, bearin
                            count=_count_one, write=_write_json, output_kind=JSON_SCAN, in_folders=False))
 register_format(FileFormat("jsonl", (".jsonl",), "scans as JSON lines, one per line (.jsonl)", read=_read_jsonl,
                            write=_write_jsonl, output_kind=JSON_LINES, in_folders=False))
+_BUILT_IN = frozenset(FORMATS)  # the formats above (an empty file of a format registered later is its own affair)

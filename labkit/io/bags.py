@@ -1,9 +1,13 @@
 """ROS bags in and out: ROS1 ``.bag``, ROS2 sqlite3 folders and MCAP, through rosbags.
 
-Reading goes through ``rosbags.highlevel.AnyReader``. When rosbags cannot open a file
-(a recording cut short has no index, footer or intact database), labkit falls back to a
-sequential reader (:mod:`labkit.io.salvage`) that recovers every complete scan and then
-raises :class:`~labkit.io.CorruptFileError` saying where the file broke.
+Reading: ROS1 bags and MCAP files are read front to back by labkit's walkers
+(:mod:`labkit.io.salvage`), which keep every message that can be read and resynchronise past
+damage; rosbags opens their index only to list the topics and how many messages each holds, the
+count against which the scans read are checked (a scan the index lists but the walk did not find
+is a scan lost, and said so). ROS2 sqlite3 folders are read through rosbags'
+``AnyReader``; a database it cannot read is read row by row. Either way a damaged file yields
+every scan that could be read and then raises :class:`~labkit.io.CorruptFileError` saying where
+the damage is, how many scans were kept and how many were lost.
 """
 
 from __future__ import annotations
@@ -50,10 +54,16 @@ def _topics_via_rosbags(path: Path) -> list[tuple[str, str, int | None]]:
 
 
 def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None]]:
-    """The topics a damaged bag declares before its damage; a bag too damaged to declare any
-    is a :class:`CorruptFileError` (0 scans read), not an empty bag."""
+    """The topics a damaged bag declares (with the messages found intact, for ROS1 and MCAP); a
+    bag too damaged to declare any is a :class:`CorruptFileError` (0 scans read), not an empty bag."""
+    if fmt in salvage.WALKERS:
+        walker, faults = salvage.walk_topics(path, fmt)
+        seen = {c.topic: c.msgtype for c in walker.connections.values()}
+        if not seen and faults:
+            raise CorruptFileError(path, faults[0].where, 0, faults[0].reason, lost_exact=False)
+        return sorted((name, msgtype, None) for name, msgtype in seen.items())
     seen: dict[str, str] = {}
-    gen = _salvager(fmt)(path, None, want_topics=True)
+    gen = salvage.salvage_sqlite3(path, None, want_topics=True, known=_metadata_topics(path.parent))
     first_fault = None
     while True:
         try:
@@ -67,12 +77,8 @@ def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None
             name, _stamp, msgtype = item
             seen.setdefault(name, msgtype)
     if not seen and first_fault is not None:
-        raise CorruptFileError(path, first_fault.where, 0, first_fault.reason, n_skipped=first_fault.count)
+        raise CorruptFileError(path, first_fault.where, 0, first_fault.reason, lost_exact=False)
     return sorted((name, msgtype, None) for name, msgtype in seen.items())
-
-
-def _salvager(fmt: str):
-    return {"ros1": salvage.salvage_ros1, "mcap": salvage.salvage_mcap, "ros2": salvage.salvage_sqlite3}[fmt]
 
 
 def _storage_file(path: Path, fmt: str) -> Path:
@@ -87,12 +93,38 @@ def _storage_file(path: Path, fmt: str) -> Path:
 
 
 def list_topics(path: str | Path, fmt: str) -> tuple[list[tuple[str, str, int | None]], bool]:
-    """Topics ``(name, msgtype, count)`` of a bag and whether rosbags could open it."""
+    """Topics ``(name, msgtype, count)`` of a bag and whether rosbags could open it. The counts
+    are the index's (None when it cannot be read; a ROS2 folder's metadata.yaml says them even
+    when its database is damaged)."""
     path = Path(path)
     try:
         return _topics_via_rosbags(path), True
     except Exception:  # noqa: BLE001 - any failure to open means: try the sequential reader
-        return _topics_via_salvage(_storage_file(path, fmt), fmt), False
+        topics = _topics_via_salvage(_storage_file(path, fmt), fmt)
+    counts = _metadata_counts(path) if path.is_dir() else {}
+    return [(name, msgtype, counts.get(name)) for name, msgtype, _ in topics], False
+
+
+def _metadata_counts(folder: Path) -> dict[str, int]:
+    """Messages per topic as a ROS2 bag folder's metadata.yaml lists them ({} if it cannot be read)."""
+    return {name: count for name, _type, count in _metadata(folder)}
+
+
+def _metadata_topics(folder: Path) -> list[tuple[str, str]]:
+    return [(name, msgtype) for name, msgtype, _count in _metadata(folder)]
+
+
+def _metadata(folder: Path) -> list[tuple[str, str, int]]:
+    """``(topic, type, message count)`` as a ROS2 bag folder's metadata.yaml lists them, in its
+    order ([] if it cannot be read)."""
+    from ruamel.yaml import YAML  # rosbags reads metadata.yaml with it
+
+    try:
+        info = YAML(typ="safe").load((folder / "metadata.yaml").read_text(encoding="utf-8"))
+        return [(t["topic_metadata"]["name"], t["topic_metadata"]["type"], int(t["message_count"]))
+                for t in info["rosbag2_bagfile_information"]["topics_with_message_count"]]
+    except Exception:  # noqa: BLE001 - a missing or damaged metadata.yaml: none
+        return []
 
 
 def resolve_topic(path: Path, topics, topic: str | None) -> str:
@@ -126,10 +158,30 @@ def _stamp_of(msg) -> int:
     return int(stamp.secs if sec is None else sec) * 1_000_000_000 + int(stamp.nsecs if nsec is None else nsec)
 
 
+def _check_span(msg) -> None:
+    """A LaserScan whose beam count disagrees with its angle span is refused (a skipped, counted
+    record), not read with ``angle_max`` silently changed: ``angle_min + (n - 1) * angle_increment``
+    must be ``angle_max`` to within one beam (drivers differ on whether ``angle_max`` is the last
+    beam or the end of its sector)."""
+    try:
+        n, inc = len(msg.ranges), float(msg.angle_increment)
+        span = float(msg.angle_max) - float(msg.angle_min)
+    except (AttributeError, TypeError):
+        return  # not a LaserScan: Scan.from_ros says so
+    if n < 2 or inc == 0 or not np.isfinite(span) or not np.isfinite(inc):
+        return  # Scan.from_ros refuses an impossible increment itself
+    implied = span / inc + 1
+    if abs(implied - n) > 1.001:
+        raise ValueError(f"the scan has {n} ranges but its angles span {np.degrees(span):.6g} deg in steps of "
+                         f"{np.degrees(inc):.6g} deg ({implied:.6g} beams)")
+
+
 def _scan_from(msg, receive_ns: int, poses=None) -> Scan:
     """The scan of a LaserScan message the bag received at ``receive_ns``. A header stamp of 0
     (drivers that leave it empty) is replaced by the receive time. ``poses`` (see
-    :func:`iter_bag`) gives the sensor's pose at the scan's stamp."""
+    :func:`iter_bag`) gives the sensor's pose at the scan's stamp. A message whose beam count
+    disagrees with its angle span is refused (:func:`_check_span`)."""
+    _check_span(msg)
     if poses is None:
         scan = Scan.from_ros(msg, receive_ns=receive_ns)
         return scan.replace(stamp_ns=receive_ns) if scan.stamp_ns == 0 and receive_ns else scan
@@ -142,28 +194,29 @@ def _scan_from(msg, receive_ns: int, poses=None) -> Scan:
     return scan.replace(stamp_ns=receive_ns) if scan.stamp_ns == 0 and receive_ns else scan
 
 
-def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False, poses=None) -> Iterator[Scan]:
+def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = False, poses=None,
+             expected: int | None = None) -> Iterator[Scan]:
     """Yield the scans of ``topic``; a message that does not decode or holds impossible
     fields (``angle_increment`` 0, ...) is skipped and counted; after the last good scan,
-    raise :class:`CorruptFileError` if anything was skipped (``strict``: stop at the first).
+    raise :class:`CorruptFileError` if anything was skipped or lost (``strict``: stop at the
+    first damage).
 
-    Bags rosbags can open are read through it; if rosbags stops part-way (a garbled chunk
-    or page), the rest is read by labkit's sequential reader (:mod:`labkit.io.salvage`),
-    which walks past the damage where the file's framing allows.
+    ``expected`` is how many scans the bag's index lists (when it is intact): the scans lost are
+    then counted exactly, and a scan the index lists that the walk did not find is a loss too.
 
     ``poses`` (a :class:`labkit.io.poses.BagPoses`, read beforehand) gives every scan its
     sensor pose, and brings the faults met while reading the poses: they count with the
     scans' own (once each), and with ``strict`` reading stops at the first scan after the
     last pose read before a fault.
     """
-    faults = Faults(path, strict)
+    faults = Faults(path, strict, expected)
     n_read = 0
     messages = read_messages(path, fmt, {topic: _MSGTYPE}, readable, faults, lambda _t, stamp, msg: _scan_from(
         msg, stamp, poses), salvage_topic=topic)
     try:
         for scan in messages:
             if poses is not None and poses.stops_before(scan.stamp_ns):
-                faults.skip(*poses.first_fault)
+                faults.skip(*poses.first_fault, count=0)
                 break
             yield scan
             n_read += 1
@@ -178,13 +231,19 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
                   convert: Callable, *, salvage_topic: str | frozenset[str] | None = None) -> Iterator:
     """``convert(topic, receive_ns, message)`` for every message on ``topics`` (name -> message
     type), in the bag's order; a message that does not decode, or that ``convert`` refuses (any
-    exception), is skipped and noted in ``faults`` (whose strictness decides whether to read on).
+    exception), is skipped and noted in ``faults`` (whose strictness decides whether to read on),
+    and so is every damaged place of the file.
 
-    Bags rosbags can open are read through it; if rosbags stops part-way, the rest is read by the
-    sequential reader (:mod:`labkit.io.salvage`; ``salvage_topic`` tells it what to yield, by
-    default the names of ``topics``), skipping what rosbags already gave.
+    ROS1 and MCAP: labkit's walker (:mod:`labkit.io.salvage`), in file order. ROS2 sqlite3:
+    rosbags, in time order; if rosbags stops part-way, the rest is read row by row
+    (``salvage_topic`` tells it what to yield, by default the names of ``topics``), skipping what
+    rosbags already gave.
     """
     what = next(iter(topics)) if len(topics) == 1 else ", ".join(sorted(topics))
+    if fmt in salvage.WALKERS:
+        yield from _walk_messages(path, fmt, topics, faults, convert, what,
+                                  frozenset(topics) if salvage_topic is None else salvage_topic)
+        return
     done: Counter[tuple[str, int]] = Counter()  # messages read through rosbags, not to be read twice
     if readable:
         reader = _open(path)
@@ -209,9 +268,10 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
                 done[conn.topic, stamp] += 1
         finally:
             reader.close()
-        if failure is None or not faults.skip(*failure, count=0):
+        if failure is None or not faults.skip(*failure, count=0, known=False):
             return
-    gen = _salvager(fmt)(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None else salvage_topic)
+    gen = salvage.salvage_sqlite3(_storage_file(path, fmt), frozenset(topics) if salvage_topic is None
+                                  else salvage_topic, known=_metadata_topics(path) if path.is_dir() else ())
     k = 0
     try:
         while True:
@@ -219,10 +279,10 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
                 item = next(gen)
             except StopIteration as stop:
                 if stop.value is not None:
-                    faults.skip(stop.value.where, stop.value.reason, stop.value.count)
+                    faults.skip(stop.value.where, stop.value.reason, 0, open_end=stop.value.open_end, known=False)
                 return
             if isinstance(item, salvage.Fault):
-                if not faults.skip(item.where, item.reason, item.count):
+                if not faults.skip(item.where, item.reason, 0, known=False, open_end=item.open_end):
                     return
                 continue
             name, stamp, raw = item
@@ -239,6 +299,34 @@ def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, 
             yield item
     finally:
         gen.close()
+
+
+def _walk_messages(path: Path, fmt: str, topics: dict[str, str], faults: Faults, convert: Callable, what: str,
+                   chosen) -> Iterator:
+    """:func:`read_messages` for ROS1 and MCAP: the walker's messages and faults, then its books."""
+    walker = salvage.WALKERS[fmt](_storage_file(path, fmt), chosen)
+    k = 0
+    messages = walker.messages()
+    try:
+        for item in messages:
+            if isinstance(item, salvage.Fault):
+                if not faults.skip(item.where, item.reason, item.count, known=False, open_end=item.open_end):
+                    return
+                continue
+            name, stamp, raw, where = item
+            k += 1
+            try:
+                item = convert(name, stamp, _deserialize(fmt, raw, topics.get(name, _MSGTYPE)))
+            except Exception as exc:  # noqa: BLE001 - a garbled message that slipped through the framing
+                if not faults.skip(f"{where} (message {k} of {what})", _why(exc)):
+                    return
+                continue
+            yield item
+    finally:
+        messages.close()
+    faults.lose(sum(walker.lost[name] for name in topics))
+    if walker.index_counts is not None:  # the file's own index, as the walker read it (rosbags counts the
+        faults.expected = sum(walker.index_counts[name] for name in topics)  # chunks it could open, if any)
 
 
 def _why(exc: Exception) -> str:
@@ -466,7 +554,7 @@ def write_bag(
             raise ValueError(f"{name} must start with '/', got {value!r}")
     if pose_topic == topic:
         raise ValueError(f"pose_topic and topic must differ, both are {topic!r}")
-    with safe_output(path, output_kind(path, fmt), overwrite=overwrite, inputs=inputs) as tmp:
+    with safe_output(path, output_kind(path, fmt), overwrite=overwrite, inputs=inputs) as tmp, _system_errors(path):
         if fmt == "ros1":
             return _write_ros1(scans, tmp, topic, pose_topic)
         if fmt == "mcap" and path.name.lower().endswith(".mcap"):
@@ -481,6 +569,51 @@ def write_bag(
                     written.replace(tmp)
         plugin = rosbag2.StoragePlugin.MCAP if fmt == "mcap" else rosbag2.StoragePlugin.SQLITE3
         return _write_ros2(scans, tmp, topic, plugin, fmt, pose_topic)
+
+
+@contextlib.contextmanager
+def whole_writes():
+    """Ctrl-C waits until the message being written is written whole: rosbags notes a message in
+    the bag's index before it writes its data, so an interruption in between leaves a partial
+    bag whose index lists a message that is not there (readers then count it lost)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pressed: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, _frame: pressed.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if pressed:
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _system_errors(path: Path):
+    """What the system refused while a bag was written, as the OSError it is: sqlite says "database
+    or disk is full" (a ROS2 folder on a full disk), rosbags wraps an OSError in its WriterError.
+    The command line then exits 3 with one line, and safe_output removes the temporary output."""
+    import errno
+    import sqlite3
+
+    try:
+        yield
+    except sqlite3.Error as exc:
+        text = str(exc).lower()
+        if "full" in text:
+            raise OSError(errno.ENOSPC, "No space left on device", str(path)) from exc
+        if "readonly" in text or "read-only" in text or "unable to open" in text or "disk i/o" in text:
+            raise OSError(errno.EIO, f"the database could not be written ({exc})", str(path)) from exc
+        raise
+    except (rosbag1.WriterError, rosbag2.WriterError) as exc:
+        cause = exc.__cause__ or exc.__context__
+        if isinstance(cause, OSError):
+            raise cause from exc
+        raise
 
 
 def _odometry(typestore, scan: Scan, seq: int, ros1: bool):
@@ -521,11 +654,15 @@ def _write_all(writer, conn, scans, typestore, serialize, fmt: str, pose_topic: 
             if last is not None and receive < last:
                 receive, raised = last, raised + 1
             _check_stamps(fmt, scan, receive, count)
-            writer.write(conn, receive, serialize(_message(typestore, scan, count, ros1), _MSGTYPE))
+            message = serialize(_message(typestore, scan, count, ros1), _MSGTYPE)
+            with whole_writes():
+                writer.write(conn, receive, message)
             if scan.pose is not None and pose_topic is not None:
                 if poses is None:
                     poses = writer.add_connection(pose_topic, _ODOMETRY, typestore=typestore)
-                writer.write(poses, receive, serialize(_odometry(typestore, scan, count, ros1), _ODOMETRY))
+                message = serialize(_odometry(typestore, scan, count, ros1), _ODOMETRY)
+                with whole_writes():
+                    writer.write(poses, receive, message)
             last = receive
             count += 1
     except BaseException:

@@ -6,6 +6,11 @@ optional keys ``range_min``, ``range_max``, ``stamp_ns``, ``receive_ns``, ``fram
 ``pose``, ``intensities``, ``time_increment`` and ``scan_time`` are read when present.
 labkit writes the same keys, so bag -> JSON -> bag loses nothing.
 
+Without a ``range_max`` key, a reading beyond :data:`DEFAULT_RANGE_MAX_M` (1000 m: no 2D laser
+scanner measures that far) is invalid, like a bag's reading beyond its ``range_max``, so that a
+placeholder such as ``1e30`` is not taken for a wall. ``"range_max": null`` means no limit (how
+labkit writes an infinite one).
+
 JSON has no NaN or infinity, and the two mean different things in a scan: NaN is "no
 reading", +inf is "no return" (REP 117). labkit writes a NaN range (or intensity) as ``null``
 and an infinite one as the string ``"inf"`` or ``"-inf"``, and reads them back the same way
@@ -22,7 +27,10 @@ import numpy as np
 
 from .._safe import OutputKind, first_json_line_with, json_object_with, safe_output
 from ..scan import Scan
-from .errors import CorruptFileError, Faults
+from .errors import CorruptFileError, EmptyRecordingError, Faults
+
+#: The range limit of a JSON scan that does not give its own ``range_max`` (metres).
+DEFAULT_RANGE_MAX_M = 1000.0
 
 _FROM_JSON = {None: np.nan, "inf": np.inf, "+inf": np.inf, "-inf": -np.inf, "nan": np.nan}
 
@@ -57,7 +65,9 @@ def scan_from_dict(d: dict, where: str = "scan") -> Scan:
     angles = d["bearings"] if "bearings" in d else d["angles"]
     kwargs = {k: d[k] for k in ("range_min", "stamp_ns", "receive_ns", "frame_id", "pose", "time_increment",
                                 "scan_time") if d.get(k) is not None}
-    if d.get("range_max") is not None:
+    if "range_max" not in d:
+        kwargs["range_max"] = DEFAULT_RANGE_MAX_M
+    elif d["range_max"] is not None:
         kwargs["range_max"] = d["range_max"]
     if d.get("intensities") is not None:
         kwargs["intensities"] = _values_from_json(d["intensities"], "intensities", where)
@@ -137,6 +147,8 @@ def read_json_lines(path: str | Path, *, strict: bool = False) -> Iterator[Scan]
             continue
         yield scan
         n += 1
+    if n == 0 and not faults:
+        raise EmptyRecordingError(f"{path} holds no scans (no JSON line in it)")
     faults.check(n)
 
 

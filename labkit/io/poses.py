@@ -204,15 +204,17 @@ class BagPoses:
         return track.at
 
 
-def read_bag_poses(path: Path, fmt: str, plan: PosePlan, readable: bool, strict: bool = False) -> BagPoses:
+def read_bag_poses(path: Path, fmt: str, plan: PosePlan, readable: bool, strict: bool = False,
+                   expected: int | None = None) -> BagPoses:
     """Read every pose and transform ``plan`` names, in one pass over those topics of the bag.
 
     A record that cannot be read is skipped and counted in :attr:`BagPoses.faults` (with
     ``strict``, reading stops there); :func:`labkit.io.bags.iter_bag` reports them with the scans'.
+    ``expected``: how many pose messages the bag's index lists, to count the lost ones exactly.
     """
     from .bags import read_messages  # bags reads LaserScans with the same machinery
 
-    faults = Faults(path, strict)
+    faults = Faults(path, strict, expected)
     odometry: dict[tuple[str, str], tuple[list, list]] = {}
     static: dict[str, tuple[str, tuple]] = {}
     moving: dict[tuple[str, str], tuple[list, list]] = {}
@@ -237,8 +239,9 @@ def read_bag_poses(path: Path, fmt: str, plan: PosePlan, readable: bool, strict:
                 ps.append(pose)
             last_good.append(stamp)
 
+    faults.done = 0
     for _ in read_messages(path, fmt, plan.msgtypes, readable, faults, convert):
-        pass
+        faults.done += 1
     tree = FrameTree()
     for child, (parent, pose) in static.items():
         tree.add_static(parent, child, pose)

@@ -19,14 +19,14 @@ Quick start
 >>> scan.n_beams, len(truth.walls) > 0
 (361, True)
 
-Modules: :mod:`~labkit.sim.worlds` (walls, arcs, columns, the bundled rooms),
-:mod:`~labkit.sim.people` (paths, rolling cylinders, walkers), :mod:`~labkit.sim.lidar`
-(lidars, trajectories, scenarios, ray casting, :func:`scan_at`, :func:`simulate`) and
+Modules: :mod:`~labkit.sim.worlds` (walls, arcs, columns, the bundled rooms, the ``crossing``
+worlds for tracking), :mod:`~labkit.sim.people` (paths, rolling cylinders, walkers, movers),
+:mod:`~labkit.sim.lidar` (lidars, trajectories, scenarios, ray casting, :func:`scan_at`, :func:`simulate`) and
 :mod:`~labkit.sim.truth` (ground-truth records and ``.truth.jsonl`` files).
 """
 
 from .lidar import EPOCH_NS, LIDARS, Lidar, Scenario, Trajectory, scan_at, scenario, simulate
-from .people import PathSpec, RollingCylinder, Walker
+from .people import Mover, PathSpec, RollingCylinder, Walker
 from .truth import (
     TRUTH_FILE,
     GroundTruth,
@@ -39,7 +39,7 @@ from .truth import (
     truth_path_for,
     write_truth,
 )
-from .worlds import WORLDS, Arc, Column, Wall, World, make_world, random_polygons
+from .worlds import CROSSING_WALKERS, WORLDS, Arc, Column, Wall, World, crossing, make_world, random_polygons
 
 __all__ = [
     "Wall",
@@ -48,6 +48,7 @@ __all__ = [
     "PathSpec",
     "RollingCylinder",
     "Walker",
+    "Mover",
     "World",
     "Lidar",
     "LIDARS",
@@ -62,6 +63,8 @@ __all__ = [
     "WORLDS",
     "make_world",
     "random_polygons",
+    "crossing",
+    "CROSSING_WALKERS",
     "scenario",
     "simulate",
     "scan_at",

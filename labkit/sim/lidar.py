@@ -151,7 +151,8 @@ def scenario(name: str) -> Scenario:
     ``hall``: static LMS200 near the bottom wall, 60 s at 10 Hz. ``corridor``: LMS111
     driving 22 m down the corridor then turning into the side branch, 40 s at 10 Hz.
     ``office``: XV-11 (360 deg) touring both rooms, 40 s at 5 Hz. ``random_polygons_<seed>``:
-    static LMS200 in the room's centre, one scan.
+    static LMS200 in the room's centre, one scan. ``crossing`` (4 walkers) and ``crossing_<n>`` (1-6):
+    the hall's static LMS200 watching people cross (:func:`labkit.sim.worlds.crossing`), 60 s at 10 Hz.
     """
     if name == "hall":
         return Scenario(make_world("hall"), LIDARS["lms200"], Trajectory.static(6.0, 0.4, np.pi / 2), 60.0)
@@ -164,11 +165,13 @@ def scenario(name: str) -> Scenario:
                            (22.0, 8.0, 3.8, 2.5), (26.0, 7.0, 2.5, np.pi), (30.0, 5.0, 2.5, np.pi),
                            (40.0, 2.8, 2.0, -2.0)))
         return Scenario(make_world("office"), LIDARS["xv11"], traj, 40.0)
+    if name == "crossing" or (name.startswith("crossing_") and name[len("crossing_"):].isdigit()):
+        return Scenario(make_world(name), LIDARS["lms200"], Trajectory.static(6.0, 0.4, np.pi / 2), 60.0)
     if name.startswith("random_polygons"):
         world = make_world(name)
         w, h = 12.0, 9.0
         return Scenario(world, LIDARS["lms200"], Trajectory.static(w / 2, h / 2, 0.0), 0.1)
-    raise ValueError(f"scenario must be one of {sorted(WORLDS)} or random_polygons_<seed>, got {name!r}")
+    raise ValueError(f"scenario must be one of {sorted(WORLDS)}, crossing_<n> or random_polygons_<seed>, got {name!r}")
 
 
 # ============================================================================ ray casting

@@ -1,7 +1,9 @@
 """Moving objects of the simulated worlds: paths, a rolling cylinder and walking people.
 
 :class:`Walker` is a simulated person (two legs with a gait); it is not
-:class:`labkit.Person`, the *detected* pair of legs.
+:class:`labkit.Person`, the *detected* pair of legs. :class:`Mover` is where a moving object
+is at one instant and how fast it goes: the truth a tracker (:mod:`labkit.tracking`) is scored
+against (:meth:`labkit.sim.World.movers_at`).
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PathSpec", "RollingCylinder", "Walker"]
+__all__ = ["PathSpec", "RollingCylinder", "Walker", "Mover"]
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,36 @@ class PathSpec:
         heading = np.arctan2(direction * seg[k, 1], direction * seg[k, 0])
         return pos, float(heading)
 
+    def velocity(self, s: float, speed_mps: float) -> np.ndarray:
+        """Velocity (2,) of something walking at ``speed_mps`` when it is ``s`` metres along
+        (the walking direction; at a corner or a bounce, that of the stretch it enters)."""
+        _, heading = self.at(s)
+        return speed_mps * np.array([np.cos(heading), np.sin(heading)])
+
+
+@dataclass(frozen=True)
+class Mover:
+    """A moving object at one instant, in the world frame: the truth of a track.
+
+    Attributes
+    ----------
+    name : str
+        The walker's or the cylinder's name.
+    kind : str
+        ``"person"`` (a :class:`Walker`; its centre is the body's, on the path, which on a
+        straight path is the midpoint of its two legs) or ``"cylinder"``.
+    object_ids : tuple of int
+        Its ids in a scan's ``hits`` (two legs, or the cylinder), see :meth:`World.objects`.
+    center, velocity : (float, float)
+        Metres and metres per second.
+    """
+
+    name: str
+    kind: str
+    object_ids: tuple[int, ...]
+    center: tuple[float, float]
+    velocity: tuple[float, float]
+
 
 @dataclass(frozen=True)
 class RollingCylinder:
@@ -77,6 +109,9 @@ class RollingCylinder:
 
     def center_at(self, t: float) -> np.ndarray:
         return self.path.at(self.start_offset_m + self.speed_mps * t)[0]
+
+    def velocity_at(self, t: float) -> np.ndarray:
+        return self.path.velocity(self.start_offset_m + self.speed_mps * t, self.speed_mps)
 
 
 @dataclass(frozen=True)
@@ -126,3 +161,6 @@ class Walker:
     def center_at(self, t: float) -> np.ndarray:
         return self.path.at(self.start_offset_m + self.speed_mps * t)[0]
 
+    def velocity_at(self, t: float) -> np.ndarray:
+        """The body's velocity (2,) at time ``t``, m/s (the legs' mean velocity over a step)."""
+        return self.path.velocity(self.start_offset_m + self.speed_mps * t, self.speed_mps)

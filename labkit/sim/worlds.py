@@ -11,9 +11,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .people import PathSpec, RollingCylinder, Walker
+from .people import Mover, PathSpec, RollingCylinder, Walker
 
-__all__ = ["Wall", "Arc", "Column", "World", "WORLDS", "make_world", "random_polygons"]
+__all__ = ["Wall", "Arc", "Column", "World", "WORLDS", "make_world", "random_polygons", "crossing",
+           "CROSSING_WALKERS"]
 
 
 # ============================================================================ world
@@ -84,8 +85,30 @@ class World:
             row["id"] = oid
         return table
 
+    def movers_at(self, t: float) -> tuple[Mover, ...]:
+        """The moving objects at time ``t`` seconds, world frame: the rolling cylinders, then
+        the walkers, with their ids in :meth:`objects` (a scan's ``hits`` say which beams saw them).
+
+        >>> [(m.name, m.kind, m.object_ids) for m in make_world("hall").movers_at(0.0)]
+        [('cylinder', 'cylinder', (13,)), ('student', 'person', (14, 15))]
+        """
+        first = len(self.walls) + len(self.arcs) + len(self.circles)
+        out = []
+        for k, c in enumerate(self.cylinders):
+            out.append(Mover(c.name, "cylinder", (first + k,), _xy(c.center_at(t)), _xy(c.path.velocity(
+                c.start_offset_m + c.speed_mps * t, c.speed_mps))))
+        first += len(self.cylinders)
+        for k, p in enumerate(self.people):
+            out.append(Mover(p.name, "person", (first + 2 * k, first + 2 * k + 1), _xy(p.center_at(t)),
+                             _xy(p.velocity_at(t))))
+        return tuple(out)
+
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def _xy(v) -> tuple[float, float]:
+    return (float(v[0]), float(v[1]))
 
 
 def _wall_loop(points: Sequence[tuple[float, float]], name: str, closed: bool = True) -> list[Wall]:
@@ -101,11 +124,11 @@ def _stadium(x0: float, x1: float, y: float, radius: float, n_arc: int = 12) -> 
     return tuple((round(float(px), 6), round(float(py), 6)) for px, py in right + left)
 
 
-def _hall() -> World:
-    # A 12 m x 9 m hallway entrance (Xavier et al. 2005, static test): walls with an
-    # entrance recess and a rounded corner, two columns, a bench made of two short
-    # cylinders of the columns' radius, a cylinder pulled round the columns and a
-    # student walking past the lower right corner.
+_HALL_LOOP = PathSpec(((2.5, 3.5), (9.5, 3.5), (9.5, 6.5), (2.5, 6.5)), "loop")  # round the columns
+
+
+def _hall_room() -> tuple[tuple[Wall, ...], tuple[Arc, ...], tuple[Column, ...]]:
+    """The hall's walls, rounded corner, columns and bench (static)."""
     r = 0.25
     outline = [(0, 0), (12, 0), (12, 9), (7.5, 9), (7.5, 10), (5.0, 10), (5.0, 9), (0.8, 9)]
     walls = _wall_loop(outline, "hall", closed=False)
@@ -117,10 +140,64 @@ def _hall() -> World:
         Column((1.6, 7.6), r, "bench", "bench_a"),
         Column((2.8, 7.6), r, "bench", "bench_b"),
     )
-    loop = PathSpec(((2.5, 3.5), (9.5, 3.5), (9.5, 6.5), (2.5, 6.5)), "loop")
-    cylinder = RollingCylinder(r, loop, 0.5, "cylinder")
+    return tuple(walls), (corner,), circles
+
+
+def _hall() -> World:
+    # A 12 m x 9 m hallway entrance (Xavier et al. 2005, static test): walls with an
+    # entrance recess and a rounded corner, two columns, a bench made of two short
+    # cylinders of the columns' radius, a cylinder pulled round the columns and a
+    # student walking past the lower right corner.
+    walls, arcs, circles = _hall_room()
+    cylinder = RollingCylinder(0.25, _HALL_LOOP, 0.5, "cylinder")
     walker = Walker(PathSpec(((8.0, 1.2), (11.2, 4.5)), "bounce"), speed_mps=0.9, name="student")
-    return World("hall", tuple(walls), (corner,), circles, (cylinder,), (walker,))
+    return World("hall", walls, arcs, circles, (cylinder,), (walker,))
+
+
+#: The walkers of the ``crossing`` worlds, in the order they join (``crossing_<n>`` has the first
+#: n): name, the two ends of the straight line walked back and forth, the time of a round trip
+#: (seconds) and where the walker starts, as a fraction of a round trip. The cylinder makes a lap
+#: in 32 s, so every meeting repeats every 32 s, and the starts are chosen so that nobody walks into
+#: anybody: anna and ben cross each other's paths at 0.59 m (centre to centre); carl and dora pass each
+#: other in opposite directions on lanes 0.6 m apart in front of the others (the nearer hides the
+#: farther from the lidar, and both hide the people behind); emil and fay walk to and from the ends
+#: of those lanes, and pass carl and dora at 0.69-0.94 m; nobody comes within 0.72 m of the cylinder's
+#: centre or 0.67 m of a column's. Everybody stays within 6 m of the lidar of the ``crossing``
+#: scenario, where its 0.5 deg beams still put 3 or more on a leg.
+CROSSING_WALKERS = (
+    ("anna", ((3.0, 2.8), (9.0, 4.6)), 16.0, 0.0),
+    ("ben", ((9.0, 2.8), (3.0, 4.6)), 16.0, 0.165),
+    ("carl", ((2.0, 1.5), (10.0, 1.5)), 16.0, 0.052),
+    ("dora", ((10.0, 2.1), (2.0, 2.1)), 16.0, 0.114),
+    ("emil", ((10.6, 1.0), (10.6, 4.0)), 8.0, 0.964),
+    ("fay", ((1.5, 0.9), (1.5, 4.0)), 8.0, 0.905),
+)
+
+
+def crossing(n_walkers: int = 4) -> World:
+    """The hall (its walls, columns and bench) with ``n_walkers`` (1-6) people crossing and
+    passing close, and the cylinder rolling round the columns: a world for tracking.
+
+    The walkers of :data:`CROSSING_WALKERS` walk straight lines back and forth (0.75-1.0 m/s),
+    through each other's paths; the cylinder goes round the columns at 0.625 m/s, a lap in 32 s.
+    Named ``crossing`` (4 walkers) or ``crossing_<n>`` in :func:`make_world`.
+
+    >>> [p.name for p in crossing(2).people]
+    ['anna', 'ben']
+    """
+    if isinstance(n_walkers, bool) or not isinstance(n_walkers, (int, np.integer)) or not \
+            1 <= n_walkers <= len(CROSSING_WALKERS):
+        raise ValueError(f"n_walkers must be a whole number in 1..{len(CROSSING_WALKERS)}, got {n_walkers!r}")
+    walls, arcs, circles = _hall_room()
+    loop_length = _HALL_LOOP.length
+    cylinder = RollingCylinder(0.25, _HALL_LOOP, loop_length / 32.0, "cylinder", start_offset_m=0.963 * loop_length)
+    people = []
+    for name, (a, b), round_trip_s, start in CROSSING_WALKERS[:n_walkers]:
+        length = float(np.hypot(b[0] - a[0], b[1] - a[1]))
+        people.append(Walker(PathSpec((a, b), "bounce"), speed_mps=2 * length / round_trip_s, name=name,
+                             start_offset_m=start * 2 * length))
+    name = "crossing" if n_walkers == 4 else f"crossing_{n_walkers}"
+    return World(name, walls, arcs, circles, (cylinder,), tuple(people))
 
 
 def _corridor() -> World:
@@ -211,18 +288,20 @@ def random_polygons(
 
 
 #: Named worlds. ``make_world(name)`` builds one.
-WORLDS = {"hall": _hall, "corridor": _corridor, "office": _office}
+WORLDS = {"hall": _hall, "corridor": _corridor, "office": _office, "crossing": crossing}
 
 
 def make_world(name: str) -> World:
-    """Build a named world: ``hall``, ``corridor``, ``office`` or ``random_polygons[_SEED]``."""
+    """Build a named world: ``hall``, ``corridor``, ``office``, ``crossing[_N]`` (N walkers, 1-6;
+    4 without) or ``random_polygons[_SEED]``."""
     if name.startswith("random_polygons"):
         rest = name[len("random_polygons"):].lstrip("_")
         return random_polygons(int(rest) if rest else 0)
+    if name.startswith("crossing_") and name[len("crossing_"):].isdigit():
+        return crossing(int(name[len("crossing_"):]))
     try:
         return WORLDS[name]()
     except KeyError:
         raise ValueError(
-            f"world must be one of {sorted(WORLDS) + ['random_polygons_<seed>']}, got {name!r}"
+            f"world must be one of {sorted(WORLDS) + ['crossing_<n>', 'random_polygons_<seed>']}, got {name!r}"
         ) from None
-

@@ -1,0 +1,922 @@
+"""Tracking over time: people and moving round objects keep an identity from scan to scan.
+
+The detectors find people (leg pairs, :class:`labkit.Person`), single legs and circles in each
+scan; this module connects one scan's detections to the next. Each target is a *track*: a
+constant-velocity Kalman filter over ``(x, y, vx, vy)`` with an identity and a life cycle.
+:meth:`Tracker.step` takes one scan's detections through the steps of the classic tracker
+(Bar-Shalom and Li; Blackman and Popoli, ch. 6-7), each a function of its own below:
+
+1. **predict** every track to the scan's time with the constant-velocity model
+   (:func:`cv_predict`; :func:`cv_model` gives ``F`` and ``Q``);
+2. **gate**: the squared Mahalanobis distance ``d2 = nu' S^-1 nu`` of every detection to every
+   track of its kind (:func:`innovation`), kept when under the chi-square quantile of 2 degrees
+   of freedom at ``gate_probability`` (:func:`gate_threshold`);
+3. **assign**: global nearest neighbour (:func:`assign`, with
+   ``scipy.optimize.linear_sum_assignment``): as many (track, detection) pairs inside the gates
+   as possible, and among those the least total cost ``d2 + ln det S`` (the negative
+   log-likelihood of the pair, less a constant);
+4. **update** each assigned track with its detection (:func:`kalman_update`, Joseph form);
+5. **birth**: a *tentative* track for every person (leg pair) or circle detection that lies
+   outside every gate of its kind (a single leg never starts a track: a leg alone is too weak a
+   cue for a person, and a detection inside a gate belongs to a target already followed);
+6. **confirm** a tentative track detected in ``confirm_hits`` (M) of its first
+   ``confirm_scans`` (N) scans, the birth scan included. It is confirmed as ``"static"`` until it
+   has moved: until M updates in a row have put its estimate further than ``min_travel_m`` from
+   where it was first seen (the mean of its first M detections). Then it becomes ``"confirmed"``
+   (a moving target), and stays so when the target stops. A single wrong detection cannot make a
+   track move, and a static track only takes detections within about ``min_travel_m`` of it (its
+   gate does not grow past that while it is hidden). A column, a bench foot or a bin is thus
+   recognised as static and never confirmed as a moving track;
+7. **delete** a tentative track as soon as M detections in its first N scans can no longer be
+   reached (more than N - M misses), and any track not detected for more than ``max_coast_s``
+   seconds (scan stamps in integer nanoseconds, so "more than" is exact).
+
+Targets and measurements. People are tracked from leg pairs (the midpoint of two legs, which
+the simulator's gait puts on the body's path; ``person_sigma_m``) and updated by single legs as
+weaker measurements (``leg_sigma_m``: a leg is up to half a step and half the legs' separation
+from the body). Circles (:class:`labkit.Circle` of kind ``"circle"``) make a second kind of
+track (``circle_sigma_m``); a detection only ever gates with tracks of its own kind. The
+detectors give no covariance of their centres yet, so a detection's measurement covariance is
+``sigma^2 I`` of its kind; :class:`Detections` built by hand (or by a detector that fits one)
+carry a full covariance per detection, which the tracker uses as given.
+
+Frames. Detections are in the sensor frame. With ``frame="map"`` (or ``"auto"`` when the first
+scan carries a pose, :attr:`labkit.Scan.pose`) they are moved into the world frame by the
+scan's pose before the steps above, so that the robot's own motion is not a target's: a column
+then stays put and is recognised as static. In the map frame, a scan without a pose gives no
+detections (its tracks coast). In the sensor frame a moving robot sees every column move.
+
+Process noise. The model's acceleration is white noise of spectral density ``q``
+(``acceleration_noise_m2_s3``, m^2/s^3), so over ``dt`` seconds ``Q = q [[dt^3/3, dt^2/2],
+[dt^2/2, dt]]`` per axis (Bar-Shalom, Li and Kirubarajan 2001, Sec. 6.2.2). ``q = 0`` makes the
+filter a least-squares fit of a straight line at constant speed.
+
+``Tracker.step(..., trace=True)`` also returns the steps as :class:`labkit.Step` records
+(algorithm ``"tracking"``; kinds ``predict``, ``gate``, ``assign``, ``update``, ``birth``,
+``confirm``, ``delete``; ``track`` and ``detection`` say which), for notebooks and viewers.
+
+References
+----------
+Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to Tracking and
+Navigation*, Wiley 2001, Sec. 5.2 (Kalman filter), 6.2 (white-noise acceleration models).
+S. Blackman and R. Popoli, *Design and Analysis of Modern Tracking Systems*, Artech House 1999,
+ch. 6 (gating and global nearest neighbour), 7 (track initiation and deletion, M of N).
+K. Arras, O. Martinez Mozos and W. Burgard, "Using boosted features for the detection of people
+in 2D range data", ICRA 2007 (people from legs); A. Leigh et al., "Person tracking and
+following with 2D laser scanners", ICRA 2015.
+
+Examples
+--------
+One person walking at 1 m/s along x, seen every 0.1 s:
+
+>>> tracker = Tracker()
+>>> for k in range(10):
+...     seen = Detections(k * 100_000_000, ("person",), [[1.0 + 0.1 * k, 2.0]])
+...     table = tracker.step(seen)
+>>> table.ids.tolist(), table.status.tolist()
+([1], ['confirmed'])
+>>> np.round(table.states[0], 2).tolist()  # x, y, vx, vy
+[1.9, 2.0, 1.0, 0.0]
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from time import perf_counter
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from .features import Features
+from .params import Params, checked_by, param
+from .steps import Step
+
+__all__ = [
+    "TrackingParams",
+    "Detections",
+    "TrackTable",
+    "Tracker",
+    "track",
+    "detections_from",
+    "cv_model",
+    "cv_predict",
+    "innovation",
+    "mahalanobis2",
+    "gate_threshold",
+    "kalman_update",
+    "assign",
+    "TRACK_KINDS",
+    "DETECTION_KINDS",
+    "STATUSES",
+]
+
+#: The kinds of track: people (from leg pairs and legs) and circles (moving or static).
+TRACK_KINDS = ("person", "circle")
+#: The kinds of detection, and the kind of track each one measures.
+DETECTION_KINDS = {"person": "person", "leg": "person", "circle": "circle"}
+#: A track's status in a :class:`TrackTable` (see the module docstring for the life cycle).
+STATUSES = ("tentative", "static", "confirmed", "deleted")
+_TENTATIVE, _STATIC, _CONFIRMED, _DELETED = range(4)
+_KIND_CODE = {"person": 0, "circle": 1}
+_TRACK_KIND_OF = {"person": 0, "leg": 0, "circle": 1}
+_STARTS_TRACKS = {"person": True, "leg": False, "circle": True}
+_H = np.hstack([np.eye(2), np.zeros((2, 2))])  # a detection measures the position
+_I2, _I4 = np.eye(2), np.eye(4)
+
+
+@dataclass(frozen=True)
+class TrackingParams(Params):
+    """Parameters of :class:`Tracker` and :func:`track` (and the ``[tracking]`` table of
+    :class:`labkit.Config`), each default once: lengths in metres, times in seconds."""
+
+    frame: str = param("auto", "track in the sensor frame, the map frame (moved by each scan's pose) or auto: "
+                               "the map frame when the first scan carries a pose", choices=("auto", "sensor", "map"),
+                       kind=str)
+    acceleration_noise_m2_s3: float = param(0.5, "process noise: spectral density of the white acceleration of "
+                                                 "the constant-velocity model, m^2/s^3", lo=0)
+    initial_speed_sigma_mps: float = param(1.5, "standard deviation of a new track's velocity in x and in y, m/s",
+                                           lo=0, strict=True)
+    person_sigma_m: float = param(0.08, "standard deviation of a person's position measured by a leg pair "
+                                        "(their midpoint), metres", lo=0, strict=True)
+    leg_sigma_m: float = param(0.2, "standard deviation of a person's position measured by one leg, metres",
+                               lo=0, strict=True)
+    circle_sigma_m: float = param(0.05, "standard deviation of a circle's centre, metres", lo=0, strict=True)
+    single_legs: bool = param(True, "update people with single legs (weaker measurements) besides leg pairs")
+    gate_probability: float = param(0.99, "gate: a detection is considered for a track when its Mahalanobis "
+                                          "distance is within the chi-square (2 dof) quantile at this probability",
+                                    lo=0, strict=True, hi=0.999999)
+    confirm_hits: int = param(3, "M: a track is confirmed when detected in M of its first N scans", lo=1)
+    confirm_scans: int = param(5, "N: the scans, from its birth, in which a track must be detected M times", lo=1)
+    max_coast_s: float = param(1.5, "delete a track not detected for longer than this, seconds", lo=0)
+    min_travel_m: float = param(0.3, "a confirmed track is static until M updates in a row put its estimate this "
+                                     "far from where it was first seen (the mean of its first M detections), metres",
+                                lo=0, strict=True)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.confirm_hits > self.confirm_scans:
+            where = f"{self._name}." if self._name else ""
+            raise ValueError(f"{where}confirm_hits must be <= {where}confirm_scans (M of N), got "
+                             f"{self.confirm_hits} of {self.confirm_scans}")
+
+
+# ============================================================================ the filter
+def cv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
+    """The constant-velocity model over ``dt`` seconds: transition ``F`` (4, 4) and process
+    noise ``Q`` (4, 4) for the state ``(x, y, vx, vy)``, the acceleration white noise of
+    spectral density ``q`` (m^2/s^3) in each axis (Bar-Shalom et al. 2001, eq. 6.2.2-12).
+
+    >>> F, Q = cv_model(0.5, 2.0)
+    >>> F[0].tolist(), np.round(Q[0], 4).tolist()
+    ([1.0, 0.0, 0.5, 0.0], [0.0833, 0.0, 0.25, 0.0])
+    """
+    F = np.eye(4)
+    F[0, 2] = F[1, 3] = dt
+    a, b, c = dt**3 / 3.0, dt**2 / 2.0, dt
+    Q = q * np.array([[a, 0.0, b, 0.0], [0.0, a, 0.0, b], [b, 0.0, c, 0.0], [0.0, b, 0.0, c]])
+    return F, Q
+
+
+def cv_predict(x, P, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
+    """Predict states ``x`` (..., 4) and covariances ``P`` (..., 4, 4) ``dt`` seconds ahead:
+    ``x' = F x``, ``P' = F P F' + Q`` (:func:`cv_model`). Works on one track or a stack.
+
+    >>> x, P = cv_predict(np.array([0.0, 0.0, 1.0, 0.5]), np.eye(4), 0.1, 0.0)
+    >>> x.tolist()
+    [0.1, 0.05, 1.0, 0.5]
+    """
+    F, Q = _cv_model(float(dt), float(q))
+    x = np.asarray(x, dtype=np.float64)
+    P = np.asarray(P, dtype=np.float64)
+    return x @ F.T, F @ P @ F.T + Q
+
+
+@functools.lru_cache(maxsize=64)
+def _cv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`cv_model`, remembered (scans mostly come at one rate), read-only."""
+    F, Q = cv_model(dt, q)
+    F.setflags(write=False)
+    Q.setflags(write=False)
+    return F, Q
+
+
+def innovation(x, P, z, R) -> tuple[np.ndarray, np.ndarray]:
+    """The innovation ``nu = z - H x`` (..., 2) of a position measurement ``z`` (..., 2) with
+    covariance ``R`` (..., 2, 2), and its covariance ``S = H P H' + R`` (..., 2, 2); ``H``
+    picks the position out of ``(x, y, vx, vy)``. Arrays broadcast (tracks against detections)."""
+    x = np.asarray(x, dtype=np.float64)
+    P = np.asarray(P, dtype=np.float64)
+    return np.asarray(z, dtype=np.float64) - x[..., :2], P[..., :2, :2] + np.asarray(R, dtype=np.float64)
+
+
+def mahalanobis2(nu, S) -> np.ndarray:
+    """The squared Mahalanobis distance ``nu' S^-1 nu`` of innovations ``nu`` (..., 2) with
+    covariances ``S`` (..., 2, 2), and ``ln det S``; ``S`` is inverted in closed form (2 x 2).
+
+    >>> d2, logdet = mahalanobis2(np.array([0.3, 0.0]), 0.01 * np.eye(2))
+    >>> round(float(d2), 9), round(float(logdet), 4)
+    (9.0, -9.2103)
+    """
+    nu = np.asarray(nu, dtype=np.float64)
+    S = np.asarray(S, dtype=np.float64)
+    a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
+    det = a * d - b * c
+    u, v = nu[..., 0], nu[..., 1]
+    return (d * u * u - (b + c) * u * v + a * v * v) / det, np.log(det)
+
+
+def gate_threshold(probability: float) -> float:
+    """The chi-square quantile of 2 degrees of freedom at ``probability``: ``-2 ln(1 - p)``
+    (with 2 dof the chi-square law is exponential, so the quantile has this closed form). A true
+    detection's ``d2`` exceeds it with probability ``1 - p``.
+
+    >>> round(gate_threshold(0.99), 4)
+    9.2103
+    """
+    if not 0.0 < probability < 1.0:
+        raise ValueError(f"probability must lie in (0, 1), got {probability!r}")
+    return -2.0 * math.log1p(-probability)
+
+
+def kalman_update(x, P, z, R) -> tuple[np.ndarray, np.ndarray]:
+    """The Kalman update of states ``x`` (..., 4), covariances ``P`` (..., 4, 4) by position
+    measurements ``z`` (..., 2) with covariances ``R`` (..., 2, 2): gain ``K = P H' S^-1``,
+    ``x + K nu``, and the covariance in Joseph form ``(I - K H) P (I - K H)' + K R K'``
+    (symmetric and positive definite also when rounding hurts the short form ``(I - K H) P``).
+
+    >>> x, P = kalman_update(np.zeros(4), np.eye(4), np.array([1.0, 0.0]), np.eye(2))
+    >>> x.tolist(), float(P[0, 0])
+    ([0.5, 0.0, 0.0, 0.0], 0.5)
+    """
+    x = np.asarray(x, dtype=np.float64)
+    P = np.asarray(P, dtype=np.float64)
+    R = np.asarray(R, dtype=np.float64)
+    nu, S = innovation(x, P, z, R)
+    K = P[..., :, :2] @ _inverse2(S)  # P H' S^-1, (..., 4, 2)
+    x = x + (K @ nu[..., None])[..., 0]
+    I_KH = _I4 - K @ _H
+    P = I_KH @ P @ np.swapaxes(I_KH, -1, -2) + K @ R @ np.swapaxes(K, -1, -2)
+    return x, 0.5 * (P + np.swapaxes(P, -1, -2))
+
+
+def _inverse2(S: np.ndarray) -> np.ndarray:
+    """The inverses of 2 x 2 matrices (..., 2, 2), in closed form."""
+    a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
+    det = a * d - b * c
+    return np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
+
+
+def assign(cost) -> tuple[np.ndarray, np.ndarray]:
+    """Global nearest neighbour: ``(rows, cols)``, the pairs of tracks (rows) and detections
+    (columns) of a ``cost`` matrix (T, D) in which a pair outside its gate costs ``inf``.
+
+    As many pairs inside the gates as possible, and among those the least total cost: the
+    pairs outside the gates are given a cost larger than any assignment of pairs inside them
+    can reach (``2 r c + 1`` for ``r = min(T, D)`` pairs of costs within ``[-c, c]``), the
+    problem is solved by ``scipy.optimize.linear_sum_assignment`` and those pairs are dropped.
+
+    >>> rows, cols = assign(np.array([[1.0, 2.0], [1.5, np.inf]]))
+    >>> list(zip(rows.tolist(), cols.tolist()))   # not (0, 0): then track 1 would go without
+    [(0, 1), (1, 0)]
+    """
+    cost = np.asarray(cost, dtype=np.float64)
+    inside = np.isfinite(cost)
+    if not inside.any():
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    c = float(np.abs(cost[inside]).max()) + 1.0
+    rows, cols = linear_sum_assignment(np.where(inside, cost, 2.0 * min(cost.shape) * c + 1.0))
+    keep = inside[rows, cols]
+    return rows[keep], cols[keep]
+
+
+# ============================================================================ detections
+@dataclass(frozen=True, eq=False)
+class Detections:
+    """One scan's detections, as the tracker takes them.
+
+    Attributes
+    ----------
+    stamp_ns : int
+        The scan's time stamp.
+    kinds : tuple of str
+        ``"person"`` (a leg pair), ``"leg"`` (a leg alone) or ``"circle"``, one per detection.
+    positions : ndarray of shape (K, 2), metres
+        In the sensor frame (the tracker moves them into the map frame when it tracks there).
+    covariances : ndarray of shape (K, 2, 2), m^2, or None
+        Their measurement covariances; None: ``sigma^2 I`` with the tracker's sigma of each kind
+        (``person_sigma_m``, ``leg_sigma_m``, ``circle_sigma_m``, see :meth:`with_sigmas`).
+    first, last : ndarray of shape (K,), int
+        The beams each detection came from (-1 when unknown), to draw it on its scan.
+    """
+
+    stamp_ns: int
+    kinds: tuple
+    positions: np.ndarray
+    covariances: np.ndarray | None = None
+    first: np.ndarray | None = None
+    last: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        kinds = tuple(self.kinds)
+        bad = [k for k in kinds if k not in DETECTION_KINDS]
+        if bad:
+            raise ValueError(f"kinds must be among {tuple(DETECTION_KINDS)}, got {bad[0]!r}")
+        n = len(kinds)
+        try:
+            p = np.array(self.positions, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"positions must be finite, of shape ({n}, 2), got {self.positions!r}") from None
+        if p.size == 0:
+            p = p.reshape(0, 2)
+        if p.shape != (n, 2) or not np.isfinite(p).all():
+            raise ValueError(f"positions must be finite, of shape ({n}, 2) (one per kind), got "
+                             f"{np.shape(self.positions)}")
+        if self.covariances is None:
+            c = None
+        else:
+            c = np.array(self.covariances, dtype=np.float64)
+            if c.shape != (n, 2, 2) or not np.isfinite(c).all():
+                raise ValueError(f"covariances must be finite, of shape ({n}, 2, 2), got {c.shape}")
+            if n and (np.abs(c - np.swapaxes(c, 1, 2)).max() > 1e-12 or
+                      (np.linalg.eigvalsh(0.5 * (c + np.swapaxes(c, 1, 2))) <= 0).any()):
+                raise ValueError("covariances must be symmetric and positive definite")
+        beams = []
+        for name in ("first", "last"):
+            b = getattr(self, name)
+            b = np.full(n, -1, dtype=np.int64) if b is None else np.array(b, dtype=np.int64).reshape(-1)
+            if b.shape != (n,):
+                raise ValueError(f"{name} must hold one beam per detection ({n}), got {b.shape}")
+            beams.append(b)
+        for name, value in (("kinds", kinds), ("positions", p), ("covariances", c), ("first", beams[0]),
+                            ("last", beams[1])):
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "stamp_ns", int(self.stamp_ns))
+
+    def __len__(self) -> int:
+        return len(self.kinds)
+
+    @classmethod
+    def _trusted(cls, stamp_ns: int, kinds: tuple, positions, covariances, first, last) -> Detections:
+        """A record of values already checked (the tracker's own), built without the checks."""
+        d = object.__new__(cls)
+        d.__dict__.update(stamp_ns=stamp_ns, kinds=kinds, positions=positions, covariances=covariances,
+                          first=first, last=last)
+        return d
+
+    def with_sigmas(self, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float) -> Detections:
+        """These detections with ``sigma^2 I`` of its kind as each one's covariance, where they
+        have none (``covariances`` None); as they are otherwise."""
+        if self.covariances is not None:
+            return self
+        sigma = {"person": person_sigma_m, "leg": leg_sigma_m, "circle": circle_sigma_m}
+        var = np.array([sigma[k] ** 2 for k in self.kinds], dtype=np.float64)
+        return Detections._trusted(self.stamp_ns, self.kinds, self.positions, var[:, None, None] * _I2, self.first,
+                                   self.last)
+
+    def in_frame(self, pose) -> Detections:
+        """The detections moved from the sensor frame by ``pose = (x, y, theta)`` (the sensor's
+        pose in the map): ``p' = R p + t``, ``C' = R C R'``."""
+        x, y, theta = pose
+        c, s = math.cos(theta), math.sin(theta)
+        rot = np.array([[c, -s], [s, c]])
+        return Detections._trusted(self.stamp_ns, self.kinds, self.positions @ rot.T + np.array([x, y]),
+                                   rot @ self.covariances @ rot.T, self.first, self.last)
+
+
+def detections_from(
+    features: Features,
+    *,
+    person_sigma_m: float = TrackingParams.person_sigma_m,
+    leg_sigma_m: float = TrackingParams.leg_sigma_m,
+    circle_sigma_m: float = TrackingParams.circle_sigma_m,
+    single_legs: bool = TrackingParams.single_legs,
+) -> Detections:
+    """The detections of one scan's :class:`labkit.Features`, in the sensor frame: every person
+    (the midpoint of its two legs), every leg in no person (with ``single_legs``) and every
+    circle of kind ``"circle"`` (not ``"arc-like"``), each with ``sigma^2 I`` of its kind."""
+    if not isinstance(features, Features):
+        raise ValueError(f"features must be labkit.Features, got {type(features).__name__}")
+    kinds, positions, sigmas, first, last = [], [], [], [], []
+    paired = set()
+    for person in features.people:
+        a, b = person.legs
+        paired.update((id(a), id(b)))
+        kinds.append("person")
+        positions.append(person.center)
+        sigmas.append(person_sigma_m)
+        first.append(min(a.first, b.first))
+        last.append(max(a.last, b.last))
+    if single_legs:
+        for leg in features.legs:
+            if id(leg) not in paired:
+                kinds.append("leg")
+                positions.append(leg.center)
+                sigmas.append(leg_sigma_m)
+                first.append(leg.first)
+                last.append(leg.last)
+    for circle in features.circles:
+        if circle.kind == "circle":
+            kinds.append("circle")
+            positions.append(circle.center)
+            sigmas.append(circle_sigma_m)
+            first.append(circle.first)
+            last.append(circle.last)
+    var = np.square(np.array(sigmas, dtype=np.float64))
+    return Detections._trusted(int(features.stamp_ns), tuple(kinds),
+                               np.array(positions, dtype=np.float64).reshape(-1, 2), var[:, None, None] * _I2,
+                               np.array(first, dtype=np.int64), np.array(last, dtype=np.int64))
+
+
+# ============================================================================ the track table
+@dataclass(frozen=True, eq=False)
+class TrackTable:
+    """The tracks after one scan: one row per track, columns as arrays.
+
+    Every live track is listed (tentative, static and confirmed), and so is a track deleted
+    at this scan (status ``"deleted"``, its last prediction), once. The moving targets are the
+    rows whose status is ``"confirmed"`` (:meth:`confirmed`).
+
+    Attributes
+    ----------
+    stamp_ns : int
+        The scan's time stamp.
+    frame : str
+        ``"sensor"`` or ``"map"``: the frame of the states.
+    pose : (x, y, theta) or None
+        The scan's pose that moved its detections into the map frame (None in the sensor frame,
+        or when the scan had none).
+    ids : ndarray (T,), int
+        Track identities, from 1, never reused.
+    kinds, status : ndarray (T,), str
+        ``"person"`` or ``"circle"``; ``"tentative"``, ``"static"``, ``"confirmed"`` or ``"deleted"``.
+    states : ndarray (T, 4)
+        ``(x, y, vx, vy)``, metres and m/s.
+    covariances : ndarray (T, 4, 4)
+        Their covariances.
+    hits : ndarray (T,), int
+        Scans in which the track was detected.
+    born_ns, last_seen_ns : ndarray (T,), int
+        When it was born, and last detected.
+    detection : ndarray (T,), int
+        The detection (index into ``detections``) that updated it at this scan, -1 if none.
+    detections : Detections
+        The scan's detections, in the tracking frame.
+    events : tuple of (str, int)
+        ``("birth", id)``, ``("confirm", id)`` (a moving track), ``("static", id)`` (confirmed
+        static), ``("delete", id)``, in the order they happened.
+    seconds : float
+        The time the tracker took for this scan.
+    late : bool
+        The scan came with a stamp older than the last one tracked and was not tracked: the
+        tracks are listed as they were (a recording whose stamps go back; see
+        :attr:`Tracker.late_scans`).
+    """
+
+    stamp_ns: int
+    frame: str
+    pose: tuple | None
+    ids: np.ndarray
+    kinds: np.ndarray
+    status: np.ndarray
+    states: np.ndarray
+    covariances: np.ndarray
+    hits: np.ndarray
+    born_ns: np.ndarray
+    last_seen_ns: np.ndarray
+    detection: np.ndarray
+    detections: Detections
+    events: tuple = ()
+    seconds: float = 0.0
+    late: bool = False
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def confirmed(self) -> np.ndarray:
+        """The rows of the confirmed (moving) tracks, as a boolean mask."""
+        return self.status == "confirmed"
+
+    def rows(self) -> list[dict]:
+        """One JSON-ready dict per track: ``stamp_ns``, ``frame``, ``id``, ``kind``, ``status``,
+        ``x``, ``y``, ``vx``, ``vy``, ``covariance`` (4 x 4 as nested lists), ``hits``,
+        ``born_ns``, ``last_seen_ns`` (what ``labkit track`` writes, one row per track per scan)."""
+        out = []
+        for i in range(len(self.ids)):
+            x, y, vx, vy = self.states[i].tolist()
+            out.append({"stamp_ns": self.stamp_ns, "frame": self.frame, "id": int(self.ids[i]),
+                        "kind": str(self.kinds[i]), "status": str(self.status[i]), "x": x, "y": y, "vx": vx,
+                        "vy": vy, "covariance": self.covariances[i].tolist(), "hits": int(self.hits[i]),
+                        "born_ns": int(self.born_ns[i]), "last_seen_ns": int(self.last_seen_ns[i])})
+        return out
+
+    def __repr__(self) -> str:
+        counts = {s: int((self.status == s).sum()) for s in STATUSES}
+        return (f"TrackTable(stamp_ns={self.stamp_ns}, frame={self.frame!r}, "
+                + ", ".join(f"{v} {k}" for k, v in counts.items()) + ")")
+
+
+# ============================================================================ the tracker
+class Tracker:
+    """A multi-target tracker (see the module docstring for the steps and the life cycle).
+
+    Build one with the keywords of :class:`TrackingParams` (``Tracker(**config.tracking.kwargs())``
+    with a :class:`labkit.Config`), then call :meth:`step` once per scan, in time order.
+
+    Parameters
+    ----------
+    frame : {"auto", "sensor", "map"}
+    acceleration_noise_m2_s3 : float, m^2/s^3
+    initial_speed_sigma_mps : float, m/s
+    person_sigma_m, leg_sigma_m, circle_sigma_m : float, metres
+    single_legs : bool
+    gate_probability : float in (0, 1)
+    confirm_hits, confirm_scans : int
+        M of N.
+    max_coast_s : float, seconds
+    min_travel_m : float, metres
+        Each as documented in :class:`TrackingParams`.
+    """
+
+    @checked_by(TrackingParams)
+    def __init__(
+        self,
+        *,
+        frame: str = TrackingParams.frame,
+        acceleration_noise_m2_s3: float = TrackingParams.acceleration_noise_m2_s3,
+        initial_speed_sigma_mps: float = TrackingParams.initial_speed_sigma_mps,
+        person_sigma_m: float = TrackingParams.person_sigma_m,
+        leg_sigma_m: float = TrackingParams.leg_sigma_m,
+        circle_sigma_m: float = TrackingParams.circle_sigma_m,
+        single_legs: bool = TrackingParams.single_legs,
+        gate_probability: float = TrackingParams.gate_probability,
+        confirm_hits: int = TrackingParams.confirm_hits,
+        confirm_scans: int = TrackingParams.confirm_scans,
+        max_coast_s: float = TrackingParams.max_coast_s,
+        min_travel_m: float = TrackingParams.min_travel_m,
+    ) -> None:
+        self.params = TrackingParams(
+            frame=frame, acceleration_noise_m2_s3=acceleration_noise_m2_s3,
+            initial_speed_sigma_mps=initial_speed_sigma_mps, person_sigma_m=person_sigma_m, leg_sigma_m=leg_sigma_m,
+            circle_sigma_m=circle_sigma_m, single_legs=single_legs, gate_probability=gate_probability,
+            confirm_hits=confirm_hits, confirm_scans=confirm_scans, max_coast_s=max_coast_s,
+            min_travel_m=min_travel_m)
+        self.frame = None if frame == "auto" else frame  # decided at the first scan
+        self._gate = gate_threshold(gate_probability)
+        self._max_coast_ns = round(max_coast_s * 1e9)
+        self._next_id = 1
+        self._stamp: int | None = None
+        #: scans older than the last one tracked, which were not tracked (see :meth:`step`)
+        self.late_scans = 0
+        # the live tracks, one row each
+        self._ids = np.zeros(0, dtype=np.int64)
+        self._kind = np.zeros(0, dtype=np.int64)
+        self._status = np.zeros(0, dtype=np.int64)
+        self._x = np.zeros((0, 4))
+        self._P = np.zeros((0, 4, 4))
+        self._anchor = np.zeros((0, 2))  # where it was first seen
+        self._moved = np.zeros(0, dtype=bool)
+        self._far = np.zeros(0, dtype=np.int64)
+        self._hits = np.zeros(0, dtype=np.int64)
+        self._scans = np.zeros(0, dtype=np.int64)
+        self._born = np.zeros(0, dtype=np.int64)
+        self._seen = np.zeros(0, dtype=np.int64)
+
+    def __repr__(self) -> str:
+        return f"Tracker({len(self._ids)} tracks, frame={self.frame!r})"
+
+    # ------------------------------------------------------------------ one scan
+    def step(self, observed: Features | Detections, *, pose=None, trace: bool = False):
+        """Take one scan's detections (its :class:`labkit.Features`, or :class:`Detections`),
+        in the sensor frame, with the scan's ``pose`` in the map (or None); returns the
+        :class:`TrackTable` after the scan, and with ``trace=True`` also the steps taken.
+
+        Scans must come in time order: one stamped before the last one tracked is not tracked
+        (its table has ``late=True``, the tracks as they were; :attr:`late_scans` counts them)."""
+        t_start = perf_counter()
+        steps: list[Step] | None = [] if trace else None
+        detections, pose = self._detections(observed, pose)
+        if self._stamp is not None and detections.stamp_ns < self._stamp:
+            return self._late(detections, pose, steps, t_start)
+        dt = self._advance_clock(detections.stamp_ns)
+        self._predict(dt, steps)                                      # 1
+        cost = self._gate_all(detections, steps)                      # 2
+        tracks, dets = assign(cost)                                   # 3
+        _trace_assign(steps, self._ids, tracks, dets, cost, detections)
+        self._update(tracks, dets, detections, steps)                 # 4
+        events = self._birth(cost, detections, steps)                 # 5
+        events += self._confirm(steps)                                # 6
+        deleted = self._to_delete(steps)                              # 7
+        events += [("delete", int(i)) for i in self._ids[deleted]]
+        detection = np.full(len(self._ids), -1, dtype=np.int64)
+        detection[tracks] = dets
+        table = self._table(detections, pose, deleted, detection, tuple(events))
+        self._keep(~deleted)
+        table = _with_seconds(table, perf_counter() - t_start)
+        return (table, steps) if trace else table
+
+    def _detections(self, observed, pose) -> tuple[Detections, tuple | None]:
+        """The scan's detections in the tracking frame, and the pose used (None if none)."""
+        p = self.params
+        if isinstance(observed, Features):
+            observed = detections_from(observed, person_sigma_m=p.person_sigma_m, leg_sigma_m=p.leg_sigma_m,
+                                       circle_sigma_m=p.circle_sigma_m, single_legs=p.single_legs)
+        elif isinstance(observed, Detections):
+            observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
+        else:
+            raise ValueError(f"observed must be labkit.Features or labkit.tracking.Detections, got "
+                             f"{type(observed).__name__}")
+        if pose is not None:
+            try:
+                pose = tuple(float(v) for v in pose)
+            except (TypeError, ValueError):
+                raise ValueError(f"pose must be (x, y, theta) or None, got {pose!r}") from None
+            if len(pose) != 3 or not all(math.isfinite(v) for v in pose):
+                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}")
+        if self.frame is None:
+            self.frame = "map" if pose is not None else "sensor"
+        if self.frame == "sensor":
+            return observed, None
+        if pose is None:  # the map frame without a pose: nothing can be placed
+            return Detections._trusted(observed.stamp_ns, (), np.zeros((0, 2)), np.zeros((0, 2, 2)),
+                                       np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)), None
+        return observed.in_frame(pose), pose
+
+    def _late(self, detections: Detections, pose, steps, t_start: float):
+        """A scan older than the last one tracked (a recording whose stamps go back): not tracked.
+        Its table lists the tracks as they are, with ``late=True``; :attr:`late_scans` counts them."""
+        self.late_scans += 1
+        table = self._table(detections, pose, np.zeros(len(self._ids), dtype=bool),
+                            np.full(len(self._ids), -1, dtype=np.int64), ())
+        object.__setattr__(table, "late", True)
+        table = _with_seconds(table, perf_counter() - t_start)
+        return (table, steps) if steps is not None else table
+
+    def _advance_clock(self, stamp_ns: int) -> float:
+        dt = 0.0 if self._stamp is None else (stamp_ns - self._stamp) * 1e-9
+        self._stamp = stamp_ns
+        self._scans += 1
+        return dt
+
+    # ------------------------------------------------------------------ 1. predict
+    def _predict(self, dt: float, steps) -> None:
+        """Every track to the scan's time (:func:`cv_predict`)."""
+        if len(self._ids) and dt > 0.0:
+            self._x, self._P = cv_predict(self._x, self._P, dt, self.params.acceleration_noise_m2_s3)
+        if steps is not None:
+            for i, tid in enumerate(self._ids.tolist()):
+                steps.append(Step("tracking", "predict", center=tuple(self._x[i, :2].tolist()), value=dt,
+                                  radius=float(math.sqrt(max(np.linalg.eigvalsh(self._P[i, :2, :2]).max(), 0.0))),
+                                  track=tid, reason=f"track {tid} predicted {dt:.3f} s ahead "
+                                                    f"(radius: its largest position standard deviation)"))
+
+    # ------------------------------------------------------------------ 2. gate
+    def _gate_all(self, detections: Detections, steps) -> np.ndarray:
+        """Cost ``d2 + ln det S`` of every (track, detection) pair of the same kind inside the
+        gate; ``inf`` elsewhere."""
+        n_tracks, n_dets = len(self._ids), len(detections)
+        if n_tracks == 0 or n_dets == 0:
+            return np.full((n_tracks, n_dets), np.inf)
+        nu, S = innovation(self._x[:, None, :], self._static_gate_P()[:, None, :, :], detections.positions[None],
+                           detections.covariances[None])
+        d2, logdet = mahalanobis2(nu, S)
+        det_kind = np.array([_TRACK_KIND_OF[k] for k in detections.kinds])
+        same_kind = self._kind[:, None] == det_kind[None, :]
+        inside = same_kind & (d2 <= self._gate)
+        if steps is not None:
+            for i, j in zip(*np.nonzero(same_kind), strict=True):
+                ok = bool(inside[i, j])
+                steps.append(Step("tracking", "gate", int(detections.first[j]), int(detections.last[j]),
+                                  center=tuple(detections.positions[j].tolist()), value=float(d2[i, j]),
+                                  threshold=self._gate, test="gate_probability", track=int(self._ids[i]),
+                                  detection=int(j), reason=f"{detections.kinds[j]} {j} {'inside' if ok else 'outside'} "
+                                  f"the gate of track {self._ids[i]}: d2 = {d2[i, j]:.2f} "
+                                  f"{'<=' if ok else '>'} {self._gate:.2f}"))
+        return np.where(inside, d2 + logdet, np.inf)
+
+    def _static_gate_P(self) -> np.ndarray:
+        """The covariances the gate reads: a static track's position covariance scaled down so that
+        it alone spans no more than ``min_travel_m`` (its largest eigenvalue at most
+        ``min_travel_m^2 / gate``): a column hidden for a while takes no detection from across the room."""
+        static = self._status == _STATIC
+        if not static.any():
+            return self._P
+        P = self._P.copy()
+        a, b, d = P[static, 0, 0], P[static, 0, 1], P[static, 1, 1]
+        largest = 0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + b * b)
+        cap = self.params.min_travel_m**2 / self._gate
+        scale = np.minimum(1.0, cap / np.maximum(largest, 1e-300))
+        P[static, :2, :2] *= scale[:, None, None]
+        return P
+
+    # ------------------------------------------------------------------ 4. update
+    def _update(self, tracks: np.ndarray, dets: np.ndarray, detections: Detections, steps) -> None:
+        """Each assigned track with its detection (:func:`kalman_update`)."""
+        if len(tracks) == 0:
+            return
+        x, P = kalman_update(self._x[tracks], self._P[tracks], detections.positions[dets],
+                             detections.covariances[dets])
+        self._x[tracks], self._P[tracks] = x, P
+        self._hits[tracks] += 1
+        self._seen[tracks] = detections.stamp_ns
+        first = self._hits[tracks] <= self.params.confirm_hits  # the anchor: the mean of its first M detections
+        self._anchor[tracks[first]] += (detections.positions[dets[first]] - self._anchor[tracks[first]]) \
+            / self._hits[tracks[first], None]
+        far = np.hypot(*(x[:, :2] - self._anchor[tracks]).T) > self.params.min_travel_m
+        self._far[tracks] = np.where(far, self._far[tracks] + 1, 0)  # updates in a row beyond min_travel_m
+        self._moved[tracks] |= self._far[tracks] >= self.params.confirm_hits
+        if steps is not None:
+            for i, j in zip(tracks.tolist(), dets.tolist(), strict=True):
+                steps.append(Step("tracking", "update", int(detections.first[j]), int(detections.last[j]),
+                                  center=tuple(self._x[i, :2].tolist()), track=int(self._ids[i]), detection=j,
+                                  reason=f"track {self._ids[i]} updated by {detections.kinds[j]} {j}"))
+
+    # ------------------------------------------------------------------ 5. birth
+    def _birth(self, cost: np.ndarray, detections: Detections, steps) -> list:
+        """A tentative track for every person or circle detection outside every gate."""
+        outside = ~np.isfinite(cost).any(axis=0) if cost.shape[0] else np.ones(len(detections), dtype=bool)
+        new = [j for j in range(len(detections)) if outside[j] and _STARTS_TRACKS[detections.kinds[j]]]
+        if not new:
+            return []
+        p = self.params
+        ids = np.arange(self._next_id, self._next_id + len(new), dtype=np.int64)
+        self._next_id += len(new)
+        z = detections.positions[new]
+        x = np.hstack([z, np.zeros((len(new), 2))])
+        P = np.zeros((len(new), 4, 4))
+        P[:, :2, :2] = detections.covariances[new]
+        P[:, 2, 2] = P[:, 3, 3] = p.initial_speed_sigma_mps**2
+        kinds = np.array([_TRACK_KIND_OF[detections.kinds[j]] for j in new], dtype=np.int64)
+        stamp = np.full(len(new), detections.stamp_ns, dtype=np.int64)
+        self._ids = np.concatenate([self._ids, ids])
+        self._kind = np.concatenate([self._kind, kinds])
+        self._status = np.concatenate([self._status, np.full(len(new), _TENTATIVE)])
+        self._x = np.concatenate([self._x, x])
+        self._P = np.concatenate([self._P, P])
+        self._anchor = np.concatenate([self._anchor, z])
+        self._moved = np.concatenate([self._moved, np.zeros(len(new), dtype=bool)])
+        self._far = np.concatenate([self._far, np.zeros(len(new), dtype=np.int64)])
+        self._hits = np.concatenate([self._hits, np.ones(len(new), dtype=np.int64)])
+        self._scans = np.concatenate([self._scans, np.ones(len(new), dtype=np.int64)])
+        self._born = np.concatenate([self._born, stamp])
+        self._seen = np.concatenate([self._seen, stamp])
+        if steps is not None:
+            for tid, j in zip(ids.tolist(), new, strict=True):
+                steps.append(Step("tracking", "birth", int(detections.first[j]), int(detections.last[j]),
+                                  center=tuple(detections.positions[j].tolist()), track=tid, detection=j,
+                                  reason=f"track {tid} born, tentative, from {detections.kinds[j]} {j} "
+                                         "(outside every gate)"))
+        return [("birth", tid) for tid in ids.tolist()]
+
+    # ------------------------------------------------------------------ 6. confirm
+    def _confirm(self, steps) -> list:
+        """Tentative tracks detected ``confirm_hits`` times become static or confirmed; static
+        tracks that have moved (``min_travel_m``, M updates in a row) become confirmed."""
+        p = self.params
+        events = []
+        ready = (self._status == _TENTATIVE) & (self._hits >= p.confirm_hits)
+        moving = (self._status == _STATIC) & self._moved
+        for i in np.flatnonzero(ready | moving).tolist():
+            tid = int(self._ids[i])
+            travel = float(np.hypot(*(self._x[i, :2] - self._anchor[i])))
+            self._status[i] = _CONFIRMED if self._moved[i] else _STATIC
+            events.append(("confirm" if self._moved[i] else "static", tid))
+            if steps is not None:
+                if ready[i]:
+                    what = "confirmed, moving" if self._moved[i] else "confirmed static"
+                    steps.append(Step("tracking", "confirm", center=tuple(self._x[i, :2].tolist()),
+                                      value=float(self._hits[i]), threshold=float(p.confirm_hits), test="confirm_hits",
+                                      track=tid, reason=f"track {tid} {what}: detected in {self._hits[i]} of its "
+                                                        f"{self._scans[i]} scans, travelled {travel:.2f} m"))
+                else:
+                    steps.append(Step("tracking", "confirm", center=tuple(self._x[i, :2].tolist()), value=travel,
+                                      threshold=p.min_travel_m, test="min_travel_m", track=tid,
+                                      reason=f"static track {tid} moves: {travel:.2f} m from where it was first "
+                                             f"seen, beyond min_travel_m at {p.confirm_hits} updates in a row"))
+        return events
+
+    # ------------------------------------------------------------------ 7. delete
+    def _to_delete(self, steps) -> np.ndarray:
+        """Tentative tracks that can no longer be confirmed, and tracks not detected for more
+        than ``max_coast_s``: a boolean mask of the tracks."""
+        p = self.params
+        hopeless = (self._status == _TENTATIVE) & (self._scans - self._hits > p.confirm_scans - p.confirm_hits)
+        lost = (self._stamp - self._seen) > self._max_coast_ns if len(self._ids) else np.zeros(0, dtype=bool)
+        deleted = hopeless | lost
+        if steps is not None:
+            for i in np.flatnonzero(deleted).tolist():
+                tid = int(self._ids[i])
+                if hopeless[i]:
+                    misses = int(self._scans[i] - self._hits[i])
+                    steps.append(Step("tracking", "delete", center=tuple(self._x[i, :2].tolist()), value=float(misses),
+                                      threshold=float(p.confirm_scans - p.confirm_hits), test="confirm_hits",
+                                      track=tid, reason=f"tentative track {tid} deleted: {misses} misses, so fewer "
+                                                        f"than {p.confirm_hits} detections in {p.confirm_scans} scans"))
+                else:
+                    gone = (self._stamp - int(self._seen[i])) * 1e-9
+                    steps.append(Step("tracking", "delete", center=tuple(self._x[i, :2].tolist()), value=gone,
+                                      threshold=p.max_coast_s, test="max_coast_s", track=tid,
+                                      reason=f"track {tid} deleted: not detected for {gone:.2f} s"))
+        return deleted
+
+    # ------------------------------------------------------------------ bookkeeping
+    def _table(self, detections, pose, deleted, detection, events) -> TrackTable:
+        status = np.where(deleted, _DELETED, self._status)
+        return TrackTable(int(detections.stamp_ns), self.frame, pose, self._ids.copy(), _KINDS[self._kind],
+                          _STATUS_NAMES[status], self._x.copy(), self._P.copy(), self._hits.copy(),
+                          self._born.copy(), self._seen.copy(), detection, detections, events)
+
+    def _keep(self, keep: np.ndarray) -> None:
+        if keep.all():
+            return
+        for name in ("_ids", "_kind", "_status", "_x", "_P", "_anchor", "_moved", "_far", "_hits", "_scans", "_born",
+                     "_seen"):
+            setattr(self, name, getattr(self, name)[keep])
+
+
+_KINDS = np.array(TRACK_KINDS)
+_STATUS_NAMES = np.array(STATUSES)
+
+
+def _with_seconds(table: TrackTable, seconds: float) -> TrackTable:
+    object.__setattr__(table, "seconds", seconds)
+    return table
+
+
+def _trace_assign(steps, ids, tracks, dets, cost, detections) -> None:
+    if steps is None:
+        return
+    for i, j in zip(tracks.tolist(), dets.tolist(), strict=True):
+        steps.append(Step("tracking", "assign", int(detections.first[j]), int(detections.last[j]),
+                          center=tuple(detections.positions[j].tolist()), value=float(cost[i, j]),
+                          track=int(ids[i]), detection=j,
+                          reason=f"{detections.kinds[j]} {j} assigned to track {ids[i]} "
+                                 f"(cost d2 + ln det S = {cost[i, j]:.2f})"))
+
+
+# ============================================================================ a stream of scans
+@checked_by(TrackingParams)
+def track(
+    stream: Iterable,
+    *,
+    frame: str = TrackingParams.frame,
+    acceleration_noise_m2_s3: float = TrackingParams.acceleration_noise_m2_s3,
+    initial_speed_sigma_mps: float = TrackingParams.initial_speed_sigma_mps,
+    person_sigma_m: float = TrackingParams.person_sigma_m,
+    leg_sigma_m: float = TrackingParams.leg_sigma_m,
+    circle_sigma_m: float = TrackingParams.circle_sigma_m,
+    single_legs: bool = TrackingParams.single_legs,
+    gate_probability: float = TrackingParams.gate_probability,
+    confirm_hits: int = TrackingParams.confirm_hits,
+    confirm_scans: int = TrackingParams.confirm_scans,
+    max_coast_s: float = TrackingParams.max_coast_s,
+    min_travel_m: float = TrackingParams.min_travel_m,
+    trace: bool = False,
+) -> Iterator:
+    """Track over a stream of scans, lazily: one :class:`TrackTable` per scan.
+
+    Parameters
+    ----------
+    stream : iterable
+        :class:`labkit.Features` (which carry no pose: the sensor frame; with ``frame="map"``
+        nothing could be placed), or ``(scan, features)`` pairs whose
+        :attr:`labkit.Scan.pose` places the scan in the map (``frame="map"``, or ``"auto"`` when
+        the first scan has one); :class:`Detections` work too, alone or as ``(pose, detections)``.
+        :func:`labkit.pipeline.track_scans` runs the pipeline and this together.
+    frame, acceleration_noise_m2_s3, ..., min_travel_m
+        The keywords of :class:`TrackingParams` (``**config.tracking.kwargs()``).
+    trace : bool
+        Yield ``(table, steps)`` per scan (see :meth:`Tracker.step`).
+
+    Examples
+    --------
+    >>> from labkit import sim, extract_all
+    >>> scans = [s for s, _ in sim.simulate("crossing_2", seed=1, n_scans=40)]
+    >>> tables = list(track(zip(scans, extract_all(scans))))
+    >>> tables[-1].frame, int(tables[-1].confirmed().sum())
+    ('map', 3)
+    """
+    tracker = Tracker(frame=frame, acceleration_noise_m2_s3=acceleration_noise_m2_s3,
+                      initial_speed_sigma_mps=initial_speed_sigma_mps, person_sigma_m=person_sigma_m,
+                      leg_sigma_m=leg_sigma_m, circle_sigma_m=circle_sigma_m, single_legs=single_legs,
+                      gate_probability=gate_probability, confirm_hits=confirm_hits, confirm_scans=confirm_scans,
+                      max_coast_s=max_coast_s, min_travel_m=min_travel_m)
+    return _tracked(tracker, stream, trace)
+
+
+def _tracked(tracker: Tracker, stream: Iterable, trace: bool) -> Iterator:
+    for item in stream:
+        if isinstance(item, (Features, Detections)):
+            yield tracker.step(item, trace=trace)
+            continue
+        try:
+            first, observed = item
+        except (TypeError, ValueError):
+            raise ValueError(f"stream items must be Features or (scan, features) pairs, got {type(item).__name__}") \
+                from None
+        pose = getattr(first, "pose", first)  # a Scan's pose, or a pose given as such
+        yield tracker.step(observed, pose=pose, trace=trace)
