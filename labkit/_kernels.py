@@ -28,6 +28,7 @@ checks that on this machine.
 from __future__ import annotations
 
 import math
+import warnings
 from fractions import Fraction
 
 import numba
@@ -45,15 +46,37 @@ HALF_PI = math.pi / 2
 
 
 def jit(fn):
-    """``fn`` compiled by numba on its first call, cached on disk (see the module docstring)."""
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    """``fn`` compiled by numba on its first call, cached on disk (see the module docstring).
+
+    The cache is numba's: ``__pycache__`` beside the source when that folder is writable (an
+    editable install: the repository's ``labkit/**/__pycache__``), else the user's cache folder
+    (``~/.cache/numba``), or ``$NUMBA_CACHE_DIR`` when set. Where none is writable the engines
+    still run, compiled afresh in every process (a warning says so once)."""
+    try:
+        return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    except RuntimeError as exc:  # numba: "cannot cache function ...: no locator available"
+        if "cannot cache" not in str(exc):
+            raise
+        _warn_no_cache(str(exc))
+        return numba.njit(nogil=True, error_model="numpy")(fn)
 
 
 def jit_inline(fn):
     """:func:`jit` for a small helper that LLVM inlines into its callers. (numba's own
     ``inline="always"`` copies the helper into each caller before typing: a fifth more
     compilation time for the engines, measured, and no faster code.)"""
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    return jit(fn)
+
+
+_WARNED: list[str] = []
+
+
+def _warn_no_cache(reason: str) -> None:
+    if not _WARNED:
+        _WARNED.append(reason)
+        warnings.warn(f"labkit's compiled engines find no writable cache folder ({reason}): every process "
+                      "compiles them again on its first scan (some 30 s of CPU); set NUMBA_CACHE_DIR to a "
+                      "writable folder", RuntimeWarning, stacklevel=3)
 
 
 @jit

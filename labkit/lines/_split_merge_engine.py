@@ -454,7 +454,7 @@ def extract(points, ranges, angles, valid, labels, fit, threshold_m, noise_sigma
             # step 4: is it a line?
             failed = worst > threshold_m
             if noise_sigma > 0 and not failed and a < p < b - 1 and worst > MIN_SPLIT_M:
-                q, ratio = _beyond_own_noise(V, RHO, lo, hi, r, noise_sigma)
+                q, ratio = _beyond_own_noise(V, RHO, np.int64(lo), np.int64(hi), r, noise_sigma)
                 if ratio > 1.0:
                     failed = True
                     p = lo + q
@@ -467,8 +467,8 @@ def extract(points, ranges, angles, valid, labels, fit, threshold_m, noise_sigma
                 cf, sf = math.cos(af), math.sin(af)
                 for i in range(a, b):
                     V[i] = dot2(X[i], Y[i], cf, sf, fused)
-                misfit, k_s, w_s = _misfit(V, RHO, a, b, rf, noise_sigma, scratch[0], scratch[1], scratch[2],
-                                           scratch[3], scratch[4])
+                misfit, k_s, w_s = _misfit(V, RHO, np.int64(a), np.int64(b), rf, noise_sigma, scratch[0], scratch[1],
+                                           scratch[2], scratch[3], scratch[4])
                 if misfit == 1 and a < p < b - 1:
                     failed = True
             if failed and a < p < b - 1:  # step 5: split at the worst point, which ends the left half
@@ -554,9 +554,9 @@ def extract(points, ranges, angles, valid, labels, fit, threshold_m, noise_sigma
     RR = np.empty(m + 1)
     # step 6: merge similar neighbours; drop the lines too short, then merge the new neighbours
     if merge_on:
-        n_lines = _merge(lines, n_lines, S, R, AL, ENDS, PF, PL, FIRST, LAST, HEAD, TAIL, NEXT, span_a, span_b, order,
-                         points, ranges, angles, valid, threshold_m, noise_sigma, max_gap_m, merge_dr_m, merge_dalpha,
-                         floor_m, lam_cut, lam_graze, full_circle, VV, RR, work)
+        n_lines = _merge(lines, np.int64(n_lines), S, R, AL, ENDS, PF, PL, FIRST, LAST, HEAD, TAIL, NEXT, span_a,
+                         span_b, order, points, ranges, angles, valid, threshold_m, noise_sigma, max_gap_m, merge_dr_m,
+                         merge_dalpha, floor_m, lam_cut, lam_graze, full_circle, VV, RR, work)
     kept = 0
     for i in range(n_lines):
         k = lines[i]
@@ -565,9 +565,9 @@ def extract(points, ranges, angles, valid, labels, fit, threshold_m, noise_sigma
             lines[kept] = k
             kept += 1
     if merge_on and 1 < kept < n_lines:
-        kept = _merge(lines, kept, S, R, AL, ENDS, PF, PL, FIRST, LAST, HEAD, TAIL, NEXT, span_a, span_b, order,
-                      points, ranges, angles, valid, threshold_m, noise_sigma, max_gap_m, merge_dr_m, merge_dalpha,
-                      floor_m, lam_cut, lam_graze, full_circle, VV, RR, work)
+        kept = _merge(lines, np.int64(kept), S, R, AL, ENDS, PF, PL, FIRST, LAST, HEAD, TAIL, NEXT, span_a, span_b,
+                      order, points, ranges, angles, valid, threshold_m, noise_sigma, max_gap_m, merge_dr_m,
+                      merge_dalpha, floor_m, lam_cut, lam_graze, full_circle, VV, RR, work)
     # the kept lines' beams, laid end to end
     offsets = np.zeros(kept + 1, np.int64)
     for i in range(kept):
@@ -682,9 +682,10 @@ def _attempt(a, b, S, R, AL, ENDS, PF, PL, FIRST, LAST, HEAD, TAIL, NEXT, span_a
     if worst > threshold_m:
         return False
     if noise_sigma > 0:
-        if worst > MIN_SPLIT_M and _beyond_own_noise(VV, RR, 0, n, r, noise_sigma)[1] > 1.0:
+        zero, n = np.int64(0), np.int64(n)  # (no literal: numba would compile the callees again for Literal[int](0))
+        if worst > MIN_SPLIT_M and _beyond_own_noise(VV, RR, zero, n, r, noise_sigma)[1] > 1.0:
             return False
-        if _misfit(VV, RR, 0, n, r, noise_sigma, work[0], work[1], work[2], work[3], work[4])[0] != 0:
+        if _misfit(VV, RR, zero, n, r, noise_sigma, work[0], work[1], work[2], work[3], work[4])[0] != 0:
             return False
     # no valid beam between them ending more than max_gap_m in front of or behind the merged line
     after, before = LAST[a], FIRST[b]
@@ -893,14 +894,15 @@ def compile_all() -> None:
     ranges = 2.0 / np.maximum(np.cos(angles), 0.3) + 0.002 * np.sin(7.0 * angles)
     points = np.stack([ranges * np.cos(angles), ranges * np.sin(angles)], axis=1)
     valid = np.ones(len(ranges), dtype=bool)
-    for arrays in ((ranges, angles, valid, points), tuple(_read_only(a) for a in (ranges, angles, valid, points))):
-        r, a, v, p = arrays
-        residuals(r, a, v, False)
-        labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
-        out = extract(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15, False,
-                      0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, bool(FUSED_DOT))
-        cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
-        _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
+    # read-only arrays, as every Scan hands them over: numba compiles a kernel once per kind of
+    # argument (a writable array is another kind), and only this kind is worth compiling ahead
+    r, a, v, p = (_read_only(x) for x in (ranges, angles, valid, points))
+    residuals(r, a, v, False)
+    labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
+    out = extract(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15, False,
+                  0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, bool(FUSED_DOT))
+    cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
+    _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
