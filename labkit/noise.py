@@ -50,9 +50,12 @@ from collections.abc import Iterable
 import numpy as np
 
 from ._checks import check_nonneg, check_positive
-from ._noise_engine import residuals as engine_residuals
+from ._jit import ENABLED as _JIT
 from .params import AUTO
 from .scan import Scan
+
+if _JIT:  # (LABKIT_NO_JIT=1: the readable code, numba not imported)
+    from ._noise_engine import residuals as _engine_residuals
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "noise_sigma", "auto_split_threshold",
            "chi2_upper_over_dof", "noise_config", "MIN_RESIDUALS", "AUTO_LINES", "AUTO_RANSAC", "AUTO_HOUGH",
@@ -152,8 +155,11 @@ def estimate_range_noise(scans: Scan | Iterable[Scan]) -> float:
     >>> round(estimate_range_noise(Scan(ranges=ranges, angles=theta)), 3)
     0.01
     """
-    if isinstance(scans, Scan):  # the residuals in one compiled pass, bit for bit range_noise_residuals'
-        return _robust_sigma(engine_residuals(scans.ranges, scans.angles, scans.valid, scans.is_full_circle))
+    if isinstance(scans, Scan):
+        if not _JIT:
+            return _robust_sigma(range_noise_residuals(scans))
+        # the residuals in one compiled pass, bit for bit range_noise_residuals'
+        return _robust_sigma(_engine_residuals(scans.ranges, scans.angles, scans.valid, scans.is_full_circle))
     if isinstance(scans, (str, bytes)) or not isinstance(scans, Iterable):
         raise ValueError(f"scans must be a labkit.Scan or an iterable of them, got {type(scans).__name__}")
     parts = [range_noise_residuals(s) for s in scans]

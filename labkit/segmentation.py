@@ -28,10 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._segmentation_engine import labels as engine_labels
+from ._jit import ENABLED as _JIT
 from .noise import RANGE_SIGMA_M, scan_sigma
 from .params import AUTO, Params, checked_by, param
 from .scan import Scan
+
+if _JIT:  # (LABKIT_NO_JIT=1: the readable code, numba not imported)
+    from ._segmentation_engine import labels as _engine_labels
 
 __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
            "range_segments", "breakpoint_thresholds", "segment_order",
@@ -175,11 +178,13 @@ def segment_labels(
     """
     if adaptive and range_sigma_m == AUTO:
         range_sigma_m = scan_sigma(scan)
+    if not _JIT:
+        return _segment_labels_reference(scan, threshold_m, min_points, adaptive, incidence_deg, range_sigma_m)
     # one compiled pass over the beams (labkit._segmentation_engine), the labels of
     # _segment_labels_reference below bit for bit
-    return engine_labels(scan.points, scan.ranges, scan.angles, scan.valid, float(threshold_m), int(min_points),
-                         bool(adaptive), math.radians(incidence_deg), float(range_sigma_m) if adaptive else 0.0,
-                         scan.is_full_circle, scan.angle_increment)
+    return _engine_labels(scan.points, scan.ranges, scan.angles, scan.valid, float(threshold_m), int(min_points),
+                          bool(adaptive), math.radians(incidence_deg), float(range_sigma_m) if adaptive else 0.0,
+                          scan.is_full_circle, scan.angle_increment)
 
 
 def _segment_labels_reference(scan: Scan, threshold_m: float, min_points: int, adaptive: bool, incidence_deg: float,

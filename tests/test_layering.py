@@ -13,8 +13,8 @@ LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 
 #: the model and the algorithms (modules, or whole family packages): each may import the
 #: others, numpy and the standard library
-ALGORITHMS = ["_checks", "_safe", "_cache", "_iav", "params", "_records", "_plainfloat", "_dbscan_fast", "_kernels",
-              "_segmentation_engine", "_noise_engine",
+ALGORITHMS = ["_checks", "_jit", "_safe", "_cache", "_iav", "params", "_records", "_plainfloat", "_dbscan_fast",
+              "_kernels", "_segmentation_engine", "_noise_engine",
               "errors", "scan", "steps", "geometry", "noise", "segmentation", "fitting",
               "features", "dbscan", "pipeline", "evaluation", "poses", "lines", "circles", "sim",
               "tracking", "tracking_metrics"]

@@ -66,13 +66,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._jit import ENABLED as _JIT
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
 from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
 from ..segmentation import SegmentationParams, detector_labels, segment_labels, segment_order
 from ..steps import Step
-from . import _split_merge_engine as engine
 from ._runs import _ends_off, _Trace
 from ._split_merge_fast import (
     GRAZING_DEG,
@@ -86,6 +86,11 @@ from ._split_merge_fast import (
     wide_gaps,
 )
 from .placing import placed
+
+if _JIT:  # (LABKIT_NO_JIT=1: the readable steps, numba not imported)
+    from . import _split_merge_engine as engine
+else:
+    engine = None
 
 __all__ = ["split_and_merge", "iepf", "lines_similar", "join_grazing_walls", "SplitMergeParams", "GRAZING_DEG",
            "RESIDUAL_Z", "SHIFT_Z", "SHIFT_MIN_M"]
@@ -342,7 +347,8 @@ def split_and_merge(
 
     # step 1: the list of lists L, one list per range segment
     labels = _range_segments(scan, segments, segment_threshold_m, adaptive_segmentation, min_points, sigma)
-    if not trace and merge != "chi2" and engine.READY:  # steps 1-6 and placing in one compiled pass: the same lines
+    # steps 1-6 and placing in one compiled pass: the same lines
+    if not trace and merge != "chi2" and engine is not None and engine.READY:
         return engine.split_and_merge(
             scan, labels, fit=method == "fit", threshold_m=test.threshold, noise_sigma=test.noise_sigma,
             absorb_m=test.absorb_m, sigma=sigma, min_points=min_points, min_length_m=min_length_m, max_gap_m=max_gap_m,
