@@ -254,3 +254,53 @@ def test_the_identity_tests_can_fail(shared_datasets):
     spans = [(ln.first, ln.last) for ln in reference]
     assert list(zip(same[3].tolist(), same[4].tolist(), strict=True)) == spans
     assert list(zip(other[3].tolist(), other[4].tolist(), strict=True)) != spans
+
+
+# ---------------------------------------------------------------------------- caching and the switch
+def _twice(x):
+    return 2.0 * x
+
+
+def test_the_engines_compile_where_no_cache_folder_is_writable(monkeypatch):
+    """A read-only install with a read-only home: numba finds no cache folder and refuses
+    ``cache=True`` when the module is imported; the engines compile uncached instead, and say so."""
+    import numba.core.caching as caching
+    import numba.core.config
+
+    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # (its name before numba 0.62)
+    monkeypatch.setattr(impl, "_locator_classes", [])  # (no folder numba may write to)
+    monkeypatch.setattr(numba.core.config, "CACHE_LOCATOR_CLASSES", "", raising=False)
+    monkeypatch.setattr(K, "_WARNED", [], raising=False)
+    with pytest.warns(RuntimeWarning, match="no writable cache folder"):
+        twice = K.jit(_twice)
+    assert twice(21.0) == 42.0
+
+
+def test_LABKIT_NO_JIT_runs_the_readable_code_without_numba(tmp_path):
+    """``LABKIT_NO_JIT=1``: numba is never imported and the features are the engine's."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    room = polygon_scan(SQUARE_ROOM, 361)
+    scan = Scan(ranges=room.ranges + np.random.default_rng(5).normal(0.0, 0.01, 361), angles=room.angles)
+    np.savez(tmp_path / "scan.npz", ranges=scan.ranges, angles=scan.angles)
+    code = ("import json, sys, numpy as np, labkit\n"
+            f"d = np.load({str(tmp_path / 'scan.npz')!r})\n"
+            "s = labkit.Scan(ranges=d['ranges'], angles=d['angles'])\n"
+            "lines = labkit.split_and_merge(s)\n"
+            "out = {'lines': [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)] + [ln.first, ln.last]"
+            " for ln in lines], 'labels': labkit.segment_labels(s).tolist(),"
+            " 'sigma': float(labkit.estimate_range_noise(s)).hex(), 'numba': 'numba' in sys.modules}\n"
+            "print(json.dumps(out))\n")
+    env = dict(os.environ, LABKIT_NO_JIT="1")
+    got = json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                                    check=True, timeout=120).stdout)
+    s = fresh(scan)
+    assert got["numba"] is False
+    assert got["lines"] == [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)] + [ln.first, ln.last]
+                            for ln in split_and_merge(s)]
+    assert got["labels"] == segment_labels(s).tolist()
+    assert got["sigma"] == float(estimate_range_noise(fresh(scan))).hex()
+    assert len(got["lines"]) >= 4
