@@ -54,8 +54,15 @@ from ._jit import ENABLED as _JIT
 from .params import AUTO
 from .scan import Scan
 
-if _JIT:  # (LABKIT_NO_JIT=1: the readable code, numba not imported)
-    from ._noise_engine import residuals as _engine_residuals
+
+def _engine_residuals(ranges, angles, valid, full_circle):
+    """labkit._noise_engine.residuals, imported on the first scan (numba's import alone costs some
+    0.35 s of CPU, which a process that extracts nothing should not pay); it then takes this name."""
+    global _engine_residuals
+    from ._noise_engine import residuals
+
+    _engine_residuals = residuals
+    return residuals(ranges, angles, valid, full_circle)
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "noise_sigma", "auto_split_threshold",
            "chi2_upper_over_dof", "noise_config", "MIN_RESIDUALS", "AUTO_LINES", "AUTO_RANSAC", "AUTO_HOUGH",

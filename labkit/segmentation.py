@@ -33,8 +33,15 @@ from .noise import RANGE_SIGMA_M, scan_sigma
 from .params import AUTO, Params, checked_by, param
 from .scan import Scan
 
-if _JIT:  # (LABKIT_NO_JIT=1: the readable code, numba not imported)
-    from ._segmentation_engine import labels as _engine_labels
+
+def _engine_labels(*args):
+    """labkit._segmentation_engine.labels, imported on the first scan (numba's import alone costs
+    some 0.35 s of CPU, which a process that extracts nothing should not pay); it then takes this name."""
+    global _engine_labels
+    from ._segmentation_engine import labels
+
+    _engine_labels = labels
+    return labels(*args)
 
 __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
            "range_segments", "breakpoint_thresholds", "segment_order",

@@ -87,13 +87,22 @@ from ._split_merge_fast import (
 )
 from .placing import placed
 
-if _JIT:  # (LABKIT_NO_JIT=1: the readable steps, numba not imported)
-    from . import _split_merge_engine as engine
-else:
-    engine = None
-
 __all__ = ["split_and_merge", "iepf", "lines_similar", "join_grazing_walls", "SplitMergeParams", "GRAZING_DEG",
            "RESIDUAL_Z", "SHIFT_Z", "SHIFT_MIN_M"]
+
+_ENGINE = False if _JIT else None  # (False: not imported yet)
+
+
+def _engine():
+    """labkit.lines._split_merge_engine, or None where it does not run (LABKIT_NO_JIT=1, or a BLAS
+    whose rounding it does not reproduce). Imported on the first scan, not with labkit: numba's
+    import alone costs some 0.35 s of CPU, which a process that extracts nothing should not pay."""
+    global _ENGINE
+    if _ENGINE is False:
+        from . import _split_merge_engine as engine
+
+        _ENGINE = engine if _JIT and engine.READY else None
+    return _ENGINE
 
 _METHODS = ("fit", "endpoints")
 
@@ -348,7 +357,7 @@ def split_and_merge(
     # step 1: the list of lists L, one list per range segment
     labels = _range_segments(scan, segments, segment_threshold_m, adaptive_segmentation, min_points, sigma)
     # steps 1-6 and placing in one compiled pass: the same lines
-    if not trace and merge != "chi2" and engine is not None and engine.READY:
+    if not trace and merge != "chi2" and (engine := _engine()) is not None:
         return engine.split_and_merge(
             scan, labels, fit=method == "fit", threshold_m=test.threshold, noise_sigma=test.noise_sigma,
             absorb_m=test.absorb_m, sigma=sigma, min_points=min_points, min_length_m=min_length_m, max_gap_m=max_gap_m,
