@@ -7,7 +7,7 @@ over the scenario's 60 s:
 
 * ``segment``: the detectors' range segmentation, :func:`labkit.segment_labels` at 0.08 m
   (``range_segments``, which also builds a record per segment, costs about 200 us more)
-* ``circles``: :func:`labkit.circles.iav.detect_circles` (segmentation included)
+* ``circles``: :func:`labkit.circles.iav_circles.detect_circles` (segmentation included)
 * ``arc-like``: the same with ``arc_like=True``
 * ``legs``: :func:`labkit.circles.legs.detect_legs` (segmentation included)
 * ``legs+people``: legs and :func:`labkit.circles.legs.pair_legs`
@@ -30,7 +30,7 @@ import platform
 import numpy as np
 from common import per_scan, world_scans
 
-from labkit.circles.iav import detect_circles
+from labkit.circles.iav_circles import detect_circles
 from labkit.circles.legs import detect_legs, pair_legs
 from labkit.segmentation import segment_labels
 

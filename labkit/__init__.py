@@ -11,9 +11,11 @@ The library's public names are re-exported here; modules:
   (split-and-merge and IEPF), :mod:`~labkit.lines.angular` (angular segmentation, Meglicki 2021),
   :mod:`~labkit.lines.incremental`, :mod:`~labkit.lines.regression`, :mod:`~labkit.lines.ransac`,
   :mod:`~labkit.lines.hough` (the others Nguyen et al. compared, written to teach) and
-  :mod:`~labkit.lines.iav` (lines by inscribed angle variance)
-- :mod:`labkit.circles` round things: :mod:`~labkit.circles.iav` (inscribed angle variance:
-  circles, arcs) and :mod:`~labkit.circles.legs` (legs, paired into people)
+  :mod:`~labkit.lines.iav_lines` (lines by inscribed angle variance)
+- :mod:`labkit.iav` the inscribed angle variance: inscribed angles, the circle prerequisite, circles
+  from the chord (Xavier et al. 2005)
+- :mod:`labkit.circles` round things: :mod:`~labkit.circles.iav_circles` (IAV circles, arcs) and
+  :mod:`~labkit.circles.legs` (legs, paired into people)
 - :mod:`labkit.dbscan` DBSCAN on 1-D data in linear time (:func:`dbscan1d`)
 - :mod:`labkit.features` feature records (lines, corners, circles, legs) and corners
 - :mod:`labkit.evaluation` scores against ground truth (Nguyen's line metrics, circles, legs) and ray-axis RMSE
@@ -31,27 +33,15 @@ The library's public names are re-exported here; modules:
 """
 
 
-from . import circles, evaluation, geometry, lines, poses, sim, tracking, tracking_metrics
-from .circles import (
-    ArcParams,
-    CircleParams,
-    IAVStats,
-    LegsParams,
-    circle_from_iav,
-    detect_arcs,
-    detect_circles,
-    detect_legs,
-    iav_stats,
-    inscribed_angles,
-    middle_point_offset,
-    pair_legs,
-)
+from . import circles, evaluation, geometry, iav, lines, poses, sim, tracking, tracking_metrics
+from .circles import ArcParams, CircleParams, LegsParams, detect_arcs, detect_circles, detect_legs, pair_legs
 from .data import bundled_data
 from .dbscan import DBSCAN1D, dbscan1d, dbscan1d_reference
 from .evaluation import match_circles, match_legs, match_lines, ray_errors, score_detections, score_lines
 from .features import Circle, Corner, CornerParams, Features, Leg, LineSegment, Person, find_corners, line_segment
 from .fitting import CircleFit, LineFit, fit_circle, fit_line_ols, fit_line_polar, fit_line_tls, placement_probability
 from .geometry import angle_difference, circular_mean, line_through_points, wrap_angle
+from .iav import IAVStats, circle_from_iav, iav_stats, inscribed_angles, middle_point_offset
 from .io import (
     CorruptFileError,
     convert,
@@ -156,7 +146,6 @@ __all__ = [
     "lines",
     "circles",
     "iav",
-    "legs",
     "inscribed_angles",
     "iav_stats",
     "IAVStats",

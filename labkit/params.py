@@ -97,7 +97,8 @@ def _check_value(section: str, f: dataclasses.Field, value):
             raise ValueError(f"{name} must be a pair [low, high] with low < high, got {value!r}")
         lo, hi = meta["lo"], meta["hi"]
         if (lo is not None and pair[0] < lo) or (hi is not None and pair[1] > hi):
-            raise ValueError(f"{name} must lie within [{lo:g}, {hi:g}], got {list(pair)}")
+            low, high = (f"{v:g}" if v is not None else edge for v, edge in ((lo, "-inf"), (hi, "inf")))
+            raise ValueError(f"{name} must lie within [{low}, {high}], got {list(pair)}")
         return pair
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         either = ' or "auto"' if meta.get("auto") else ""
@@ -135,6 +136,19 @@ class Params:
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             object.__setattr__(self, f.name, _check_value(self._name, f, getattr(self, f.name)))
+        self.check_relations({f.name: getattr(self, f.name) for f in dataclasses.fields(self)})
+
+    @classmethod
+    def check_relations(cls, values) -> None:
+        """Limits between fields (``min_chord_m < max_chord_m``): ``values`` maps every field to
+        its value, each already checked on its own. Raises ``ValueError`` naming a field (see
+        :meth:`_where`). Checked when a record is built and, by :func:`checked_by`, on the keywords
+        a caller passes; a record with such limits overrides this (there are none here)."""
+
+    @classmethod
+    def _where(cls, name: str) -> str:
+        """A field's name as an error message gives it (``circles.max_chord_m`` in a config section)."""
+        return f"{cls._name}.{name}" if cls._name else name
 
     @classmethod
     def defaults(cls) -> Params:
@@ -248,7 +262,11 @@ def checked_by(record: type[Params], *, positional: tuple[str, ...] = (), rename
 
     def decorate(fn: Callable) -> Callable:
         fields = {f.name: f for f in dataclasses.fields(record) if f.metadata.get("record") is None}
-        takes = [name for name in inspect.signature(fn).parameters if name in fields]
+        signature = inspect.signature(fn).parameters
+        takes = [name for name in signature if name in fields]
+        # limits between fields, checked on the values a call passes and the defaults of the others
+        related = record.check_relations.__func__ is not Params.check_relations.__func__
+        defaults = {name: signature[name].default for name in takes}
         old = {name[:-4]: name for name in takes if name.endswith("_deg")}
         old.update({k: v for k, v in {**record.renamed(), **(renamed or {})}.items() if v in takes or k == v})
         name = fn.__name__
@@ -299,10 +317,14 @@ def checked_by(record: type[Params], *, positional: tuple[str, ...] = (), rename
                 for key in list(kwargs):
                     if key in old and key not in fields:
                         _old(kwargs, key)
+                checked = False
                 for key, value in kwargs.items():
                     f = fields.get(key)
                     if f is not None:
                         kwargs[key] = _check_value(section, f, value)
+                        checked = True
+                if related and checked:
+                    record.check_relations({**defaults, **kwargs})
             return fn(first, **kwargs)
 
         wrapper.unchecked = fn  # type: ignore[attr-defined]

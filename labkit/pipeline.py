@@ -19,14 +19,14 @@ al.'s 80 mm as its floor) and run in this order:
 5. **corners** -- where consecutive lines meet (:func:`labkit.find_corners`);
 6. **arcs** -- arcs embedded in walls, such as rounded corners (:func:`labkit.detect_arcs`).
    Off by default: the arc test needs walls extracted with a tight split threshold and
-   long lines (:data:`labkit.circles.iav.ARC_LINE_PARAMS`), a second line pass that doubles the
+   long lines (:data:`labkit.circles.iav_circles.ARC_LINE_PARAMS`), a second line pass that doubles the
    cost of a scan.
 
 Over time, :func:`track_scans` also follows the people and circles from scan to scan
 (:mod:`labkit.tracking`, the ``[tracking]`` section).
 
 The sections of a :class:`Config` are the detectors' parameter records (one default per
-parameter, held in the detector's module; see :mod:`labkit._params`), plus the pipeline's
+parameter, held in the detector's module; see :mod:`labkit.params`), plus the pipeline's
 switches (``enabled``, ``lines.method``, ``lines.skip_round``): each stage calls its detector
 with its section, so a detector alone with its defaults gives what its stage gives.
 Angles in a :class:`Config` are in degrees (names end in ``_deg``) so that a TOML file
@@ -56,7 +56,7 @@ from time import perf_counter
 import numpy as np
 
 from ._safe import OutputKind, safe_output
-from .circles.iav import ArcParams, CircleParams, detect_arcs, detect_circles
+from .circles.iav_circles import ArcParams, CircleParams, detect_arcs, detect_circles
 from .circles.legs import LegsParams, detect_legs, pair_legs
 from .features import CornerParams, Features, find_corners
 from .lines import (
@@ -255,7 +255,7 @@ class Config:
 
     Each section is its detector's parameter record (``Config().circles`` is a
     :class:`labkit.CircleParams`, with ``enabled``), so ``labkit.detect_circles(scan,
-    cfg.circles)`` is the pipeline's call. [lines] holds split-and-merge's keys (iepf and
+    **cfg.circles.kwargs())`` is the pipeline's call. [lines] holds split-and-merge's keys (iepf and
     split_and_merge) and one table per other line method:
 
     >>> Config().updated({"lines.ransac.threshold_m": 0.02}).lines.ransac.threshold_m
@@ -425,13 +425,13 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
     lap("segmentation")
     legs, people = [], []
     if lg.enabled:
-        legs = detect_legs(scan, lg, segments=labels)
+        legs = detect_legs.unchecked(scan, **lg.kwargs(), segments=labels)
         people = pair_legs(legs, lg.pair_max_distance_m)
     lap("legs")
     rest = _mask_segments(labels, legs)
     circles = []
     if cc.enabled:
-        circles = detect_circles(scan, cc, segments=rest)
+        circles = detect_circles.unchecked(scan, **cc.kwargs(), segments=rest)
     lap("circles")
     rest = _mask_segments(rest, circles)
     lines = []
@@ -451,7 +451,7 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
     lap("corners")
     arcs = []
     if cfg.arcs.enabled:
-        arcs = detect_arcs(scan, cfg.arcs, segments=rest)
+        arcs = detect_arcs.unchecked(scan, **cfg.arcs.kwargs(), segments=rest)
     lap("arcs")
     timings["total"] = perf_counter() - t_start
     return Features(scan.stamp_ns, scan.n_beams, labels, tuple(lines), tuple(corners), tuple(circles), tuple(arcs),

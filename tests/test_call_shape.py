@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import labkit
+from labkit.circles import ArcParams, CircleParams, LegsParams
 from labkit.features import CornerParams
 from labkit.lines import (
     AngularParams,
@@ -46,6 +47,9 @@ PUBLIC = [
     (labkit.angular_segmentation, AngularParams),
     (labkit.angular_arrays, AngularParams),
     (labkit.detect_lines_iav, IAVLineParams),
+    (labkit.detect_circles, CircleParams),
+    (labkit.detect_arcs, ArcParams),
+    (labkit.detect_legs, LegsParams),
     (labkit.find_corners, CornerParams),
 ]
 _IDS = [fn.__name__ for fn, _ in PUBLIC]
@@ -203,3 +207,91 @@ def test_lines_similar_takes_degrees_and_its_old_radians_with_a_warning():
         assert not labkit.lines_similar(a, b, merge_dr_m=far, merge_dalpha=math.radians(5.0))[0]
     with pytest.warns(DeprecationWarning, match="merge_dalpha_deg"):
         assert labkit.lines_similar(a, b, merge_dr_m=far, merge_dalpha=math.radians(10.0))[0]
+
+
+# ---------------------------------------------------------------------------- the IAV detectors' older keywords
+def _hall_with_people():
+    from labkit import sim
+
+    scan, _ = list(sim.simulate("hall", 0, n_scans=9))[8]  # columns, the bench, the walking student's legs
+    return scan
+
+
+def _rounded_room():
+    from labkit import sim
+
+    walls = (sim.Wall((0.0, 0.0), (6.0, 0.0)), sim.Wall((6.0, 0.0), (6.0, 4.2)), sim.Wall((5.2, 5.0), (0.0, 5.0)))
+    world = sim.World("room", walls=walls, arcs=(sim.Arc((5.2, 4.2), 0.8, 0.0, math.pi / 2),))
+    return sim.scan_at(world, sim.LIDARS["lms200"], (3.0, 1.5, math.pi / 2), rng=np.random.default_rng(0))[0]
+
+
+def _places(found) -> list:
+    return [(f.first, f.last, *np.round(f.center, 9).tolist()) for f in found]
+
+
+@pytest.mark.parametrize(("fn", "scan", "old", "new"), [
+    (labkit.detect_circles, _hall_with_people, {"std_max": 0.12, "mean_range": (math.radians(95), math.radians(130))},
+     {"std_max_deg": math.degrees(0.12), "mean_range_deg": (95.0, 130.0)}),
+    (labkit.detect_circles, _hall_with_people, {"arc_like": True, "arc_like_std_max": math.radians(20.0)},
+     {"arc_like": True, "arc_like_std_max_deg": 20.0}),
+    (labkit.detect_legs, _hall_with_people, {"chord_range": (0.08, 0.3)}, {"chord_range_m": (0.08, 0.3)}),
+    (labkit.detect_legs, _hall_with_people, {"iav_std_max": 0.4, "iav_mean_range": None},
+     {"iav_std_max_deg": math.degrees(0.4), "iav_mean_range_deg": None}),
+    (labkit.detect_arcs, _rounded_room, {"line_params": {"split_threshold_m": 0.03}}, {"split_threshold_m": 0.03}),
+    (labkit.detect_arcs, _rounded_room, {"mean_range": (math.radians(90.0), math.radians(160.0))},
+     {"mean_range_deg": (90.0, 160.0)}),
+], ids=["circles-radians", "circles-arc-like", "legs-chord_range", "legs-radians", "arcs-line_params", "arcs-radians"])
+def test_the_iav_detectors_old_keywords_are_their_new_ones_with_a_warning(fn, scan, old, new):
+    scan = scan()
+    with pytest.warns(DeprecationWarning) as caught:
+        got = fn(scan, **old)
+    said = " ".join(str(w.message) for w in caught)
+    for name in set(new) - set(old):
+        assert f"{name}=" in said
+    want = fn(scan, **new)
+    assert want and _places(got) == _places(want)
+
+
+def test_the_iav_detectors_old_positional_shapes_still_work_with_a_warning():
+    scan = _hall_with_people()
+    for fn, record in ((labkit.detect_circles, CircleParams(min_points=5)), (labkit.detect_legs, LegsParams())):
+        with pytest.warns(DeprecationWarning, match=r"\*\*params.kwargs\(\)"):
+            old = fn(scan, record)
+        assert old and _places(old) == _places(fn(scan, **record.kwargs()))
+    room = _rounded_room()
+    lines = labkit.split_and_merge(room, split_threshold_m=0.02, min_length_m=0.5)
+    with pytest.warns(DeprecationWarning, match="lines by position"):
+        old = labkit.detect_arcs(room, lines)
+    assert old and _places(old) == _places(labkit.detect_arcs(room, lines=lines))
+    with pytest.raises(ValueError, match="line_params is only used when lines is None"):
+        labkit.detect_arcs(room, lines=lines, line_params={"split_threshold_m": 0.03})
+
+
+def test_limits_between_fields_are_checked_by_the_record_and_at_the_call():
+    """One home: min_chord_m < max_chord_m and, with arc_like, arc_like_std_max_deg > std_max_deg, in the
+    record (a config file) and on the keywords a call passes (with the defaults of the others)."""
+    for make in (lambda **kw: CircleParams(**kw), lambda **kw: labkit.detect_circles(_SCAN, **kw)):
+        with pytest.raises(ValueError, match="min_chord_m must be < max_chord_m"):
+            make(min_chord_m=1.0, max_chord_m=0.5)
+        with pytest.raises(ValueError, match="arc_like_std_max_deg must exceed std_max_deg"):
+            make(arc_like=True, std_max_deg=30.0)
+        make(arc_like=False, std_max_deg=30.0)  # (the arc-like limit is not used then)
+    with pytest.raises(ValueError, match="min_chord_m must be < max_chord_m"):
+        labkit.detect_arcs(_SCAN, lines=[], max_chord_m=0.1)
+    with pytest.raises(ValueError, match="circles.min_chord_m must be < max_chord_m"):
+        labkit.Config.from_dict({"circles": {"max_chord_m": 0.1}})
+
+
+def test_a_limit_the_detector_needs_is_the_records():
+    """The V-corner test needs a neighbour on each side: a config with one neighbour was accepted and made
+    detect_circles(arc_like=True) raise in the middle of a scan."""
+    with pytest.raises(ValueError, match="v_corner_neighbours must be >= 2"):
+        labkit.Config.from_dict({"circles": {"v_corner_neighbours": 1}})
+    with pytest.raises(ValueError, match="v_corner_neighbours"):
+        labkit.detect_circles(_SCAN, v_corner_neighbours=1)
+
+
+def test_a_pair_with_one_bound_names_itself_when_refused():
+    """A pair field with a lower bound only (middle_range) raised TypeError formatting its message."""
+    with pytest.raises(ValueError, match=r"middle_range must lie within \[0, inf\]"):
+        labkit.Config.from_dict({"circles": {"middle_range": [-1.0, 1.0]}})

@@ -123,7 +123,7 @@ def test_random_wall_beams_has_walls_clutter_and_every_invalid_reading():
         seen["-inf"] += int(np.isneginf(r).sum())
         seen["zero"] += int((r == 0).sum())
         seen["negative"] += int((np.isfinite(r) & (r < 0)).sum())
-        labels = labkit.segment_labels(labkit.Scan(**beams), 0.1, min_points=1)
+        labels = labkit.segment_labels(labkit.Scan(**beams), threshold_m=0.1, min_points=1)
         sizes = np.bincount(labels[labels >= 0])
         longest.append(sizes.max(initial=0))
         n_segments.append(sizes.size)

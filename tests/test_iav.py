@@ -11,22 +11,20 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, segment_labels, sim
-from labkit.circles.iav import (
-    ARC_LINE_PARAMS,
+from labkit.circles.iav_circles import ARC_LINE_PARAMS, detect_arcs, detect_circles
+from labkit.features import Circle, line_segment
+from labkit.fitting import fit_circle
+from labkit.geometry import signed_distance_to_line
+from labkit.iav import (
     IAVStats,
     circle_confidence,
     circle_from_iav,
-    detect_arcs,
-    detect_circles,
     iav_stats,
     inscribed_angles,
     is_v_corner,
     middle_point_offset,
 )
-from labkit.features import Circle, line_segment
-from labkit.fitting import fit_circle
-from labkit.geometry import signed_distance_to_line
-from labkit.lines.iav import detect_lines_iav
+from labkit.lines.iav_lines import detect_lines_iav
 from labkit.lines.split_merge import split_and_merge
 from labkit.segmentation import RangeSegment, range_segments
 
@@ -127,6 +125,11 @@ def test_iav_stats_is_a_named_mean_and_population_std():
     assert isinstance(stats, IAVStats)
     mean, std, n = stats
     assert n == 4 and mean == pytest.approx(ang.mean()) and std == pytest.approx(ang.std(ddof=0))
+    assert stats == IAVStats.from_angles(ang)  # the statistics of the angles themselves
+    mirrored = IAVStats.from_angles(2 * np.pi - ang)  # (a hollow arc's angles, as detect_arcs takes them)
+    assert mirrored.mean == pytest.approx(2 * np.pi - mean) and mirrored.std == pytest.approx(std)
+    with pytest.raises(ValueError, match="angles"):
+        IAVStats.from_angles([])
 
 
 @pytest.mark.parametrize("points", [
@@ -555,11 +558,11 @@ def test_trace_has_one_record_per_segment():
     (dict(max_chord_m=0.0), "max_chord_m"),
     (dict(middle_range=(0.7, 0.1)), "middle_range"),
     (dict(middle_range=0.5), "middle_range"),
-    (dict(mean_range=(1.0, 4.0)), "mean_range"),
-    (dict(std_max=0.0), "std_max"),
-    (dict(std_max=np.nan), "std_max"),
+    (dict(mean_range_deg=(60.0, 230.0)), "mean_range_deg"),
+    (dict(std_max_deg=0.0), "std_max_deg"),
+    (dict(std_max_deg=np.nan), "std_max_deg"),
     (dict(center_method="kasa"), "center_method"),
-    (dict(arc_like=True, arc_like_std_max=0.1), "arc_like_std_max"),
+    (dict(arc_like=True, arc_like_std_max_deg=5.0), "arc_like_std_max_deg"),
     (dict(v_corner_neighbours=1), "v_corner_neighbours"),
     (dict(v_corner_stride=0), "v_corner_stride"),
     (dict(seg_threshold_m=0.0), "seg_threshold_m"),
@@ -614,12 +617,26 @@ def test_columns_and_corners_are_not_iav_lines():
 @pytest.mark.parametrize("kwargs, match", [
     (dict(min_points=2), "min_points"),
     (dict(min_length_m=-1.0), "min_length_m"),
-    (dict(mean_tolerance=0.0), "mean_tolerance"),
-    (dict(std_max=-0.1), "std_max"),
+    (dict(mean_tolerance_deg=0.0), "mean_tolerance_deg"),
+    (dict(std_max_deg=-0.1), "std_max_deg"),
 ])
 def test_detect_lines_iav_validates_its_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
         detect_lines_iav(Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1), **kwargs)
+
+
+@pytest.mark.parametrize("detect, old, value, new", [
+    (detect_lines_iav, "mean_tolerance", 0.0, "mean_tolerance_deg"),
+    (detect_lines_iav, "std_max", -0.1, "std_max_deg"),
+    (detect_circles, "std_max", math.nan, "std_max_deg"),
+])
+def test_an_old_name_still_works_for_a_release_and_a_bad_value_under_it_is_refused(detect, old, value, new):
+    # the old name (an angle in radians) warns, naming the new one, and its value is then checked
+    # under the new name as any other
+    scan = Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1)
+    with pytest.warns(DeprecationWarning, match=rf"\({old}=\.\.\.\) is deprecated: use {new}="), \
+            pytest.raises(ValueError, match=new):
+        detect(scan, **{old: value})
 
 
 # ============================================================================ arcs in lines
@@ -658,7 +675,7 @@ def test_rounded_room_corners_between_given_lines(radius):
     for _ in range(10):
         pose = (3.0 + rng.uniform(-1, 1), 1.5 + rng.uniform(-0.5, 1.0), math.pi / 2)
         scan, truth = sim.scan_at(_room(radius), sim.LIDARS["lms200"], pose, rng=rng)
-        arcs = detect_arcs(scan, _truth_lines(scan, truth))
+        arcs = detect_arcs(scan, lines=_truth_lines(scan, truth))
         assert all(a.kind == "arc" for a in arcs)
         n = _match_arcs(arcs, truth, radius)
         assert len(arcs) == n
@@ -675,7 +692,7 @@ def test_rounded_outside_corner_bulging_towards_the_sensor():
     rng = np.random.default_rng(6)
     for _ in range(5):
         scan, truth = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0), rng=rng)
-        arcs, trace = detect_arcs(scan, _truth_lines(scan, truth), trace=True)
+        arcs, trace = detect_arcs(scan, lines=_truth_lines(scan, truth), trace=True)
         assert len(truth.arcs) == 1
         assert len(arcs) == _match_arcs(arcs, truth, r) == 1, trace
         assert middle_point_offset(scan.points[arcs[0].first:arcs[0].last + 1]) > 0  # bulging
@@ -687,13 +704,13 @@ def test_no_arcs_in_a_room_with_sharp_corners():
     rng = np.random.default_rng(4)
     for _ in range(5):
         scan, truth = sim.scan_at(world, sim.LIDARS["lms200"], (3.0, 1.5, math.pi / 2), rng=rng)
-        assert detect_arcs(scan, _truth_lines(scan, truth)) == []
+        assert detect_arcs(scan, lines=_truth_lines(scan, truth)) == []
 
 
 def test_a_segment_without_lines_is_left_to_detect_circles():
     world = sim.World("column", circles=(sim.Column((2.0, 0.0), 0.3),))
     scan, _ = sim.scan_at(world, sim.LIDARS["lms200"], (0.0, 0.0, 0.0))
-    assert detect_arcs(scan, []) == []
+    assert detect_arcs(scan, lines=[]) == []
     assert len(detect_circles(scan)) == 1
 
 
@@ -711,7 +728,7 @@ def test_rounded_corners_with_split_and_merge_lines(radius):
         arcs = detect_arcs(scan)
         found += _match_arcs(arcs, truth, radius)
         assert len(arcs) <= len(truth.arcs)
-        found_plain += _match_arcs(detect_arcs(scan, split_and_merge(scan)), truth, radius)
+        found_plain += _match_arcs(detect_arcs(scan, lines=split_and_merge(scan)), truth, radius)
     assert found >= 17
     assert found_plain == 0
     assert dict(ARC_LINE_PARAMS) == {"split_threshold_m": 0.02, "min_length_m": 0.5}
@@ -722,14 +739,14 @@ def test_rounded_corners_with_split_and_merge_lines(radius):
     (["wall"], {}, "lines"),
     ("bad-index", {}, "beam indices"),
     ([], dict(line_params={"split_threshold_m": 0.02}), "line_params"),
-    ([], dict(mean_range=(2.0, 1.0)), "mean_range"),
+    ([], dict(mean_range_deg=(120.0, 60.0)), "mean_range_deg"),
 ])
 def test_detect_arcs_validates_its_arguments(lines, kwargs, match):
     scan = Scan(ranges=np.ones(10), angles=np.arange(10) * 0.1)
     if lines == "bad-index":
         lines = [line_segment(np.array([[1.0, 0.0], [1.0, 1.0]]), [9, 10])]
     with pytest.raises(ValueError, match=match):
-        detect_arcs(scan, lines, **kwargs)
+        detect_arcs(scan, lines=lines, **kwargs)
 
 
 def test_records_are_the_shared_feature_records():
@@ -776,18 +793,19 @@ def test_with_a_noise_allowance_a_corner_is_not_a_circle_when_its_points_miss_on
     assert hit / len(columns) > 0.9, hit / len(columns)
 
 
-def test_the_residual_tests_early_decision_is_the_converged_fits():
-    # the residual test decides most runs after a few Gauss-Newton steps (labkit._iav.
-    # _wider_than_noise); the converged orthogonal fit is the referee: on the runs the circle test
+def test_the_residual_tests_early_decision_is_the_converged_fits(monkeypatch):
+    # the residual test decides most runs after a few Gauss-Newton steps (labkit._iav_noise.
+    # wider_than_noise); the converged orthogonal fit is the referee: on the runs the circle test
     # meets in the simulated hall at 5 mm to 3 cm, every decision is the converged one's, and the
     # early mean square is never more than half the factor it relies on over its minimum
-    from labkit import Config, _iav, extract_features
+    from labkit import Config, _iav_batch, _iav_noise, extract_features
     from labkit.experiments import nguyen_lidar, world_scans
     from labkit.fitting import fit_circles
+    from labkit.iav import NOISE_Z
     from labkit.noise import AUTO_CONFIG, chi2_upper_over_dof
 
     seen = []
-    real = _iav._wider_than_noise
+    real = _iav_noise.wider_than_noise
 
     def spy(pts, starts, ends, sigma, centers=None, radii=None):
         seen.append((pts, np.asarray(starts), np.asarray(ends), sigma, centers, radii))
@@ -795,13 +813,11 @@ def test_the_residual_tests_early_decision_is_the_converged_fits():
 
     config = Config().updated(AUTO_CONFIG)
     rng = np.random.default_rng(4)
-    try:
-        _iav._wider_than_noise = spy
-        for noise in (0.005, 0.01, 0.02, 0.03):
-            for scan, _ in world_scans("hall", nguyen_lidar(722, noise), 25, rng):
-                extract_features(scan, config)
-    finally:
-        _iav._wider_than_noise = real
+    monkeypatch.setattr(_iav_batch, "wider_than_noise", spy)  # the name the batch engine calls
+    for noise in (0.005, 0.01, 0.02, 0.03):
+        for scan, _ in world_scans("hall", nguyen_lidar(722, noise), 25, rng):
+            extract_features(scan, config)
+    monkeypatch.undo()
     runs = worst = 0
     for pts, starts, ends, sigma, centers, radii in seen:
         big = ends - starts > 3
@@ -809,15 +825,28 @@ def test_the_residual_tests_early_decision_is_the_converged_fits():
         centers, radii = (None, None) if centers is None else (centers[big], radii[big])
         if not len(starts):
             continue
-        early = fit_circles(pts, starts, ends, "geometric", max_iterations=_iav._EARLY_STEPS)
+        early = fit_circles(pts, starts, ends, "geometric", max_iterations=_iav_noise.EARLY_STEPS)
         full = fit_circles(pts, starts, ends, "geometric")
         ok = full.status == 0
         worst = max(worst, float(np.max(early.rms[ok] ** 2 / full.rms[ok] ** 2, initial=1.0)))
         dof = (ends - starts - 3).astype(float)
-        limit = sigma * sigma * chi2_upper_over_dof(dof, _iav.NOISE_Z) * dof / (dof + 3)
+        limit = sigma * sigma * chi2_upper_over_dof(dof, NOISE_Z) * dof / (dof + 3)
         with np.errstate(invalid="ignore"):
             assert np.array_equal(real(pts, starts, ends, sigma), full.rms ** 2 > limit)
             if centers is not None:  # the detector's own circles tried first: the same decisions
                 assert np.array_equal(real(pts, starts, ends, sigma, centers, radii), full.rms ** 2 > limit)
         runs += len(starts)
-    assert runs > 200 and worst < _iav._EARLY_FACTOR / 2, (runs, worst)
+    assert runs > 200 and worst < _iav_noise.EARLY_FACTOR / 2, (runs, worst)
+
+
+@pytest.mark.parametrize("name", ["IAVStats", "circle_from_iav", "iav_stats", "inscribed_angles",
+                                  "middle_point_offset"])
+def test_the_geometry_labkit_circles_used_to_export_still_imports_for_a_release(name):
+    import labkit.circles
+    import labkit.iav
+
+    with pytest.warns(DeprecationWarning, match=rf"labkit\.circles\.{name} is deprecated: use labkit\.iav\.{name}"):
+        moved = getattr(labkit.circles, name)
+    assert moved is getattr(labkit.iav, name)
+    with pytest.raises(AttributeError):
+        labkit.circles.no_such_name  # noqa: B018

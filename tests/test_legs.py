@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from labkit import Scan, sim
-from labkit.circles.iav import inscribed_angles, middle_point_offset
 from labkit.circles.legs import detect_legs, is_occluded, pair_legs
 from labkit.features import Leg, Person
+from labkit.iav import inscribed_angles, middle_point_offset
 from labkit.segmentation import RangeSegment, range_segments
 
 LMS200 = sim.LIDARS["lms200"]
@@ -221,7 +221,7 @@ def test_columns_and_walls_are_not_legs():
 def test_optional_iav_thresholds_tighten_the_test(hall):
     """With the circles' thresholds added, fewer legs pass (the paper has none for legs).
     Measured on 300 scans (seed 0): precision 1.0 but recall 0.56 against 0.93."""
-    precision, recall, _, _ = _score(hall, iav_mean_range=(math.radians(90), math.radians(135)), iav_std_max=0.15)
+    precision, recall, _, _ = _score(hall, iav_mean_range_deg=(90.0, 135.0), iav_std_max_deg=math.degrees(0.15))
     _, padded_recall, _, _ = _score(hall)
     assert precision >= 0.95 and 0.3 < recall < padded_recall - 0.2
 
@@ -262,11 +262,11 @@ def test_invalid_beams_are_masked_not_raised():
 
 @pytest.mark.parametrize("kwargs, match", [
     (dict(min_points=2), "min_points"),
-    (dict(chord_range=(0.25, 0.1)), "chord_range"),
+    (dict(chord_range_m=(0.25, 0.1)), "chord_range_m"),
     (dict(chord_padding_beams=-1.0), "chord_padding_beams"),
     (dict(middle_range=(0.7, 0.1)), "middle_range"),
-    (dict(iav_mean_range=(1.0, 4.0)), "iav_mean_range"),
-    (dict(iav_std_max=0.0), "iav_std_max"),
+    (dict(iav_mean_range_deg=(60.0, 230.0)), "iav_mean_range_deg"),
+    (dict(iav_std_max_deg=0.0), "iav_std_max_deg"),
     (dict(center_method="middle"), "center_method"),
     (dict(seg_threshold_m=-0.08), "seg_threshold_m"),
     (dict(segments=["a"]), "segments"),

@@ -428,7 +428,7 @@ def test_a_detector_told_auto_segments_with_the_estimated_noise_too():
 
 
 # ----------------------------------------------------------------------------- circles and legs
-# The noise allowances of the IAV tests (labkit._iav: _ratio_sd, _angle_noise) are first-order
+# The noise allowances of the IAV tests (labkit._iav_noise: ratio_sd, angle_noise) are first-order
 # propagations; the truth here is what the statistics do when noise is drawn many times.
 def _arc_points(center, radius, n, half_span_deg):
     """n points of a circle, in scan order, on the side facing the sensor at the origin."""
@@ -448,14 +448,13 @@ def _noisy(points, sigma, rng, draws):
 @pytest.mark.parametrize(("n", "half_span", "sigma"), [(5, 60, 0.005), (9, 70, 0.005), (15, 75, 0.003),
                                                        (7, 50, 0.002)])
 def test_the_angle_allowances_match_the_noise_they_model(n, half_span, sigma):
-    from labkit._iav import NOISE_Z, _angle_noise
+    from labkit._iav_noise import angle_noise
+    from labkit.iav import NOISE_Z, inscribed_angles
 
     pts = _arc_points((3.0, 0.4), 0.3, n, half_span)
-    spread_max_sq, mean_sd = _angle_noise(pts, sigma)
+    spread_max_sq, mean_sd = angle_noise(pts, sigma)
     rng = np.random.default_rng(n)
     draws = _noisy(pts, sigma, rng, 4000)
-    from labkit.circles.iav import inscribed_angles
-
     angles = np.array([inscribed_angles(p, signed=True) for p in draws])
     # the mean's spread within 10 % (4000 draws: the standard error of an SD is 1.1 %)
     assert np.std(angles.mean(axis=1)) == pytest.approx(mean_sd, rel=0.10)
@@ -466,14 +465,15 @@ def test_the_angle_allowances_match_the_noise_they_model(n, half_span, sigma):
 
 
 def test_the_prerequisite_allowance_matches_the_noise_it_models():
-    from labkit._iav import _middle_ratio, _ratio_sd
+    from labkit._iav_noise import ratio_sd
+    from labkit.iav import middle_point_offset
 
     rng = np.random.default_rng(3)
     for n, sigma in ((5, 0.02), (7, 0.01), (4, 0.005)):
         pts = _arc_points((2.5, -0.6), 0.07, n, 70)
         chord = float(np.hypot(*(pts[-1] - pts[0])))
-        predicted = _ratio_sd(pts[0].tolist(), pts[-1].tolist(), pts[n // 2].tolist(), chord, sigma)
-        ratios = [_middle_ratio(p) for p in _noisy(pts, sigma, rng, 4000)]
+        predicted = ratio_sd(pts[0].tolist(), pts[-1].tolist(), pts[n // 2].tolist(), chord, sigma)
+        ratios = [middle_point_offset(p) for p in _noisy(pts, sigma, rng, 4000)]
         # first order: within 15 % while the noise is small against the chord (2 cm on a 12 cm chord is not)
         assert np.std(ratios) == pytest.approx(predicted, rel=0.15 if sigma < 0.02 else 0.3)
 
@@ -539,7 +539,7 @@ def test_flat_pieces_of_leg_width_the_leg_allowance_lets_through(sigma, fixed_ma
 
 def test_auto_is_the_scans_estimate_a_number_wins_and_zero_is_the_paper():
     from labkit import detect_circles, detect_legs, sim
-    from labkit.circles.iav import CircleParams
+    from labkit.circles.iav_circles import CircleParams
     from labkit.circles.legs import LegsParams
 
     assert CircleParams().range_sigma_m == "auto" and LegsParams().range_sigma_m == "auto"  # the default

@@ -144,7 +144,7 @@ def _check_sim_legs(is_leg, rng, scans, setting):
         scan, _ = sim.scan_at(_leg_world(rng), lidar, (0.0, 0.0, 0.0), rng=rng)
         kwargs, (chord_range, middle_range, padding) = _leg_kwargs(rng)
         # the paper's fixed test, the one the exercise asks for (labkit's default widens it for the noise)
-        _, steps = labkit.detect_legs(scan, chord_range=chord_range, middle_range=middle_range,
+        _, steps = labkit.detect_legs(scan, chord_range_m=chord_range, middle_range=middle_range,
                                       chord_padding_beams=padding, range_sigma_m=0, trace=True)
         xy, n = scan.points, scan.n_beams
         for check in steps:

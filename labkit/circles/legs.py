@@ -8,7 +8,7 @@ as "an extension of the circle prerequisites": a range segment is a leg when
    diameters, 0.1 to 0.25 m (see "Chord padding" below for the one change we make);
 3. its middle point passes the circle prerequisite of Fig. 5 (it lies towards the sensor
    from the chord, between 0.1 and 0.7 chord lengths, see
-   :func:`labkit.circles.iav.middle_point_offset`);
+   :func:`labkit.iav.middle_point_offset`);
 4. it is not partially occluded (below).
 
 The paper applies no inscribed-angle test to legs (Sec. II-E lists only the conditions
@@ -39,7 +39,15 @@ does not cover the full circle, a segment that touches the first or last beam is
 the field of view and counts as occluded; on a full-circle scan the neighbours wrap.
 
 Degenerate segments (fewer than 3 points, identical points) are skipped, never raised,
-as in :mod:`labkit.circles.iav`.
+as in :mod:`labkit.circles.iav_circles`.
+
+Read :func:`_test_segment` for the tests in the paper's order, one short function each:
+enough points, the (padded) chord within the leg diameters, the prerequisite of Fig. 5
+(shared with :mod:`labkit.circles.iav_circles`), the optional angle tests, the occlusion rule,
+and the centre. The noise allowances (``range_sigma_m``) are stages of their own: the band of
+Fig. 5 and the optional angle limits widened for the noise (:mod:`labkit._iav_noise`).
+``trace=True`` runs these functions segment by segment; without it :func:`detect_legs` runs
+the batch engine (:mod:`labkit._iav_batch`), which gives the same legs.
 
 References
 ----------
@@ -55,41 +63,38 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._cache import remembered
-from .._checks import check_int, check_nonneg, check_positive
-from .._iav import (
-    _ACCEPTED,
-    _DEGENERATE,
-    _FEW,
-    _FIT,
-    _LONG,
-    _MEAN,
-    _OCCLUDED,
-    _PREREQ,
-    _SHORT,
-    _STD,
-    _angle_limits,
-    _batch_angles,
-    _cheap_tests,
-    _check_range,
-    _check_scan,
-    _geometry,
-    _scan_runs,
-    _trace,
-    circle_from_iav,
+from .._checks import check_positive
+from .._iav_batch import (
+    ACCEPTED,
+    DEGENERATE,
+    FEW,
+    FIT,
+    LONG,
+    MEAN,
+    OCCLUDED,
+    PREREQ,
+    SHORT,
+    STD,
+    LegTest,
+    Runs,
+    Seen,
+    check_scan,
+    leg_center,
+    leg_engine,
+    leg_limits,
+    occluded,
 )
+from .._iav_noise import angle_limits
 from ..features import Leg, Person
-from ..fitting import fit_circle
+from ..iav import IAVStats
 from ..noise import noise_sigma
-from ..params import AUTO, Params, param
+from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
 from ..segmentation import RangeSegment
 from ..steps import Step
-from ._takes_params import old_kwargs, takes_params
+from .iav_circles import _angles, _chord, _in_band, _middle_ratio, _prerequisite_band, _segments, _side
 
 __all__ = ["LegsParams", "detect_legs", "pair_legs", "is_occluded"]
-
-_LEG_CENTER_METHODS = ("ray", "iav", "algebraic", "geometric")
 
 
 def is_occluded(scan: Scan, first: int, last: int) -> bool:
@@ -104,40 +109,12 @@ def is_occluded(scan: Scan, first: int, last: int) -> bool:
     >>> is_occluded(s, 1, 2)      # beam 0 behind, beam 3 at the same range: not occluded
     False
     """
-    _check_scan(scan)
+    check_scan(scan)
     n = scan.n_beams
     for name, beam in (("first", first), ("last", last)):
         if isinstance(beam, bool) or int(beam) != beam or not 0 <= beam < n:
             raise ValueError(f"{name} must be a beam index in 0..{n - 1}, got {beam!r}")
-    return _occluded(scan, int(first), int(last))
-
-
-def _occluded(scan: Scan, first: int, last: int) -> bool:
-    """:func:`is_occluded` without the checks."""
-    n = scan.n_beams
-    r, valid = scan.ranges, scan.valid
-    for end, nb in ((first, first - 1), (last, last + 1)):
-        if not 0 <= nb < n:
-            if not scan.is_full_circle:
-                return True  # cut by the edge of the field of view
-            nb %= n
-        if valid.item(nb) and r.item(nb) < r.item(end):
-            return True
-    return False
-
-
-def _leg_center(points: np.ndarray, chord: float, mean: float, side: float,
-                method: str) -> tuple[np.ndarray, float]:
-    """Centre and diameter of a leg segment."""
-    if method == "ray":
-        mx, my = points[points.shape[0] // 2].tolist()
-        h, k = math.hypot(mx, my), 0.5 * chord
-        return np.array([mx + k * mx / h, my + k * my / h]), chord
-    if method == "iav":
-        center, radius = circle_from_iav(points[0], points[-1], mean, side if side != 0 else 1.0)
-        return np.asarray(center, dtype=np.float64), 2.0 * radius
-    fit = fit_circle(points, method)
-    return np.array(fit.center, dtype=np.float64), 2.0 * fit.radius
+    return occluded(scan, int(first), int(last))
 
 
 @dataclass(frozen=True)
@@ -151,10 +128,10 @@ class LegsParams(Params):
     chord_padding_beams: float = param(1.0, "widen the chord by this many beam spacings at the leg's range", lo=0)
     middle_range: tuple = param((0.1, 0.7), "prerequisite band: the middle point's distance from the chord, "
                                             "as a fraction of the chord", lo=0)
-    iav_mean_range_deg: tuple = param((0.0, 180.0), "accepted IAV mean, degrees ([0, 180]: not tested)", lo=0,
-                                      hi=180)
-    iav_std_max_deg: float = param(math.inf, "largest IAV standard deviation, degrees (inf: not tested)",
-                                   lo=0, strict=True, finite=False)
+    iav_mean_range_deg: tuple = param((0.0, 180.0), "accepted IAV mean, degrees ([0, 180] or none: not tested)",
+                                      lo=0, hi=180, optional=True)
+    iav_std_max_deg: float = param(math.inf, "largest IAV standard deviation, degrees (inf or none: not tested)",
+                                   lo=0, strict=True, finite=False, optional=True)
     reject_occluded: bool = param(True, "drop segments partly hidden behind a nearer object")
     center_method: str = param("ray", "centre: ray (middle point pushed back by the radius), iav, algebraic, "
                                       "geometric", choices=("ray", "iav", "algebraic", "geometric"))
@@ -164,32 +141,24 @@ class LegsParams(Params):
                                        lo=0, strict=True)
 
     @classmethod
-    def old_renamed(cls) -> dict:
-        return {"chord_range_m": "chord_range"}
-
-    def _old_kwargs(self) -> dict:
-        kw = old_kwargs(self)
-        if self.iav_mean_range_deg == (0.0, 180.0):
-            kw["iav_mean_range"] = None
-        if math.isinf(self.iav_std_max_deg):
-            kw["iav_std_max"] = None
-        return kw
+    def renamed(cls) -> dict:
+        return {"chord_range": "chord_range_m"}
 
 
-@takes_params(LegsParams, segmented=True, own_segmentation=("seg_threshold_m",))
+@checked_by(LegsParams)
 def detect_legs(
     scan: Scan,
     *,
-    seg_threshold_m: float = 0.08,
-    min_points: int,
-    chord_range: tuple[float, float],
-    chord_padding_beams: float,
-    middle_range: tuple[float, float],
-    iav_mean_range: tuple[float, float] | None,
-    iav_std_max: float | None,
-    reject_occluded: bool,
-    center_method: str,
-    range_sigma_m: float | str,
+    min_points: int = LegsParams.min_points,
+    chord_range_m: tuple[float, float] = LegsParams.chord_range_m,
+    chord_padding_beams: float = LegsParams.chord_padding_beams,
+    middle_range: tuple[float, float] = LegsParams.middle_range,
+    iav_mean_range_deg: tuple[float, float] | None = LegsParams.iav_mean_range_deg,
+    iav_std_max_deg: float | None = LegsParams.iav_std_max_deg,
+    reject_occluded: bool = LegsParams.reject_occluded,
+    center_method: str = LegsParams.center_method,
+    range_sigma_m: float | str = LegsParams.range_sigma_m,
+    seg_threshold_m: float | None = None,
     segments: list[RangeSegment] | np.ndarray | None = None,
     trace: bool = False,
 ) -> list[Leg] | tuple[list[Leg], list[Step]]:
@@ -198,29 +167,29 @@ def detect_legs(
     Parameters
     ----------
     scan : Scan
-    seg_threshold_m : float, metres
-        Range segmentation threshold (Table II, 80 mm). Ignored when ``segments`` is given.
     min_points : int
         Fewest points of a leg: 3 (one inscribed angle).
-    chord_range : (float, float), metres
-        Distance between the segment's extremes: 0.1 to 0.25 m, the expected leg diameters.
+    chord_range_m : (float, float), metres
+        Distance between the segment's extremes: 0.1 to 0.25 m, the expected leg diameters
+        (``chord_range``, its old name, is deprecated).
     chord_padding_beams : float
         Beam spacings added to the chord before the range test (module notes): 1.
         0 reproduces the paper's literal test.
     middle_range : (float, float)
         The circle prerequisite (Fig. 5): 0.1 to 0.7 of the chord, towards the sensor.
-    iav_mean_range : (float, float) or None, radians
-        Optional bound on the mean inscribed angle (e.g. the circles' 90 to 135 deg).
-        None (default): no test, as in the paper.
-    iav_std_max : float or None, radians
-        Optional bound on the spread of the inscribed angles (e.g. 0.15 rad). None: no test.
+    iav_mean_range_deg : (float, float) or None, degrees
+        Optional bound on the mean inscribed angle (e.g. the circles' 90 to 135).
+        Default (0, 180), or None: no test, as in the paper.
+    iav_std_max_deg : float or None, degrees
+        Optional bound on the spread of the inscribed angles (e.g. 8.6). Default inf, or None:
+        no test.
     reject_occluded : bool
         Apply the occlusion rule (default True).
     center_method : {"ray", "iav", "algebraic", "geometric"}
         ``"ray"`` (default): the middle point moved half a (padded) chord further along
         its beam, i.e. the centre of a circle whose diameter is the padded chord, seen
         straight on; ``diameter`` is the padded chord. ``"iav"``:
-        :func:`labkit.circles.iav.circle_from_iav`; ``"algebraic"``/``"geometric"``:
+        :func:`labkit.iav.circle_from_iav`; ``"algebraic"``/``"geometric"``:
         :func:`labkit.fitting.fit_circle`; with these three, ``diameter`` is twice the
         fitted radius. On the ``hall`` scenario (as above) ``"ray"`` has the larger
         median centre error (1.4 cm against 0.9 cm) but no outliers (largest 4 cm against
@@ -237,15 +206,18 @@ def detect_legs(
         10-25 cm piece cannot tell round from flat at that noise, and with no angle test
         (the paper has none for legs) a flat piece of leg width, such as a box's face,
         passes the widened band about half the time at 2 cm and a fifth at 5 mm (15 % and
-        1 % with the fixed band; ``tests/test_noise_aware.py``). Without ``segments``, the
-        scan's own segmentation follows this noise too (not 0).
+        1 % with the fixed band; ``tests/test_noise_aware.py``).
+    seg_threshold_m : float or None, metres
+        A fixed range segmentation threshold (Table II, 80 mm). Default None: the default
+        segmentation, its breakpoints following ``range_sigma_m`` too. Ignored when
+        ``segments`` is given.
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments (:func:`labkit.segmentation.labels_from`).
     trace : bool
-        Also return one :class:`labkit.Step` per segment (``algorithm="legs"``), as
-        :func:`labkit.detect_circles` does (the chord tested is the padded chord; an
-        ``"accept"`` step's circle is the leg: its centre and half its diameter; ``test``
-        may also be ``"occluded"``).
+        Run the reference, segment by segment, and also return one :class:`labkit.Step` per
+        segment (``algorithm="legs"``), as :func:`labkit.detect_circles` does (the chord tested
+        is the padded chord; an ``"accept"`` step's circle is the leg: its centre and half its
+        diameter; ``test`` may also be ``"occluded"``).
 
     Returns
     -------
@@ -261,78 +233,100 @@ def detect_legs(
     >>> np.round(leg.center, 2).tolist(), round(leg.diameter, 2), leg.n_points
     ([1.99, 0.5], 0.12, 7)
     """
-    _check_scan(scan)
-    min_points, (chord_lo, chord_hi), middle_range, iav_mean_range, iav_std_max, chord_padding_beams = _leg_params(
-        min_points, chord_range, middle_range, iav_mean_range, iav_std_max, center_method, chord_padding_beams)
-    runs = _scan_runs(scan, segments, seg_threshold_m)
-    if runs.starts.size == 0:
-        return ([], []) if trace else []
-    geo = _geometry(runs)
-    spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
-    chord = geo.chord + chord_padding_beams * spacing * np.hypot(geo.middle[:, 0], geo.middle[:, 1])
+    check_scan(scan)
+    no_mean_test = iav_mean_range_deg is None or iav_mean_range_deg == (0.0, 180.0)
+    no_std_test = iav_std_max_deg is None or math.isinf(iav_std_max_deg)
+    test = LegTest(min_points=min_points, chord_range=chord_range_m, chord_padding_beams=chord_padding_beams,
+                   middle_range=middle_range,
+                   iav_mean_range=None if no_mean_test else tuple(math.radians(v) for v in iav_mean_range_deg),
+                   iav_std_max=None if no_std_test else math.radians(iav_std_max_deg),
+                   reject_occluded=reject_occluded, center_method=center_method)
+    runs = _segments(scan, segments, seg_threshold_m, range_sigma_m)
     sigma = noise_sigma(scan, range_sigma_m)
-    widened: dict = {}
-    verdict, ratio = _cheap_tests(geo, chord, min_points, (chord_lo, chord_hi), middle_range, sigma=sigma,
-                                  widened=widened)
-    widened = {k: {_PREREQ: band} for k, band in widened.items()}
-    sel = [k for k, v in enumerate(verdict) if v == _ACCEPTED]
-    legs: list[Leg] = []
-    ang = None
-    if sel:
-        ang = _batch_angles(runs, np.array(sel), with_side=center_method == "iav")
-        for j, k in enumerate(sel):
-            a, b = runs.starts.item(k), runs.ends.item(k)
-            first, last = runs.idx.item(a), runs.idx.item(b - 1)
-            m, sd = ang.mean.item(j), ang.std.item(j)
-            mean_range, std_max = iav_mean_range, iav_std_max
-            if sigma > 0.0 and not (mean_range is None and std_max is None):
-                mean_range, std_max, _ = _angle_limits(runs.pts[a:b], sigma, mean_range or (0.0, math.pi), std_max)
-                widened[k].update({_MEAN: mean_range, _STD: std_max, _ACCEPTED: std_max})
-                mean_range = mean_range if iav_mean_range is not None else None
-            if ang.degenerate.item(j):
-                verdict[k] = _DEGENERATE
-            elif mean_range is not None and not mean_range[0] <= m <= mean_range[1]:
-                verdict[k] = _MEAN
-            elif std_max is not None and sd >= std_max:
-                verdict[k] = _STD
-            elif reject_occluded and _occluded(scan, first, last):
-                verdict[k] = _OCCLUDED
-            else:
-                side = ang.side.item(j) if center_method == "iav" else 0.0  # (only the iav centre needs it)
-                try:
-                    center, diameter = _leg_center(runs.pts[a:b], chord.item(k), m, side, center_method)
-                except ValueError:
-                    verdict[k] = _FIT
-                    continue
-                middle = np.array(geo.middle[k], dtype=np.float64)
-                center.setflags(write=False)
-                middle.setflags(write=False)
-                legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
-    if not trace:
-        return legs
-    limits = {_FEW: min_points, _SHORT: chord_lo, _LONG: chord_hi, _PREREQ: middle_range}
-    if iav_mean_range is not None:
-        limits[_MEAN] = tuple(iav_mean_range)
-    if iav_std_max is not None:
-        limits[_STD] = limits[_ACCEPTED] = iav_std_max
-    return legs, _trace(runs, geo, chord, ratio, verdict, sel, ang, "legs", limits, legs, widened)
+    if not trace:  # the engine: every segment at once, the same legs
+        return leg_engine(scan, runs, test, sigma)[0]
+    return _reference(scan, runs, test, sigma)
 
 
-@remembered
-def _leg_params(min_points, chord_range, middle_range, iav_mean_range, iav_std_max, center_method,
-                chord_padding_beams) -> tuple:
-    """The parameters of :func:`detect_legs` checked, in its order, and converted."""
-    min_points = check_int("min_points", min_points, 3)
-    chord_range = _check_range("chord_range", chord_range, 0.0, math.inf)
-    middle_range = _check_range("middle_range", middle_range, 0.0, math.inf)
-    if iav_mean_range is not None:
-        iav_mean_range = _check_range("iav_mean_range", iav_mean_range, 0.0, math.pi)
-    if iav_std_max is not None:
-        iav_std_max = check_positive("iav_std_max", iav_std_max)
-    if center_method not in _LEG_CENTER_METHODS:
-        raise ValueError(f"center_method must be one of {_LEG_CENTER_METHODS}, got {center_method!r}")
-    chord_padding_beams = check_nonneg("chord_padding_beams", chord_padding_beams)
-    return min_points, chord_range, middle_range, iav_mean_range, iav_std_max, chord_padding_beams
+def _reference(scan: Scan, runs: Runs, t: LegTest, sigma: float) -> tuple[list[Leg], list[Step]]:
+    """The leg test of Xavier et al. on each segment in turn, and what each test saw."""
+    legs, steps = [], []
+    limits = leg_limits(t)
+    spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
+    for beams, points in runs.segments():
+        seen = Seen(len(points))
+        leg = _test_segment(scan, points, beams, t, sigma, spacing, seen)
+        if leg is not None:
+            legs.append(leg)
+        steps.append(seen.step("legs", beams, limits, leg))
+    return legs, steps
+
+
+def _test_segment(scan: Scan, points: np.ndarray, beams: np.ndarray, t: LegTest, sigma: float, spacing: float,
+                  seen: Seen) -> Leg | None:
+    """The leg of one segment, or None; ``seen`` records what the tests saw and the first that
+    failed."""
+    # enough points (3: one inscribed angle)
+    if len(points) < t.min_points:
+        return seen.reject(FEW)
+    # Sec. II-E: the distance between the end points within the leg diameters (the chord padded)
+    chord = _chord(points)
+    seen.chord = _padded(chord, points, t.chord_padding_beams, spacing)
+    if seen.chord < t.chord_range[0]:
+        return seen.reject(SHORT)
+    if seen.chord > t.chord_range[1]:
+        return seen.reject(LONG)
+    # Sec. II-D, Fig. 5: the circle prerequisite, as for circles
+    seen.ratio = _middle_ratio(points)
+    if math.isnan(seen.ratio):
+        return seen.reject(DEGENERATE)
+    band = _prerequisite_band(points, chord, t.middle_range, sigma, seen)
+    if not _in_band(seen.ratio, band):
+        return seen.reject(PREREQ)
+    # the inscribed angles: kept in the record; tested only when asked (the paper does not)
+    angles = _angles(points, hollow=False)
+    if angles is None:
+        return seen.reject(DEGENERATE)
+    seen.mean, seen.std, _ = IAVStats.from_angles(angles)
+    mean_range, std_max = _angle_limits(points, t, sigma, seen)
+    if mean_range is not None and not mean_range[0] <= seen.mean <= mean_range[1]:
+        return seen.reject(MEAN)
+    if std_max is not None and seen.std >= std_max:
+        return seen.reject(STD)
+    # Sec. II-E: not partially occluded
+    first, last = int(beams[0]), int(beams[-1])
+    if t.reject_occluded and is_occluded(scan, first, last):
+        return seen.reject(OCCLUDED)
+    # the centre and the diameter
+    side = _side(points) if t.center_method == "iav" else 0.0
+    try:
+        center, diameter = leg_center(points, seen.chord, seen.mean, side, t.center_method)
+    except ValueError:
+        return seen.reject(FIT)
+    middle = np.array(points[len(points) // 2], dtype=np.float64)
+    center.setflags(write=False)
+    middle.setflags(write=False)
+    return Leg(center, float(diameter), middle, first, last, len(points), seen.mean, seen.std)
+
+
+def _padded(chord: float, points: np.ndarray, padding_beams: float, spacing: float) -> float:
+    """The chord plus ``padding_beams`` beam spacings at the middle point's range: the extreme
+    beams hit a leg up to one spacing inside its silhouette (module notes)."""
+    mx, my = points[len(points) // 2]
+    return chord + padding_beams * spacing * float(np.hypot(mx, my))
+
+
+def _angle_limits(points: np.ndarray, t: LegTest, sigma: float,
+                  seen: Seen) -> tuple[tuple[float, float] | None, float | None]:
+    """Noise allowance: the optional mean range and spread limit, widened by what range noise
+    ``sigma`` does to this segment's angles (:func:`labkit._iav_noise.angle_limits`); as given
+    when ``sigma`` is 0; None: not tested."""
+    mean_range, std_max = t.iav_mean_range, t.iav_std_max
+    if sigma > 0.0 and not (mean_range is None and std_max is None):
+        wide, std_max, _ = angle_limits(points, sigma, mean_range or (0.0, math.pi), std_max)
+        seen.widened.update({MEAN: wide, STD: std_max, ACCEPTED: std_max})
+        mean_range = wide if mean_range is not None else None
+    return mean_range, std_max
 
 
 def pair_legs(legs: list[Leg], max_distance_m: float = LegsParams.pair_max_distance_m) -> list[Person]:

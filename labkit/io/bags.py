@@ -26,9 +26,14 @@ from rosbags.highlevel import AnyReader
 
 from .._safe import OutputKind, safe_output, starts_with
 from ..errors import RefusedError
+from ..poses import quaternion_from_yaw
 from ..scan import Scan
 from . import salvage
 from .errors import CorruptFileError, EmptyRecordingError, Faults
+
+#: Where labkit's bag writers put the scans' poses, and the frame they are in (labkit.io.poses reads them).
+ODOM_TOPIC = "/odom"
+ODOM_FRAME = "map"
 
 BAG_FORMATS = ("ros1", "ros2", "mcap")
 _MSGTYPE = "sensor_msgs/msg/LaserScan"
@@ -618,9 +623,6 @@ def _system_errors(path: Path):
 
 def _odometry(typestore, scan: Scan, seq: int, ros1: bool):
     """The scan's pose as a ``nav_msgs/Odometry`` message: the sensor frame (child) in ``map``."""
-    from ..poses import quaternion_from_yaw
-    from .poses import ODOM_FRAME
-
     t = typestore.types
     sec, nsec = divmod(int(scan.stamp_ns), 1_000_000_000)
     header = t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),

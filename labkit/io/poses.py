@@ -41,6 +41,7 @@ import numpy as np
 
 from ..errors import RefusedError
 from ..poses import FrameTree, PoseTrack, compose, yaw_from_quaternion
+from .bags import ODOM_FRAME, ODOM_TOPIC, read_messages
 from .errors import Faults
 
 __all__ = ["ODOMETRY_TYPES", "TF_TYPES", "ODOM_TOPIC", "ODOM_FRAME", "PosePlan", "BagPoses", "plan_poses",
@@ -48,9 +49,6 @@ __all__ = ["ODOMETRY_TYPES", "TF_TYPES", "ODOM_TOPIC", "ODOM_FRAME", "PosePlan",
 
 ODOMETRY_TYPES = frozenset({"nav_msgs/Odometry", "nav_msgs/msg/Odometry"})
 TF_TYPES = frozenset({"tf2_msgs/TFMessage", "tf2_msgs/msg/TFMessage", "tf/tfMessage", "tf/msg/tfMessage"})
-#: Where labkit's bag writers put the scans' poses, and the frame they are in.
-ODOM_TOPIC = "/odom"
-ODOM_FRAME = "map"
 
 
 @dataclass(frozen=True)
@@ -212,8 +210,6 @@ def read_bag_poses(path: Path, fmt: str, plan: PosePlan, readable: bool, strict:
     ``strict``, reading stops there); :func:`labkit.io.bags.iter_bag` reports them with the scans'.
     ``expected``: how many pose messages the bag's index lists, to count the lost ones exactly.
     """
-    from .bags import read_messages  # bags reads LaserScans with the same machinery
-
     faults = Faults(path, strict, expected)
     odometry: dict[tuple[str, str], tuple[list, list]] = {}
     static: dict[str, tuple[str, tuple]] = {}

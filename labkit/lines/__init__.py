@@ -4,7 +4,7 @@
 * :mod:`~labkit.lines.angular` angular segmentation (Meglicki 2021)
 * :mod:`~labkit.lines.incremental`, :mod:`~labkit.lines.regression`,
   :mod:`~labkit.lines.ransac`, :mod:`~labkit.lines.hough` the other extractors Nguyen et al. compared
-* :mod:`~labkit.lines.iav` lines by inscribed angle variance (Xavier et al. 2005)
+* :mod:`~labkit.lines.iav_lines` lines by inscribed angle variance (Xavier et al. 2005)
 
 :data:`LINE_EXTRACTORS` maps one name per method to a :class:`LineExtractor` (function,
 parameter record, one-line description, display label). The pipeline's ``lines.method``,
@@ -22,7 +22,7 @@ from __future__ import annotations
 from ..params import Params
 from .angular import AngularParams, AngularSteps, angular_arrays, angular_lines, angular_segmentation, local_directions
 from .hough import HoughParams, hough_lines
-from .iav import IAVLineParams, detect_lines_iav
+from .iav_lines import IAVLineParams, detect_lines_iav
 from .incremental import IncrementalParams, incremental_lines
 from .placing import PlacingParams
 from .ransac import RansacParams, ransac_lines

@@ -1,7 +1,11 @@
-"""Lines by inscribed angle variance (Xavier et al. 2005, Sec. II-B): a whole range
+"""Lines by inscribed angle variance (Xavier et al. 2005, Sec. II-B.1): a whole range
 segment is a line when its signed inscribed angles are all near 180 deg.
 
-The inscribed angles and their conventions are those of :mod:`labkit.circles.iav`.
+The inscribed angles and their conventions are those of :mod:`labkit.iav`. Read
+:func:`_test_segment` for the tests in the paper's order (enough points, the distance between
+the extremes, the angles' mean near 180 deg and their spread); ``trace=True`` runs it segment
+by segment, and without it :func:`detect_lines_iav` runs the batch engine
+(:mod:`labkit._iav_batch`), which gives the same lines.
 """
 
 from __future__ import annotations
@@ -11,27 +15,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._iav import (
-    _ACCEPTED,
-    _DEGENERATE,
-    _FEW,
-    _MEAN,
-    _SHORT,
-    _STD,
-    CIRCLE_STD_MAX,
-    _batch_angles,
-    _check_scan,
-    _geometry,
-    _scan_runs,
-    _trace,
+from .._iav_batch import (
+    DEGENERATE,
+    FEW,
+    MEAN,
+    SHORT,
+    STD,
+    LineTest,
+    Runs,
+    Seen,
+    check_scan,
+    line_engine,
+    line_limits,
+    scan_runs,
 )
 from ..features import LineSegment, line_segment
+from ..iav import CIRCLE_STD_MAX, IAVStats, inscribed_angles
 from ..params import Params, checked_by, param
 from ..scan import Scan
 from ..segmentation import RangeSegment, detector_labels
 from ..steps import Step
 
-__all__ = ["detect_lines_iav"]
+__all__ = ["IAVLineParams", "detect_lines_iav"]
 
 
 @dataclass(frozen=True)
@@ -89,7 +94,8 @@ def detect_lines_iav(
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments.
     trace : bool
-        Also return one :class:`labkit.Step` per segment (``algorithm="iav_lines"``), as
+        Run the reference, segment by segment, and also return one :class:`labkit.Step` per
+        segment (``algorithm="iav_lines"``), as
         :func:`labkit.detect_circles` does; an ``"accept"`` step carries the line ``r, alpha``,
         and the ``"iav mean"`` test compares ``value = |mean - pi|`` (radians) with ``mean_tolerance_deg`` in radians.
 
@@ -106,33 +112,49 @@ def detect_lines_iav(
     >>> round(line.r, 6), abs(line.alpha) < 1e-6, line.n_points
     (2.0, True, 107)
     """
-    _check_scan(scan)
-    mean_tolerance, std_max = math.radians(mean_tolerance_deg), math.radians(std_max_deg)
+    check_scan(scan)
+    test = LineTest(min_points=min_points, min_length_m=min_length_m, mean_tolerance=math.radians(mean_tolerance_deg),
+                    std_max=math.radians(std_max_deg))
     if segments is None and seg_threshold_m is None:
         segments = detector_labels(scan, None)
-    runs = _scan_runs(scan, segments, seg_threshold_m)
-    s = runs.starts.size
-    if s == 0:
-        return ([], []) if trace else []
-    geo = _geometry(runs)
-    verdict = np.full(s, _ACCEPTED, dtype=np.int64)
-    if geo.finite is not None:
-        verdict[~geo.finite] = _DEGENERATE
-    verdict[geo.chord < min_length_m] = _SHORT
-    verdict[geo.n < min_points] = _FEW
-    sel = np.flatnonzero(verdict == _ACCEPTED)
-    lines: list[LineSegment] = []
-    ang = None
-    if sel.size:
-        ang = _batch_angles(runs, sel)
-        verdict[sel[np.abs(ang.mean - math.pi) > mean_tolerance]] = _MEAN
-        verdict[sel[(verdict[sel] == _ACCEPTED) & (ang.std >= std_max)]] = _STD
-        verdict[sel[ang.degenerate]] = _DEGENERATE
-        for k in sel[verdict[sel] == _ACCEPTED]:
-            a, b = runs.starts[k], runs.ends[k]
-            lines.append(line_segment(runs.pts[a:b], runs.idx[a:b]))
-    if not trace:
-        return lines
-    limits = {_FEW: min_points, _SHORT: min_length_m, _MEAN: mean_tolerance, _STD: std_max, _ACCEPTED: std_max,
-              "mean_from": math.pi}  # the mean test compares |mean - pi| with the tolerance
-    return lines, _trace(runs, geo, geo.chord, np.full(s, np.nan), verdict, sel, ang, "iav_lines", limits, lines)
+    runs = scan_runs(scan, segments, seg_threshold_m)
+    if not trace:  # the engine: every segment at once, the same lines
+        return line_engine(runs, test)[0]
+    return _reference(runs, test)
+
+
+def _reference(runs: Runs, t: LineTest) -> tuple[list[LineSegment], list[Step]]:
+    """The line test of Xavier et al. on each segment in turn, and what each test saw."""
+    lines, steps = [], []
+    limits = line_limits(t)
+    for beams, points in runs.segments():
+        seen = Seen(len(points))
+        line = _test_segment(points, beams, t, seen)
+        if line is not None:
+            lines.append(line)
+        steps.append(seen.step("iav_lines", beams, limits, line))
+    return lines, steps
+
+
+def _test_segment(points: np.ndarray, beams: np.ndarray, t: LineTest, seen: Seen) -> LineSegment | None:
+    """The line of one segment, or None; ``seen`` records what the tests saw and the first that
+    failed."""
+    # Table II line_min_pts: enough points
+    if len(points) < t.min_points:
+        return seen.reject(FEW)
+    # Table II line_min_len: the distance between the extremes
+    dx, dy = points[-1] - points[0]
+    seen.chord = float(np.hypot(dx, dy))
+    if seen.chord < t.min_length_m:
+        return seen.reject(SHORT)
+    # Sec. II-B.1: "the same procedure of circles", around 180 deg
+    try:
+        angles = inscribed_angles(points, signed=True)
+    except ValueError:  # a point not finite, or an interior point on an extreme
+        return seen.reject(DEGENERATE)
+    seen.mean, seen.std, _ = IAVStats.from_angles(angles)
+    if abs(seen.mean - math.pi) > t.mean_tolerance:
+        return seen.reject(MEAN)
+    if seen.std >= t.std_max:
+        return seen.reject(STD)
+    return line_segment(points, beams)
