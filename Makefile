@@ -24,12 +24,18 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install --quiet --upgrade pip
 
+# ENGINES: compile labkit's numba engines once into their cache (labkit/**/__pycache__), so that no
+# notebook, test or command pays it on its first scan
+ENGINES = $(BIN)/python -c "from labkit.lines._split_merge_engine import compile_all; compile_all()"
+
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(PIP) install --quiet -e ".[research]"
+	$(ENGINES)
 	touch $@
 
 $(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
 	$(PIP) install --quiet -e ".[dev,research]"
+	$(ENGINES)
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
@@ -56,6 +62,7 @@ chromium:
 	  fi; }
 
 test: $(VENV)/.installed-dev sandbox chromium
+	$(ENGINES)
 	$(BIN)/python -m pytest -n $(JOBS)
 
 # The students' JupyterLab: notebooks/.jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)

@@ -26,12 +26,24 @@ def world_scans(world: str, n_beams: int, n_scans: int, *, seed: int = 0, noise_
     return scans
 
 
-def per_scan(fn, scans, repeat: int) -> tuple[float, float]:
+def fresh_scan(scan):
+    """The same beams as a new :class:`labkit.Scan`: its points, valid mask and noise estimate (all
+    cached on a Scan) are computed again by whatever runs on it."""
+    from labkit import Scan
+
+    return Scan(ranges=scan.ranges, angles=scan.angles, range_min=scan.range_min, range_max=scan.range_max,
+                stamp_ns=scan.stamp_ns)
+
+
+def per_scan(fn, scans, repeat: int, *, fresh: bool = False) -> tuple[float, float]:
     """Median and largest seconds per scan, each scan timed at its best of ``repeat`` passes
-    (so that a pause of the machine does not pass for a slow scan)."""
+    (so that a pause of the machine does not pass for a slow scan). ``fresh``: every call gets a
+    new Scan of the same beams (:func:`fresh_scan`, built outside the timer)."""
     times = np.empty((repeat, len(scans)))
     for k in range(repeat):
         for i, s in enumerate(scans):
+            if fresh:
+                s = fresh_scan(s)
             t0 = time.perf_counter()
             fn(s)
             times[k, i] = time.perf_counter() - t0

@@ -28,9 +28,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._jit import ENABLED as _JIT
 from .noise import RANGE_SIGMA_M, scan_sigma
 from .params import AUTO, Params, checked_by, param
 from .scan import Scan
+
+
+def _engine_labels(*args):
+    """labkit._segmentation_engine.labels, imported on the first scan (numba's import alone costs
+    some 0.35 s of CPU, which a process that extracts nothing should not pay); it then takes this name."""
+    global _engine_labels
+    from ._segmentation_engine import labels
+
+    _engine_labels = labels
+    return labels(*args)
 
 __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_labels",
            "range_segments", "breakpoint_thresholds", "segment_order",
@@ -172,6 +183,22 @@ def segment_labels(
     >>> segment_labels(s, adaptive=False).tolist()
     [0, 0, 0, 1, 1, -1, -1]
     """
+    if adaptive and range_sigma_m == AUTO:
+        range_sigma_m = scan_sigma(scan)
+    if not _JIT:
+        return _segment_labels_reference(scan, threshold_m, min_points, adaptive, incidence_deg, range_sigma_m)
+    # one compiled pass over the beams (labkit._segmentation_engine), the labels of
+    # _segment_labels_reference below bit for bit
+    return _engine_labels(scan.points, scan.ranges, scan.angles, scan.valid, float(threshold_m), int(min_points),
+                          bool(adaptive), math.radians(incidence_deg), float(range_sigma_m) if adaptive else 0.0,
+                          scan.is_full_circle, scan.angle_increment)
+
+
+def _segment_labels_reference(scan: Scan, threshold_m: float, min_points: int, adaptive: bool, incidence_deg: float,
+                              range_sigma_m) -> np.ndarray:
+    """:func:`segment_labels` in numpy, as the paper reads: link neighbouring beams closer than the
+    threshold, start a segment at every valid beam not linked to the one before, join the runs
+    either side of the seam of a full circle, drop the segments with too few points."""
     n = scan.n_beams
     if n == 0:
         return np.full(n, -1, dtype=np.int64)

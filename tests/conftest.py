@@ -59,3 +59,16 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.section("slow steps")
         for nodeid, steps in _SLOW_STEPS:
             terminalreporter.write_line(f"{nodeid}: {', '.join(steps)}")
+
+
+# labkit's numba engines compile into an on-disk cache (labkit/**/__pycache__) the first time they
+# run. `make` compiles them at set-up; where the cache is missing or stale (an edited engine), the two
+# xdist workers would each compile them at once, about 30 s of CPU each. The controller compiles them
+# (or loads them, about a second) before it starts the workers, which then load its cache.
+def pytest_configure(config):
+    from labkit import _jit
+
+    if _jit.ENABLED and getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
+        from labkit.lines._split_merge_engine import compile_all
+
+        compile_all()

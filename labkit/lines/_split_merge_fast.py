@@ -96,7 +96,8 @@ class Line:
 
     @property
     def length(self) -> float:
-        return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
+        dx, dy = self.end[0] - self.start[0], self.end[1] - self.start[1]
+        return math.sqrt(dx * dx + dy * dy)  # (not math.hypot, whose rounding differs between Pythons)
 
     def joined(self, other: Line) -> Line:
         """The line through this line's points and ``other``'s (which follows it), refitted

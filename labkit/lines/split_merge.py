@@ -66,6 +66,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._jit import ENABLED as _JIT
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
 from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
 from ..params import AUTO, Params, checked_by, param
@@ -88,6 +89,20 @@ from .placing import placed
 
 __all__ = ["split_and_merge", "iepf", "lines_similar", "join_grazing_walls", "SplitMergeParams", "GRAZING_DEG",
            "RESIDUAL_Z", "SHIFT_Z", "SHIFT_MIN_M"]
+
+_ENGINE = False if _JIT else None  # (False: not imported yet)
+
+
+def _engine():
+    """labkit.lines._split_merge_engine, or None where it does not run (LABKIT_NO_JIT=1, or a BLAS
+    whose rounding it does not reproduce). Imported on the first scan, not with labkit: numba's
+    import alone costs some 0.35 s of CPU, which a process that extracts nothing should not pay."""
+    global _ENGINE
+    if _ENGINE is False:
+        from . import _split_merge_engine as engine
+
+        _ENGINE = engine if _JIT and engine.READY else None
+    return _ENGINE
 
 _METHODS = ("fit", "endpoints")
 
@@ -341,6 +356,14 @@ def split_and_merge(
 
     # step 1: the list of lists L, one list per range segment
     labels = _range_segments(scan, segments, segment_threshold_m, adaptive_segmentation, min_points, sigma)
+    # steps 1-6 and placing in one compiled pass: the same lines
+    if not trace and merge != "chi2" and (engine := _engine()) is not None:
+        return engine.split_and_merge(
+            scan, labels, fit=method == "fit", threshold_m=test.threshold, noise_sigma=test.noise_sigma,
+            absorb_m=test.absorb_m, sigma=sigma, min_points=min_points, min_length_m=min_length_m, max_gap_m=max_gap_m,
+            merge=merge, merge_dr_m=merge_dr_m, merge_dalpha_deg=merge_dalpha_deg, weights=weights,
+            floor_m=SegmentationParams.threshold_m if segment_threshold_m is None else segment_threshold_m,
+            place_dr_m=place_dr_m, place_dalpha_deg=place_dalpha_deg, place_confidence=place_confidence)
     L = _Lists(scan, labels, weights, max_gap_m, test, segment_threshold_m, min_points)
     # steps 2-5 on every list: fit a line, find the worst point, accept the line or split there
     spans: list[tuple[int, int]] = []
@@ -652,7 +675,7 @@ def _misfit(v: np.ndarray, rho: np.ndarray, r: float, sigma: float):
     sd /= rho
     np.maximum(sd, MIN_SPLIT_M / SPLIT_SIGMAS, out=sd)
     z = res / sd
-    total = float(z @ z)
+    total = float(np.sum(z * z))  # (numpy's pairwise sum, the same on every machine, unlike BLAS's z @ z)
     if total > n - 2 and total > (n - 2) * chi2_upper_over_dof(n - 2, RESIDUAL_Z):
         return "residual", math.sqrt(float(res @ res) / n)
     if n < 8 or total <= SHIFT_Z * SHIFT_Z:  # (a shifted stretch's z squared is at most the total)
@@ -824,7 +847,8 @@ class _Merging:
 
     def _neighbours(self, a: Line, b: Line) -> bool:
         """Whether the facing ends of ``a`` and ``b`` are close enough to merge them (a "keep" step if not)."""
-        gap = math.hypot(b.start[0] - a.end[0], b.start[1] - a.end[1])
+        dx, dy = b.start[0] - a.end[0], b.start[1] - a.end[1]
+        gap = math.sqrt(dx * dx + dy * dy)  # (not math.hypot, whose rounding differs between Pythons)
         if gap <= self.max_gap_m or (self.test.noise_sigma and b.first == a.last + 1 and grazing_links(
                 self.points, self.ranges, self.angles, np.array([a.last]), self.floor, self.test.noise_sigma).item(0)):
             return True

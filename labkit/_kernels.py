@@ -1,0 +1,232 @@
+"""What labkit's compiled engines share (private: not part of labkit's API).
+
+The engines (:mod:`labkit._segmentation_engine`, :mod:`labkit._noise_engine`,
+:mod:`labkit.lines._split_merge_engine`) run the readable algorithms' exact arithmetic as
+numba-compiled loops: the same IEEE operations in the same order, so that they give the same
+features bit for bit. This module holds the pieces of that arithmetic that numpy or Python
+compute in a way of their own:
+
+* :func:`jit` -- ``numba.njit`` with the on-disk cache (a second process loads the machine code
+  instead of compiling it again), IEEE division (``error_model="numpy"``: x / 0 is inf, not an
+  exception) and no fast-math (no reassociation, no fused multiply-add);
+* :func:`pairwise_sum` -- ``numpy.sum`` of a float64 array: numpy's pairwise summation
+  (blocks of 128 summed with 8 accumulators, halves above that), which a plain loop does not
+  reproduce;
+* :func:`remainder_2pi` -- ``math.remainder(x, 2 pi)`` for the angles the algorithms wrap;
+* :func:`line_from_sums` -- :func:`labkit.fitting.line_from_sums`, the closed-form weighted fit;
+* :func:`dot2` and :data:`FUSED_DOT` -- a point projected on a direction as ``points @ (c, s)``
+  computes it: numpy hands that to BLAS, whose kernel may fuse the multiply-add (OpenBLAS on an
+  FMA processor computes ``fma(x, c, y s)``). :func:`blas_dot_rounding` finds out once, by exact
+  arithmetic on a few numbers, which rounding this machine's BLAS uses; where it is neither, the
+  engines are not used (:data:`FUSED_DOT` is None) and the readable code runs.
+
+The transcendental functions (``math.cos``, ``sin``, ``atan2``, ``hypot``, ``pow``) are the C
+library's in numba, in numpy's float64 loops and in Python alike; ``tests/test_engine.py``
+checks that on this machine.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from fractions import Fraction
+
+import numba
+import numpy as np
+from llvmlite import ir
+from numba.core import cgutils, types
+from numba.extending import intrinsic
+
+__all__ = ["jit", "jit_inline", "pairwise_sum", "sum_at", "segment_sum", "remainder_2pi", "line_from_sums", "dot2",
+           "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
+
+PI = math.pi
+TWO_PI = 2 * math.pi
+HALF_PI = math.pi / 2
+
+
+def jit(fn):
+    """``fn`` compiled by numba on its first call, cached on disk (see the module docstring).
+
+    The cache is numba's: ``__pycache__`` beside the source when that folder is writable (an
+    editable install: the repository's ``labkit/**/__pycache__``), else the user's cache folder
+    (``~/.cache/numba``), or ``$NUMBA_CACHE_DIR`` when set. Where none is writable the engines
+    still run, compiled afresh in every process (a warning says so once)."""
+    try:
+        return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    except RuntimeError as exc:  # numba: "cannot cache function ...: no locator available"
+        if "cannot cache" not in str(exc):
+            raise
+        _warn_no_cache(str(exc))
+        return numba.njit(nogil=True, error_model="numpy")(fn)
+
+
+def jit_inline(fn):
+    """:func:`jit` for a small helper that LLVM inlines into its callers. (numba's own
+    ``inline="always"`` copies the helper into each caller before typing: a fifth more
+    compilation time for the engines, measured, and no faster code.)"""
+    return jit(fn)
+
+
+_WARNED: list[str] = []
+
+
+def _warn_no_cache(reason: str) -> None:
+    if not _WARNED:
+        _WARNED.append(reason)
+        warnings.warn(f"labkit's compiled engines find no writable cache folder ({reason}): every process "
+                      "compiles them again on its first scan (some 30 s of CPU); set NUMBA_CACHE_DIR to a "
+                      "writable folder", RuntimeWarning, stacklevel=3)
+
+
+@jit
+def segment_sum(a, lo, n):
+    """A segment's sum as ``numpy.add.reduceat`` gives it: its first value plus numpy's pairwise
+    sum of the others (``n >= 1`` values from ``a[lo]``)."""
+    if n == 1:
+        return a[lo]
+    return a[lo] + _pairwise(a, lo + 1, n - 1)
+
+
+@jit
+def sum_at(a, lo, n):
+    """``numpy.sum(a[lo:lo + n])`` bit for bit (see :func:`pairwise_sum`)."""
+    return 0.0 + _pairwise(a, lo, n)
+
+
+@jit
+def pairwise_sum(a, n):
+    """``numpy.sum(a[:n])`` bit for bit (float64, contiguous): ``0.0 +`` numpy's pairwise sum
+    (:func:`_pairwise`)."""
+    return 0.0 + _pairwise(a, n - n, n)
+
+
+@jit
+def _pairwise(a, lo, n):
+    """numpy's pairwise sum of ``a[lo:lo + n]``: blocks of up to 128 values are summed by eight
+    accumulators (:func:`_block`); a longer run is split in two, the first half a multiple of 8,
+    and the halves' sums added. The recursion is unrolled onto a stack (numba cannot cache a
+    recursive function)."""
+    if n <= 128:
+        return _block(a, lo, n)
+    node_lo = np.empty(192, np.int64)
+    node_n = np.empty(192, np.int64)
+    node_split = np.zeros(192, np.bool_)
+    sums = np.empty(96)
+    n_sums = 0
+    node_lo[0], node_n[0] = lo, n
+    top = 1
+    while top:
+        top -= 1
+        at, size = node_lo[top], node_n[top]
+        if size <= 128:
+            sums[n_sums] = _block(a, at, size)
+            n_sums += 1
+        elif node_split[top]:  # both halves summed: add them
+            n_sums -= 1
+            sums[n_sums - 1] = sums[n_sums - 1] + sums[n_sums]
+        else:  # this node again once its halves are done, then the second half, then the first
+            half = size // 2
+            half -= half % 8
+            node_split[top] = True
+            node_lo[top + 1], node_n[top + 1], node_split[top + 1] = at + half, size - half, False
+            node_lo[top + 2], node_n[top + 2], node_split[top + 2] = at, half, False
+            top += 3
+    return sums[0]
+
+
+@jit_inline
+def _block(a, lo, n):
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]  # eight accumulators, then the rest one by one
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    stop = n - n % 8
+    while i < stop:
+        j = lo + i
+        r0 += a[j]
+        r1 += a[j + 1]
+        r2 += a[j + 2]
+        r3 += a[j + 3]
+        r4 += a[j + 4]
+        r5 += a[j + 5]
+        r6 += a[j + 6]
+        r7 += a[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@jit_inline
+def remainder_2pi(x):
+    """``math.remainder(x, 2 pi)`` for ``|x| < 3 pi``: the result is exact (Sterbenz), and a
+    half-way ``x = +-pi`` stays (the quotient 0.5 rounds to the even 0)."""
+    if x > PI:
+        return x - TWO_PI
+    if x < -PI:
+        return x + TWO_PI
+    return x
+
+
+@jit_inline
+def line_from_sums(sw, sx, sy, sxx, syy, sxy):
+    """:func:`labkit.fitting.line_from_sums`, the same operations in the same order."""
+    num = 2.0 * (sxy - sx * sy / sw)
+    den = (sxx - syy) - (sx * sx - sy * sy) / sw
+    alpha = 0.5 * math.atan2(num, den) + HALF_PI
+    r = (sx * math.cos(alpha) + sy * math.sin(alpha)) / sw
+    if r < 0:
+        r = -r
+        alpha = alpha + PI
+    return r, remainder_2pi(alpha)
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once (LLVM's ``llvm.fma.f64``)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(ir.DoubleType(), [ir.DoubleType()] * 3),
+                                            "llvm.fma.f64")
+        return builder.call(fn, args)
+
+    return sig, codegen
+
+
+@jit_inline
+def dot2(x, y, c, s, fused):
+    """``x c + y s`` as ``numpy.dot`` of the point ``(x, y)`` and ``(c, s)`` rounds it on this
+    machine: once (``fused``, as a fused multiply-add of ``x c`` onto ``y s``) or after each
+    operation."""
+    if fused:
+        return _fma(x, c, y * s)
+    return x * c + y * s
+
+
+def blas_dot_rounding() -> bool | None:
+    """How numpy's ``(N, 2) @ (2,)`` rounds ``x c + y s`` here: True when it equals
+    ``fma(x, c, y s)`` (rounded once), False when ``x c + y s`` rounded after each operation, None
+    when neither (the engines then stand aside). Worked out exactly (fractions), on points whose
+    two roundings differ, in several lengths and offsets of a larger array."""
+    rng = np.random.default_rng(20261128)
+    big = rng.uniform(-30.0, 30.0, (257, 2))
+    fused = plain = True
+    for lo, hi, angle in ((0, 257, 0.3), (1, 8, 2.0), (3, 40, -1.2), (5, 6, 2.9), (2, 133, -2.6)):
+        c, s = math.cos(angle), math.sin(angle)
+        got = big[lo:hi].dot(np.array([c, s])).tolist()
+        for (x, y), g in zip(big[lo:hi].tolist(), got, strict=True):
+            fused = fused and g == float(Fraction(x) * Fraction(c) + Fraction(y * s))
+            plain = plain and g == x * c + y * s
+    return True if fused else False if plain else None
+
+
+#: :func:`blas_dot_rounding` of this machine.
+FUSED_DOT = blas_dot_rounding()

@@ -1,0 +1,306 @@
+"""The compiled engines give the readable references' results bit for bit.
+
+``split_and_merge(scan)`` runs the engine (labkit/lines/_split_merge_engine.py),
+``split_and_merge(scan, trace=True)`` the readable steps; ``segment_labels`` and
+``estimate_range_noise(scan)`` run compiled passes whose numpy references stay in their modules.
+Compared here: every field of every line (floats by their bits, arrays by their bytes), on random
+scans (hypothesis), full-circle rooms, the simulated worlds at 361-2881 beams and 5 mm-3 cm of
+noise, and the real recordings (``../shared/datasets``, skipped when absent). The arithmetic the
+engines reproduce (numpy's pairwise sums, BLAS's dot rounding, ``math.remainder``, the C library's
+functions) is checked on its own first.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import labkit
+from labkit import Scan, estimate_range_noise, segment_labels, split_and_merge
+from labkit import _kernels as K
+from labkit.fitting import line_from_sums, placement_probability
+from labkit.lines import _split_merge_engine as engine
+from labkit.lines import split_merge
+from labkit.noise import FIXED_LINES, _robust_sigma, range_noise_residuals
+from labkit.segmentation import _segment_labels_reference
+from labkit.sim import Lidar, make_world, scan_at, scenario
+from tests.line_scans import HEXAGON_ROOM, SQUARE_ROOM, polygon_scan
+
+#: the settings compared: the default (noise followed), the papers' fixed one, and the other branches
+SETTINGS = [{}, FIXED_LINES, {"method": "fit"}, {"merge": "none"}, {"weights": "uniform"},
+            {"min_points": 3, "max_gap_m": 0.2, "place_confidence": 0.5}]
+
+
+def every_field(lines) -> list:
+    """Every field of every line, exactly (floats by their bits, arrays by dtype, shape and bytes)."""
+    out = []
+    for ln in lines:
+        out.append((float(ln.r).hex(), float(ln.alpha).hex(), ln.first, ln.last, ln.n_points, float(ln.error).hex(),
+                    *((a.dtype.str, a.shape, a.tobytes()) for a in (ln.covariance, ln.start, ln.end, ln.indices))))
+    return out
+
+
+def fresh(scan: Scan) -> Scan:
+    """The same beams as a new Scan (the noise estimate is cached on a Scan)."""
+    return Scan(ranges=scan.ranges, angles=scan.angles, range_min=scan.range_min, range_max=scan.range_max)
+
+
+def check_identical(scan: Scan, settings=SETTINGS) -> int:
+    """The engine's lines equal the reference's on ``scan`` for every setting; the lines compared."""
+    count = 0
+    for kw in settings:
+        fast = split_and_merge(fresh(scan), **kw)
+        reference, _ = split_and_merge(fresh(scan), trace=True, **kw)
+        assert every_field(fast) == every_field(reference), f"engine != reference with {kw}"
+        count += len(fast)
+    s = fresh(scan)
+    for adaptive in (True, False):
+        assert np.array_equal(segment_labels(s, adaptive=adaptive),
+                              _segment_labels_reference(s, 0.08, 2, adaptive, 10.0, "auto"))
+    assert np.array_equal(K_residuals(s), range_noise_residuals(s)), "noise residuals differ"
+    a, b = estimate_range_noise(fresh(scan)), _robust_sigma(range_noise_residuals(s))
+    assert a == b or (math.isnan(a) and math.isnan(b))
+    return count
+
+
+def K_residuals(scan: Scan) -> np.ndarray:
+    from labkit._noise_engine import residuals
+
+    return residuals(scan.ranges, scan.angles, scan.valid, scan.is_full_circle)
+
+
+# ---------------------------------------------------------------------------- the arithmetic
+def test_pairwise_sums_are_numpys():
+    rng = np.random.default_rng(1)
+    for n in [*range(0, 140), 255, 511, 1000, 1024, 1025, 2881, 9000]:
+        a = rng.normal(size=n) * 10.0 ** rng.uniform(-3, 3, n)
+        assert K.pairwise_sum(a, n) == float(np.sum(a))
+        if n > 6:
+            starts = np.array([0, n // 3, n // 2])
+            ends = [n // 3, n // 2, n]
+            got = [K.segment_sum(a, s, e - s) for s, e in zip(starts.tolist(), ends, strict=True)]
+            assert got == np.add.reduceat(a, starts).tolist()
+            assert K.sum_at(a, n // 3, n - n // 3) == float(np.sum(a[n // 3:]))
+
+
+def test_remainder_and_fit_are_pythons():
+    rng = np.random.default_rng(2)
+    xs = [*rng.uniform(-3 * math.pi + 1e-9, 3 * math.pi - 1e-9, 2000).tolist(), math.pi, -math.pi, 2 * math.pi,
+          -2 * math.pi, 0.0, math.nextafter(math.pi, 4.0), math.nextafter(-math.pi, -4.0)]
+    for x in xs:
+        assert K.remainder_2pi(x) == math.remainder(x, 2 * math.pi)
+    for _ in range(500):
+        p = rng.normal(size=(6, 2)) * rng.uniform(0.1, 20) + rng.uniform(-10, 10, 2)
+        w = rng.uniform(0.05, 1.0, 6)
+        sums = (w.sum(), w @ p[:, 0], w @ p[:, 1], w @ p[:, 0] ** 2, w @ p[:, 1] ** 2, w @ (p[:, 0] * p[:, 1]))
+        sums = tuple(float(v) for v in sums)
+        assert _call_line_from_sums(*sums) == line_from_sums(*sums)
+
+
+@K.jit
+def _call_line_from_sums(a, b, c, d, e, f):
+    return K.line_from_sums(a, b, c, d, e, f)
+
+
+def test_the_c_library_functions_are_numpys():
+    """The engines call cos, sin, atan2, hypot, exp and sqrt of the C library where the references
+    call numpy's float64 loops: they must agree on this machine (numpy's SIMD loops may not)."""
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(-40, 40, 20000), rng.uniform(-40, 40, 20000)
+    probe = K.jit(_libm)
+    got = probe(x, y)
+    assert np.array_equal(got[0], np.cos(x)) and np.array_equal(got[1], np.sin(x))
+    assert np.array_equal(got[2], np.arctan2(x, y)) and np.array_equal(got[3], np.hypot(x, y))
+    assert np.array_equal(got[4], np.exp(-np.abs(x))) and np.array_equal(got[5], np.sqrt(np.abs(y)))
+
+
+def _libm(x, y):
+    out = np.empty((6, len(x)))
+    for i in range(len(x)):
+        out[0, i], out[1, i] = math.cos(x[i]), math.sin(x[i])
+        out[2, i], out[3, i] = math.atan2(x[i], y[i]), math.hypot(x[i], y[i])
+        out[4, i], out[5, i] = math.exp(-abs(x[i])), math.sqrt(abs(y[i]))
+    return out
+
+
+def test_the_dot_rounding_is_found_and_reproduced():
+    assert K.FUSED_DOT is not None, "this machine's BLAS rounds (N, 2) @ (2,) in neither known way"
+    rng = np.random.default_rng(4)
+    xy = rng.uniform(-30, 30, (3000, 2))
+    c, s = math.cos(0.7), math.sin(0.7)
+    probe = K.jit(_dots)
+    assert np.array_equal(probe(xy[17:2900, 0].copy(), xy[17:2900, 1].copy(), c, s, K.FUSED_DOT),
+                          xy[17:2900].dot(np.array([c, s])))
+
+
+def _dots(x, y, c, s, fused):
+    out = np.empty(len(x))
+    for i in range(len(x)):
+        out[i] = K.dot2(x[i], y[i], c, s, fused)
+    return out
+
+
+def test_the_engine_shares_the_references_constants():
+    assert (engine._RESIDUAL_Z, engine._SHIFT_Z, engine._SHIFT_MIN_M) == (
+        split_merge.RESIDUAL_Z, split_merge.SHIFT_Z, split_merge.SHIFT_MIN_M)
+    from labkit import fitting
+
+    assert np.array_equal(engine._GL_U, fitting._GL_U) and np.array_equal(engine._GL_W, fitting._GL_W)
+
+
+def test_placing_decides_as_the_reference_and_hands_it_the_near_ties():
+    rng = np.random.default_rng(5)
+    k = 400
+    sd = np.stack([rng.uniform(0.002, 0.08, k), rng.uniform(0.002, 0.12, k)], axis=1)
+    rho = rng.uniform(-0.99, 0.99, k)
+    cov = np.empty((k, 2, 2))
+    cov[:, 0, 0], cov[:, 1, 1] = sd[:, 0] ** 2, sd[:, 1] ** 2
+    cov[:, 0, 1] = cov[:, 1, 0] = rho * sd[:, 0] * sd[:, 1]
+    cov[::37] = np.nan
+    chance = placement_probability(cov, 0.05, math.radians(3.0))
+    for confidence in (0.2, 0.5, 0.8, 0.95):
+        verdict = engine._placing(cov, 0.05, math.radians(3.0), confidence, engine._GL_U, engine._GL_W)
+        assert np.array_equal(verdict == 1, chance >= confidence)
+    # a confidence equal to a line's probability: too close to call in another summation order
+    verdict = engine._placing(cov, 0.05, math.radians(3.0), float(chance[1]), engine._GL_U, engine._GL_W)
+    assert verdict[1] == 2
+
+
+# ---------------------------------------------------------------------------- identity on scans
+@st.composite
+def random_scans(draw):
+    """Rooms of random walls, round things and gaps, at random noise, beam counts and fields of view."""
+    n = draw(st.integers(20, 900))
+    fov = draw(st.sampled_from([math.pi, 1.5 * math.pi, 2 * math.pi]))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    full = fov == 2 * math.pi
+    angles = -fov / 2 + (fov / n if full else fov / (n - 1)) * np.arange(n)
+    walls = [(rng.uniform(0.5, 8.0), rng.uniform(-math.pi, math.pi)) for _ in range(rng.integers(1, 7))]
+    c = np.cos(angles[:, None] - np.array([w[1] for w in walls])[None, :])
+    ranges = np.where(c > 0.05, np.array([w[0] for w in walls]) / np.where(c > 0.05, c, 1.0), np.inf).min(axis=1)
+    for _ in range(rng.integers(0, 4)):  # a post in front of the walls
+        k, w = rng.integers(0, n), rng.integers(1, 12)
+        ranges[k:k + w] = np.minimum(ranges[k:k + w], rng.uniform(0.3, 3.0))
+    ranges = ranges + rng.normal(0.0, draw(st.sampled_from([0.0, 0.002, 0.005, 0.01, 0.02, 0.03])), n)
+    if draw(st.booleans()):  # quantised, as the Radish logs' ranges
+        ranges = np.round(ranges / 0.01) * 0.01
+    ranges[rng.random(n) < draw(st.sampled_from([0.0, 0.02, 0.1]))] = np.nan
+    return Scan(ranges=ranges, angles=angles, range_max=20.0)
+
+
+@settings(max_examples=60)
+@given(random_scans())
+def test_engine_equals_reference_on_random_scans(scan):
+    check_identical(scan)
+
+
+@pytest.mark.parametrize("walls", [SQUARE_ROOM, HEXAGON_ROOM], ids=["square", "hexagon"])
+def test_engine_equals_reference_across_the_seam(walls):
+    """Full-circle rooms: a line across the seam, the merge across it."""
+    rng = np.random.default_rng(6)
+    for n in (360, 720, 1441):
+        clean = polygon_scan(walls, n)
+        for noise in (0.0, 0.005, 0.02):
+            scan = Scan(ranges=clean.ranges + rng.normal(0, noise, n), angles=clean.angles, range_max=100.0)
+            check_identical(scan, SETTINGS[:3])
+
+
+@pytest.mark.parametrize("beams", [361, 722, 1441, 2881])
+@pytest.mark.parametrize("noise", [0.005, 0.02, 0.03])
+def test_engine_equals_reference_on_simulated_worlds(beams, noise):
+    for world in ("hall", "corridor", "office"):
+        sc = scenario(world)
+        lidar = Lidar(f"t{beams}", -math.pi / 2, math.pi / (beams - 1), beams, range_max=32.0, noise_std_m=noise)
+        geometry = make_world(world)
+        rng = np.random.default_rng(beams)
+        for t in (0.1 * sc.duration_s, 0.6 * sc.duration_s):
+            check_identical(scan_at(geometry, lidar, sc.trajectory.pose_at(t), t, rng=rng)[0], SETTINGS[:3])
+
+
+RADISH = ("aces", "csail", "freiburg-079", "infinite-corridor", "intel", "orebro")
+
+
+@pytest.mark.shared
+@pytest.mark.parametrize("log", RADISH)
+def test_engine_equals_reference_on_the_radish_logs(shared_datasets, log):
+    for scan in itertools.islice(labkit.read_scans(shared_datasets / "carmen" / f"{log}-corrected.log.gz"), 0, 300, 15):
+        check_identical(scan, SETTINGS[:2])  # every 15th of the first 300 scans
+
+
+@pytest.mark.shared
+def test_engine_equals_reference_on_the_peers_scans(shared_datasets):
+    for k in range(1, 7):
+        check_identical(labkit.read_json_scan(shared_datasets / "single_scans" / f"laser_scan_{k}.json"))
+
+
+@pytest.mark.shared
+def test_the_identity_tests_can_fail(shared_datasets):
+    """The other dot rounding (plain instead of fused, or back) changes a worst point on a real
+    scan whose quantised ranges tie: the comparisons above see one bit of difference."""
+    scan = next(itertools.islice(labkit.read_scans(shared_datasets / "carmen" / "aces-corrected.log.gz"), 287, None))
+    s = fresh(scan)
+    reference, _ = split_and_merge(s, trace=True, **FIXED_LINES)
+    labels = segment_labels(s, range_sigma_m=FIXED_LINES["range_sigma_m"])
+    args = (s.points, s.ranges, s.angles, s.valid, labels, False, 0.05, 0.0, 0.03, 5, 0.3, True, 0.2,
+            math.radians(10.0), 0.15, False, 0.08, math.radians(10.0), math.radians(3.0), False)
+    same = engine.extract(*args, K.FUSED_DOT)
+    other = engine.extract(*args, not K.FUSED_DOT)
+    spans = [(ln.first, ln.last) for ln in reference]
+    assert list(zip(same[3].tolist(), same[4].tolist(), strict=True)) == spans
+    assert list(zip(other[3].tolist(), other[4].tolist(), strict=True)) != spans
+
+
+# ---------------------------------------------------------------------------- caching and the switch
+def _twice(x):
+    return 2.0 * x
+
+
+def test_the_engines_compile_where_no_cache_folder_is_writable(monkeypatch):
+    """A read-only install with a read-only home: numba finds no cache folder and refuses
+    ``cache=True`` when the module is imported; the engines compile uncached instead, and say so."""
+    import numba.core.caching as caching
+    import numba.core.config
+
+    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # (its name before numba 0.62)
+    monkeypatch.setattr(impl, "_locator_classes", [])  # (no folder numba may write to)
+    monkeypatch.setattr(numba.core.config, "CACHE_LOCATOR_CLASSES", "", raising=False)
+    monkeypatch.setattr(K, "_WARNED", [], raising=False)
+    with pytest.warns(RuntimeWarning, match="no writable cache folder"):
+        twice = K.jit(_twice)
+    assert twice(21.0) == 42.0
+
+
+def test_LABKIT_NO_JIT_runs_the_readable_code_without_numba(tmp_path):
+    """``LABKIT_NO_JIT=1``: numba is never imported and the features are the engine's."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    room = polygon_scan(SQUARE_ROOM, 361)
+    scan = Scan(ranges=room.ranges + np.random.default_rng(5).normal(0.0, 0.01, 361), angles=room.angles)
+    np.savez(tmp_path / "scan.npz", ranges=scan.ranges, angles=scan.angles)
+    code = ("import json, sys, numpy as np, labkit\n"
+            f"d = np.load({str(tmp_path / 'scan.npz')!r})\n"
+            "s = labkit.Scan(ranges=d['ranges'], angles=d['angles'])\n"
+            "lines = labkit.split_and_merge(s)\n"
+            "out = {'lines': [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)] + [ln.first, ln.last]"
+            " for ln in lines], 'labels': labkit.segment_labels(s).tolist(),"
+            " 'sigma': float(labkit.estimate_range_noise(s)).hex(), 'numba': 'numba' in sys.modules}\n"
+            "print(json.dumps(out))\n")
+    env = dict(os.environ, LABKIT_NO_JIT="1")
+    got = json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                                    check=True, timeout=120).stdout)
+    s = fresh(scan)
+    assert got["numba"] is False
+    assert got["lines"] == [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)] + [ln.first, ln.last]
+                            for ln in split_and_merge(s)]
+    assert got["labels"] == segment_labels(s).tolist()
+    assert got["sigma"] == float(estimate_range_noise(fresh(scan))).hex()
+    assert len(got["lines"]) >= 4
