@@ -21,6 +21,7 @@ into their low bits, a few times faster than :func:`numpy.argsort`.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -127,7 +128,7 @@ def _labels_by_shifts(s: np.ndarray, ext: np.ndarray | None, eps: float, min_pts
     """
     n = s.size
     wrap = ext is not None
-    src = ext if wrap else s
+    src = s if ext is None else ext
     kmax = min(max(min_pts - 1, 1), n - 1)
     nears = np.empty((kmax, n), dtype=bool)
     count = np.zeros(n, dtype=np.int8)  # neighbours besides the point itself, up to 2 (min_pts - 1)
@@ -149,7 +150,7 @@ def _labels_by_shifts(s: np.ndarray, ext: np.ndarray | None, eps: float, min_pts
             count[:k] += near[n - k:]
     core = count >= min_pts - 1
     del count, buf
-    itype = np.int32 if n < 2**31 else np.int64
+    itype: type[np.signedinteger[Any]] = np.int32 if n < 2**31 else np.int64
     if not core.any():
         second = np.full(n, -1, dtype=itype) if border == "all" else None
         return np.full(n, -1, dtype=itype), second, core
@@ -295,12 +296,11 @@ def cluster_sorted(s: np.ndarray, eps: float, min_pts: int, period: float | None
     if n == 0:
         return np.zeros(0, dtype=np.int64), (np.zeros(0, dtype=np.int64) if border == "all" else None), \
             np.zeros(0, dtype=bool)
-    wrap = period is not None
-    if wrap and eps >= period / 2:  # every point is within eps of every other one
+    if period is not None and eps >= period / 2:  # every point is within eps of every other one
         core = np.full(n, n >= min_pts)
         labels = np.full(n, 0 if n >= min_pts else -1, dtype=np.int64)
         return labels, (np.full(n, -1, dtype=np.int64) if border == "all" else None), core
-    ext = _wrap_extension(s, period, eps, min_pts) if wrap else None
+    ext = None if period is None else _wrap_extension(s, period, eps, min_pts)
     if min_pts <= _SHIFT_MAX_MIN_PTS and (min_pts - 1) * n <= _SHIFT_MAX_BYTES:
         return _labels_by_shifts(s, ext, eps, min_pts, border, order)
     return _labels_from_core(s, _core_by_bounds(s, ext, eps, min_pts), eps, period, border, order)
@@ -329,19 +329,22 @@ def _labels_from_core(s: np.ndarray, core: np.ndarray, eps: float, period: float
     np.cumsum(gap, out=run[1:])
     n_runs = int(run[-1]) + 1
     merged = wrap and n_runs > 1 and bool((xc[0] + period) - xc[-1] <= eps)  # the last run wraps round
-    starts = np.concatenate([[0], np.flatnonzero(gap) + 1]) if merged or order is not None else None
-    if merged:
-        run[starts[-1]:] = 0
-    if order is None:
-        core_labels = run  # numbered by their smallest index already, also when merged
-    else:  # number the clusters by their first core point in the caller's order
-        key = np.minimum.reduceat(order.take(ci), starts)
+    if not merged and order is None:
+        core_labels = run  # numbered by their smallest index already
+    else:
+        starts = np.concatenate([[0], np.flatnonzero(gap) + 1])
         if merged:
-            key[0] = min(key[0], key[-1])
-            key = key[:-1]
-        rank = np.empty(key.size, dtype=np.int64)
-        rank[np.argsort(key)] = np.arange(key.size)
-        core_labels = rank.take(run)
+            run[starts[-1]:] = 0
+        if order is None:
+            core_labels = run  # numbered by their smallest index already, also when merged
+        else:  # number the clusters by their first core point in the caller's order
+            key = np.minimum.reduceat(order.take(ci), starts)
+            if merged:
+                key[0] = min(key[0], key[-1])
+                key = key[:-1]
+            rank = np.empty(key.size, dtype=np.int64)
+            rank[np.argsort(key)] = np.arange(key.size)
+            core_labels = rank.take(run)
     if m == n:
         return core_labels, second, core
     labels[ci] = core_labels

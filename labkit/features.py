@@ -34,11 +34,12 @@ def frozen_array(a) -> np.ndarray:
     return a
 
 
-# ``@fast_init`` (labkit._fastinit) only makes building these frozen records faster.
+# ``@fast_init`` (labkit._fastinit) only makes building these frozen records faster: it replaces the
+# dataclass's ``__init__`` (same fields, order and defaults), which stays for type checkers to read.
 
 
 @fast_init
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class LineSegment:
     """A line fitted to a run of beams.
 
@@ -123,7 +124,7 @@ def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None)
 
 
 @fast_init
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class Corner:
     """Where two consecutive line segments meet.
 
@@ -241,7 +242,7 @@ def find_corners(
 
 
 @fast_init
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class Circle:
     """A circle (or arc) found in a scan.
 
@@ -268,7 +269,7 @@ class Circle:
 
 
 @fast_init
-@dataclass(frozen=True, eq=False, init=False)
+@dataclass(frozen=True, eq=False)
 class Leg:
     """A leg candidate: ``center`` (2,) and ``diameter`` in metres, ``middle`` the segment's
     middle point (Xavier et al. Table I), beam indices, IAV statistics."""

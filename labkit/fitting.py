@@ -509,6 +509,7 @@ def fit_circles(points: np.ndarray, starts: np.ndarray, ends: np.ndarray, method
     if np.any(sizes < 3):
         raise ValueError("every run needs at least 3 points to fit a circle")
     n = sizes.astype(np.float64)
+    idx: slice | np.ndarray  # the points of the runs
     if k_runs == 1:  # (one run: plain sums, and its values broadcast over its points)
         idx, off = slice(starts.item(0), ends.item(0)), np.zeros(1, np.int64)
 

@@ -49,8 +49,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from ._validate import check_nonneg, check_positive
 from ._jit import ENABLED as _JIT
+from ._validate import check_nonneg, check_positive
 from .params import AUTO
 from .scan import Scan
 

@@ -262,7 +262,8 @@ class FrameTree:
     tracks: dict[str, tuple[str, PoseTrack]] = field(default_factory=dict)
 
     def add_static(self, parent: str, child: str, pose) -> None:
-        self.static[child] = (parent, tuple(float(v) for v in _as_poses("pose", pose)))
+        values = tuple(float(v) for v in _as_poses("pose", pose))
+        self.static[child] = (parent, (values[0], values[1], values[2]))
 
     def add_track(self, parent: str, child: str, track: PoseTrack) -> None:
         self.tracks[child] = (parent, track)

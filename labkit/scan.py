@@ -175,12 +175,13 @@ class Scan:
         pose = self.pose
         if pose is not None:
             try:
-                pose = tuple(float(v) for v in pose)
+                numbers = tuple(float(v) for v in pose)
             except (TypeError, ValueError):
                 raise ValueError(f"pose must be (x, y, theta), got {self.pose!r}") from None
-            if len(pose) != 3 or not all(np.isfinite(pose)):
+            if len(numbers) != 3 or not all(np.isfinite(numbers)):
                 raise ValueError(f"pose must be three finite numbers (x, y, theta), got {self.pose!r}")
-        for name, value in [
+            pose = (numbers[0], numbers[1], numbers[2])
+        for name, checked in [
             ("ranges", ranges),
             ("angles", angles),
             ("range_min", range_min),
@@ -192,7 +193,7 @@ class Scan:
             ("time_increment", timing[0]),
             ("scan_time", timing[1]),
         ]:
-            object.__setattr__(self, name, value)
+            object.__setattr__(self, name, checked)
 
     # ------------------------------------------------------------------ constructors
     @classmethod

@@ -212,7 +212,7 @@ def innovation(x, P, z, R) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(z, dtype=np.float64) - x[..., :2], P[..., :2, :2] + np.asarray(R, dtype=np.float64)
 
 
-def mahalanobis2(nu, S) -> np.ndarray:
+def mahalanobis2(nu, S) -> tuple[np.ndarray, np.ndarray]:
     """The squared Mahalanobis distance ``nu' S^-1 nu`` of innovations ``nu`` (..., 2) with
     covariances ``S`` (..., 2, 2), and ``ln det S``; ``S`` is inverted in closed form (2 x 2).
 
@@ -402,7 +402,7 @@ def detections_from(
     if not isinstance(features, Features):
         raise ValueError(f"features must be labkit.Features, got {type(features).__name__}")
     kinds, positions, sigmas, first, last = [], [], [], [], []
-    paired = set()
+    paired: set[int] = set()
     for person in features.people:
         a, b = person.legs
         paired.update((id(a), id(b)))
@@ -610,7 +610,7 @@ class Tracker:
         self._update(tracks, dets, detections, steps)                 # 4
         events = self._birth(cost, detections, steps)                 # 5
         events += self._confirm(steps)                                # 6
-        deleted = self._to_delete(steps)                              # 7
+        deleted = self._to_delete(detections.stamp_ns, steps)         # 7
         events += [("delete", int(i)) for i in self._ids[deleted]]
         detection = np.full(len(self._ids), -1, dtype=np.int64)
         detection[tracks] = dets
@@ -681,8 +681,9 @@ class Tracker:
         n_tracks, n_dets = len(self._ids), len(detections)
         if n_tracks == 0 or n_dets == 0:
             return np.full((n_tracks, n_dets), np.inf)
+        covariances, first, last = _measured(detections)
         nu, S = innovation(self._x[:, None, :], self._static_gate_P()[:, None, :, :], detections.positions[None],
-                           detections.covariances[None])
+                           covariances[None])
         d2, logdet = mahalanobis2(nu, S)
         det_kind = np.array([_TRACK_KIND_OF[k] for k in detections.kinds])
         same_kind = self._kind[:, None] == det_kind[None, :]
@@ -690,7 +691,7 @@ class Tracker:
         if steps is not None:
             for i, j in zip(*np.nonzero(same_kind), strict=True):
                 ok = bool(inside[i, j])
-                steps.append(Step("tracking", "gate", int(detections.first[j]), int(detections.last[j]),
+                steps.append(Step("tracking", "gate", int(first[j]), int(last[j]),
                                   center=tuple(detections.positions[j].tolist()), value=float(d2[i, j]),
                                   threshold=self._gate, test="gate_probability", track=int(self._ids[i]),
                                   detection=int(j), reason=f"{detections.kinds[j]} {j} {'inside' if ok else 'outside'} "
@@ -718,20 +719,20 @@ class Tracker:
         """Each assigned track with its detection (:func:`kalman_update`)."""
         if len(tracks) == 0:
             return
-        x, P = kalman_update(self._x[tracks], self._P[tracks], detections.positions[dets],
-                             detections.covariances[dets])
+        covariances, first, last = _measured(detections)
+        x, P = kalman_update(self._x[tracks], self._P[tracks], detections.positions[dets], covariances[dets])
         self._x[tracks], self._P[tracks] = x, P
         self._hits[tracks] += 1
         self._seen[tracks] = detections.stamp_ns
-        first = self._hits[tracks] <= self.params.confirm_hits  # the anchor: the mean of its first M detections
-        self._anchor[tracks[first]] += (detections.positions[dets[first]] - self._anchor[tracks[first]]) \
-            / self._hits[tracks[first], None]
+        early = self._hits[tracks] <= self.params.confirm_hits  # the anchor: the mean of its first M detections
+        self._anchor[tracks[early]] += (detections.positions[dets[early]] - self._anchor[tracks[early]]) \
+            / self._hits[tracks[early], None]
         far = np.hypot(*(x[:, :2] - self._anchor[tracks]).T) > self.params.min_travel_m
         self._far[tracks] = np.where(far, self._far[tracks] + 1, 0)  # updates in a row beyond min_travel_m
         self._moved[tracks] |= self._far[tracks] >= self.params.confirm_hits
         if steps is not None:
             for i, j in zip(tracks.tolist(), dets.tolist(), strict=True):
-                steps.append(Step("tracking", "update", int(detections.first[j]), int(detections.last[j]),
+                steps.append(Step("tracking", "update", int(first[j]), int(last[j]),
                                   center=tuple(self._x[i, :2].tolist()), track=int(self._ids[i]), detection=j,
                                   reason=f"track {self._ids[i]} updated by {detections.kinds[j]} {j}"))
 
@@ -743,12 +744,13 @@ class Tracker:
         if not new:
             return []
         p = self.params
+        covariances, first, last = _measured(detections)
         ids = np.arange(self._next_id, self._next_id + len(new), dtype=np.int64)
         self._next_id += len(new)
         z = detections.positions[new]
         x = np.hstack([z, np.zeros((len(new), 2))])
         P = np.zeros((len(new), 4, 4))
-        P[:, :2, :2] = detections.covariances[new]
+        P[:, :2, :2] = covariances[new]
         P[:, 2, 2] = P[:, 3, 3] = p.initial_speed_sigma_mps**2
         kinds = np.array([_TRACK_KIND_OF[detections.kinds[j]] for j in new], dtype=np.int64)
         stamp = np.full(len(new), detections.stamp_ns, dtype=np.int64)
@@ -766,7 +768,7 @@ class Tracker:
         self._seen = np.concatenate([self._seen, stamp])
         if steps is not None:
             for tid, j in zip(ids.tolist(), new, strict=True):
-                steps.append(Step("tracking", "birth", int(detections.first[j]), int(detections.last[j]),
+                steps.append(Step("tracking", "birth", int(first[j]), int(last[j]),
                                   center=tuple(detections.positions[j].tolist()), track=tid, detection=j,
                                   reason=f"track {tid} born, tentative, from {detections.kinds[j]} {j} "
                                          "(outside every gate)"))
@@ -800,12 +802,12 @@ class Tracker:
         return events
 
     # ------------------------------------------------------------------ 7. delete
-    def _to_delete(self, steps) -> np.ndarray:
+    def _to_delete(self, now_ns: int, steps) -> np.ndarray:
         """Tentative tracks that can no longer be confirmed, and tracks not detected for more
-        than ``max_coast_s``: a boolean mask of the tracks."""
+        than ``max_coast_s`` at ``now_ns`` (the scan's stamp): a boolean mask of the tracks."""
         p = self.params
         hopeless = (self._status == _TENTATIVE) & (self._scans - self._hits > p.confirm_scans - p.confirm_hits)
-        lost = (self._stamp - self._seen) > self._max_coast_ns if len(self._ids) else np.zeros(0, dtype=bool)
+        lost = (now_ns - self._seen) > self._max_coast_ns if len(self._ids) else np.zeros(0, dtype=bool)
         deleted = hopeless | lost
         if steps is not None:
             for i in np.flatnonzero(deleted).tolist():
@@ -817,7 +819,7 @@ class Tracker:
                                       track=tid, reason=f"tentative track {tid} deleted: {misses} misses, so fewer "
                                                         f"than {p.confirm_hits} detections in {p.confirm_scans} scans"))
                 else:
-                    gone = (self._stamp - int(self._seen[i])) * 1e-9
+                    gone = (now_ns - int(self._seen[i])) * 1e-9
                     steps.append(Step("tracking", "delete", center=tuple(self._x[i, :2].tolist()), value=gone,
                                       threshold=p.max_coast_s, test="max_coast_s", track=tid,
                                       reason=f"track {tid} deleted: not detected for {gone:.2f} s"))
@@ -825,6 +827,8 @@ class Tracker:
 
     # ------------------------------------------------------------------ bookkeeping
     def _table(self, detections, pose, deleted, detection, events) -> TrackTable:
+        if self.frame is None:
+            raise RuntimeError("the tracking frame is decided by the first scan's detections (_detections)")
         status = np.where(deleted, _DELETED, self._status)
         return TrackTable(int(detections.stamp_ns), self.frame, pose, self._ids.copy(), _KINDS[self._kind],
                           _STATUS_NAMES[status], self._x.copy(), self._P.copy(), self._hits.copy(),
@@ -840,6 +844,14 @@ class Tracker:
 
 _KINDS = np.array(TRACK_KINDS)
 _STATUS_NAMES = np.array(STATUSES)
+
+
+def _measured(detections: Detections) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The covariances and beams (first, last) of detections the tracker took: arrays once
+    :meth:`Detections.with_sigmas` gave each detection its covariance (and ``__post_init__`` its beams)."""
+    if detections.covariances is None or detections.first is None or detections.last is None:
+        raise RuntimeError("the tracker takes detections with covariances and beams (Detections.with_sigmas)")
+    return detections.covariances, detections.first, detections.last
 
 
 def _with_seconds(table: TrackTable, seconds: float) -> TrackTable:

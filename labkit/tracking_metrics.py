@@ -149,9 +149,10 @@ def _distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _drop_on_unseen(frame: MOTFrame, max_distance_m: float) -> tuple[tuple, np.ndarray, int]:
     """The frame's hypotheses less those matched to a true object that is not visible."""
-    if not len(frame.ignored_xy) or not len(frame.hyp_ids):
+    ignored = frame.ignored_xy  # (0, 2) when none were given (MOTFrame.__post_init__)
+    if ignored is None or not len(ignored) or not len(frame.hyp_ids):
         return frame.hyp_ids, frame.hyp_xy, 0
-    every = np.vstack([frame.truth_xy, frame.ignored_xy])
+    every = np.vstack([frame.truth_xy, ignored])
     d = _distances(every, frame.hyp_xy)
     rows, cols = _match(d, d <= max_distance_m)
     drop = np.zeros(len(frame.hyp_ids), dtype=bool)

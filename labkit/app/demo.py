@@ -18,6 +18,7 @@ from labkit.errors import CorruptFileError, RefusedError
 from labkit.features import Features
 from labkit.io import read_scans
 from labkit.pipeline import Config, extract_features
+from labkit.scan import Scan
 
 __all__ = ["DemoResult", "PNG_FILE", "richest_scan", "run_demo"]
 
@@ -94,7 +95,8 @@ def run_demo(source: str | Path, out: str | Path, config: Config | None = None, 
     check_output(png, PNG_FILE, overwrite=True, inputs=[source])
     seconds = {}
     t0 = time.perf_counter()
-    scans, damage = [], None
+    scans: list[Scan] = []
+    damage: CorruptFileError | None = None
     try:
         scans.extend(read_scans(source, topic=topic, strict=strict))
     except CorruptFileError as exc:  # show what could be read, then report the damage

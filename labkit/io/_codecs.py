@@ -80,20 +80,25 @@ def _front_to_back(decoder, data: bytes, name: str) -> tuple[list[bytes], str]:
 
 
 # ---------------------------------------------------------------------------- bz2 blocks
-def _patterns(magic: int):
+# (bit shift, the whole bytes of the magic, bytes before them, and for a shift the (mask, value)
+# checks of the partial first and last bytes)
+_Pattern = tuple[int, bytes, int, tuple[tuple[int, int], tuple[int, int]] | None]
+
+
+def _patterns(magic: int) -> list[_Pattern]:
     """For each bit shift s (the magic starting s bits into a byte): the bytes that lie wholly
     inside the magic, and how to check the partial bytes at either end."""
-    found = []
+    found: list[_Pattern] = []
     for s in range(8):
         window = (magic << (8 - s)) if s else magic  # 56 bits (7 bytes) or, for s = 0, 48 bits
         size = 7 if s else 6
         raw = window.to_bytes(size, "big")
         if s == 0:
-            found.append((0, raw, 0, None, None))
+            found.append((0, raw, 0, None))
             continue
         head_mask = (1 << (8 - s)) - 1  # the low bits of the first byte belong to the magic
         tail_mask = (0xFF << (8 - s)) & 0xFF  # the high bits of the last byte do
-        found.append((s, raw[1:6], 1, (head_mask, raw[0] & head_mask), (tail_mask, raw[6] & tail_mask)))
+        found.append((s, raw[1:6], 1, ((head_mask, raw[0] & head_mask), (tail_mask, raw[6] & tail_mask))))
     return found
 
 
@@ -101,15 +106,16 @@ _BLOCK_PATTERNS = _patterns(_BLOCK_MAGIC)
 _END_PATTERNS = _patterns(_END_MAGIC)
 
 
-def _find_bits(data: bytes, patterns) -> list[int]:
+def _find_bits(data: bytes, patterns: list[_Pattern]) -> list[int]:
     """Every bit position at which a 48-bit magic starts."""
     hits = []
-    for s, middle, lead, head, tail in patterns:
+    for s, middle, lead, edges in patterns:
         at = data.find(middle)
         while at >= 0:
             first = at - lead
             ok = first >= 0 and first + (7 if s else 6) <= len(data)
-            if ok and head is not None:
+            if ok and edges is not None:
+                head, tail = edges
                 ok = (data[first] & head[0]) == head[1] and (data[first + 6] & tail[0]) == tail[1]
             if ok:
                 hits.append(first * 8 + s)

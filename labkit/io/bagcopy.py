@@ -22,6 +22,7 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import SimpleNamespace
+from typing import cast
 
 from rosbags import rosbag1, rosbag2
 from rosbags.highlevel import AnyReader
@@ -56,7 +57,7 @@ def _source(path: Path, fmt: str) -> tuple[list[Connection], object, Counter | N
         reader = None
     if reader is not None:
         try:
-            counts = Counter()
+            counts: Counter[str] = Counter()
             for c in reader.connections:
                 counts[c.topic] += c.msgcount
             return list(reader.connections), reader.typestore, counts
@@ -71,17 +72,18 @@ def _source(path: Path, fmt: str) -> tuple[list[Connection], object, Counter | N
     walker, _faults = salvage.walk_topics(bags.storage_file(path, fmt), fmt)
     types: dict = {}
     conns = []
-    for c in walker.connections.values():
-        msgtype = bags._typename(c.msgtype)
+    for found in walker.connections.values():
+        msgtype = bags._typename(found.msgtype)
         with contextlib.suppress(Exception):  # no definition, or one that does not parse: the stock types
-            if c.encoding in ("ros1msg", "ros2msg") and c.definition:
-                types.update(get_types_from_msg(c.definition, msgtype))
-            elif c.encoding == "ros2idl" and c.definition:
-                types.update(get_types_from_idl(c.definition))
-        ext = ConnectionExtRosbag1((c.extra or {}).get("callerid"), int((c.extra or {}).get("latching", 0) or 0)) \
+            if found.encoding in ("ros1msg", "ros2msg") and found.definition:
+                types.update(get_types_from_msg(found.definition, msgtype))
+            elif found.encoding == "ros2idl" and found.definition:
+                types.update(get_types_from_idl(found.definition))
+        extra = found.extra or {}
+        ext = ConnectionExtRosbag1(extra.get("callerid"), int(extra.get("latching", 0) or 0)) \
             if fmt == "ros1" else ConnectionExtRosbag2("cdr", [])
-        conns.append(Connection(c.id, c.topic, msgtype, MessageDefinition(MessageDefinitionFormat.NONE, ""), "", 0,
-                                ext, None))
+        conns.append(Connection(found.id, found.topic, msgtype, MessageDefinition(MessageDefinitionFormat.NONE, ""),
+                                "", 0, ext, None))
     ts = get_typestore(Stores.EMPTY)
     ts.register(salvage.typestore(fmt == "ros1").fielddefs)
     with contextlib.suppress(Exception):
@@ -89,8 +91,10 @@ def _source(path: Path, fmt: str) -> tuple[list[Connection], object, Counter | N
     return conns, ts, walker.index_counts
 
 
-def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults) -> Iterator[tuple[str, int, bytes]]:
-    """``(topic, receive_ns, raw)`` of every message on ``topics``; damage noted in ``faults``."""
+def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults,
+              walked: list[salvage.Walker]) -> Iterator[tuple[str, int, bytes]]:
+    """``(topic, receive_ns, raw)`` of every message on ``topics``; damage noted in ``faults``. A
+    walker (ROS1, MCAP) is appended to ``walked`` when its walk is complete (its books then hold)."""
     if fmt in salvage.WALKERS:
         walker = salvage.WALKERS[fmt](bags.storage_file(path, fmt), topics)
         for item in walker.messages():
@@ -99,7 +103,7 @@ def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults) -> I
                     return
                 continue
             yield item[:3]
-        faults.walker = walker
+        walked.append(walker)
         return
     done: Counter = Counter()
     try:
@@ -122,16 +126,16 @@ def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults) -> I
     gen = salvage.salvage_sqlite3(bags.storage_file(path, fmt), topics, known=bags._metadata_topics(path))
     while True:
         try:
-            item = next(gen)
+            row = next(gen)
         except StopIteration as stop:
             if stop.value is not None:
                 faults.skip(stop.value.where, stop.value.reason, 0, known=False, open_end=stop.value.open_end)
             return
-        if isinstance(item, salvage.Fault):
-            if not faults.skip(item.where, item.reason, 0, known=False, open_end=item.open_end):
+        if isinstance(row, salvage.Fault):
+            if not faults.skip(row.where, row.reason, 0, known=False, open_end=row.open_end):
                 return
             continue
-        name, stamp, raw = item
+        name, stamp, raw = row
         if done[name, stamp]:
             done[name, stamp] -= 1
             continue
@@ -153,13 +157,14 @@ def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: boo
     scan_topics = {c.topic for c in connections if c.msgtype in salvage.LASERSCAN_TYPES}
     expected = sum(listed[t] for t in scan_topics) if listed is not None else None
     faults = Faults(src, strict, expected)
-    faults.walker = None
+    walked: list[salvage.Walker] = []  # the source's walker, once its walk is complete
     written: Counter = Counter()
     skipped: Counter = Counter()
     reasons: dict[str, str] = {}
     with safe_output(dst, bags.output_kind(dst, dst_fmt), overwrite=overwrite, inputs=[src]) as tmp, \
             bags._system_errors(dst):
         target = tmp.parent / dst.stem if dst_fmt == "mcap" and dst.name.lower().endswith(".mcap") else tmp
+        writer: rosbag1.Writer | rosbag2.Writer
         if dst_fmt == "ros1":
             writer = rosbag1.Writer(target)
         else:
@@ -167,7 +172,9 @@ def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: boo
             writer = rosbag2.Writer(target, version=9, storage_plugin=plugin)
         writer.open()
         try:
-            standin = SimpleNamespace(typestore=src_ts, is2=src_fmt != "ros1")
+            # rosbags reads only the reader's typestore and is2 (rosbags.convert.converter): a stand-in
+            # for the source, which may be a walker's findings rather than an AnyReader
+            standin = cast(AnyReader, SimpleNamespace(typestore=src_ts, is2=src_fmt != "ros1"))
             by_topic: dict[str, tuple] = {}
             for conn in connections:
                 if conn.topic in by_topic:
@@ -179,7 +186,7 @@ def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: boo
                     by_topic[conn.topic] = (connmap[(conn.id, conn.owner)], convmap[conn.msgtype])
                 except Exception as exc:  # noqa: BLE001 - a type rosbags cannot carry over: skip the topic
                     reasons[conn.topic] = f"{conn.msgtype}: {type(exc).__name__}: {exc}"
-            messages = _messages(src, src_fmt, frozenset(c.topic for c in connections), faults)
+            messages = _messages(src, src_fmt, frozenset(c.topic for c in connections), faults, walked)
             if progress:
                 from tqdm.auto import tqdm
 
@@ -213,7 +220,7 @@ def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: boo
             warnings.warn(f"{n} message(s) of {topic} were not carried into {dst}: {reasons.get(topic, '?')}",
                           TopicsSkippedWarning, stacklevel=2)
         n_scans = sum(written[t] for t in scan_topics)
-        walker = faults.walker
+        walker = walked[0] if walked else None
         if walker is not None and walker.index_counts is not None:  # the file's own index, as the walker read
             listed = walker.index_counts  # it (rosbags counts what the chunks it could open say)
             faults.expected = sum(listed[t] for t in scan_topics)

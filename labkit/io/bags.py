@@ -17,8 +17,9 @@ import itertools
 import shutil
 import warnings
 from collections import Counter
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Generator, Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from rosbags import rosbag1, rosbag2
@@ -63,11 +64,11 @@ def _topics_via_salvage(path: Path, fmt: str) -> list[tuple[str, str, int | None
     bag too damaged to declare any is a :class:`CorruptFileError` (0 scans read), not an empty bag."""
     if fmt in salvage.WALKERS:
         walker, faults = salvage.walk_topics(path, fmt)
-        seen = {c.topic: c.msgtype for c in walker.connections.values()}
+        seen: dict[str, str] = {c.topic: c.msgtype for c in walker.connections.values()}
         if not seen and faults:
             raise CorruptFileError(path, faults[0].where, 0, faults[0].reason, lost_exact=False)
         return sorted((name, msgtype, None) for name, msgtype in seen.items())
-    seen: dict[str, str] = {}
+    seen = {}
     gen = salvage.salvage_sqlite3(path, None, want_topics=True, known=_metadata_topics(path.parent))
     first_fault = None
     while True:
@@ -221,7 +222,8 @@ def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = Fa
     try:
         for scan in messages:
             if poses is not None and poses.stops_before(scan.stamp_ns):
-                faults.skip(*poses.first_fault, count=0)
+                where, reason = poses.first_fault
+                faults.skip(where, reason, count=0)
                 break
             yield scan
             n_read += 1
@@ -233,7 +235,8 @@ def iter_bag(path: Path, fmt: str, topic: str, readable: bool, strict: bool = Fa
 
 
 def read_messages(path: Path, fmt: str, topics: dict[str, str], readable: bool, faults: Faults,
-                  convert: Callable, *, salvage_topic: str | frozenset[str] | None = None) -> Iterator:
+                  convert: Callable, *, salvage_topic: str | frozenset[str] | None = None
+                  ) -> Generator[Any, None, None]:
     """``convert(topic, receive_ns, message)`` for every message on ``topics`` (name -> message
     type), in the bag's order; a message that does not decode, or that ``convert`` refuses (any
     exception), is skipped and noted in ``faults`` (whose strictness decides whether to read on),
@@ -577,7 +580,7 @@ def write_bag(
 
 
 @contextlib.contextmanager
-def whole_writes():
+def whole_writes() -> Iterator[None]:
     """Ctrl-C waits until the message being written is written whole: rosbags notes a message in
     the bag's index before it writes its data, so an interruption in between leaves a partial
     bag whose index lists a message that is not there (readers then count it lost)."""
@@ -627,6 +630,8 @@ def _odometry(typestore, scan: Scan, seq: int, ros1: bool):
     sec, nsec = divmod(int(scan.stamp_ns), 1_000_000_000)
     header = t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),
                                       frame_id=ODOM_FRAME, **({"seq": seq} if ros1 else {}))
+    if scan.pose is None:
+        raise ValueError("a scan without a pose has no odometry")
     x, y, theta = scan.pose
     qx, qy, qz, qw = quaternion_from_yaw(theta)
     pose = t["geometry_msgs/msg/Pose"](position=t["geometry_msgs/msg/Point"](x=x, y=y, z=0.0),

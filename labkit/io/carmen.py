@@ -152,10 +152,12 @@ def _parse(tokens: list[str]) -> _Record:
     ranges = np.array(tokens[9 : 9 + n], dtype=np.float64)
     m = int(tokens[9 + n])
     rest = tokens[10 + n + m :]
+    pose: tuple[float, float, float] | None
     if kind.startswith("ROBOTLASER"):
         if len(rest) != 14:
             raise ValueError(f"expected 14 fields after the remissions, got {len(rest)}")
-        pose = tuple(float(v) for v in rest[0:3])
+        x, y, theta = (float(v) for v in rest[0:3])
+        pose = (x, y, theta)
         stamp, logged = rest[11], rest[13]
     else:
         if len(rest) != 3:

@@ -35,15 +35,16 @@ DEFAULT_RANGE_MAX_M = 1000.0
 _FROM_JSON = {None: np.nan, "inf": np.inf, "+inf": np.inf, "-inf": -np.inf, "nan": np.nan}
 
 
-def _values_from_json(values, name: str, where: str) -> list:
+def _values_from_json(values, name: str, where: str) -> np.ndarray:
     if not isinstance(values, list):
         raise ValueError(f"{where}: {name} must be a list of numbers")
     try:
-        return [v if isinstance(v, (int, float)) and not isinstance(v, bool) else _FROM_JSON[v] for v in values]
+        numbers = [v if isinstance(v, (int, float)) and not isinstance(v, bool) else _FROM_JSON[v] for v in values]
     except (KeyError, TypeError):
         bad = next(v for v in values if not isinstance(v, (int, float)) and v not in _FROM_JSON)
         raise ValueError(f"{where}: {name} holds {bad!r}; a value is a number, null (NaN), \"inf\" or \"-inf\"") \
             from None
+    return np.array(numbers, dtype=np.float64)
 
 
 def _values_to_json(values: np.ndarray) -> list:
@@ -55,7 +56,7 @@ def _values_to_json(values: np.ndarray) -> list:
     return out
 
 
-def scan_from_dict(d: dict, where: str = "scan") -> Scan:
+def scan_from_dict(d: object, where: str = "scan") -> Scan:
     """Build a Scan from a JSON object (see the module docstring)."""
     if not isinstance(d, dict):
         raise ValueError(f"{where} must be a JSON object with 'ranges' and 'bearings'")

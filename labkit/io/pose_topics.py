@@ -159,6 +159,9 @@ class BagPoses:
 
     @property
     def first_fault(self) -> tuple[str, str]:
+        """Where and why the first pose record could not be read (asked only when one could not)."""
+        if self.faults.first is None:
+            raise ValueError("every pose record was read: there is no first fault")
         return self.faults.first
 
     def stops_before(self, stamp_ns: int) -> bool:

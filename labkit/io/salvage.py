@@ -41,10 +41,11 @@ import struct
 import tempfile
 import zlib
 from collections import Counter
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any, Literal, overload
 
 from mcap import records as mcap_records
 from mcap.data_stream import ReadDataStream
@@ -76,7 +77,10 @@ class Fault:
     open_end: bool = False
 
 
-Salvage = Generator["tuple[str, int, bytes | str] | Fault", None, "Fault | None"]
+#: what :func:`salvage_sqlite3` yields (``(topic, receive_ns, raw)`` and faults) and returns (a last fault)
+Salvage = Generator["tuple[str, int, bytes] | Fault", None, "Fault | None"]
+#: the same with ``want_topics=True``: ``(topic, 0, message type)``
+SalvagedTopics = Generator["tuple[str, int, str] | Fault", None, "Fault | None"]
 
 
 @lru_cache(maxsize=2)
@@ -176,7 +180,7 @@ class Walker:
         self._footer = False  # MCAP: the footer is read; what follows is the closing magic
 
     # -------------------------------------------------------------- the walk
-    def messages(self) -> Iterator[tuple[str, int, bytes] | Fault]:
+    def messages(self) -> Generator[tuple[str, int, bytes, str] | Fault, None, None]:
         """``(topic, receive_ns, raw, where)`` for every wanted message found intact, in file order, and
         a :class:`Fault` for every damaged place (the last one, when the file ends early, with
         ``open_end``)."""
@@ -213,9 +217,10 @@ class Walker:
             try:
                 self._record(buf, pos, end, inner)
             except (_Bad, _Cut):
-                pos = self._resync(buf, pos + 1, end, inner)
-                if pos is None:
+                resumed = self._resync(buf, pos + 1, end, inner)
+                if resumed is None:
                     return
+                pos = resumed
         while pos < end and not (self._footer and not inner):
             try:
                 rec = self._record(buf, pos, end, inner)
@@ -531,7 +536,9 @@ class Ros1Walker(Walker):
 
 # ============================================================================ MCAP
 _MCAP_MAGIC = b"\x89MCAP0\r\n"
-_MCAP_RECORDS = {  # opcode -> mcap's record class (None: a chunk, read here)
+# opcode -> mcap's record class (None: a chunk, read here); Any: the classes share no typed read()
+# (a message's read() also takes its length)
+_MCAP_RECORDS: dict[int, Any] = {
     0x01: mcap_records.Header, 0x02: mcap_records.Footer, 0x03: mcap_records.Schema,
     0x04: mcap_records.Channel, 0x05: mcap_records.Message, 0x06: None, 0x07: mcap_records.MessageIndex,
     0x08: mcap_records.ChunkIndex, 0x09: mcap_records.Attachment, 0x0A: mcap_records.AttachmentIndex,
@@ -661,8 +668,19 @@ def walk_topics(path: Path, fmt: str) -> tuple[Walker, list[Fault]]:
 
 
 # ============================================================================ sqlite3
+@overload
+def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics: Literal[False] = False,
+                    known: Sequence[tuple[str, str]] = ()) -> Salvage: ...
+
+
+@overload
+def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics: Literal[True],
+                    known: Sequence[tuple[str, str]] = ()) -> SalvagedTopics: ...
+
+
 def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics: bool = False,
-                    known: list[tuple[str, str]] = ()) -> Salvage:
+                    known: Sequence[tuple[str, str]] = ()
+                    ) -> Generator[tuple[str, int, bytes] | tuple[str, int, str] | Fault, None, Fault | None]:
     """Read the rows of a damaged rosbag2 sqlite3 database one by one.
 
     A truncated database file still carries its original page count; sqlite then refuses
@@ -692,7 +710,7 @@ def salvage_sqlite3(path: Path, topic: str | frozenset[str] | None, want_topics:
             except sqlite3.DatabaseError as exc:
                 if not known:
                     return Fault("in its topics table", str(exc), 0, open_end=True)
-                topics = {k: tuple(t) for k, t in enumerate(known, start=1)}
+                topics = {k: (name, msgtype) for k, (name, msgtype) in enumerate(known, start=1)}
                 yield Fault("in its topics table", f"{exc} (the topics are taken from metadata.yaml)", 0)
             if want_topics:
                 for name, msgtype in topics.values():
@@ -720,10 +738,10 @@ def _rows_one_by_one(con: sqlite3.Connection, topics: dict, chosen: set):
     The ids run to ``max(id)``; when even that is unreadable (a file cut short), to the last id
     a scan of the table reaches, and on until ``_MISSES`` ids in a row are missing or unreadable.
     """
-    last = _last_row_id(con)
-    end_known = last is not None
+    found = _last_row_id(con)
+    end_known = found is not None
+    last = 0 if found is None else found
     if not end_known:
-        last = 0
         with contextlib.suppress(sqlite3.DatabaseError):
             for (row_id,) in con.execute("SELECT id FROM messages"):
                 last = max(last, row_id)

@@ -49,8 +49,8 @@ def placed(lines: list[LineSegment], place_dr_m: float, place_dalpha_deg: float,
     the simulated sets of ``benchmarks/evaluation.py``.)"""
     if place_confidence <= 0 or not lines:
         return lines
-    chance = placement_probability(np.array([ln.covariance for ln in lines]), place_dr_m,
-                                   math.radians(place_dalpha_deg)).tolist()
+    chance = np.asarray(placement_probability(np.array([ln.covariance for ln in lines]), place_dr_m,
+                                              math.radians(place_dalpha_deg))).tolist()
     out = []
     for ln, c in zip(lines, chance, strict=True):
         if c >= place_confidence:

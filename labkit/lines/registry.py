@@ -7,11 +7,20 @@ import functools
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, Protocol, cast
 
 from ..params import Params, checked_by
 from ..scan import Scan
 
 __all__ = ["LINE_EXTRACTORS", "LineExtractor", "register", "unregister"]
+
+
+class _Checked(Protocol):
+    """A function :func:`~labkit.params.checked_by` its record: callable, with its undecorated twin."""
+
+    unchecked: Callable[..., Any]
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any: ...
 
 
 @dataclass(frozen=True)
@@ -25,7 +34,7 @@ class LineExtractor:
 
     name: str
     fn: Callable
-    params_cls: type
+    params_cls: type[Params]
     description: str
     label: str
     fixed: tuple = ()
@@ -47,7 +56,8 @@ class LineExtractor:
         kw = {**params.kwargs(), **dict(self.fixed), **{k: v for k, v in overrides.items() if k not in fields}}
         if trace:
             kw["trace"] = True
-        return self.fn.unchecked(scan, segments=segments, **kw)
+        # register() made every fn checked_by its record, which sets fn.unchecked (a plain Callable to mypy)
+        return cast(_Checked, self.fn).unchecked(scan, segments=segments, **kw)
 
     __call__ = run
 

@@ -211,22 +211,21 @@ def regression_lines(
         _window_steps(steps, beams, lines, starts, window, fidelity, kept, first, last, threshold, range_sigma_m ** 2)
 
     # step 5: one line per cluster; neighbours that overlap or touch and agree are merged
-    spans = _merge(spans, cluster_run, table, threshold, steps, beams, range_sigma_m ** 2)
-    spans = _share(spans, table, xy, min_points)
+    clusters = _merge(spans, cluster_run, table, threshold, steps, beams, range_sigma_m ** 2)
+    clusters = _share(clusters, table, xy, min_points)
 
     # step 6: the points between clusters join a neighbouring line they are within 3 sigma of
-    shared = spans
-    spans = _absorb(spans, runs, table, xy, 3.0 * range_sigma_m)
+    grown = _absorb(clusters, runs, table, xy, 3.0 * range_sigma_m)
     if steps is not None:
-        for (a0, b0, _), (a, b) in zip(shared, spans, strict=True):
+        for (a0, b0, _), (a, b) in zip(clusters, grown, strict=True):
             if (a, b) != (a0, b0):
                 steps.add("absorb", beams[a], beams[b - 1], value=(a0 - a) + (b - b0),
                           reason=f"{(a0 - a) + (b - b0)} free points within 3 sigma = {3.0 * range_sigma_m:.3f} m "
                                  f"join the line")
 
     # step 7: every line fitted to its points, the short ones dropped
-    out = _fitted(xy, beams, spans, min_length_m, steps)
-    return (out, list(steps)) if trace else out
+    out = _fitted(xy, beams, grown, min_length_m, steps)
+    return (out, list(steps)) if steps is not None else out
 
 
 def _window_steps(steps: _Trace, beams, lines: _Lines, starts, window: int, fidelity, kept, first, last,
@@ -311,7 +310,7 @@ def _merge(spans: np.ndarray, run: np.ndarray, table: np.ndarray, threshold: flo
     merged = [spans[0].tolist() + [int(run[0])]]
     d = lines.distance(slice(None, -1), slice(1, None)) / s2 if steps is not None else None
     for i, ((a, b), k, join) in enumerate(zip(spans[1:].tolist(), run[1:].tolist(), agree.tolist(), strict=True)):
-        if steps is not None and touch[i]:
+        if steps is not None and d is not None and touch[i]:
             steps.add("merge" if join else "keep", beams[merged[-1][0]], beams[b - 1], lines.r[i], lines.alpha[i],
                       at=beams[a], value=d[i], threshold=threshold / s2,
                       test="fidelity_threshold",

@@ -118,9 +118,9 @@ class Trajectory:
     def pose_at(self, t: float) -> tuple[float, float, float]:
         k = np.asarray(self.keyframes, dtype=np.float64)
         if len(k) == 1 or t <= k[0, 0]:
-            return tuple(float(v) for v in k[0, 1:])
+            return float(k[0, 1]), float(k[0, 2]), float(k[0, 3])
         if t >= k[-1, 0]:
-            return tuple(float(v) for v in k[-1, 1:])
+            return float(k[-1, 1]), float(k[-1, 2]), float(k[-1, 3])
         i = int(np.searchsorted(k[:, 0], t, side="right") - 1)
         u = (t - k[i, 0]) / (k[i + 1, 0] - k[i, 0])
         x = k[i, 1] + u * (k[i + 1, 1] - k[i, 1])
@@ -237,13 +237,14 @@ class _Frame:
 
 
 def _frame(world: World, t: float) -> _Frame:
-    circ_c, circ_r = [], []
+    circ_c: list[tuple[float, float] | np.ndarray] = []
+    circ_r: list[float] = []
     for c in world.circles:
         circ_c.append(c.center)
         circ_r.append(c.radius)
-    for c in world.cylinders:
-        circ_c.append(c.center_at(t))
-        circ_r.append(c.radius)
+    for cyl in world.cylinders:
+        circ_c.append(cyl.center_at(t))
+        circ_r.append(cyl.radius)
     for p in world.people:
         left, right = p.legs_at(t)
         circ_c += [left, right]
@@ -336,7 +337,7 @@ def _truth(world, lidar, frame, pose, angles, true_r, hits, stamp) -> ScanTruth:
     hit_xy = np.stack([true_r * np.cos(angles), true_r * np.sin(angles)], axis=1)
     n_walls, n_arcs = frame.n_walls, len(world.arcs)
     walls, circles, arcs, legs = [], [], [], []
-    circle_center_sensor = _to_sensor(frame.circ_center, pose) if len(frame.circ_center) else None
+    circle_center_sensor = _to_sensor(frame.circ_center, pose)  # (0, 2) when there are none
     people_leg_ids = {}
     base = n_walls + n_arcs + len(world.circles) + len(world.cylinders)
     for j, p in enumerate(world.people):
@@ -357,14 +358,15 @@ def _truth(world, lidar, frame, pose, angles, true_r, hits, stamp) -> ScanTruth:
                                    _pt(hit_xy[last]), first, last, count))
         else:
             k = oid - n_walls - n_arcs
-            c = _pt(circle_center_sensor[k])
+            center = _pt(circle_center_sensor[k])
             radius = float(frame.circ_radius[k])
             if oid in people_leg_ids:
-                legs.append(VisibleLeg(oid, people_leg_ids[oid].name, c, 2 * radius, first, last, count))
+                legs.append(VisibleLeg(oid, people_leg_ids[oid].name, center, 2 * radius, first, last, count))
             else:
-                circles.append(VisibleCircle(oid, objects[oid]["name"], objects[oid]["kind"], c, radius,
+                circles.append(VisibleCircle(oid, objects[oid]["name"], objects[oid]["kind"], center, radius,
                                              first, last, count))
-    return ScanTruth(stamp, tuple(float(v) for v in pose), hits, tuple(walls), tuple(circles),
+    x, y, theta = (float(v) for v in pose)
+    return ScanTruth(stamp, (x, y, theta), hits, tuple(walls), tuple(circles),
                      tuple(arcs), tuple(legs))
 
 

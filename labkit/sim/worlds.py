@@ -76,8 +76,8 @@ class World:
             table.append({"kind": "arc", "name": a.name or f"arc{i}"})
         for i, c in enumerate(self.circles):
             table.append({"kind": c.kind, "name": c.name or f"{c.kind}{i}"})
-        for c in self.cylinders:
-            table.append({"kind": "cylinder", "name": c.name})
+        for cyl in self.cylinders:
+            table.append({"kind": "cylinder", "name": cyl.name})
         for p in self.people:
             table.append({"kind": "leg", "name": f"{p.name}/left"})
             table.append({"kind": "leg", "name": f"{p.name}/right"})
@@ -113,7 +113,7 @@ def _xy(v) -> tuple[float, float]:
 
 def _wall_loop(points: Sequence[tuple[float, float]], name: str, closed: bool = True) -> list[Wall]:
     pts = list(points) + ([points[0]] if closed else [])
-    return [Wall(tuple(map(float, a)), tuple(map(float, b)), f"{name}{i}") for i, (a, b) in
+    return [Wall(_xy(a), _xy(b), f"{name}{i}") for i, (a, b) in
             enumerate(zip(pts[:-1], pts[1:], strict=True))]
 
 

@@ -49,6 +49,7 @@ def plot_scan(
         segs = [[(0, 0), (reach * np.cos(t), reach * np.sin(t))] for t in a]
         ax.add_collection(LineCollection(segs, colors=[mpl("invalid")], linewidths=0.4, alpha=0.5,
                                          label=f"invalid beams ({len(a)})", zorder=1))
+    colors: np.ndarray | list[tuple[float, float, float]]
     if labels is not None:
         labels = np.asarray(labels)
         if labels.shape != (scan.n_beams,):

@@ -52,7 +52,7 @@ def _draw_feature(ax, scan: Scan, step: Step, **style) -> None:
     beams = step_beams(scan, step)
     if step.has_line and beams.size:
         ax.plot(*_line_between(scan.points[beams], step.r, step.alpha).T, **style)
-    if step.has_circle:
+    if step.center is not None and step.has_circle:
         t = np.linspace(0.0, 2 * np.pi, 73)
         cx, cy = step.center
         ax.plot(cx + step.radius * np.cos(t), cy + step.radius * np.sin(t), **style)
@@ -91,7 +91,7 @@ def draw_step(scan: Scan, steps: Sequence[Step], k: int, axes) -> None:
         if step.has_line and beams.size:
             ends = _line_between(run, step.r, step.alpha)
             ax.plot(*ends.T, "k--", lw=1.2, zorder=4, label=_LINE_LABELS.get(step.kind, "line measured against"))
-        if step.has_circle:
+        if step.center is not None and step.has_circle:
             t = np.linspace(0.0, 2 * np.pi, 73)
             cx, cy = step.center
             ax.plot(cx + step.radius * np.cos(t), cy + step.radius * np.sin(t), "k--", lw=1.2, zorder=4,

@@ -39,4 +39,5 @@ def label_colors(labels) -> np.ndarray:
 
 def mpl(name: str) -> tuple[float, float, float]:
     """A layer colour as a matplotlib RGB tuple in [0, 1]."""
-    return tuple(c / 255 for c in COLORS[name])
+    r, g, b = COLORS[name]
+    return (r / 255, g / 255, b / 255)
