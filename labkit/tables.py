@@ -106,7 +106,7 @@ def feature_rows(scan_index: int, features: Features, pose=None) -> list[tuple]:
     px, py, pt = pose if world else (_NAN, _NAN, _NAN)
 
     def row(kind: str, index: int, **values) -> None:
-        out = [_NAN] * _N
+        out: list = [_NAN] * _N
         out[0], out[1], out[2], out[3] = head[0], head[1], kind, index
         for k in ("first", "last", "n_points", "corner_kind", "extrapolated"):
             out[_AT[k]] = None

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from labkit.errors import CorruptFileError, RefusedError
+from labkit.errors import RefusedError
 from labkit.io import read_scans
 from labkit.pipeline import Config, extract_features
 
@@ -39,7 +39,7 @@ class BenchResult:
     extract_s: float = 0.0
     total_s: float = 0.0
     stages: dict[str, np.ndarray] = field(default_factory=dict)
-    error: CorruptFileError | None = None
+    error: Exception | None = None  # a CorruptFileError (what record_scans reports)
     kind: str = "recording"  # what was read, for the report: ".bag", "CARMEN .log/.gz", ...
 
     @property

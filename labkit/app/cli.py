@@ -437,6 +437,7 @@ def cmd_info(args: argparse.Namespace) -> int:
             full = " (a full circle)" if fov + span[2] >= 360 - 1e-6 else ""
             print(f"  field of view: {fov:.4g} deg{full} ({span[0]:.4g} to {span[1]:.4g} deg, {span[2]:.4g} deg "
                   "per beam)")
+        assert first is not None and last is not None  # set by the first scan (n > 0)
         duration = (last - first) / 1e9
         rate = f", {(n - 1) / duration:.4g} scans/s" if duration > 0 and n > 1 else ""
         print(f"  duration: {duration:.6g} s{rate}")
@@ -529,8 +530,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         with safe_output(args.json, REPORT_FILE, overwrite=args.force, inputs=args.inputs) as tmp:
             tmp.write_text(json.dumps(json_safe(report), indent=1, allow_nan=False) + "\n", encoding="utf-8")
         print(f"\nwrote {args.json}", file=sys.stderr)
-    for exc in damage[1:]:
-        print(f"labkit: error: {exc}", file=sys.stderr)
+    for later in damage[1:]:
+        print(f"labkit: error: {later}", file=sys.stderr)
     if damage:
         raise damage[0]
     if results:
@@ -594,7 +595,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="run the recordings on an existing Dask cluster (tcp://host:8786); paths are made absolute "
                       "here, and every worker must see the inputs and outputs under those same paths")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    sub.add_parser = partial(sub.add_parser, parents=[common])  # every command takes -q
+    sub.add_parser = partial(sub.add_parser, parents=[common])  # type: ignore[method-assign]  # every command takes -q
 
     s = sub.add_parser("simulate", help="simulate a world into a bag with ground truth beside it")
     s.add_argument("world", nargs="?", help="hall, corridor, office or random_polygons_<seed>")

@@ -151,7 +151,7 @@ def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVE
 
 
 def world_scans(name: str, lidar: Lidar, n: int, rng: np.random.Generator, *, first_room: int = 0,
-                headings: Sequence[float] | None = None) -> list[tuple[Scan, ScanTruth]]:
+                headings: Sequence[float] | np.ndarray | None = None) -> list[tuple[Scan, ScanTruth]]:
     """``n`` simulated ``(scan, truth)`` pairs of one kind of world, seen by ``lidar`` with the
     noise drawn from ``rng``: for a scenario's world (``office``, ``corridor``, ``hall``, ...)
     poses spread along its trajectory (moving objects placed at each time); for
@@ -184,7 +184,7 @@ def _timed(extract: Callable, scans: Sequence[Scan], progress=None, repeat: int 
     return results, spent
 
 
-def compare_lines(data: Sequence[SimScan], extractors: dict[str, Callable] | None = None, *,
+def compare_lines(data: Sequence[SimScan], extractors: Mapping[str, Callable] | None = None, *,
                   by: Sequence[str] = ("noise_std_m",), progress: Callable | None = None, repeat: int = 1,
                   **rule) -> list[dict]:
     """Every extractor on ``data``, scored per group of scans (``by``: SimScan fields).
@@ -194,14 +194,14 @@ def compare_lines(data: Sequence[SimScan], extractors: dict[str, Callable] | Non
     timed at its best of ``repeat`` runs). ``rule``: keyword arguments of
     :func:`labkit.evaluation.match_lines`.
     """
-    extractors = LINE_EXTRACTORS if extractors is None else extractors
+    methods: Mapping[str, Callable] = LINE_EXTRACTORS if extractors is None else extractors
     groups: dict[tuple, list[SimScan]] = {}
     for item in data:
         groups.setdefault(tuple(getattr(item, k) for k in by), []).append(item)
     rows = []
     for key, items in groups.items():
         scans = [it.scan for it in items]
-        for name, extract in extractors.items():
+        for name, extract in methods.items():
             bar = None if progress is None else partial(progress, desc=f"{name} {key}")
             lines, spent = _timed(extract, scans, bar, repeat)
             s: LineScores = score_lines(zip(lines, (it.truth for it in items), strict=False), **rule)
@@ -235,7 +235,7 @@ def score_round_objects(n_scans: int = 300, *, seed: int = 0, config: Config | N
             "legs": {"kind": "legs", **score_detections(legs).as_dict(), "scans_per_s": rate}}
 
 
-def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable] | None = None, *,
+def compare_on_logs(paths: Iterable[str | Path], extractors: Mapping[str, Callable] | None = None, *,
                     n_scans: int = 100, progress: Callable | None = None, repeat: int = 1, topic: str | None = None,
                     strict: bool = False, on_damage: Callable[[Exception], None] | None = None,
                     scans: slice | None = None) -> list[dict]:
@@ -249,12 +249,12 @@ def compare_on_logs(paths: Iterable[str | Path], extractors: dict[str, Callable]
     recording was scored).
     """
 
-    extractors = LINE_EXTRACTORS if extractors is None else extractors
+    methods: Mapping[str, Callable] = LINE_EXTRACTORS if extractors is None else extractors
     rows = []
     damage: list[Exception] = []
     for path in paths:
         chosen = _first_scans(path, n_scans, topic, strict, damage, on_damage, scans)
-        for name, extract in extractors.items():
+        for name, extract in methods.items():
             bar = None if progress is None else partial(progress, desc=f"{Path(path).name} {name}")
             lines, spent = _timed(extract, chosen, bar, repeat)
             total = RayErrors(np.empty(0), 0)

@@ -52,6 +52,7 @@ import uuid
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from labkit._safe import (
     TEMP_MARK,
@@ -217,7 +218,7 @@ def split_ranges(sizes: Sequence[int | None], n_workers: int, *,
     plan: list[list[tuple[int, int]] | None] = []
     for n in sizes:
         pieces = 1 if n is None or n <= share else min(math.ceil(n / share), n // max(min_scans, 1))
-        if pieces < 2:
+        if n is None or pieces < 2:
             plan.append(None)
             continue
         bounds = [round(k * n / pieces) for k in range(pieces + 1)]
@@ -242,7 +243,7 @@ class _Stop:
 
     def __init__(self, name: str | None) -> None:
         self.name, self.next = name, time.monotonic() + _CHECK_EVERY_S
-        self.event = None
+        self.event: Any = None  # a distributed.Event, made on the first look
 
     def check(self, now: bool = False) -> None:
         if self.name is None or (time.monotonic() < self.next and not now):
@@ -327,7 +328,7 @@ def extract_one(path: str | Path, out: str | Path | None, *, config=None, topic:
                 yield scan, f
 
         result.output = str(out)
-        if str(out).lower().endswith(".parquet"):
+        if out is not None and str(out).lower().endswith(".parquet"):
             name = recording or Path(path).name
             _, result.n_rows = write_features_table(pairs(), out, recording=name, method=config.lines.method,
                                                     overwrite=overwrite, inputs=[path], first_scan=stream.first)
@@ -440,16 +441,16 @@ def run_tasks(task: Callable[..., Result], jobs: Sequence[dict], *, workers: int
     results so far in its ``results`` attribute.
     """
     known = sizes is not None and all(s is not None for s in sizes)
-    steps = list(sizes) if known else [1] * len(jobs)
+    steps = [s or 0 for s in sizes] if sizes is not None and known else [1] * len(jobs)
     bar = progress(total=sum(steps), unit="scan" if known else "recording") if progress else None
     results: list[Result | None] = [None] * len(jobs)
     try:
         if workers == 0 and client is None and not scheduler:
             for k, job in enumerate(jobs):
-                results[k] = task(**job, stop=None)
+                results[k] = result = task(**job, stop=None)
                 if bar is not None:
                     bar.update(steps[k])
-                if results[k].status == "interrupted":  # Ctrl-C here: no further recording
+                if result.status == "interrupted":  # Ctrl-C here: no further recording
                     interrupted = KeyboardInterrupt()
                     interrupted.results = results  # type: ignore[attr-defined]
                     raise interrupted
@@ -537,7 +538,7 @@ class _Job:
     size: int | None
 
 
-def _plan(paths: list[Path], ranges, n_workers: int, split: bool, part_of: Callable[[int, int], Path] | None,
+def _plan(paths: list[Path], ranges, n_workers: int, split: bool, part_of: Callable[[int, int], Path],
           user_scans: slice | None) -> list[_Job]:
     """The tasks: one per recording, or one per range of a recording :func:`split_ranges` cuts
     (those write ``part_of(k, j)``; the others ``part_of(k, -1)``)."""
@@ -657,7 +658,9 @@ class _Scratch:
     made when first needed and removed at the end, with the folders made for it if left empty."""
 
     def __init__(self, folder: Path) -> None:
-        self.folder, self.path, self.created = folder, None, []
+        self.folder = folder
+        self.path: Path | None = None
+        self.created: list[Path] = []
 
     def part(self, name: str) -> Path:
         if self.path is None:
@@ -797,15 +800,15 @@ def _one_table(paths: list[Path], out: Path, ranges, common: dict, *, overwrite:
                 if writer is not None:
                     writer.close()
                 shutil.rmtree(parts, ignore_errors=True)
-            for r in results:
-                if r is not None:
-                    r.output = str(out) if r.status in ("done", "damaged") else None
+            for res in results:
+                if res is not None:
+                    res.output = str(out) if res.status in ("done", "damaged") else None
             if interrupted is not None:
                 raise interrupted
     except _NothingRead:
-        for r in results:
-            if r is not None:
-                r.output = None
+        for res in results:
+            if res is not None:
+                res.output = None
         if interrupted is not None:
             interrupted.results = results  # type: ignore[attr-defined]
             raise interrupted from None

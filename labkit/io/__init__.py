@@ -145,7 +145,8 @@ class ScanStream:
         self.pose_sources: dict[str, str] = {}
         self.pose_count: int | None = None  # pose messages the bag's index lists
         self.held = count  # the scans the file says it holds (``count`` is the range's)
-        self.first, self.stop = 0, None
+        self.first: int = 0
+        self.stop: int | None = None
 
     def __iter__(self) -> Iterator[Scan]:
         scans = FORMATS[self.format].read(self)
@@ -322,7 +323,10 @@ def write_scans(
     """
     p = Path(path)
     fmt = output_format(p, format)
-    return FORMATS[fmt].write(scans, p, topic=topic, overwrite=overwrite, inputs=inputs)
+    write = FORMATS[fmt].write
+    if write is None:  # output_format names only writable formats
+        raise RefusedError(f"labkit does not write {FORMATS[fmt].noun}")
+    return write(scans, p, topic=topic, overwrite=overwrite, inputs=inputs)
 
 
 def output_format(p: Path, format: str | None = None) -> str:
@@ -339,7 +343,7 @@ def output_format(p: Path, format: str | None = None) -> str:
     if format is None:
         if guess is None and folder is None:
             raise RefusedError(f"cannot tell the output format of {p}; give it a suffix")
-        return guess or folder
+        return guess if guess is not None else str(folder)  # one of them is set (checked above)
     writable = writable_formats()
     if format not in writable:
         raise ValueError(f"cannot write {format!r}; writable formats: {', '.join(writable)}")
@@ -426,8 +430,9 @@ def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = N
         check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])
         from .bagcopy import copy_bag
 
-        n_scans, _n, written = copy_bag(src, src_fmt, dst, fmt, overwrite=overwrite, strict=strict, progress=progress)
-        return Conversion(n_scans, dict(written))
+        n_scans, _n, per_topic = copy_bag(src, src_fmt, dst, fmt, overwrite=overwrite, strict=strict,
+                                          progress=progress)
+        return Conversion(n_scans, dict(per_topic))
     stream = read_scans(src, topic=topic, strict=strict, poses=poses, scans=scans)
     check_output(dst, output_kind(dst, fmt), overwrite=overwrite, inputs=[src])  # refuse before reading
     restamp = None
@@ -438,14 +443,14 @@ def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = N
             restamp, note = plan_stamps(_readable(read_scans(src, topic=topic, poses=False, scans=scans)), fmt)
         if note:
             warnings.warn(f"{src}: {note}", StampsChangedWarning, stacklevel=2)
-    scans: Iterable[Scan] = stream
+    written: Iterable[Scan] = stream
     if restamp is not None:
-        scans = (restamp(scan, k) for k, scan in enumerate(stream))
+        written = (restamp(scan, k) for k, scan in enumerate(stream))
     if progress:
         from tqdm.auto import tqdm
 
-        scans = tqdm(scans, total=stream.count, unit="scan", desc=f"convert {src.name}")
-    return Conversion(write_scans(scans, dst, fmt, overwrite=overwrite, inputs=[src]))
+        written = tqdm(written, total=stream.count, unit="scan", desc=f"convert {src.name}")
+    return Conversion(write_scans(written, dst, fmt, overwrite=overwrite, inputs=[src]))
 
 
 def _readable(stream: Iterable[Scan]) -> Iterator[Scan]:
@@ -466,6 +471,7 @@ def _read_bag(stream: ScanStream) -> Iterator[Scan]:
         finally:
             WATCHED.reset(unwatched)
         stream.pose_sources = poses.sources  # filled in as scan frames are met
+    assert stream.topic is not None  # a bag's stream always names its topic (_open_bag resolves it)
     yield from bags.iter_bag(stream.path, stream.format, stream.topic, stream.readable, stream.strict, poses=poses,
                              expected=stream.held)
 
@@ -477,8 +483,8 @@ def _open_bag(p: Path, fmt: str, topic: str | None, strict: bool, poses: str | b
     plan = plan_poses(p, topics, None if poses is True else poses)
     stream = ScanStream(p, fmt, chosen, count, readable, strict, plan.describe() if plan else None, plan)
     pose_counts = [c for name, _t, c in topics if plan is not None and name in plan.msgtypes]
-    if pose_counts and None not in pose_counts:
-        stream.pose_count = sum(pose_counts)
+    if pose_counts and all(c is not None for c in pose_counts):
+        stream.pose_count = sum(c for c in pose_counts if c is not None)
     return stream
 
 

@@ -219,10 +219,14 @@ class Recorded(Protocol):
     """What a ground-truth file's header describes: a world and a lidar (each with ``to_dict()``),
     the topic and the frame of the scans (a :class:`labkit.sim.Scenario`)."""
 
-    world: Any
-    lidar: Any
-    topic: str
-    frame_id: str
+    @property
+    def world(self) -> Any: ...
+    @property
+    def lidar(self) -> Any: ...
+    @property
+    def topic(self) -> str: ...
+    @property
+    def frame_id(self) -> str: ...
 
 
 def write_truth(path: str | Path, sc: Recorded, truths, *, seed: int, overwrite: bool = False) -> int:

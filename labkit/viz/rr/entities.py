@@ -4,6 +4,7 @@ per call) on the ``ros_time`` and ``scan`` timelines (the layout is in :mod:`lab
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import numpy as np
 import rerun as rr
@@ -14,6 +15,9 @@ from ...scan import Scan
 from ...segmentation import segment_labels
 from ..style import COLORS, label_colors
 from .blueprint import _Y_UP, APP_ID, SEQUENCE, TIME
+
+if TYPE_CHECKING:
+    from ...sim import ScanTruth
 
 __all__ = ["new_recording", "log_static", "log_text", "log_scans", "log_features", "log_truth"]
 
@@ -195,7 +199,7 @@ def _send_batch(rec, items: list[tuple[Scan, np.ndarray | None, Features | None]
         )
         _scalars(rec, "metrics/count/segments", times, n_segments)
     if items[0][2] is not None:
-        _send_features(rec, times, [f for _, _, f in items], "world", "metrics", segment_count=False,
+        _send_features(rec, times, [f for _, _, f in items if f is not None], "world", "metrics", segment_count=False,
                        hide_labels=first_batch)
 
 
@@ -303,7 +307,7 @@ def _hide_truth_labels(rec: rr.RecordingStream) -> None:
         rec.log(f"world/truth/{layer}", rr.LineStrips2D.from_fields(show_labels=False), static=True)
 
 
-def _send_truth(rec: rr.RecordingStream, batch: list[tuple[int, object]]) -> None:
+def _send_truth(rec: rr.RecordingStream, batch: list[tuple[int, ScanTruth]]) -> None:
     """One ``send_columns`` call per truth layer for ``(scan index, ScanTruth)`` pairs."""
     times = _time_columns(np.array([k for k, _ in batch]), np.array([tr.stamp_ns for _, tr in batch], np.int64))
     truths = [tr for _, tr in batch]

@@ -264,13 +264,17 @@ def _close(rec: rr.RecordingStream, tmp: Path) -> None:
 
 
 def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features, config, segment_threshold_m,
-                  description, world_map=None, start_index: int = 0, timeline: str | None = None) -> RecordSummary:
+                  description, world_map: tuple[int, float] | None = None, start_index: int = 0,
+                  timeline: str | None = None) -> RecordSummary:
     rec = new_recording(name)
     with_features = features is not None or config is not None
     rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features,
                                               timeline=timeline))
     log_static(rec, description)
-    the_map = _Map(rec, *world_map, features=with_features) if world_map is not None else None
+    the_map = None
+    if world_map is not None:
+        every, cell_m = world_map
+        the_map = _Map(rec, every, cell_m, features=with_features)
     feed = _TruthFeed(truth) if truth is not None else None
     stamps = _Stamps()
     counts: dict[str, int] = {}

@@ -90,8 +90,8 @@ class _Map:
         rec = self.rec
         pts = []
         for scan, _, _ in items:
-            world = transform_points(scan.xy, scan.pose)
-            pts.append(world[self.thin.new(world)])
+            placed = transform_points(scan.xy, scan.pose)
+            pts.append(placed[self.thin.new(placed)])
         rec.send_columns("map/accumulated/points", indexes=times, columns=rr.Points2D.columns(
             positions=np.concatenate(pts), colors=_colors_rgb(_MAP_COLORS["accumulated"], sum(map(len, pts))),
             radii=np.full(sum(map(len, pts)), -1.0, dtype=np.float32)).partition([len(p) for p in pts]))
