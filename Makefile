@@ -18,7 +18,7 @@ help:
 	@echo "make data     regenerate the bundled recordings in data/ (bit-for-bit identical)"
 	@echo "make release  regenerate the student copies of the exercises (exercises/release/)"
 	@echo "make grade    grade exercises/submitted/ into the gradebook and exercises/grades.csv (EX=ex01 for one)"
-	@echo "make lint     ruff"
+	@echo "make lint     ruff and mypy"
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -86,6 +86,7 @@ grade: $(VENV)/.installed sandbox
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check labkit tests benchmarks
+	$(BIN)/mypy labkit
 
 clean:
 	rm -rf out .pytest_cache
