@@ -23,7 +23,7 @@ the verdicts (:data:`VERDICTS`) and the one function that writes a segment's
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -210,6 +210,11 @@ class Angles(NamedTuple):
     side: np.ndarray | None  # (R,) sum of cross(chord, P_i - P_1): > 0 when the points lie left of P_1 -> P_n
     degenerate: np.ndarray  # (R,) bool: an interior point on an extreme
 
+    def side_of(self, j: int) -> float:
+        """``side`` of the ``j``-th run (computed unless ``batch_angles(..., with_side=False)``)."""
+        assert self.side is not None, "the engine asks batch_angles for the sides wherever it reads one"
+        return self.side.item(j)
+
 
 def batch_angles(runs: Runs, sel: np.ndarray, flip: np.ndarray | None = None, with_side: bool = True) -> Angles:
     """Inscribed angles of runs ``sel`` (each of 3 points or more); ``flip`` (R,) mirrors a
@@ -279,7 +284,8 @@ def segment_step(algorithm: str, verdict: int, first: int, last: int, n: int, ch
     known = [f"{n} points"] + [text for ok, text in (
         (not math.isnan(c), f"chord {c:.3f} m"), (not math.isnan(r), f"middle ratio {r:.2f}"),
         (not math.isnan(m), f"iav mean {math.degrees(m):.1f} deg, std {math.degrees(sd):.1f} deg")) if ok]
-    fields = dict(value=value, threshold=threshold, test=VERDICTS[v], reason=f"{VERDICTS[v]}: " + ", ".join(known))
+    fields: dict[str, Any] = dict(value=value, threshold=threshold, test=VERDICTS[v],  # (Step's keywords)
+                                  reason=f"{VERDICTS[v]}: " + ", ".join(known))
     if v == ACCEPTED:
         if isinstance(feature, Circle):  # a circle or an arc
             fields.update(center=tuple(float(x) for x in feature.center), radius=float(feature.radius))
@@ -375,7 +381,7 @@ def circle_engine(runs: Runs, t: CircleTest, sigma: float = 0.0, *, want_trace: 
     ang = None
     if sel:
         ang = batch_angles(runs, np.array(sel), np.array([ratio[k] < 0 for k in sel]) if t.hollow else None)
-        noise = [None] * len(sel)
+        noise: list[tuple[float, float] | None] = [None] * len(sel)
         if sigma > 0.0:  # the angle allowances of every selected run at once
             spread_sq, mean_sd = angle_noise_runs(runs.pts, runs.starts[sel], runs.ends[sel], sigma)
             noise = list(zip(spread_sq.tolist(), mean_sd.tolist(), strict=True))
@@ -439,7 +445,7 @@ def _make_circle(runs: Runs, geo: Geometry, ang: Angles, j: int, k: int, t: Circ
     mean_range, std_max = limits
     try:
         if t.center_method == "iav":
-            side = ang.side.item(j)
+            side = ang.side_of(j)
             center, radius = circle_from_iav(geo.p_first[k], geo.p_last[k], mean, side if side != 0 else 1.0)
         else:
             fit = fit_circle(runs.pts[runs.starts.item(k):runs.ends.item(k)], t.center_method)
@@ -566,7 +572,7 @@ def leg_engine(scan: Scan, runs: Runs, t: LegTest, sigma: float = 0.0, *,
             elif t.reject_occluded and occluded(scan, first, last):
                 verdict[k] = OCCLUDED
             else:
-                side = ang.side.item(j) if t.center_method == "iav" else 0.0  # (only the iav centre needs it)
+                side = ang.side_of(j) if t.center_method == "iav" else 0.0  # (only the iav centre needs it)
                 try:
                     center, diameter = leg_center(runs.pts[a:b], chord.item(k), m, side, t.center_method)
                 except ValueError:

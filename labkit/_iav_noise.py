@@ -22,6 +22,7 @@ paper's test.
 from __future__ import annotations
 
 import math
+from typing import overload
 
 import numpy as np
 
@@ -132,6 +133,16 @@ def angle_limits(p: np.ndarray, sigma: float, mean_range: tuple[float, float], s
     return widen(*angle_noise(p, sigma), mean_range, std_max, like_max)
 
 
+@overload  # a spread limit given is widened, never dropped
+def widen(spread_sq: float, mean_sd: float, mean_range: tuple[float, float], std_max: float,
+          like_max: float | None) -> tuple[tuple[float, float], float, float | None]: ...
+
+
+@overload
+def widen(spread_sq: float, mean_sd: float, mean_range: tuple[float, float], std_max: float | None,
+          like_max: float | None) -> tuple[tuple[float, float], float | None, float | None]: ...
+
+
 def widen(spread_sq: float, mean_sd: float, mean_range: tuple[float, float], std_max: float | None,
           like_max: float | None) -> tuple[tuple[float, float], float | None, float | None]:
     """The limits of :func:`angle_limits` for a run whose angles range noise spreads by
@@ -171,6 +182,8 @@ def wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigm
     # convergence.
     todo = big
     if centers is not None:
+        if radii is None:  # (the TypeError indexing None raised before, with a message)
+            raise TypeError("wider_than_noise: centers need their radii")
         sizes = ends[big] - starts[big]
         off = np.cumsum(sizes) - sizes
         run = np.repeat(np.arange(len(big)), sizes)

@@ -314,8 +314,8 @@ def chi2_upper_over_dof(dof, z: float):
     if isinstance(dof, (int, float)):  # one value (the split loop's hot path): plain floats
         k = 2.0 / (9.0 * dof)
         return max(1.0 - k + z * math.sqrt(k), 0.0) ** 3
-    k = 2.0 / (9.0 * np.asarray(dof, dtype=float))
-    return np.maximum(1.0 - k + z * np.sqrt(k), 0.0) ** 3
+    ks = 2.0 / (9.0 * np.asarray(dof, dtype=float))
+    return np.maximum(1.0 - ks + z * np.sqrt(ks), 0.0) ** 3
 
 
 def auto_split_threshold(sigma: float, sigmas: float = SPLIT_SIGMAS) -> float:

@@ -27,9 +27,11 @@ import dataclasses
 import functools
 import inspect
 import math
+import types
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import ClassVar, cast
 
 import numpy as np
 
@@ -130,8 +132,8 @@ class Params:
     ``enabled``, or a value another function of the stage reads).
     """
 
-    _name = ""
-    _not_passed = ()  # (a class attribute, not a field)
+    _name: ClassVar[str] = ""
+    _not_passed: ClassVar[tuple[str, ...]] = ()  # (ClassVar: a class attribute, not a field)
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -236,9 +238,16 @@ class Params:
         return out
 
 
-@functools.cache
+# one default record per class; a dict, as functools.cache would need mypy to take a class as
+# Hashable, which it does not (python/mypy#11470)
+_DEFAULTS: dict[type[Params], Params] = {}
+
+
 def _defaults(cls: type[Params]) -> Params:
-    return cls()
+    record = _DEFAULTS.get(cls)
+    if record is None:
+        record = _DEFAULTS[cls] = cls()
+    return record
 
 
 # ---------------------------------------------------------------------------- the public boundary
@@ -265,7 +274,9 @@ def checked_by(record: type[Params], *, positional: tuple[str, ...] = (), rename
         signature = inspect.signature(fn).parameters
         takes = [name for name in signature if name in fields]
         # limits between fields, checked on the values a call passes and the defaults of the others
-        related = record.check_relations.__func__ is not Params.check_relations.__func__
+        # (a classmethod read from its class is a bound method: mypy types it as the plain callable)
+        own = cast(types.MethodType, record.check_relations).__func__
+        related = own is not cast(types.MethodType, Params.check_relations).__func__
         defaults = {name: signature[name].default for name in takes}
         old = {name[:-4]: name for name in takes if name.endswith("_deg")}
         old.update({k: v for k, v in {**record.renamed(), **(renamed or {})}.items() if v in takes or k == v})

@@ -52,6 +52,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from time import perf_counter
+from typing import cast
 
 import numpy as np
 
@@ -69,7 +70,7 @@ from .lines import (
     RegressionParams,
     SplitMergeParams,
 )
-from .params import param
+from .params import Params, param
 from .scan import Scan
 from .segmentation import SegmentationParams, segment_labels
 from .tracking import Tracker, TrackingParams, TrackTable
@@ -193,7 +194,8 @@ class TrackingConfig(TrackingParams):
 
 
 for _cls in (LegsConfig, CirclesConfig, CornersConfig, ArcsConfig):
-    _cls._not_passed = (*_cls.__mro__[1]._not_passed, "enabled")
+    # (the first base of a stage's config is its detector's record: mypy types __mro__ as plain types)
+    _cls._not_passed = (*cast(type[Params], _cls.__mro__[1])._not_passed, "enabled")
 del _cls
 
 _SECTIONS = {  # the order the stages run in, and the order of a TOML file
@@ -219,7 +221,8 @@ def _section(name: str, value):
     raise ValueError(f"Config.{name} must be a {cls.__name__} (or a {record.__name__}), got {type(value).__name__}")
 
 
-def _first_line(doc: str) -> str:
+def _first_line(doc: str | None) -> str:
+    assert doc is not None, "@dataclass gives every record a docstring (its signature when none is written)"
     return " ".join(doc.strip().split("\n\n")[0].split())
 
 

@@ -300,7 +300,8 @@ def detect_circles(
 
 def _radians(pair: tuple[float, float]) -> tuple[float, float]:
     """A pair of angles in degrees, in radians."""
-    return tuple(math.radians(v) for v in pair)
+    low, high = pair
+    return math.radians(low), math.radians(high)
 
 
 def _segments(scan: Scan, segments, seg_threshold_m: float | None, range_sigma_m) -> Runs:
@@ -329,43 +330,54 @@ def _test_segment(points: np.ndarray, beams: np.ndarray, t: CircleTest, sigma: f
     that failed."""
     # Table II circle_min_pts: enough points
     if not _enough_points(points, t.min_points):
-        return seen.reject(FEW)
+        seen.reject(FEW)
+        return None
     # Table II circle_min_len, circle_max_len: the chord
     seen.chord = _chord(points)
     if seen.chord < t.chord_range[0]:
-        return seen.reject(SHORT)
+        seen.reject(SHORT)
+        return None
     if seen.chord > t.chord_range[1]:
-        return seen.reject(LONG)
+        seen.reject(LONG)
+        return None
     # Sec. II-D, Fig. 5: the prerequisite, the middle point within a band beside the chord
     seen.ratio = _middle_ratio(points)
     if math.isnan(seen.ratio):
-        return seen.reject(DEGENERATE)
+        seen.reject(DEGENERATE)
+        return None
     band = _prerequisite_band(points, seen.chord, t.middle_range, sigma, seen)
     if not _in_band(seen.ratio, band, either_side=t.hollow):
-        return seen.reject(PREREQ)
+        seen.reject(PREREQ)
+        return None
     # Sec. II-B: the inscribed angles, their mean and spread
     angles = _angles(points, hollow=t.hollow and seen.ratio < 0)
     if angles is None:
-        return seen.reject(DEGENERATE)
+        seen.reject(DEGENERATE)
+        return None
     seen.mean, seen.std, _ = IAVStats.from_angles(angles)
     mean_range, std_max, like_max = _angle_limits(points, t, sigma, seen)
     if not mean_range[0] <= seen.mean <= mean_range[1]:
-        return seen.reject(MEAN)
+        seen.reject(MEAN)
+        return None
     kind = t.kind
     if seen.std >= std_max:
         # Sec. II-B.3: "arc-like" shapes, a wider spread, unless a V-shaped corner
         if like_max is None or seen.std >= like_max:
-            return seen.reject(STD)
+            seen.reject(STD)
+            return None
         if _is_v_corner(angles, t):
-            return seen.reject(VCORNER)
+            seen.reject(VCORNER)
+            return None
         kind, std_max = "arc-like", like_max
     # Sec. II-C: the centre and the radius
     circle = _circle(points, beams, seen, t.center_method, kind, mean_range, std_max)
     if circle is None:
-        return seen.reject(FIT)
+        seen.reject(FIT)
+        return None
     # the noise allowance's last stage: the points lie on one circle within the noise
     if sigma > 0.0 and _off_one_circle(points, circle, sigma):
-        return seen.reject(RESIDUAL)
+        seen.reject(RESIDUAL)
+        return None
     return circle
 
 
@@ -429,6 +441,7 @@ def _angle_limits(points: np.ndarray, t: CircleTest, sigma: float,
     mean_range, std_max, like_max = t.mean_range, t.std_max, t.arc_like_std_max
     if sigma > 0.0:
         mean_range, std_max, like_max = widen(*angle_noise(points, sigma), mean_range, std_max, like_max)
+        assert seen.widened is not None, "_prerequisite_band set it (sigma > 0)"
         seen.widened.update({MEAN: mean_range, STD: std_max if like_max is None else like_max, VCORNER: like_max,
                              ACCEPTED: std_max})
     return mean_range, std_max, like_max

@@ -234,12 +234,14 @@ def detect_legs(
     ([1.99, 0.5], 0.12, 7)
     """
     check_scan(scan)
-    no_mean_test = iav_mean_range_deg is None or iav_mean_range_deg == (0.0, 180.0)
-    no_std_test = iav_std_max_deg is None or math.isinf(iav_std_max_deg)
+    mean_range = std_max = None  # None: not tested
+    if iav_mean_range_deg is not None and iav_mean_range_deg != (0.0, 180.0):
+        low, high = iav_mean_range_deg
+        mean_range = (math.radians(low), math.radians(high))
+    if iav_std_max_deg is not None and not math.isinf(iav_std_max_deg):
+        std_max = math.radians(iav_std_max_deg)
     test = LegTest(min_points=min_points, chord_range=chord_range_m, chord_padding_beams=chord_padding_beams,
-                   middle_range=middle_range,
-                   iav_mean_range=None if no_mean_test else tuple(math.radians(v) for v in iav_mean_range_deg),
-                   iav_std_max=None if no_std_test else math.radians(iav_std_max_deg),
+                   middle_range=middle_range, iav_mean_range=mean_range, iav_std_max=std_max,
                    reject_occluded=reject_occluded, center_method=center_method)
     runs = _segments(scan, segments, seg_threshold_m, range_sigma_m)
     sigma = noise_sigma(scan, range_sigma_m)
@@ -268,41 +270,51 @@ def _test_segment(scan: Scan, points: np.ndarray, beams: np.ndarray, t: LegTest,
     failed."""
     # enough points (3: one inscribed angle)
     if len(points) < t.min_points:
-        return seen.reject(FEW)
+        seen.reject(FEW)
+        return None
     # Sec. II-E: the distance between the end points within the leg diameters (the chord padded)
     chord = _chord(points)
     seen.chord = _padded(chord, points, t.chord_padding_beams, spacing)
     if seen.chord < t.chord_range[0]:
-        return seen.reject(SHORT)
+        seen.reject(SHORT)
+        return None
     if seen.chord > t.chord_range[1]:
-        return seen.reject(LONG)
+        seen.reject(LONG)
+        return None
     # Sec. II-D, Fig. 5: the circle prerequisite, as for circles
     seen.ratio = _middle_ratio(points)
     if math.isnan(seen.ratio):
-        return seen.reject(DEGENERATE)
+        seen.reject(DEGENERATE)
+        return None
     band = _prerequisite_band(points, chord, t.middle_range, sigma, seen)
     if not _in_band(seen.ratio, band):
-        return seen.reject(PREREQ)
+        seen.reject(PREREQ)
+        return None
     # the inscribed angles: kept in the record; tested only when asked (the paper does not)
     angles = _angles(points, hollow=False)
     if angles is None:
-        return seen.reject(DEGENERATE)
+        seen.reject(DEGENERATE)
+        return None
     seen.mean, seen.std, _ = IAVStats.from_angles(angles)
     mean_range, std_max = _angle_limits(points, t, sigma, seen)
     if mean_range is not None and not mean_range[0] <= seen.mean <= mean_range[1]:
-        return seen.reject(MEAN)
+        seen.reject(MEAN)
+        return None
     if std_max is not None and seen.std >= std_max:
-        return seen.reject(STD)
+        seen.reject(STD)
+        return None
     # Sec. II-E: not partially occluded
     first, last = int(beams[0]), int(beams[-1])
     if t.reject_occluded and is_occluded(scan, first, last):
-        return seen.reject(OCCLUDED)
+        seen.reject(OCCLUDED)
+        return None
     # the centre and the diameter
     side = _side(points) if t.center_method == "iav" else 0.0
     try:
         center, diameter = leg_center(points, seen.chord, seen.mean, side, t.center_method)
     except ValueError:
-        return seen.reject(FIT)
+        seen.reject(FIT)
+        return None
     middle = np.array(points[len(points) // 2], dtype=np.float64)
     center.setflags(write=False)
     middle.setflags(write=False)
@@ -324,6 +336,7 @@ def _angle_limits(points: np.ndarray, t: LegTest, sigma: float,
     mean_range, std_max = t.iav_mean_range, t.iav_std_max
     if sigma > 0.0 and not (mean_range is None and std_max is None):
         wide, std_max, _ = angle_limits(points, sigma, mean_range or (0.0, math.pi), std_max)
+        assert seen.widened is not None, "_prerequisite_band set it (sigma > 0)"
         seen.widened.update({MEAN: wide, STD: std_max, ACCEPTED: std_max})
         mean_range = wide if mean_range is not None else None
     return mean_range, std_max

@@ -851,7 +851,7 @@ def line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sig
     if not k:
         return []
     cov, rms = _covariances(scan.points, scan.ranges, beams, offsets, alpha, r, weights == "uniform", float(sigma))
-    keep = range(k)
+    keep: range | list[int] = range(k)
     if place_confidence > 0:
         verdict = _placing(cov, float(place_dr_m), math.radians(place_dalpha_deg), float(place_confidence), _GL_U,
                            _GL_W)

@@ -235,12 +235,13 @@ def line_segments(lines: list[Line], points, ranges, weights, sigma: float) -> l
     p = points.take(idx, axis=0)  # = points[idx]
     alpha, r = np.array([ln.alpha for ln in lines]), np.array([ln.r for ln in lines])
     cov, rms = covariances(idx, starts, alpha, p, ranges, weights, sigma, r)  # and the RMS distances to the lines
+    assert rms is not None, "given r, covariances gives the RMS distances too"
     rms = rms.tolist()
     # read-only records (the beams already are): each covariance, start and end is a view of these
     cov.setflags(write=False)
     ends = np.array([ln.start + ln.end for ln in lines])
     ends.setflags(write=False)
-    ends = list(ends.reshape(-1, 2))  # start 0, end 0, start 1, ...
+    pairs = list(ends.reshape(-1, 2))  # start 0, end 0, start 1, ...
     return [LineSegment(ln.r, ln.alpha, c, start, end, ln.first, ln.last, n, error, ln.idx)
-            for ln, c, start, end, n, error in zip(lines, cov, ends[0::2], ends[1::2], counts.tolist(), rms,
+            for ln, c, start, end, n, error in zip(lines, cov, pairs[0::2], pairs[1::2], counts.tolist(), rms,
                                                    strict=True)]

@@ -269,7 +269,7 @@ def hough_lines(
 
     lines.sort(key=lambda s: s.first)
     lines = placed(lines, place_dr_m, place_dalpha_deg, place_confidence, steps)
-    return (lines, list(steps)) if trace else lines
+    return (lines, list(steps)) if steps is not None else lines  # (steps: made when trace is)
 
 
 def _peak_steps(steps: _Trace, peak: int, cell_number, n_r: int, alphas: np.ndarray, r_step_m: float, votes: int,

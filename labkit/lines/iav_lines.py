@@ -141,20 +141,25 @@ def _test_segment(points: np.ndarray, beams: np.ndarray, t: LineTest, seen: Seen
     failed."""
     # Table II line_min_pts: enough points
     if len(points) < t.min_points:
-        return seen.reject(FEW)
+        seen.reject(FEW)
+        return None
     # Table II line_min_len: the distance between the extremes
     dx, dy = points[-1] - points[0]
     seen.chord = float(np.hypot(dx, dy))
     if seen.chord < t.min_length_m:
-        return seen.reject(SHORT)
+        seen.reject(SHORT)
+        return None
     # Sec. II-B.1: "the same procedure of circles", around 180 deg
     try:
         angles = inscribed_angles(points, signed=True)
     except ValueError:  # a point not finite, or an interior point on an extreme
-        return seen.reject(DEGENERATE)
+        seen.reject(DEGENERATE)
+        return None
     seen.mean, seen.std, _ = IAVStats.from_angles(angles)
     if abs(seen.mean - math.pi) > t.mean_tolerance:
-        return seen.reject(MEAN)
+        seen.reject(MEAN)
+        return None
     if seen.std >= t.std_max:
-        return seen.reject(STD)
+        seen.reject(STD)
+        return None
     return line_segment(points, beams)

@@ -227,7 +227,7 @@ def incremental_lines(
 
     lines = _fitted(xy, beams, spans, min_length_m, steps, sigma)  # step 7
     lines = placed(lines, place_dr_m, place_dalpha_deg, place_confidence, steps)  # step 8
-    return (lines, list(steps)) if trace else lines
+    return (lines, list(steps)) if steps is not None else lines  # (steps: made when trace is)
 
 
 def _seed_step(steps: _Trace, beams, start: int, stop: int, xs, ys, r: float, alpha: float, max_error_m: float,

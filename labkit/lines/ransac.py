@@ -285,7 +285,7 @@ def ransac_lines(
 
     lines.sort(key=lambda s: s.first)
     lines = placed(lines, place_dr_m, place_dalpha_deg, place_confidence, steps)
-    return (lines, list(steps)) if trace else lines
+    return (lines, list(steps)) if steps is not None else lines  # (steps: made when trace is)
 
 
 def _hypothesis_steps(steps: _Trace, pair: np.ndarray, normal: np.ndarray, offset: float, votes: int,

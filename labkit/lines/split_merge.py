@@ -68,7 +68,7 @@ import numpy as np
 
 from .._jit import ENABLED as _JIT
 from ..features import LineSegment, line_segment  # noqa: F401 - used in doctests
-from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, scan_sigma
+from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS, auto_split_threshold, chi2_upper_over_dof, noise_sigma
 from ..params import AUTO, Params, checked_by, param
 from ..scan import Scan
 from ..segmentation import SegmentationParams, detector_labels, segment_labels, segment_order
@@ -351,7 +351,7 @@ def split_and_merge(
     """
     _check_arguments(scan, method, segment_threshold_m, adaptive_segmentation)
     steps = _Trace("iepf" if method == "endpoints" else "split_and_merge") if trace else None
-    sigma = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
+    sigma = noise_sigma(scan, range_sigma_m)
     test = _SplitTest(split_threshold_m, sigma)
 
     # step 1: the list of lists L, one list per range segment
@@ -382,7 +382,7 @@ def split_and_merge(
     out = line_segments(kept, scan.points, scan.ranges, weights, sigma)
     if place_confidence > 0 and out:
         out = placed(out, place_dr_m, place_dalpha_deg, place_confidence, steps)
-    return (out, list(steps)) if trace else out
+    return (out, list(steps)) if steps is not None else out  # (steps: made when trace is)
 
 
 def _check_arguments(scan, method, segment_threshold_m, adaptive_segmentation) -> None:
@@ -591,6 +591,7 @@ class _SplitTest:
         failed = worst > threshold
         sigma = self.noise_sigma
         if sigma and not failed and a < p < b - 1 and worst > MIN_SPLIT_M:  # stage 1: the point's own noise
+            assert L.rho is not None, "_Lists keeps the ranges when the noise stages are on"
             q, ratio = _beyond_own_noise(v, L.rho[lo:lo + len(v)], r, sigma)
             if ratio > 1.0:
                 failed, p = True, lo + q
@@ -598,6 +599,7 @@ class _SplitTest:
                 threshold = worst / ratio
         misfit = None
         if sigma and not failed and b - a > 2:  # stages 2 and 3: the fitted line against the noise
+            assert L.rho is not None, "_Lists keeps the ranges when the noise stages are on"
             rf, af = (r, alpha) if fit else L.runs.fit(a, b)
             misfit = _misfit(L.runs.xy[a:b].dot(np.array([math.cos(af), math.sin(af)])), L.rho[a:b], rf, sigma)
             if misfit is not None and misfit[0] == "residual" and a < p < b - 1:
@@ -881,7 +883,7 @@ class _Merging:
         if self.steps is not None:
             if not ok:
                 test, reason = "merge", f"different: statistic {stat:.2f}"
-            elif merged is None:
+            elif failed is not None:  # (similar, and the merged line failed: merged is None)
                 test, reason = failed[0], f"similar ({stat:.2f}) but {failed[1]}"
             else:
                 test, reason = "merge", f"similar: statistic {stat:.2f}"
