@@ -106,7 +106,8 @@ def check(student: Callable, cases: Sequence[Case], *, fallback: Callable | None
     stub still raises ``NotImplementedError``; raises :class:`YourTurnError` on the
     first case that fails, naming the input, the expected and the returned value and the hint.
     """
-    name = name or getattr(student, "__name__", "your function")
+    own_name: str = getattr(student, "__name__", "your function")
+    name = name or own_name
     if not cases:
         raise ValueError("check needs at least one case")
     for case in cases:

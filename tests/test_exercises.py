@@ -114,6 +114,17 @@ def test_source_cells_and_spec_agree(name):
     assert exercise.module.MISTAKES, f"{name}: give the spec plausible MISTAKES (they prove its hidden tests)"
 
 
+def test_the_functions_a_run_checks_call_names():
+    """The grader reads which functions a visible cell checks from its ``run_checks(...)`` keywords. A ``**mapping``
+    names none: it is kept as written (so the cell is refused for checking other functions than its own), not as
+    None, which made ``sorted`` raise TypeError beside a named one."""
+    from labkit.grading.exercises import _checked
+
+    assert _checked("x = 1\nrun_checks(f=check_f, g=check_g)") == ["f", "g"]
+    assert _checked("run_checks(f=check_f, **more)") == ["f", "**more"]
+    assert _checked("print(run_checks)") is None
+
+
 # ---------------------------------------------------------------------------- graded by the grader
 @pytest.mark.parametrize("name", NAMES)
 def test_solution_earns_every_point(course, name):

@@ -73,6 +73,8 @@ class Cgroups:
 
     def create(self, memory_bytes: int, processes: int, cpus: int) -> WorkerCgroup:
         """A new cgroup for one worker, with its limits set. Raises OSError when the kernel refuses."""
+        if self.version is None:  # not usable: a worker would run with no cgroup limit at all
+            raise OSError(f"no cgroup can be made on this machine: {self.problem}")
         name = f"{PREFIX}{os.getpid()}-{_start_time(os.getpid())}-w{next(_COUNTER)}"
         folders = {}
         try:

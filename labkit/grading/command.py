@@ -28,6 +28,7 @@ import signal
 import sys
 import time
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,7 +49,7 @@ from .runner import (
 from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap, kill_all_workers
 from .text import one_line
 
-__all__ = ["grade", "check", "add_grade_parser", "run_grade", "main", "GradingRun"]
+__all__ = ["grade", "check", "add_grade_parser", "run_grade", "main", "GradingRun", "GradingInterrupted"]
 
 
 @dataclass
@@ -89,6 +90,14 @@ class GradingRun:
         lines.append(f"{graded} submissions graded in {self.seconds:.1f} s ({rate:.0f} per minute, "
                      f"{self.jobs} job{plural}){where}")
         return "\n".join(lines)
+
+
+class GradingInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`grade`: ``graded`` of the ``total`` submissions to grade were graded and saved."""
+
+    def __init__(self, graded: int, total: int) -> None:
+        super().__init__(f"{graded} of {total} submissions were graded and saved")
+        self.graded, self.total = graded, total
 
 
 # ---------------------------------------------------------------------------- the class
@@ -177,7 +186,7 @@ def _grade_jobs(jobs: list[Job], workers: int, first_slot: int):
 
 
 @contextlib.contextmanager
-def _ctrl_c_deferred():
+def _ctrl_c_deferred() -> Iterator[None]:
     """A Ctrl-C within waits for the end: then it raises KeyboardInterrupt (the pool is started inside).
 
     The first submits start the grading processes. A Ctrl-C in the middle of starting one would stop
@@ -291,6 +300,9 @@ def grade(
     ------
     ValueError, FileNotFoundError, PermissionError
         No such exercise or course folder, no bwrap, a sandbox that cannot start, a stale release.
+    GradingInterrupted
+        Ctrl-C (a :class:`KeyboardInterrupt`) once grading started: says how many submissions were
+        graded and saved; ``grades.csv`` holds them.
     """
     if jobs < 1:
         raise ValueError(f"--jobs must be at least 1, got {jobs}")
@@ -300,7 +312,8 @@ def grade(
         check_bwrap()
     exercises = {name: course.exercise(name) for name in names}
     started = time.perf_counter()
-    run = GradingRun(jobs=jobs, csv=Path(output) if output else course.root / "grades.csv")
+    csv_path = Path(output) if output else course.root / "grades.csv"
+    run = GradingRun(jobs=jobs, csv=csv_path)
     with _locked(course), Records(course) as records:
         _probe(isolate, first_slot)
         secret = _secret(course)
@@ -332,11 +345,10 @@ def grade(
                 bar.update(1)
                 bar.set_postfix_str(f"{one_line(result.student, 40)}: {result.status}", refresh=False)
         except KeyboardInterrupt as interrupted:  # what the report says: how many were saved of how many
-            interrupted.graded, interrupted.total = len(run.results) - len(unrecorded), len(todo)
-            raise
+            raise GradingInterrupted(len(run.results) - len(unrecorded), len(todo)) from interrupted
         finally:  # also when interrupted: the CSV of what is graded so far
             bar.close()
-            records.write_csv(run.csv, unrecorded)
+            records.write_csv(csv_path, unrecorded)
     run.seconds = time.perf_counter() - started
     return run
 
@@ -467,7 +479,7 @@ def run_grade(args: argparse.Namespace) -> int:
         run = grade(args.exercise, course=args.course, jobs=args.jobs, students=args.student, output=args.output,
                     isolate=not args.no_sandbox, progress=not quiet)
     except KeyboardInterrupt as interrupted:
-        if hasattr(interrupted, "graded"):
+        if isinstance(interrupted, GradingInterrupted):
             print(f"labkit grade: interrupted: {interrupted.graded} of {interrupted.total} submissions were graded "
                   "and saved (gradebook, grades.csv); the others are as they were. Run the same command "
                   "again to grade them.", file=sys.stderr)

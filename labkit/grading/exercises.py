@@ -126,6 +126,8 @@ def _problem(name: str, text: str) -> ValueError:
 
 def _load_module(name: str, path: Path) -> ModuleType:
     spec = importlib.util.spec_from_file_location(f"labkit_grading_spec_{name}", path)
+    if spec is None or spec.loader is None:  # (only a name without the .py suffix has no loader)
+        raise ImportError(f"exercise {name}: cannot load {path} as a Python module")
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses and pickling in a spec need their module registered
     spec.loader.exec_module(module)
@@ -145,7 +147,9 @@ def _checked(code: str) -> list[str] | None:
     """The functions a visible cell's ``run_checks(...)`` call names (None when it has no such call)."""
     for node in ast.walk(ast.parse(code)):
         if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "run_checks":
-            return [keyword.arg for keyword in node.keywords]
+            # (``**mapping`` names no function: shown as written, it matches none and the cell is refused)
+            return [keyword.arg if keyword.arg is not None else f"**{ast.unparse(keyword.value)}"
+                    for keyword in node.keywords]
     return None
 
 

@@ -72,7 +72,9 @@ class _Reader:
         return InvalidNotebook(f"the notebook cannot be read as JSON: {what} at byte {at}")
 
     def space(self, at: int) -> int:
-        return _SPACE.match(self.raw, at).end()
+        found = _SPACE.match(self.raw, at)
+        assert found is not None, "_SPACE matches the empty string too"
+        return found.end()
 
     def expect(self, at: int, char: bytes) -> int:
         at = self.space(at)
@@ -106,7 +108,9 @@ class _Reader:
         if first == b'"':
             return self.string_end(at)
         if first not in (b"{", b"["):  # a number, true, false or null: up to the next delimiter
-            end = _SCALAR.match(self.raw, at).end()
+            scalar = _SCALAR.match(self.raw, at)
+            assert scalar is not None, "_SCALAR matches the empty string too"
+            end = scalar.end()
             if end == at:
                 raise self.fail("a missing value", at)
             return end
@@ -190,7 +194,7 @@ class _Reader:
 
     def notebook(self) -> dict:
         top: dict = {}
-        cells = None
+        cells: list[dict | None] | str | None = None  # (a string: what the notebook's "cells" are instead)
         for key, at in self.items(0):
             if key == b'"cells"':
                 if self.raw[self.space(at):self.space(at) + 1] != b"[":
@@ -377,7 +381,8 @@ def autograded_notebook(
                 cell["id"] += "x"
         used.add(cell["id"])
         if cell["cell_type"] == "code":
-            cell["outputs"] = copy.deepcopy(outputs.get(grade_id(cell), []))
+            gid = grade_id(cell)
+            cell["outputs"] = copy.deepcopy(outputs.get(gid, []) if gid is not None else [])
             cell["execution_count"] = None
         else:
             cell.pop("outputs", None)

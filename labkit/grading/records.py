@@ -27,7 +27,7 @@ import sqlite3
 import tempfile
 import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from .exercises import Course, Exercise
@@ -274,7 +274,7 @@ class Records:
                 found[assignment.name, submission.student.id] = (submission.score, submission.max_score)
         return found
 
-    def write_csv(self, path: Path, unrecorded: list[SubmissionResult] = ()) -> int:
+    def write_csv(self, path: Path, unrecorded: Sequence[SubmissionResult] = ()) -> int:
         """``grades.csv`` from every record, and ``unrecorded`` results (students whose id names no file):
         one row per student and exercise. Returns the number of rows."""
         scores = self.scores()

@@ -162,7 +162,8 @@ class StudentFunction:
             raise  # the grader's problem, not something the student's function raised
         except Exception as raised:
             raised.add_note(f"(raised by your {self.__name__}(...))")
-            raised.labkit_student_raised = True  # its message is the student's text
+            # its message is the student's text (a mark any exception takes: its class declares no such attribute)
+            setattr(raised, "labkit_student_raised", True)  # noqa: B010
             raise
 
     def __repr__(self) -> str:
@@ -205,9 +206,9 @@ def _failure(cell: GradedCell, function: str, raised: BaseException, part: str) 
     lines = [f"{name}: {message}" if message else name]
     if part == "visible":
         frames = [f for f in traceback.extract_tb(raised.__traceback__) if f.filename == f"<{cell.grade_id}>"]
-        if frames:
+        where = frames[-1].lineno if frames else None
+        if where is not None:
             code = cell.code.splitlines()
-            where = frames[-1].lineno
             text = code[where - 1].strip() if where <= len(code) else ""
             lines.insert(0, f"{function}, in the visible checks, line {where}: {text}")
         else:
@@ -359,6 +360,7 @@ def forget_courses() -> None:
 
 def _exercise(job: Job, submission: dict | None = None) -> Exercise:
     if job.course is None:  # --check without the course: the exercise the notebook itself describes
+        assert submission is not None, "grade_submission refuses an unreadable notebook without the course"
         return release_exercise(submission)
     if job.course not in _COURSES:
         _COURSES[job.course] = Course(job.course)
@@ -372,16 +374,36 @@ def _notes(errors: list[dict]) -> str:
     return "; ".join(noted[:3]) + (f"; and {len(noted) - 3} more" if len(noted) > 3 else "")
 
 
+def _hidden_tests_of(job: Job) -> tuple[str, bytes] | None:
+    """The course and its secret for a job that runs the hidden tests too; None for ``--check`` (visible only)."""
+    if job.visible_only:
+        return None
+    if job.course is None or job.secret is None:
+        raise ValueError("a job that runs the hidden tests needs the course and its secret")
+    return job.course, job.secret
+
+
+def _sources(cells: list[dict]) -> dict[str, Any]:
+    """Grade id -> source of the cells that have a grade id."""
+    found: dict[str, Any] = {}
+    for cell in cells:
+        gid = grade_id(cell)
+        if gid is not None:
+            found[gid] = cell["source"]
+    return found
+
+
 def grade_submission(job: Job) -> SubmissionResult:
     """Grade one submission; every problem of the submission is part of the result, never an exception.
 
     (Without a course, ``--check`` on a notebook that is not a release of the course is a ValueError.)
     """
+    hidden = _hidden_tests_of(job)
     result = SubmissionResult(job.exercise, job.student, GRADED, [])
     submission, problem = None, None
     if job.notebook is not None:
         try:
-            submission = read_notebook(Path(job.notebook), inside=None if job.visible_only else Path(job.course))
+            submission = read_notebook(Path(job.notebook), inside=None if hidden is None else Path(hidden[0]))
         except InvalidNotebook as invalid:
             problem = invalid
     if job.course is None and submission is None:
@@ -398,14 +420,15 @@ def grade_submission(job: Job) -> SubmissionResult:
         result.notebook = autograded_notebook(None, exercise.release, exercise.test_cells,
                                               {c.grade_id: c.outputs for c in result.cells})
         return result
+    assert submission is not None, "read (job.notebook is not None), or returned above as invalid"
     sandbox = Sandbox(exercise.masked, limits=exercise.limits, slot=_SLOT[0], isolate=job.isolate)
     code = student_cells(submission, exercise.test_cells)
     seeds, used = None, {}
-    if not job.visible_only:
-        digest = code_hash(code)
+    if hidden is not None:
+        digest, secret = code_hash(code), hidden[1]
 
         def seeds(cell: str, part: str) -> int:
-            used[f"{cell}/{part}"] = seed_for(job.secret, exercise.name, job.student, cell, part, digest)
+            used[f"{cell}/{part}"] = seed_for(secret, exercise.name, job.student, cell, part, digest)
             return used[f"{cell}/{part}"]
 
     started, cpu = time.perf_counter(), _cpu_seconds()
@@ -432,8 +455,7 @@ def grade_submission(job: Job) -> SubmissionResult:
         "trusted_s": total - session.timing.start_s - session.timing.load_s - session.timing.calls_s,
         "cpu_s": _cpu_seconds() - cpu + session.timing.worker_cpu_s,
     }
-    released = {grade_id(c): c["source"] for c in exercise.release["cells"] if grade_id(c) is not None}
-    answers = {grade_id(c): c["source"] for c in submission["cells"] if grade_id(c) is not None}
+    released, answers = _sources(exercise.release["cells"]), _sources(submission["cells"])
     result.unanswered = [gid for gid, text in released.items()
                          if gid in answers and exercise_solution(exercise, gid) and same_code(answers[gid], text)]
     result.notebook = autograded_notebook(submission, exercise.release, exercise.test_cells,

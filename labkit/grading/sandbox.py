@@ -302,6 +302,7 @@ class Sandbox:
         python, prefix, shown, hidden = _runtime()
         if not self.isolate:
             return self._plain_command(python, shown)
+        assert self.bwrap is not None, "__init__ finds bwrap when the sandbox isolates"
         args = [self.bwrap, "--die-with-parent", "--new-session", "--unshare-pid", "--unshare-net",
                 "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try", "--hostname", "grader"]
         if self.user_namespace:
@@ -437,7 +438,8 @@ def seccomp_filter() -> bytes | None:
         return None
     load, jump_eq, jump_ge, jump_set, ret = 0x20, 0x15, 0x35, 0x45, 0x06
     allow, eperm, enosys = 0x7FFF0000, 0x00050000 | 1, 0x00050000 | 38
-    program: list[tuple[int, int | str, int | str, int]] = [
+    # (op, jump if true, jump if false, k); an op that is a string is a label: the next instruction's name
+    program: list[tuple[int | str, int | str, int | str, int]] = [
         (load, 0, 0, 4),  # seccomp_data.arch
         (jump_eq, 0, "deny", 0xC000003E),  # AUDIT_ARCH_X86_64
         (load, 0, 0, 0),  # seccomp_data.nr
@@ -455,12 +457,13 @@ def seccomp_filter() -> bytes | None:
         ("no clone3", 0, 0, 0),
         (ret, 0, 0, enosys),
     ]
-    labels, code = {}, []
-    for instruction in program:
-        if isinstance(instruction[0], str):
-            labels[instruction[0]] = len(code)
+    labels: dict[str, int] = {}
+    code: list[tuple[int, int | str, int | str, int]] = []
+    for op, true, false, k in program:
+        if isinstance(op, str):
+            labels[op] = len(code)
         else:
-            code.append(instruction)
+            code.append((op, true, false, k))
 
     def offset(target: int | str, here: int) -> int:
         return target if isinstance(target, int) else labels[target] - here - 1
@@ -523,7 +526,10 @@ class Worker:
             seccomp_fd, write_end = os.pipe()
             os.write(write_end, program)
             os.close(write_end)
-        self._info, info_fd = os.pipe() if sandbox.isolate else (None, None)
+        self._info: int | None = None
+        info_fd: int | None = None
+        if sandbox.isolate:
+            self._info, info_fd = os.pipe()
         if self._info is not None:
             os.set_blocking(self._info, False)
         argv, environment, workdir = sandbox.command(seccomp_fd, info_fd)
@@ -555,8 +561,10 @@ class Worker:
                 if fd is not None:
                     os.close(fd)
         _LIVE.add(self)
-        self._out = self.process.stdin.fileno()
-        self._in = self.process.stdout.fileno()
+        stdin, stdout = self.process.stdin, self.process.stdout
+        assert stdin is not None and stdout is not None, "Popen(stdin=PIPE, stdout=PIPE)"
+        self._out = stdin.fileno()
+        self._in = stdout.fileno()
         os.set_blocking(self._out, False)
         os.set_blocking(self._in, False)
         self._readable, self._writable = select.poll(), select.poll()
@@ -690,14 +698,15 @@ class Worker:
             seconds = self._receive(time.monotonic() + 1).get("cpu")
         except WorkerLost:
             return 0.0
-        return float(seconds) if type(seconds) in (int, float) and 0 <= seconds < 1e6 else 0.0
+        return float(seconds) if (type(seconds) is int or type(seconds) is float) and 0 <= seconds < 1e6 else 0.0
 
     def close(self) -> None:
         """End the worker by closing its channel (it returns, bwrap ends its sandbox), else kill it."""
         if self.cgroup is None:  # no CPU accounting of the sandbox: the worker's own word
             self.cpu_s = self._reported_cpu_seconds()
         try:
-            self.process.stdin.close()
+            if self.process.stdin is not None:  # (always: Popen(stdin=PIPE))
+                self.process.stdin.close()
             self.process.wait(timeout=2)
         except (OSError, subprocess.TimeoutExpired):
             pass
@@ -713,7 +722,8 @@ class Worker:
         self.process.wait()
         for stream in (self.process.stdin, self.process.stdout, self.errors):
             try:
-                stream.close()
+                if stream is not None:  # (always: Popen(stdin=PIPE, stdout=PIPE))
+                    stream.close()
             except OSError:
                 pass
         self._release()
@@ -958,7 +968,7 @@ class Session:
         started = time.monotonic()
         limits = {"call": self.call_timeout_s, "test": self.test_budget_s - self.test_spent_s,
                   "submission": self.submission_timeout_s - self.spent_s}
-        which = min(limits, key=limits.get)
+        which = min(limits, key=limits.__getitem__)
         try:
             return worker.call(name, args, kwargs, started + max(limits[which], 0.0))
         except CallTimedOut:

@@ -27,6 +27,10 @@ import re
 import signal
 import sys
 import types
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # for mypy only: the protocol.py beside this file, which the functions below import by path
+    from labkit.grading import protocol  # noqa: F401 -- (there is no labkit where the worker runs)
 
 CHANNEL_IN = 0
 CHANNEL_OUT = 1
@@ -63,13 +67,17 @@ def _limit(limits: dict[str, int]) -> None:
 
 def _drop_privileges(uid: int | None, gid: int | None) -> None:
     """Become ``uid``/``gid`` for good (no supplementary groups); refuse to go on as root."""
-    if uid is not None and os.getuid() == 0:
+    if uid is None:  # nothing to drop (a user namespace, or no sandbox)
+        return
+    if gid is None:
+        raise SystemExit(f"worker: told to drop to uid {uid} without a gid")
+    if os.getuid() == 0:
         os.setgroups([])
         os.setresgid(gid, gid, gid)
         os.setresuid(uid, uid, uid)
-    if uid is not None and (os.getresuid() != (uid, uid, uid) or os.getresgid() != (gid, gid, gid)):
+    if os.getresuid() != (uid, uid, uid) or os.getresgid() != (gid, gid, gid):
         raise SystemExit(f"worker: could not drop to uid {uid}, gid {gid}")
-    if uid is not None and uid != 0 and 0 in os.getresuid():
+    if uid != 0 and 0 in os.getresuid():
         raise SystemExit("worker: still root after dropping privileges")
 
 
@@ -126,7 +134,7 @@ def without_masked_imports(tree: ast.Module, masked: frozenset[str]) -> ast.Modu
     Only imports directly in the cell's body: one inside ``try`` (a student's fallback), a function
     or a class still raises ImportError, so ``except ImportError:`` takes its other road.
     """
-    body = []
+    body: list[ast.stmt] = []
     for node in tree.body:
         bound: list[tuple[str, str]] = []  # (name bound, what it stands for)
         if isinstance(node, ast.Import):
@@ -188,7 +196,8 @@ def python_source(source: str) -> str:
 
 
 def _raised(error: BaseException) -> dict:
-    import protocol
+    if not TYPE_CHECKING:
+        import protocol
 
     try:
         message = str(error)
@@ -218,7 +227,8 @@ def _load(cells: list[str], namespace: dict, masked: frozenset[str], first: int 
 
 def _call(message: dict, namespace: dict) -> bytes:
     """The answer to one call, as a frame."""
-    import protocol
+    if not TYPE_CHECKING:
+        import protocol
 
     name = message["name"]
     try:
@@ -246,7 +256,9 @@ def serve(config: dict) -> None:
     sys.meta_path.insert(0, _Unavailable(config["masked"]))
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     import numpy  # noqa: F401 -- imported once here, so that the student's cells find it warm
-    import protocol
+
+    if not TYPE_CHECKING:
+        import protocol
 
     del sys.path[0]  # the student's code sees the runtime and site-packages only
 
@@ -263,10 +275,10 @@ def serve(config: dict) -> None:
     send({"hello": os.getpid(), "uid": os.getuid()})
     masked = frozenset(config["masked"])
     main = types.ModuleType("__main__")
+    shell = _Shell(main.__dict__)
     main.__dict__[_MISSING] = _Missing
     main.__dict__["get_ipython"] = lambda: shell
     main.__dict__["display"] = lambda *objects, **options: None  # Jupyter's builtin: nothing to show here
-    shell = _Shell(main.__dict__)
     sys.modules["__main__"] = main
     while True:
         try:
