@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import shutil
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -17,10 +20,33 @@ LABKIT = [sys.executable, "-m", "labkit.app.cli"]
 
 
 def run(*args, cwd=None, ok=True):
-    proc = subprocess.run([*LABKIT, "-q", *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300)
+    """``labkit -q ARGS``: in this process (a fresh one costs seconds of imports per call; the process-level
+    behaviour -- Ctrl-C, pipes, the installed script -- is tests/test_cli_safety.py's), or in a process of
+    its own when it must run in another folder (``cwd``)."""
+    if cwd is not None:
+        proc = subprocess.run([*LABKIT, "-q", *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300)
+    else:
+        from labkit.app.cli import main
+
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
+            warnings.simplefilter("default")  # as in a process of its own (the test run makes warnings errors)
+            try:
+                code = main(["-q", *map(str, args)])
+            except SystemExit as exc:  # argparse refusing the command line
+                code = exc.code if isinstance(exc.code, int) else 2
+        proc = subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
     if ok:
         assert proc.returncode == 0, proc.stderr
     return proc
+
+
+def run_here(*args) -> None:
+    """The command line in this process (a fresh process costs seconds of imports per call): for tests
+    that check what a command computes, not how it starts or exits."""
+    from labkit.app.cli import main
+
+    assert main(["-q", *map(str, args)]) == 0
 
 
 def test_console_script_is_installed():
@@ -188,7 +214,8 @@ def test_range_noise_makes_every_stage_follow_the_noise(tmp_path):
     for method in ("iepf", "ransac"):
         old = features(extract_features(s, fixed(method)).as_record() for s in scans)
         for value, sigma in ((None, "auto"), ("auto", "auto"), ("0.02", 0.02), ("fixed", None)):
-            run("extract", bag, *(("--range-noise", value) if value else ()), "--method", method, "-o", out, "-f")
+            run_here("extract", bag, *(("--range-noise", value) if value else ()), "--method", method, "-o", out,
+                     "-f")
             got = features(read_features(out))
             want = old if value == "fixed" else features(
                 extract_features(s, setting(sigma, method)).as_record() for s in scans)

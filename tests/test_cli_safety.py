@@ -16,8 +16,10 @@ own CARMEN and JSON writers, rosbags' chunk index), not from labkit.
 
 from __future__ import annotations
 
+import contextlib
 import gzip
 import hashlib
+import io
 import json
 import os
 import shutil
@@ -26,6 +28,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+import warnings
 import zlib
 from pathlib import Path
 from types import SimpleNamespace
@@ -45,11 +48,31 @@ NOBODY = 65534
 
 
 def labkit(*args, cwd=None, timeout=300, preexec=None, python=None) -> subprocess.CompletedProcess:
-    """Run the command line; no case may show a traceback."""
-    cmd = [*(python or LABKIT), "-q", *map(str, args)]
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout, preexec_fn=preexec)
+    """Run the command line; no case may show a traceback. In this process unless the case needs a
+    process of its own (another folder, user, limit or interpreter): a fresh process costs seconds of
+    imports per call, and what a process adds (Ctrl-C, pipes) is tested with real processes below."""
+    if cwd is None and preexec is None and python is None:
+        p = in_process(*args)
+    else:
+        cmd = [*(python or LABKIT), "-q", *map(str, args)]
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout, preexec_fn=preexec)
     assert "Traceback" not in p.stderr, p.stderr
     return p
+
+
+def in_process(*args) -> subprocess.CompletedProcess:
+    """``labkit -q ARGS`` run by its ``main`` here, with its output captured and Python's default warning
+    filters (as in a process of its own; the test run turns warnings into errors)."""
+    from labkit.app.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
+        warnings.simplefilter("default")
+        try:
+            code = main(["-q", *map(str, args)])
+        except SystemExit as exc:  # argparse refusing the command line
+            code = exc.code if isinstance(exc.code, int) else 2
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def one_error_line(p: subprocess.CompletedProcess) -> str:
