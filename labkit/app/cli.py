@@ -1,4 +1,4 @@
-"""The ``labkit`` command line: simulate, extract, view, convert, evaluate, benchmark, inspect, grade.
+"""The ``labkit`` command line: simulate, extract, track, view, convert, evaluate, benchmark, inspect, grade.
 
 Run ``labkit --help`` or ``labkit COMMAND --help``. Every expected problem prints one line
 ``labkit: error: ...`` and exits with a documented status (README, "When things go wrong"):
@@ -224,6 +224,41 @@ def _chosen_scans(args: argparse.Namespace, inputs) -> slice | None:
 
 def _counts_line(counts: dict, n: int) -> str:
     return ", ".join(f"{k} {v / max(n, 1):.1f}" for k, v in counts.items())
+
+
+def cmd_track(args: argparse.Namespace) -> int:
+    """Features and tracks of every scan: one CSV row per track per scan (labkit.io.track_files)."""
+    from labkit.io.track_files import TRACKS_FILE, write_tracks
+    from labkit.pipeline import track_scans
+
+    source = Path(args.input)
+    check_output(args.output, TRACKS_FILE, overwrite=args.force, inputs=[source])  # before any reading
+    config = _config(args)
+    stream = read_scans(source, topic=args.topic, strict=args.strict, poses=_poses(args),
+                        scans=_chosen_scans(args, [source]))
+    scans = iter(stream)
+    if not args.quiet:
+        scans = _progress(stream.count, f"track {source.name}")(scans)
+    confirmed: set[int] = set()
+    frames: set[str] = set()
+    t0 = time.perf_counter()
+
+    def tables():
+        for _features, table in track_scans(scans, config):
+            confirmed.update(int(i) for i in table.ids[table.status == "confirmed"])
+            frames.add(table.frame)
+            yield table
+
+    n, n_rows = write_tracks(tables(), args.output, overwrite=args.force, inputs=[source], first_scan=stream.first)
+    dt = time.perf_counter() - t0
+    print(f"wrote tracks of {n} scans to {args.output} ({n_rows} rows, {n / max(dt, 1e-9):,.0f} scans/s, "
+          f"{'/'.join(sorted(frames)) or 'no'} frame)")
+    print(f"  moving targets confirmed: {len(confirmed)}" + (f" (ids {_ids(sorted(confirmed))})" if confirmed else ""))
+    return 0
+
+
+def _ids(ids: list[int], most: int = 12) -> str:
+    return ", ".join(map(str, ids[:most])) + (f", ... ({len(ids) - most} more)" if len(ids) > most else "")
 
 
 def cmd_view(args: argparse.Namespace) -> int:
@@ -658,6 +693,13 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--no-features", action="store_true", help="scans and range segments only")
     v.add_argument("--spawn", action="store_true", help="open the rerun viewer on the result")
     v.set_defaults(func=cmd_view)
+
+    t = sub.add_parser("track", parents=[common, pipeline, reading, ranged],
+                       help="follow people and moving circles over time: one CSV row per track per scan")
+    t.add_argument("input", help=f"recording ({_readable_help()})")
+    t.add_argument("-o", "--output", required=True, help="the tracks table to write (.csv)")
+    t.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
+    t.set_defaults(func=cmd_track)
 
     b = sub.add_parser("bench", parents=[common, pipeline, reading, ranged],
                        help="time every pipeline stage on a recording (default: the bundled hall.bag)")
