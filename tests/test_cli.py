@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import shutil
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from labkit import read_scans
+from tests.cli_here import in_process
 
 LABKIT = [sys.executable, "-m", "labkit.app.cli"]
 
@@ -26,16 +24,7 @@ def run(*args, cwd=None, ok=True):
     if cwd is not None:
         proc = subprocess.run([*LABKIT, "-q", *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=300)
     else:
-        from labkit.app.cli import main
-
-        out, err = io.StringIO(), io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
-            warnings.simplefilter("default")  # as in a process of its own (the test run makes warnings errors)
-            try:
-                code = main(["-q", *map(str, args)])
-            except SystemExit as exc:  # argparse refusing the command line
-                code = exc.code if isinstance(exc.code, int) else 2
-        proc = subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
+        proc = in_process(*args)
     if ok:
         assert proc.returncode == 0, proc.stderr
     return proc

@@ -16,10 +16,8 @@ own CARMEN and JSON writers, rosbags' chunk index), not from labkit.
 
 from __future__ import annotations
 
-import contextlib
 import gzip
 import hashlib
-import io
 import json
 import os
 import shutil
@@ -28,7 +26,6 @@ import sqlite3
 import subprocess
 import sys
 import time
-import warnings
 import zlib
 from pathlib import Path
 from types import SimpleNamespace
@@ -39,6 +36,7 @@ from rosbags import rosbag1, rosbag2
 
 from labkit import Scan, read_scans, sim
 from labkit.io import EmptyRecordingError, salvage
+from tests.cli_here import in_process
 
 # The installed command, as users run it. (`python -m labkit.app.cli` would do for most cases, but
 # CPython run with -m sometimes ends with SIGINT although main() caught the Ctrl-C and returned 130.)
@@ -58,21 +56,6 @@ def labkit(*args, cwd=None, timeout=300, preexec=None, python=None) -> subproces
         p = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout, preexec_fn=preexec)
     assert "Traceback" not in p.stderr, p.stderr
     return p
-
-
-def in_process(*args) -> subprocess.CompletedProcess:
-    """``labkit -q ARGS`` run by its ``main`` here, with its output captured and Python's default warning
-    filters (as in a process of its own; the test run turns warnings into errors)."""
-    from labkit.app.cli import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
-        warnings.simplefilter("default")
-        try:
-            code = main(["-q", *map(str, args)])
-        except SystemExit as exc:  # argparse refusing the command line
-            code = exc.code if isinstance(exc.code, int) else 2
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def one_error_line(p: subprocess.CompletedProcess) -> str:

@@ -3,28 +3,23 @@
 from __future__ import annotations
 
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from labkit import read_scans
-from labkit.app.cli import main
+from tests.cli_here import in_process
 from tests.test_scan_ranges import carmen_log
 
 
 @pytest.fixture
-def labkit_cli(capsys):
-    """The command line in this process (a process of its own costs seconds of imports each)."""
+def labkit_cli():
+    """The command line in this process (:func:`tests.cli_here.in_process`); no case shows a traceback."""
 
     def run(*args):
-        try:
-            code = main(["-q", *map(str, args)])
-        except SystemExit as exit_:  # argparse refuses the command line
-            code = exit_.code
-        out, err = capsys.readouterr()
-        assert "Traceback" not in err, err
-        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
+        p = in_process(*args)
+        assert "Traceback" not in p.stderr, p.stderr
+        return p
 
     return run
 

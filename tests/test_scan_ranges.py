@@ -8,7 +8,6 @@ import json
 import shutil
 import sqlite3
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -17,6 +16,7 @@ from labkit import CorruptFileError, Scan, read_scans, sim, write_scans
 from labkit.app.data import write_simulation
 from labkit.errors import RefusedError
 from labkit.io import FileFormat, register_format, unregister_format
+from tests.cli_here import in_process
 
 # Python's slices the readers must agree with (the oracle is list slicing of the whole read)
 SLICES = [slice(3, 9), slice(0, 4), slice(7, None), slice(None, 5), slice(-4, None), slice(-6, -2), slice(9, 3),
@@ -214,18 +214,13 @@ def test_convert_a_range_between_bags_is_a_scans_only_copy(recordings, tmp_path)
 
 
 @pytest.fixture
-def labkit_cli(capsys):
-    """The command line in this process (a process of its own costs seconds of imports each)."""
-    from labkit.app.cli import main
+def labkit_cli():
+    """The command line in this process (:func:`tests.cli_here.in_process`); no case shows a traceback."""
 
     def run(*args):
-        try:
-            code = main(["-q", *map(str, args)])
-        except SystemExit as exit_:  # argparse refuses the command line
-            code = exit_.code
-        out, err = capsys.readouterr()
-        assert "Traceback" not in err, err
-        return SimpleNamespace(returncode=code, stdout=out, stderr=err)
+        p = in_process(*args)
+        assert "Traceback" not in p.stderr, p.stderr
+        return p
 
     return run
 
