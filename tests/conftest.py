@@ -72,3 +72,16 @@ def pytest_configure(config):
         from labkit.lines._split_merge_engine import compile_all
 
         compile_all()
+
+
+@pytest.fixture
+def labkit_cli():
+    """The command line in this process (:func:`tests.cli_here.in_process`); no case shows a traceback."""
+    from tests.cli_here import in_process
+
+    def run(*args):
+        p = in_process(*args)
+        assert "Traceback" not in p.stderr, p.stderr
+        return p
+
+    return run

@@ -5,23 +5,9 @@ from __future__ import annotations
 import json
 
 import numpy as np
-import pytest
 
 from labkit import read_scans
-from tests.cli_here import in_process
 from tests.test_scan_ranges import carmen_log
-
-
-@pytest.fixture
-def labkit_cli():
-    """The command line in this process (:func:`tests.cli_here.in_process`); no case shows a traceback."""
-
-    def run(*args):
-        p = in_process(*args)
-        assert "Traceback" not in p.stderr, p.stderr
-        return p
-
-    return run
 
 
 def test_simulate_another_sensor_and_beam_count(tmp_path, labkit_cli):

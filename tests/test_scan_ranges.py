@@ -16,7 +16,6 @@ from labkit import CorruptFileError, Scan, read_scans, sim, write_scans
 from labkit.app.data import write_simulation
 from labkit.errors import RefusedError
 from labkit.io import FileFormat, register_format, unregister_format
-from tests.cli_here import in_process
 
 # Python's slices the readers must agree with (the oracle is list slicing of the whole read)
 SLICES = [slice(3, 9), slice(0, 4), slice(7, None), slice(None, 5), slice(-4, None), slice(-6, -2), slice(9, 3),
@@ -213,16 +212,6 @@ def test_convert_a_range_between_bags_is_a_scans_only_copy(recordings, tmp_path)
     assert [s.stamp_ns for s in read_scans(tmp_path / "r.mcap")] == [s.stamp_ns for s in read_scans(bag)][2:5]
 
 
-@pytest.fixture
-def labkit_cli():
-    """The command line in this process (:func:`tests.cli_here.in_process`); no case shows a traceback."""
-
-    def run(*args):
-        p = in_process(*args)
-        assert "Traceback" not in p.stderr, p.stderr
-        return p
-
-    return run
 
 
 def _records(path: Path) -> list[dict]:
