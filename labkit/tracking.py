@@ -88,7 +88,6 @@ from dataclasses import dataclass
 from time import perf_counter
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .features import Features
 from .params import Params, checked_by, param
@@ -287,6 +286,7 @@ def assign(cost) -> tuple[np.ndarray, np.ndarray]:
     if not inside.any():
         return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     c = float(np.abs(cost[inside]).max()) + 1.0
+    from scipy.optimize import linear_sum_assignment  # here, not at import: scipy adds 22 MB to every process
     rows, cols = linear_sum_assignment(np.where(inside, cost, 2.0 * min(cost.shape) * c + 1.0))
     keep = inside[rows, cols]
     return rows[keep], cols[keep]

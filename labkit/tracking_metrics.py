@@ -55,7 +55,6 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from ._validate import check_int, check_positive
 from .geometry import inverse_transform_points
@@ -138,6 +137,7 @@ def _match(cost: np.ndarray, allowed: np.ndarray) -> tuple[np.ndarray, np.ndarra
     if not allowed.any():
         return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
     c = float(np.abs(cost[allowed]).max()) + 1.0
+    from scipy.optimize import linear_sum_assignment  # here, not at import: scipy adds 22 MB to every process
     rows, cols = linear_sum_assignment(np.where(allowed, cost, 2.0 * min(cost.shape) * c + 1.0))
     keep = allowed[rows, cols]
     return rows[keep], cols[keep]
@@ -282,6 +282,7 @@ def _id_true_positives(pair_frames: dict) -> int:
     w = np.zeros((len(objs), len(hyps)))
     for (o, h), n in pair_frames.items():
         w[oi[o], hi[h]] = n
+    from scipy.optimize import linear_sum_assignment  # here, not at import: scipy adds 22 MB to every process
     rows, cols = linear_sum_assignment(w, maximize=True)
     return int(w[rows, cols].sum())
 
