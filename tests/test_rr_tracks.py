@@ -174,3 +174,25 @@ def test_the_command_line_draws_tracks_and_refuses_them_without_features(crossin
     p = labkit_cli("view", bag, "-o", tmp_path / "u.rrd", "--tracks", "--no-features")
     assert p.returncode != 0 and "--tracks needs the features" in p.stderr
     assert not (tmp_path / "u.rrd").exists()
+
+
+def test_log_tracks_numbers_the_scans_and_draws_the_confirmed_tracks(tmp_path):
+    """The notebook's call: tables of a hand-made walk logged from scan 5 on, read back."""
+    from labkit.viz import rr as lkrr
+
+    tracker = Tracker(frame="sensor")
+    tables = [tracker.step(Detections(k * 100_000_000, ("person",), [[1.0 + 0.1 * k, 2.0]])) for k in range(20)]
+    rec = lkrr.new_recording("walk")
+    rec.save(tmp_path / "walk.rrd")
+    assert lkrr.log_tracks(rec, tables, start_index=5) == 20
+    rec.flush()
+    rec.disconnect()
+    points = _rows(tmp_path / "walk.rrd", "/world/tracks/points")
+    assert sorted(points) == list(range(5, 25))
+    said = {"confirmed": "", "static": " static"}
+    for k, table in enumerate(tables):
+        shown = np.isin(table.status, ("confirmed", "static"))
+        assert (points[k + 5]["Points2D:labels"] or []) == [f"id {i}{said[s]}" for i, s in zip(
+            table.ids[shown], table.status[shown], strict=True)]
+        np.testing.assert_allclose(_xy(points[k + 5]["Points2D:positions"]), table.states[shown, :2], atol=1e-5)
+    assert points[24]["Points2D:labels"] == ["id 1"]  # static at first, then moving

@@ -66,7 +66,7 @@ from .blueprint import APP_ID, SEQUENCE, STEP, TIME, blueprint, map_view, show_i
 from .entities import log_features, log_scans, log_static, log_text, log_truth, new_recording  # noqa: E402
 from .recording import RRD_FILE, RecordSummary, StampsCollapsedWarning, describe, record_scans  # noqa: E402
 from .replay import log_steps, record_steps  # noqa: E402
-from .tracks import TrackLogger, track_color  # noqa: E402
+from .tracks import TrackLogger, log_tracks, track_color  # noqa: E402
 from .worldmap import MAP_CELL_M, MAP_EVERY, log_map  # noqa: E402
 
 __all__ = [
@@ -95,5 +95,6 @@ __all__ = [
     "log_steps",
     "record_steps",
     "TrackLogger",
+    "log_tracks",
     "track_color",
 ]

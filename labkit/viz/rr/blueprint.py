@@ -74,10 +74,12 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
 
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=(),
-                with_map: bool = False) -> None:
+                with_map: bool = False, with_tracks: bool = False) -> None:
     """Show a recording in the notebook with the default blueprint (``with_map``: and the map
-    view), or the side-by-side one for ``compare``; works offline."""
-    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map))
+    view; ``with_tracks``: and the track events), or the side-by-side one for ``compare``; works
+    offline."""
+    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map,
+                                                                      with_tracks=with_tracks))
 
 
 def steps_blueprint() -> rrb.Blueprint:

@@ -27,6 +27,7 @@ of the recording.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Iterable
 
 import numpy as np
 import rerun as rr
@@ -34,9 +35,9 @@ import rerun as rr
 from ...geometry import inverse_transform_points, rotation_matrix, transform_points
 from ...tracking import TrackTable
 from ..style import track_color
-from .entities import _scalars, _time_columns
+from .entities import _batched, _scalars, _time_columns
 
-__all__ = ["TRAIL_S", "ARROW_S", "track_color", "TrackLogger"]
+__all__ = ["TRAIL_S", "ARROW_S", "track_color", "TrackLogger", "log_tracks"]
 
 #: Seconds of path drawn behind each moving track.
 TRAIL_S = 3.0
@@ -73,8 +74,8 @@ class TrackLogger:
         if not batch:
             return
         times = _time_columns(np.array([k for k, _ in batch]), np.array([t.stamp_ns for _, t in batch], np.int64))
-        drawn: dict[str, dict[str, list]] = {view: {"pts": [], "col": [], "lab": [], "n": [], "strips": [], "scol": [], "ns": [], "org": [],
-                        "vec": [], "vcol": [], "nv": []} for view in self.views}
+        keys = ("pts", "col", "lab", "n", "strips", "scol", "ns", "org", "vec", "vcol", "nv")
+        drawn: dict[str, dict[str, list]] = {view: {key: [] for key in keys} for view in self.views}
         events_text, events_level, n_events = [], [], []
         for _, table in batch:
             self._remember(table)
@@ -160,3 +161,13 @@ class TrackLogger:
         rec.send_columns(f"{view}/tracks/velocity", indexes=times, columns=rr.Arrows2D.columns(
             origins=org, vectors=vec, colors=np.array(d["vcol"], dtype=np.uint8).reshape(-1, 3),
             radii=np.full(len(org), -1.5, dtype=np.float32)).partition(d["nv"]))
+
+
+def log_tracks(rec: rr.RecordingStream, tables: Iterable[TrackTable], *, start_index: int = 0,
+               views: tuple[str, ...] = ("world",), trail_s: float = TRAIL_S) -> int:
+    """Log the tracker's tables (one :class:`labkit.tracking.TrackTable` per scan, e.g. from
+    :func:`labkit.track_scans`) at ``scan = start_index + k``, in the ``views`` (``"world"``, and
+    ``"map"`` beside :func:`labkit.viz.rr.log_map`); returns how many. Show them with
+    ``show_inline(rec, with_tracks=True)``."""
+    logger = TrackLogger(rec, views, trail_s)
+    return _batched(tables, lambda batch, k: logger.send(list(enumerate(batch, start=start_index + k))))
