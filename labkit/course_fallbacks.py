@@ -14,9 +14,10 @@ from .fitting import fit_line_polar
 from .geometry import signed_distance_to_line
 from .pipeline import Config
 from .poses import interpolate_poses
+from .tracking import assign, cv_model
 
 __all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "config_for", "mean_per_scan", "rates",
-           "pose_at"]
+           "pose_at", "process_noise", "best_assignment"]
 
 
 def closed_form_alpha(rho, theta, w):
@@ -57,3 +58,14 @@ def rates(n_truth, n_matched, n_scored):
 def pose_at(t0, p0, t1, p1, t):
     """Notebook 11: the pose at ``t`` between two stamped poses."""
     return interpolate_poses([t0, t1], [p0, p1], [t])[0]
+
+
+def process_noise(dt, q):
+    """Notebook 12: the constant-velocity model's process noise ``Q`` (4 x 4) over ``dt`` seconds."""
+    return cv_model(dt, q)[1]
+
+
+def best_assignment(cost):
+    """Notebook 12: the (row, column) pairs of least total cost of a square cost matrix, sorted by row."""
+    rows, cols = assign(np.asarray(cost, dtype=float))
+    return sorted(zip(rows.tolist(), cols.tolist(), strict=True))

@@ -264,14 +264,20 @@ def _ids(ids: list[int], most: int = 12) -> str:
 def cmd_view(args: argparse.Namespace) -> int:
     from labkit.app.record import record
 
+    if args.tracks and args.no_features:
+        raise ValueError("--tracks needs the features: leave out --no-features")
     config = None if args.no_features else _config(args)
     summary = record(args.input, args.output, topic=args.topic, config=config,
                      features=not args.no_features, progress=not args.quiet, overwrite=args.force,
-                     strict=args.strict, poses=_poses(args), scans=_chosen_scans(args, [args.input]))
+                     strict=args.strict, poses=_poses(args), scans=_chosen_scans(args, [args.input]),
+                     tracks=args.tracks)
     extra = f" and ground truth for {summary.n_truth}" if summary.n_truth else ""
     print(f"wrote {summary.n_scans} scans{extra} to {summary.path}")
     if summary.counts:
         print(f"  per scan: {_counts_line(summary.counts, summary.n_scans)}")
+    if args.tracks:
+        moving = list(summary.moving_tracks)
+        print(f"  moving targets confirmed: {len(moving)}" + (f" (ids {_ids(moving)})" if moving else ""))
     if args.spawn:
         env = {k: v for k, v in os.environ.items() if not (k == "RUST_LOG" and v == _RERUN_QUIET)}
         subprocess.Popen([sys.executable, "-m", "rerun", str(summary.path)], env=env)
@@ -691,6 +697,11 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("-o", "--output", required=True, help="the .rrd file to write")
     v.add_argument("-f", "--force", action="store_true", help=FORCE_HELP)
     v.add_argument("--no-features", action="store_true", help="scans and range segments only")
+    v.add_argument("--tracks", action="store_true",
+                   help="also follow people and moving circles (the config's [tracking] section, as `labkit track`) "
+                   "and draw each track in a colour of its own with its id, its trail over the last 3 s and its "
+                   "velocity, in the scan view and the map view; births, confirmations and deletions in the "
+                   "'Track events' log")
     v.add_argument("--spawn", action="store_true", help="open the rerun viewer on the result")
     v.set_defaults(func=cmd_view)
 

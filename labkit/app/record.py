@@ -30,6 +30,7 @@ def record(
     strict: bool = False,
     poses: str | bool | None = None,
     scans: slice | None = None,
+    tracks: bool = False,
 ) -> RecordSummary:
     """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
     ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
@@ -40,7 +41,11 @@ def record(
     recording. See :func:`labkit.viz.rr.record_scans` for damaged inputs, for ``overwrite`` and for memory;
     ``strict`` stops reading at the first bad record. When the recording has poses (``poses``
     as in :func:`labkit.read_scans`), the map view is logged too (see :mod:`labkit.viz.rr`).
+    ``tracks``: also follow people and moving circles (``config.tracking``) and log the tracks,
+    their trails, velocities and life-cycle events (:mod:`labkit.viz.rr.tracks`); needs features.
     """
+    if tracks and not features:
+        raise ValueError("tracks need features: features=False logs scans and range segments only")
     check_output(out, RRD_FILE, overwrite=overwrite, inputs=[source])  # before any reading
     stream = read_scans(source, topic=topic, strict=strict, poses=poses, scans=scans)
     name = Path(source).name
@@ -55,7 +60,7 @@ def record(
         if not features:
             origin += f" Range segments: adaptive breakpoints, {segment_threshold_m} m floor."
         description = describe(name, source=origin, config=config if features else None, truth=truth is not None,
-                               world_map=stream.poses is not None)
+                               world_map=stream.poses is not None, tracks=tracks)
     items = iter(stream)
     if progress:
         from tqdm.auto import tqdm
@@ -65,4 +70,4 @@ def record(
     return record_scans(items, out, name=name, truth=truth, config=config if features else None,
                         segment_threshold_m=segment_threshold_m, description=description, overwrite=overwrite,
                         inputs=inputs, with_map=None if stream.poses is not None else False,
-                        start_index=stream.first)
+                        start_index=stream.first, tracks=tracks)

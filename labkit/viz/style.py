@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import colorsys
+
 import numpy as np
 
 #: RGB (0-255) per layer.
@@ -41,3 +43,16 @@ def mpl(name: str) -> tuple[float, float, float]:
     """A layer colour as a matplotlib RGB tuple in [0, 1]."""
     r, g, b = COLORS[name]
     return (r / 255, g / 255, b / 255)
+
+
+def track_color(track_id: int) -> tuple[int, int, int]:
+    """The RGB (0-255) colour of a track (:mod:`labkit.tracking`): hues a golden-ratio step apart for
+    successive ids, so that tracks born one after the other differ and an id keeps its colour for its
+    whole life, in rerun and in matplotlib.
+
+    >>> track_color(1) == track_color(1), track_color(1) != track_color(2)
+    (True, True)
+    """
+    hue = (int(track_id) * 0.6180339887498949) % 1.0
+    r, g, b = colorsys.hsv_to_rgb(hue, 0.85, 0.9)
+    return int(round(255 * r)), int(round(255 * g)), int(round(255 * b))

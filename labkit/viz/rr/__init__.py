@@ -3,7 +3,8 @@
 Its modules: :mod:`~labkit.viz.rr.blueprint` the layouts and timelines, :mod:`~labkit.viz.rr.entities`
 scans, features and truth as entities, :mod:`~labkit.viz.rr.worldmap` the world frame and the
 accumulated map, :mod:`~labkit.viz.rr.recording` a whole recording to an ``.rrd`` file,
-:mod:`~labkit.viz.rr.replay` an algorithm's steps on the ``step`` timeline. A recording file read,
+:mod:`~labkit.viz.rr.replay` an algorithm's steps on the ``step`` timeline, :mod:`~labkit.viz.rr.tracks`
+tracks over time (``labkit view --tracks``). A recording file read,
 run through the pipeline and written in one call is the application's :func:`labkit.app.record.record`.
 
 Layout of a labkit recording
@@ -35,6 +36,10 @@ Map (when the scans carry poses: :attr:`labkit.Scan.pose`)
     ``map/truth/walls``: the simulator's walls, when its ground truth lies beside the recording.
     The map view sits beside the sensor view, on the same timelines; without poses there is
     no ``map`` and the layout is as before.
+Tracks (``labkit view --tracks``, :mod:`labkit.viz.rr.tracks`)
+    ``world/tracks/{points,trails,velocity}`` and ``map/tracks/...``: each track in a colour of
+    its own with its id, its trail over the last seconds and its velocity; ``tracks/events`` the
+    births, confirmations and deletions; ``metrics/count/tracks`` moving tracks per scan.
 
 Importing this module sets ``RERUN_NOTEBOOK_ASSET=serve-local`` (unless already set) before
 it imports rerun, so the viewer embedded in a notebook loads its assets from the installed
@@ -61,6 +66,7 @@ from .blueprint import APP_ID, SEQUENCE, STEP, TIME, blueprint, map_view, show_i
 from .entities import log_features, log_scans, log_static, log_text, log_truth, new_recording  # noqa: E402
 from .recording import RRD_FILE, RecordSummary, StampsCollapsedWarning, describe, record_scans  # noqa: E402
 from .replay import log_steps, record_steps  # noqa: E402
+from .tracks import TrackLogger, log_tracks, track_color  # noqa: E402
 from .worldmap import MAP_CELL_M, MAP_EVERY, log_map  # noqa: E402
 
 __all__ = [
@@ -88,4 +94,7 @@ __all__ = [
     "describe",
     "log_steps",
     "record_steps",
+    "TrackLogger",
+    "log_tracks",
+    "track_color",
 ]

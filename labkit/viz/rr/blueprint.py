@@ -31,12 +31,13 @@ def map_view() -> rrb.Spatial2DView:
 
 
 def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False,
-              with_times: bool = True, timeline: str | None = None) -> rrb.Blueprint:
+              with_times: bool = True, timeline: str | None = None, with_tracks: bool = False) -> rrb.Blueprint:
     """The default layout: the scan view on the left; counts, stage times, log and notes on
     the right. ``with_map``: the map view (world frame) beside the scan view; ``with_times=False``
     leaves out the stage-time panel (a recording without features has no stage times);
     ``timeline``: the timeline the viewer opens on (:data:`SEQUENCE` for a recording whose
-    stamps do not advance). With
+    stamps do not advance); ``with_tracks``: a log of the tracks' births, confirmations and
+    deletions (``tracks/events``) under the log. With
     ``compare=("A", "B")`` there is one scan view per named configuration
     (features logged with ``log_features(..., name="A")``), side by side, each showing the
     scan, the ground truth and that configuration's features."""
@@ -57,6 +58,8 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
               (rrb.TimeSeriesView(origin="metrics/time_ms", name="Milliseconds per stage", plot_legend=_NO_LEGEND), 2),
               (rrb.TextLogView(origin="log", name="Log"), 1),
               (rrb.TextDocumentView(origin="description", name="About"), 2)]
+    if with_tracks:
+        panels.insert(3, (rrb.TextLogView(origin="tracks/events", name="Track events"), 1))
     if not with_times:
         del panels[1]
     return rrb.Blueprint(
@@ -71,10 +74,12 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
 
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=(),
-                with_map: bool = False) -> None:
+                with_map: bool = False, with_tracks: bool = False) -> None:
     """Show a recording in the notebook with the default blueprint (``with_map``: and the map
-    view), or the side-by-side one for ``compare``; works offline."""
-    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map))
+    view; ``with_tracks``: and the track events), or the side-by-side one for ``compare``; works
+    offline."""
+    rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map,
+                                                                      with_tracks=with_tracks))
 
 
 def steps_blueprint() -> rrb.Blueprint:

@@ -33,6 +33,7 @@ from .entities import (
     log_text,
     new_recording,
 )
+from .tracks import TrackLogger
 from .worldmap import MAP_CELL_M, MAP_EVERY, _Map
 
 __all__ = ["RRD_FILE", "RecordSummary", "StampsCollapsedWarning", "describe", "record_scans"]
@@ -52,6 +53,8 @@ class RecordSummary:
     error: Exception | None
     counts: dict = field(default_factory=dict)
     stage_seconds: dict = field(default_factory=dict)
+    #: With tracks: the ids of every track confirmed as moving, in order.
+    moving_tracks: tuple = ()
 
 _LAYER_NOTES = {
     "world/scan/points": "valid beams",
@@ -68,6 +71,13 @@ _LAYER_NOTES = {
     "metrics/valid_beams": "valid beams per scan",
     "metrics/time_ms/*": "milliseconds per pipeline stage",
 }
+_TRACK_NOTES = {
+    "world/tracks/points": "tracks (labkit.tracking): a colour per id, labelled; static ones grey",
+    "world/tracks/trails": "each moving track's path over the last seconds",
+    "world/tracks/velocity": "each moving track's velocity (the distance covered in half a second)",
+    "tracks/events": "track births, confirmations and deletions",
+    "metrics/count/tracks": "moving tracks per scan",
+}
 _MAP_NOTES = {
     "map/path": "the sensor's path (world frame)",
     "map/sensor": "the sensor's pose at the current scan (a transform); the scan and its features under it",
@@ -77,10 +87,10 @@ _MAP_NOTES = {
 
 
 def describe(title: str, *, source: str = "", config: Config | None = None, truth: bool = False,
-             compare: dict[str, Config] | None = None, world_map: bool = False) -> str:
-    """The Markdown note logged with a recording: what each entity shows, and the config;
-    with ``compare`` (``{name: config}`` of features logged with ``log_features(...,
-    name=name)``) the named layers and every config."""
+             compare: dict[str, Config] | None = None, world_map: bool = False, tracks: bool = False) -> str:
+    """The Markdown note logged with a recording: what each entity shows, and the config
+    (``tracks``: and the tracks' entities); with ``compare`` (``{name: config}`` of features
+    logged with ``log_features(..., name=name)``) the named layers and every config."""
     lines = [f"# {title}", ""]
     if source:
         lines += [source, ""]
@@ -95,6 +105,10 @@ def describe(title: str, *, source: str = "", config: Config | None = None, trut
         lines += [f"| `{entity}` | {note} |" for entity, note in _MAP_NOTES.items()]
         if truth:
             lines.append("| `map/truth/walls` | the simulator's walls, grey |")
+    if tracks:
+        lines += [f"| `{entity}` | {note} |" for entity, note in _TRACK_NOTES.items()]
+        if world_map:
+            lines.append("| `map/tracks/*` | the tracks in the world frame |")
     for name in compare or {}:
         lines.append(f"| `world/{name}/*`, `metrics/{name}/*` | the features, counts and stage times of config "
                      f"`{name}` |")
@@ -122,6 +136,7 @@ def record_scans(
     map_every: int = MAP_EVERY,
     map_cell_m: float = MAP_CELL_M,
     start_index: int = 0,
+    tracks: bool = False,
 ) -> RecordSummary:
     """Write scans to an ``.rrd`` file with the default blueprint, as they come: the file is
     written while the scans are read (``RecordingStream.save`` before anything is logged, then
@@ -140,6 +155,11 @@ def record_scans(
     :class:`labkit.CorruptFileError` (a damaged file), the ``.rrd`` holds every scan that
     could be read, the error is logged to ``log`` and returned in the summary (not raised).
     ``start_index``: the ``scan`` timeline's number of the first scan (a range of a recording).
+
+    ``tracks=True`` also follows people and moving circles over the scans
+    (:class:`labkit.tracking.Tracker` with ``config.tracking``, default :class:`labkit.Config` ())
+    and logs the tracks in the scan view and the map view (see :mod:`labkit.viz.rr.tracks`); it
+    needs features (``features`` or ``config``).
 
     When the scans' time stamps do not advance (at least 1 % of them no later than the scan
     before, as in the Radish ``infinite-corridor`` log), a :class:`StampsCollapsedWarning` says so:
@@ -160,13 +180,15 @@ def record_scans(
         damage = exc
     if with_map is None:
         with_map = any(s.pose is not None for s in first)
+    if tracks and features is None and config is None:
+        raise ValueError("tracks need features: pass features or config")
     timeline = SEQUENCE if _Stamps.collapsed(first) else None
     scans = itertools.chain(first, scans if damage is None else _raise(damage))
     with safe_output(out, RRD_FILE, overwrite=overwrite, inputs=inputs) as tmp:
         return _record_scans(scans, tmp, Path(out), name=name, truth=truth, labels=labels, features=features,
                              config=config, segment_threshold_m=segment_threshold_m, description=description,
                              world_map=(map_every, map_cell_m) if with_map else None, start_index=start_index,
-                             timeline=timeline)
+                             timeline=timeline, tracks=tracks)
 
 
 class StampsCollapsedWarning(UserWarning):
@@ -265,17 +287,22 @@ def _close(rec: rr.RecordingStream, tmp: Path) -> None:
 
 def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features, config, segment_threshold_m,
                   description, world_map: tuple[int, float] | None = None, start_index: int = 0,
-                  timeline: str | None = None) -> RecordSummary:
+                  timeline: str | None = None, tracks: bool = False) -> RecordSummary:
+    from ...tracking import Tracker
+
     rec = new_recording(name)
     with_features = features is not None or config is not None
     rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features,
-                                              timeline=timeline))
+                                              timeline=timeline, with_tracks=tracks))
     log_static(rec, description)
     the_map = None
     if world_map is not None:
         every, cell_m = world_map
         the_map = _Map(rec, every, cell_m, features=with_features)
     feed = _TruthFeed(truth) if truth is not None else None
+    tracker = Tracker(**(config or Config()).tracking.kwargs()) if tracks else None
+    track_log = TrackLogger(rec, ("world", "map") if world_map is not None else ("world",)) if tracks else None
+    tables: list = []  # the tracks of the scans of the batch being gathered (sent with it)
     stamps = _Stamps()
     counts: dict[str, int] = {}
     seconds: dict[str, float] = {}
@@ -296,6 +323,9 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
                     counts[k] = counts.get(k, 0) + v
                 for k, v in f.timings.items():
                     seconds[k] = seconds.get(k, 0.0) + v
+                if tracker is not None:
+                    tables.append(tracker.step(f, pose=scan.pose))
+                    seconds["tracking"] = seconds.get("tracking", 0.0) + tables[-1].seconds
                 yield scan, f.labels, f
             elif labels is not None:
                 yield scan, x, None
@@ -308,6 +338,9 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
         _send_batch(rec, batch, first, True, k == 0)
         if the_map is not None:
             the_map.send(batch, first)
+        if track_log is not None:
+            track_log.send(list(enumerate(tables[:len(batch)], start=first)))
+            del tables[:len(batch)]
         if feed is not None:
             index_of = {scan.stamp_ns: first + i for i, (scan, _, _) in enumerate(batch)}
             matched = feed.take([scan.stamp_ns for scan, _, _ in batch])
@@ -340,7 +373,8 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
         log_text(rec, note, level="WARN")
         warnings.warn(note, StampsCollapsedWarning, stacklevel=3)
     _close(rec, tmp)
-    return RecordSummary(out, n, n_truth, error, counts, seconds)
+    moving = tuple(sorted(track_log.confirmed)) if track_log is not None else ()
+    return RecordSummary(out, n, n_truth, error, counts, seconds, moving)
 
 #: What :func:`record_scans` writes (see labkit._safe): how an existing recording is recognised.
 RRD_FILE = OutputKind("a rerun recording (.rrd)", (".rrd",), starts_with(b"RRF"))
