@@ -347,7 +347,7 @@ def dbscan1d(x, eps: float, min_pts: int, *, period: float | None = None, border
 
 
 class DBSCAN1D:
-    """scikit-learn style estimator around :func:`dbscan1d`.
+    """A scikit-learn style estimator around :func:`dbscan1d`.
 
     Parameters
     ----------

@@ -29,6 +29,18 @@ __all__ = [
 def wrap_angle(angle):
     """Wrap angles (radians) to the interval (-pi, pi].
 
+    Parameters
+    ----------
+    angle : float or array_like
+        Angles in radians, any value.
+
+    Returns
+    -------
+    float or ndarray
+        The same angles in (-pi, pi], a float for a scalar input, an array of the input's shape otherwise.
+
+    Examples
+    --------
     >>> float(wrap_angle(3 * np.pi / 2))
     -1.5707963267948966
     >>> float(wrap_angle(-np.pi))
@@ -42,6 +54,18 @@ def wrap_angle(angle):
 def angle_difference(a, b):
     """Smallest signed difference ``a - b`` across the wrap, in (-pi, pi].
 
+    Parameters
+    ----------
+    a, b : float or array_like
+        Angles in radians (broadcast against each other).
+
+    Returns
+    -------
+    float or ndarray
+        ``a - b`` wrapped to (-pi, pi]: how far to turn from ``b`` to reach ``a`` the short way round.
+
+    Examples
+    --------
     >>> round(float(np.degrees(angle_difference(np.radians(170), np.radians(-170)))), 9)
     -20.0
     """
@@ -56,6 +80,27 @@ def circular_mean(angles, period: float = 2 * np.pi, weights=None) -> float:
     are defined modulo pi. Raises ``ValueError`` for an empty input or when the mean
     direction is undefined (the vectors cancel).
 
+    Parameters
+    ----------
+    angles : array_like
+        The angles, in the unit of ``period`` (radians by default).
+    period : float, default 2 pi
+        The period of the circle: ``np.pi`` for line directions.
+    weights : array_like, optional
+        One weight per angle (the vectors' lengths); equal weights by default.
+
+    Returns
+    -------
+    float
+        The mean in ``[0, period)``.
+
+    Raises
+    ------
+    ValueError
+        For no angles, a period that is not positive, weights of another shape, or vectors that cancel.
+
+    Examples
+    --------
     >>> round(float(np.degrees(circular_mean(np.radians([350.0, 20.0])))), 9)
     5.0
     >>> round(float(np.degrees(circular_mean(np.radians([178.0, 4.0]), period=np.pi))), 9)
@@ -99,6 +144,25 @@ def normalize_line(r, alpha):
 def line_through_points(p, q) -> tuple[float, float]:
     """Normal-form ``(r, alpha)`` of the line through two distinct points.
 
+    Parameters
+    ----------
+    p, q : array_like of shape (2,)
+        Two distinct points ``(x, y)``, metres.
+
+    Returns
+    -------
+    r : float
+        Distance of the line from the origin, ``r >= 0``, metres.
+    alpha : float
+        Angle of the line's normal, radians in (-pi, pi].
+
+    Raises
+    ------
+    ValueError
+        When ``p`` and ``q`` are the same point.
+
+    Examples
+    --------
     >>> r, a = line_through_points((1.0, -1.0), (1.0, 1.0))
     >>> round(r, 12), round(a, 12)
     (1.0, 0.0)

@@ -87,10 +87,20 @@ _CUT_SD = math.sqrt(1.0 - 2.0 * _CUT * math.exp(-_CUT * _CUT / 2) / math.sqrt(2 
 
 
 def range_noise_residuals(scan: Scan) -> np.ndarray:
-    """The residual ``z_i`` of every beam with two valid neighbours, in metres of range noise
-    (zero on any straight wall, standard deviation sigma under Gaussian range noise; see the
-    module docstring). Beams in scan order; on a full-circle scan the first and last beam
-    are neighbours.
+    """The residual ``z_i`` of every beam with two valid neighbours, in metres of range noise.
+
+    It is zero on any straight wall and has standard deviation sigma under Gaussian range noise
+    (see the module docstring). Beams in scan order; on a full-circle scan the first and last beam are neighbours.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+
+    Returns
+    -------
+    ndarray of shape (M,)
+        The residual of every beam with two valid neighbours, in scan order, metres.
 
     Examples
     --------
@@ -144,13 +154,25 @@ def _robust_sigma(z: np.ndarray) -> float:
 
 
 def estimate_range_noise(scans: Scan | Iterable[Scan]) -> float:
-    """The standard deviation of the range noise, metres, estimated from one scan or from the
-    residuals of many pooled (a recording: any iterable of scans).
+    """The standard deviation of the range noise, metres, estimated from one scan or many.
+
+    Many scans (a recording: any iterable of scans) pool their residuals.
 
     Each beam with two valid neighbours gives a residual that is exactly zero on a straight
     wall at any incidence (:func:`range_noise_residuals`); the estimate is a robust standard
     deviation of those, so corners, jump edges and round objects, a few beams each, barely
     move it. NaN when fewer than :data:`MIN_RESIDUALS` beams have two valid neighbours.
+
+    Parameters
+    ----------
+    scans : Scan or iterable of Scan
+        One scan, or many whose residuals are pooled (a recording).
+
+    Returns
+    -------
+    float
+        The estimated standard deviation of the range noise, metres; NaN when too few beams have two
+        valid neighbours.
 
     Examples
     --------

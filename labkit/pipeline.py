@@ -405,6 +405,19 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
 
     See the module docstring for the stages and their order. Invalid beams are masked,
     never raised; a scan with no valid beam gives empty features.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+    config : Config, optional
+        Every stage's parameters; default ``Config()``.
+
+    Returns
+    -------
+    Features
+        Lines, corners, circles, arcs, legs and people of the scan, the range segment of every beam
+        (``labels``) and the seconds each stage took (``timings``).
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
@@ -462,7 +475,20 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
 
 
 def extract_all(scans: Iterable[Scan], config: Config | None = None) -> Iterator[Features]:
-    """:func:`extract_features` for every scan of a stream, lazily (one scan in memory)."""
+    """:func:`extract_features` for every scan of a stream, lazily (one scan in memory).
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans, e.g. :func:`labkit.read_scans`'s stream.
+    config : Config, optional
+        Every stage's parameters; default ``Config()``.
+
+    Yields
+    ------
+    Features
+        The features of each scan, in the order of ``scans``.
+    """
     cfg = _DEFAULT if config is None else config
     for scan in scans:
         yield extract_features(scan, cfg)

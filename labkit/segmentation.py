@@ -50,8 +50,9 @@ __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_label
 
 @dataclass(frozen=True)
 class SegmentationParams(Params):
-    """Parameters of :func:`segment_labels` and the ``[segmentation]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees.
+    """Parameters of :func:`segment_labels`.
+
+    The ``[segmentation]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees.
 
     The default is the adaptive detector with Xavier et al.'s 80 mm as its floor, the
     segmentation every detector uses when given no ``segments`` and the pipeline's
@@ -71,7 +72,7 @@ class SegmentationParams(Params):
 class RangeSegment:
     """A run of neighbouring beams.
 
-    Attributes
+    Parameters
     ----------
     indices : ndarray of shape (M,), int
         Beam indices in scan order (wrapping past N - 1 to 0 for a seam-crossing segment).
@@ -110,8 +111,45 @@ def breakpoint_thresholds(
     incidence_deg: float = SegmentationParams.incidence_deg,
     range_sigma_m: float = RANGE_SIGMA_M,
 ) -> np.ndarray:
-    """Adaptive breakpoint distance (Borges & Aldon 2004) between beams of ranges ``r_a``,
-    ``r_b`` that are ``dphi`` radians apart, floored at ``threshold_m``.
+    """Adaptive breakpoint distance (Borges & Aldon 2004) between neighbouring beams.
+
+    Two beams of ranges :math:`r_a, r_b` that are :math:`\\Delta\\phi` apart belong to one segment
+    when their points are closer than
+
+    .. math::
+
+        D = \\min(r_a, r_b) \\frac{\\sin \\Delta\\phi}{\\sin(\\lambda - \\Delta\\phi)} + 3 \\sigma_r,
+
+    the gap a wall seen at the grazing angle :math:`\\lambda` would leave, plus three times the range
+    noise; :math:`D` is floored at ``threshold_m``.
+
+    Parameters
+    ----------
+    r_a, r_b : ndarray of shape (N,)
+        Ranges of the two beams of each pair, metres.
+    dphi : ndarray of shape (N,)
+        Angle between the two beams of each pair, radians (its absolute value is used).
+    threshold_m : float, default 0.08
+        The floor of the distance, metres.
+    incidence_deg : float, default 10.0
+        The grazing angle :math:`\\lambda`, degrees in (0, 90).
+    range_sigma_m : float, default 0.01
+        The range noise :math:`\\sigma_r` of the sensor, metres.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        The breakpoint distance of each pair, metres (NaN where a range is NaN).
+
+    Raises
+    ------
+    ValueError
+        For ``incidence_deg`` outside (0, 90) or a negative or infinite ``range_sigma_m``.
+
+    References
+    ----------
+    G. A. Borges and M.-J. Aldon, "Line extraction in 2D range images for mobile robotics",
+    Journal of Intelligent and Robotic Systems 40 (2004).
 
     Examples
     --------
@@ -249,9 +287,29 @@ def range_segments(
     incidence_deg: float = SegmentationParams.incidence_deg,
     range_sigma_m: float | str = SegmentationParams.range_sigma_m,
 ) -> list[RangeSegment]:
-    """The segments of :func:`segment_labels` (the same arguments) as :class:`RangeSegment`
-    records, in scan order (a seam-crossing segment is listed first and its indices run
-    N-k..N-1, 0..m)."""
+    """The segments of :func:`segment_labels` as :class:`RangeSegment` records, in scan order.
+
+    A seam-crossing segment is listed first and its indices run N-k..N-1, 0..m.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan to segment.
+    threshold_m : float, default 0.08
+        Largest gap between neighbouring points of a segment, metres (the floor of the adaptive threshold).
+    min_points : int, default 2
+        Smallest segment kept.
+    adaptive : bool, default True
+        Grow the threshold with range and angular step (:func:`breakpoint_thresholds`).
+    incidence_deg : float, default 10.0
+        Grazing angle of the adaptive threshold, degrees.
+    range_sigma_m : float or "auto", default "auto"
+        Range noise of the sensor, metres; ``"auto"`` estimates it from the scan (:mod:`labkit.noise`).
+
+    Returns
+    -------
+    list of RangeSegment
+        One record per kept segment."""
     labels = segment_labels.unchecked(scan, threshold_m=threshold_m, min_points=min_points, adaptive=adaptive,
                                       incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)
     return segments_from_labels(scan, labels)

@@ -129,8 +129,9 @@ _I2, _I4 = np.eye(2), np.eye(4)
 
 @dataclass(frozen=True)
 class TrackingParams(Params):
-    """Parameters of :class:`Tracker` and :func:`track` (and the ``[tracking]`` table of
-    :class:`labkit.Config`), each default once: lengths in metres, times in seconds."""
+    """Parameters of :class:`Tracker` and :func:`track`.
+
+    The ``[tracking]`` table of :class:`labkit.Config`, each default once: lengths in metres, times in seconds."""
 
     frame: str = param("auto", "track in the sensor frame, the map frame (moved by each scan's pose) or auto: "
                                "the map frame when the first scan carries a pose", choices=("auto", "sensor", "map"),
@@ -297,7 +298,7 @@ def assign(cost) -> tuple[np.ndarray, np.ndarray]:
 class Detections:
     """One scan's detections, as the tracker takes them.
 
-    Attributes
+    Parameters
     ----------
     stamp_ns : int
         The scan's time stamp.
@@ -441,7 +442,7 @@ class TrackTable:
     at this scan (status ``"deleted"``, its last prediction), once. The moving targets are the
     rows whose status is ``"confirmed"`` (:meth:`confirmed`).
 
-    Attributes
+    Parameters
     ----------
     stamp_ns : int
         The scan's time stamp.

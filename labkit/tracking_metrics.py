@@ -68,7 +68,7 @@ __all__ = ["MOTFrame", "MOTScores", "clear_mot", "sim_frames"]
 class MOTFrame:
     """One frame of a tracking result against its truth.
 
-    Attributes
+    Parameters
     ----------
     truth_ids : sequence of hashable, length n
         The true objects present and visible (names or numbers, unique in the frame).

@@ -61,7 +61,7 @@ class HiddenTest:
 class GradedCell:
     """One graded cell of an exercise.
 
-    Attributes
+    Parameters
     ----------
     grade_id : str
     points : float

@@ -281,6 +281,26 @@ def write_scans(
     Returns the number written. Bags: see :func:`write_bag`. CARMEN logs are read-only.
     ``overwrite`` replaces only an output of the same kind; ``inputs`` are the files the
     scans come from, which the output may not be (see :mod:`labkit._safe`).
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans.
+    path : str or Path
+        The output; its format from its name unless ``format`` is given.
+    format : str, optional
+        A name of :data:`labkit.io.FORMATS` with a writer.
+    topic : str, default "/scan"
+        The topic of the scans in a bag.
+    overwrite : bool, default False
+        Replace an existing output of the same kind.
+    inputs : iterable of str or Path
+        The files the scans come from, which the output may not be.
+
+    Returns
+    -------
+    int
+        The number of scans written.
     """
     p = Path(path)
     fmt = output_format(p, format)

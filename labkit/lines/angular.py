@@ -109,7 +109,7 @@ class AngularSteps:
     (:func:`angular_arrays`); ``angular_segmentation(..., trace=True)`` gives the same stages
     as :class:`labkit.Step` records for the step viewers.
 
-    Attributes
+    Parameters
     ----------
     local_angles : ndarray of shape (N,), radians in [0, pi)
         Local line direction per beam (step 1). NaN where undefined: the beam or one of
@@ -144,6 +144,7 @@ def local_directions(scan: Scan, window: int = 1, straight_sigma: float | None =
     Parameters
     ----------
     scan : Scan
+        The laser scan.
     window : int, >= 1
         Half-width of the window. Range noise ``sigma`` tilts a direction fitted to ``2 h + 1``
         points at spacing ``s`` by about ``sigma / (s sqrt(h (h + 1) (2 h + 1) / 3))`` radians,
@@ -266,8 +267,9 @@ def _scan_order(beams: np.ndarray, n: int, full_circle: bool) -> np.ndarray:
 
 @dataclass(frozen=True)
 class AngularParams(Params):
-    """Parameters of :func:`angular_segmentation` and the ``[lines.angular]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
+    """Parameters of :func:`angular_segmentation`.
+
+    The ``[lines.angular]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
 
     eps_theta_deg: float = param(math.degrees(EPS_THETA), "DBSCAN1D radius in line direction, degrees", lo=0,
                                  strict=True, hi=89.9)

@@ -109,8 +109,10 @@ _METHODS = ("fit", "endpoints")
 
 @dataclass(frozen=True)
 class SplitMergeParams(Params):
-    """Parameters of :func:`split_and_merge` (both ``"iepf"`` and ``"split_and_merge"`` in the
-    registry, and the ``[lines]`` table of :class:`labkit.Config`), each default once: lengths
+    """Parameters of :func:`split_and_merge`.
+
+    Both ``"iepf"`` and ``"split_and_merge"`` in the
+    registry, and the ``[lines]`` table of :class:`labkit.Config`, each default once: lengths
     in metres (``_m``), angles in degrees (``_deg``)."""
 
     split_threshold_m: float = param(AUTO, "split when the worst point is farther than this from the line, metres; "
