@@ -316,6 +316,11 @@ def dbscan1d(x, eps: float, min_pts: int, *, period: float | None = None, border
         ``min_pts`` not an integer >= 1, ``period`` not a finite number > 0, or an
         unknown ``border``. The message names the argument.
 
+    References
+    ----------
+    B. Meglicki, "Linear time DBSCAN for sorted 1D data and laser range scan
+    segmentation", 2021, section 2.
+
     Examples
     --------
     >>> dbscan1d([0.0, 0.1, 0.2, 5.0, 9.0, 9.1, 9.2], eps=0.15, min_pts=2)
@@ -337,11 +342,6 @@ def dbscan1d(x, eps: float, min_pts: int, *, period: float | None = None, border
     array([ 0,  0,  0,  0, -1,  1,  1,  1,  1])
     >>> dbscan1d(x, 2, 4, border="all")[4]
     array([0, 1])
-
-    References
-    ----------
-    B. Meglicki, "Linear time DBSCAN for sorted 1D data and laser range scan
-    segmentation", 2021, section 2.
     """
     return _dbscan1d(x, eps, min_pts, period, border)[0]
 

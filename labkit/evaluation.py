@@ -403,8 +403,8 @@ def match_circles(circles: Sequence, scan: Scan, truth, *, max_center_m: float =
         The detections of one scan (``center``, ``radius``).
     scan : Scan
         The scan they were detected in.
-    truth
-        The scan's ground truth (a record of :func:`labkit.sim.read_truth`).
+    truth : labkit.sim.ScanTruth
+        The scan's ground truth (one scan of :func:`labkit.sim.read_truth`).
     max_center_m : float, default 0.1
         Largest distance between a detection's centre and the true one, metres.
     min_beams : int, default 4
@@ -436,8 +436,8 @@ def match_legs(legs: Sequence, scan: Scan, truth, *, max_center_m: float = 0.1, 
         The detections of one scan (``center``, ``diameter``).
     scan : Scan
         The scan they were detected in.
-    truth
-        The scan's ground truth (a record of :func:`labkit.sim.read_truth`).
+    truth : labkit.sim.ScanTruth
+        The scan's ground truth (one scan of :func:`labkit.sim.read_truth`).
     max_center_m : float, default 0.1
         Largest distance between a detection's centre and the true one, metres.
     min_beams : int, default 3
@@ -557,10 +557,24 @@ class RayErrors:
 
 
 def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
-    """The ray-axis errors of ``segments`` (anything with ``start``/``end``, sensor frame)
-    against ``scan``: for each valid beam, the measured range minus the distance from the
-    sensor to the nearest point where the beam's ray crosses a segment (a ray through a
-    segment's end point meets it, to within a billionth of its length).
+    """The ray-axis errors of ``segments`` against ``scan`` (no ground truth needed).
+
+    The ray-axis errors of ``segments`` (anything with ``start``/``end``, sensor frame) against
+    ``scan``: for each valid beam, the measured range minus the distance from the sensor to the
+    nearest point where the beam's ray crosses a segment (a ray through a segment's end point meets
+    it, to within a billionth of its length).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the segments were extracted from.
+    segments : sequence
+        Line segments (anything with ``start`` and ``end``, sensor frame, metres).
+
+    Returns
+    -------
+    RayErrors
+        The error of each valid beam whose ray meets a segment, with its RMSE and robust summaries.
 
     Examples
     --------

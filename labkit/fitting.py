@@ -85,8 +85,26 @@ class LineFit:
 
 @dataclass(frozen=True, eq=False)
 class CircleFit:
-    """A fitted circle: ``center`` (2,), ``radius``, RMS of the orthogonal distances
-    ``|p - center| - radius``, point count, the method and its iteration count."""
+    """A fitted circle.
+
+    A fitted circle: ``center`` (2,), ``radius``, RMS of the orthogonal distances ``|p - center| -
+    radius``, point count, the method and its iteration count.
+
+    Parameters
+    ----------
+    center : ndarray of shape (2,)
+        Centre, metres.
+    radius : float
+        Radius, metres.
+    rms : float
+        RMS of the orthogonal distances ``|p - center| - radius``, metres.
+    n_points : int
+        The number of points fitted.
+    method : {"algebraic", "geometric"}
+        The fit.
+    iterations : int, default 0
+        Gauss-Newton iterations of ``"geometric"``.
+    """
 
     center: np.ndarray
     radius: float

@@ -274,7 +274,9 @@ def _with_parameters(cls: type) -> str | None:
     for name, (annotation, f) in fields.items():
         kind = annotation if isinstance(annotation, str) else getattr(annotation, "__name__", str(annotation))
         record = f.metadata.get("record")
-        default = record.__name__ + "()" if record is not None else repr(f.default)
+        value = f.default
+        default = (record.__name__ + "()" if record is not None
+                   else f"{value:.10g}" if isinstance(value, float) else repr(value))
         text = str(f.metadata.get("doc", "")).strip()
         text = text[:1].upper() + text[1:] if text else "See the record's description."
         out += [f"{pad}{name} : {kind}, default {default}", f"{pad}    {text.rstrip('.')}."]

@@ -19,12 +19,6 @@ import pytest
 from docs import executed_notebooks, public_api
 
 REPO = Path(__file__).resolve().parents[1]
-TODO = REPO / "docs" / "numpydoc_todo.txt"
-
-
-def _todo() -> set[str]:
-    lines = TODO.read_text(encoding="utf-8").splitlines() if TODO.is_file() else []
-    return {line.strip() for line in lines if line.strip() and not line.startswith("#")}
 
 
 @pytest.fixture(scope="module")
@@ -57,13 +51,13 @@ def test_a_public_name_is_listed_once_at_its_home():
 
 
 def test_numpydoc_finds_nothing_new(findings):
-    new = sorted(findings - _todo())
+    new = sorted(findings - public_api.todo())
     assert not new, ("numpydoc findings on public docstrings (fix the docstring; `python -m docs.public_api` shows "
                      "the messages):\n" + "\n".join(new))
 
 
 def test_numpydoc_todo_list_only_shrinks(findings):
-    fixed = sorted(_todo() - findings)
+    fixed = sorted(public_api.todo() - findings)
     assert not fixed, "fixed, so take them off docs/numpydoc_todo.txt:\n" + "\n".join(fixed)
 
 

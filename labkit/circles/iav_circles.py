@@ -552,19 +552,27 @@ def detect_arcs(
         deprecated.)
     split_threshold_m, min_length_m : float, metres
         The finer line pass when ``lines`` is None (:data:`ARC_LINE_PARAMS`); not used otherwise.
-    line_params : dict, optional
-        Deprecated: ``split_and_merge``'s keywords for the line pass; use ``split_threshold_m``
-        and ``min_length_m``.
+    min_points : int, default 4
+        Fewest points of an arc.
+    min_chord_m, max_chord_m : float, default 0.15 and inf
+        Shortest and longest chord of an arc, metres.
+    middle_range : tuple of float, default (0.1, 0.7)
+        The circle prerequisite's band (:func:`labkit.iav.middle_point_offset`).
+    mean_range_deg : tuple of float, default (90.0, 155.0)
+        The band of the mean inscribed angle, degrees.
+    std_max_deg : float, default 8.59
+        Largest standard deviation of the inscribed angles, degrees.
     center_method : {"geometric", "algebraic", "iav"}
         Default ``"geometric"``, not the paper's construction: embedded arcs are short
         (90 deg or less) and the lines take their ends, which is where the IAV
         construction is weakest. In rooms with rounded corners of 0.4-1.2 m seen by an
         LMS200 from 2-4 m, the median radius error was 0.5-2 % with the geometric fit
         and 2-5 % with the IAV construction (largest 9 % and 18 %).
+    line_params : dict, optional
+        Deprecated: ``split_and_merge``'s keywords for the line pass; use ``split_threshold_m``
+        and ``min_length_m``.
     seg_threshold_m : float or None, metres
         A fixed range segmentation threshold; default None: the default segmentation.
-    mean_range_deg, std_max_deg, min_points, min_chord_m, max_chord_m, middle_range : see :class:`ArcParams`
-        The IAV tests of an arc, as :func:`detect_circles`'s (:class:`ArcParams` holds the defaults).
     segments : list of RangeSegment or ndarray of per-beam labels, optional
         Precomputed segments, as for :func:`detect_circles`.
     trace : bool, default False

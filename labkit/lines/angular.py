@@ -105,8 +105,9 @@ STRAIGHT_Z = 3.0
 
 @dataclass(frozen=True, eq=False)
 class AngularSteps:
-    """The intermediate results of :func:`angular_segmentation`, one array per stage
-    (:func:`angular_arrays`); ``angular_segmentation(..., trace=True)`` gives the same stages
+    """The intermediate results of :func:`angular_segmentation`, one array per stage.
+
+    :func:`angular_arrays` gives them; ``angular_segmentation(..., trace=True)`` gives the same stages
     as :class:`labkit.Step` records for the step viewers.
 
     Parameters
@@ -138,8 +139,9 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 def local_directions(scan: Scan, window: int = 1, straight_sigma: float | None = None) -> np.ndarray:
-    """Local line direction at every beam: total least squares through beams
-    ``i - window .. i + window`` (the paper's three beams by default).
+    """Local line direction at every beam, by total least squares through its neighbours.
+
+    The fit runs through beams ``i - window .. i + window`` (the paper's three beams by default).
 
     Parameters
     ----------
@@ -407,9 +409,35 @@ def angular_arrays(
     direction_window: int | str = AngularParams.direction_window,
     range_sigma_m: float | str = AngularParams.range_sigma_m,
 ) -> AngularSteps:
-    """The intermediate arrays of :func:`angular_segmentation` (same parameters), one per
-    stage, per beam: local directions, angular labels, the clusters' mean directions, offsets
-    and the final labels (:class:`AngularSteps`), for plotting the stages.
+    """The intermediate arrays of :func:`angular_segmentation`, one per stage, per beam.
+
+    The intermediate arrays of :func:`angular_segmentation` (same parameters), one per stage, per
+    beam: local directions, angular labels, the clusters' mean directions, offsets and the final
+    labels (:class:`AngularSteps`), for plotting the stages.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+    eps_theta_deg : float, default 3.0
+        DBSCAN1D radius in line direction, degrees.
+    eps_dist_m : float, default 0.03
+        DBSCAN1D radius in line offset, metres.
+    min_points : int, default 8
+        DBSCAN1D min_pts of both clusterings.
+    split_gap_m : float, default 0.3
+        Split collinear clusters at gaps wider than this, metres (inf: never).
+    direction_window : int, default 'auto'
+        Half-width of the local directions' window, beams (1: the paper's three beams); auto:
+        the narrowest the range noise allows.
+    range_sigma_m : float, default 'auto'
+        Range noise, metres: a local direction only where its window is straight at that noise
+        (0: no test, the paper); auto: estimated from each scan.
+
+    Returns
+    -------
+    AngularSteps
+        The arrays of each stage.
 
     Examples
     --------

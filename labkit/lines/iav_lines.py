@@ -103,7 +103,10 @@ def detect_lines_iav(
 
     Returns
     -------
-    list of LineSegment in scan order; with ``trace``, ``(lines, steps)``.
+    lines : list of LineSegment
+        The lines found, in scan order.
+    steps : list of Step
+        Only with ``trace=True``, which returns ``(lines, steps)``.
 
     Examples
     --------

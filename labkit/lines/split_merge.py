@@ -783,6 +783,28 @@ def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds",
     ``d = (dr, dalpha)`` is under ``merge_chi2`` (default 9.21, the 99% point of chi-square
     with 2 degrees of freedom).
 
+    Parameters
+    ----------
+    a, b : LineSegment
+        The two lines (with covariances for ``merge="chi2"``).
+    merge : {"thresholds", "chi2"}, default "thresholds"
+        The test.
+    merge_dr_m : float, default 0.2
+        Largest ``|dr|`` of ``"thresholds"``, metres.
+    merge_dalpha_deg : float, default 10.0
+        Largest ``|dalpha|`` of ``"thresholds"``, degrees.
+    merge_chi2 : float, default 9.21
+        Largest Mahalanobis distance of ``"chi2"``.
+    **deprecated
+        Old names of these keywords (radians without ``_deg``), with a ``DeprecationWarning``.
+
+    Returns
+    -------
+    similar : bool
+        Whether the two lines pass the test.
+    statistic : float
+        The test statistic (below 1 passes ``"thresholds"``; below ``merge_chi2`` passes ``"chi2"``).
+
     Examples
     --------
     >>> a = line_segment(np.array([[-1.0, 2.0], [-2.0, 2.01], [-3.0, 2.02]]), [0, 1, 2])
