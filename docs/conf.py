@@ -58,9 +58,8 @@ numpydoc_class_members_toctree = False
 nb_execution_mode = "off"
 nb_merge_streams = True
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence"]
-# ipywidgets need a live kernel: a static page shows a widget's text form instead of an empty box
-# that would load its JavaScript from the internet
-nb_mime_priority_overrides = [("html", "application/vnd.jupyter.widget-view+json", None)]
+# ipywidgets need a live kernel: prepare() turns a widget's output into a note, and the pages load no
+# widget JavaScript from the internet
 nb_ipywidgets_js: dict[str, dict[str, str]] = {}
 
 intersphinx_mapping: dict[str, tuple[str, None]] = {}  # offline build: no inventories fetched
@@ -138,12 +137,30 @@ def copy_notebooks() -> None:
             print(f"[labkit docs] executing {notebook.name} (no executed copy of this version yet)", flush=True)
             executed_notebooks.execute(notebook)
             print(f"[labkit docs] executed {notebook.name} in {time.monotonic() - started:.0f} s", flush=True)
-        _copy(copy, GENERATED / "course" / notebook.name)
+        _write(GENERATED / "course" / notebook.name, _static_outputs(copy))
     _prune(GENERATED / "course", {p.name for p in course})
     released = sorted((REPO / "exercises" / "release").glob("*/*.ipynb"))
     for notebook in released:
         _copy(notebook, GENERATED / "exercises" / notebook.name)
     _prune(GENERATED / "exercises", {p.name for p in released})
+
+
+WIDGET = "application/vnd.jupyter.widget-view+json"
+WIDGET_NOTE = "[an interactive widget: it runs in JupyterLab (make lab), not on this page]"
+
+
+def _static_outputs(executed: Path) -> str:
+    """The executed notebook as a static page shows it: a widget (sliders, the inline rerun viewer),
+    which needs a live kernel, becomes a one-line note instead of its Python repr."""
+    import nbformat
+
+    nb = nbformat.read(executed, as_version=4)
+    nb.metadata.pop("widgets", None)
+    for cell in nb.cells:
+        for output in cell.get("outputs", []):
+            if WIDGET in output.get("data", {}):
+                output["data"] = {"text/plain": WIDGET_NOTE}
+    return nbformat.writes(nb)
 
 
 def _copy(source: Path, target: Path) -> None:
@@ -173,6 +190,69 @@ def write_benchmarks_page() -> None:
     if not tables:
         parts.append("No table has been written yet: `make benchmark-tables`.\n")
     _write(GENERATED / "benchmarks.md", "\n".join(parts))
+
+
+def _mathjax_dir() -> Path:
+    """MathJax 3 as the ``sphinx-mathjax-offline`` package ships it (its extension is not used: it
+    does not declare itself safe for a parallel build; its files are all it is needed for)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("sphinx-mathjax-offline")
+    if spec is None or spec.origin is None:
+        raise RuntimeError("the docs need the sphinx-mathjax-offline package: pip install -e '.[docs]'")
+    return Path(spec.origin).parent / "static" / "mathjax"
+
+
+MATHJAX = _mathjax_dir()
+mathjax_path = "mathjax/tex-chtml.js"  # served with the site: the math renders without the internet
+
+
+def _copy_mathjax(app, exc) -> None:
+    from sphinx.util.fileutil import copy_asset
+
+    if exc is None:
+        copy_asset(str(MATHJAX), str(Path(app.outdir) / "_static" / "mathjax"))
+
+
+def _alias_targets() -> dict[str, str]:
+    """``labkit.X`` (and ``labkit.pkg.X`` re-exports) -> the dotted name X is documented under."""
+    import importlib
+
+    homes = {id(p.obj): p.name for p in public_api.public_names()}
+    aliases: dict[str, str] = {}
+    for modname in public_api.public_modules():
+        module = importlib.import_module(modname)
+        for attr in getattr(module, "__all__", ()):
+            obj = getattr(module, attr, None)
+            if id(obj) in homes and homes[id(obj)] != f"{modname}.{attr}":
+                aliases[f"{modname}.{attr}"] = homes[id(obj)]
+    return aliases
+
+
+ALIASES = _alias_targets()
+
+
+def _resolve_alias(app, env, node, contnode):
+    """A reference to a re-exported name (``:func:`labkit.split_and_merge```) goes to the page of its
+    home (``labkit.lines.split_merge.split_and_merge``), where it is documented once."""
+    if node.get("refdomain") != "py":
+        return None
+    target = node.get("reftarget", "")
+    home = ALIASES.get(target)
+    if home is None and not target.startswith("labkit."):
+        module = node.get("py:module") or ""
+        home = ALIASES.get(f"{module}.{target}") if module else None
+    if home is None:
+        return None
+    domain = env.get_domain("py")
+    node["reftarget"] = home
+    return domain.resolve_xref(env, node["refdoc"], app.builder, node["reftype"], home, node, contnode)
+
+
+def setup(app):
+    app.connect("build-finished", _copy_mathjax)
+    app.connect("missing-reference", _resolve_alias)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
 
 
 def prepare() -> None:

@@ -108,8 +108,9 @@ def _check_border(border) -> str:
 
 # ============================================================================ reference
 class Cluster(NamedTuple):
-    """A cluster found by :func:`dbscan1d_reference`: the inclusive range
-    ``lower .. upper`` of sorted positions it spans, and its label ``id``.
+    """A cluster found by :func:`dbscan1d_reference`.
+
+    It spans the inclusive range ``lower`` to ``upper`` of sorted positions and has the label ``id``.
 
     With ``border="first"`` semantics a border point in the range may carry the label
     of the cluster on its left, which reached it first.

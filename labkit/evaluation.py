@@ -345,8 +345,25 @@ class DetectionMatch:
 
 
 def is_occluded_in_truth(scan: Scan, truth, obj) -> bool:
-    """Whether a neighbouring beam of ``obj`` (a true circle or leg with ``first``/``last``
-    beams) hit something nearer than its end beam: then only part of it can be seen."""
+    """Whether a true object is seen only in part, occluded at one of its ends.
+
+    Whether a neighbouring beam of ``obj`` (a true circle or leg with ``first``/``last`` beams) hit
+    something nearer than its end beam: then only part of it can be seen.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    truth : labkit.sim.ScanTruth
+        Its ground truth (the range each beam hit).
+    obj : object
+        A true circle or leg with ``first`` and ``last`` beams.
+
+    Returns
+    -------
+    bool
+        True when a neighbouring beam hit something nearer than the object's end beam.
+    """
     n = scan.n_beams
     hits = truth.hits
     for end, nb in ((obj.first, obj.first - 1), (obj.last, obj.last + 1)):

@@ -126,6 +126,20 @@ def normalize_line(r, alpha):
     """Bring ``(r, alpha)`` to labkit's convention: ``r >= 0``, alpha in (-pi, pi].
 
     A negative ``r`` is made positive by turning the normal around (alpha + pi).
+
+    Parameters
+    ----------
+    r : float
+        Distance of the line from the origin, metres.
+    alpha : float
+        Angle of its normal, radians.
+
+    Returns
+    -------
+    r : float
+        The same line's ``r >= 0``.
+    alpha : float
+        Its normal's angle in (-pi, pi].
     """
     r = np.asarray(r, dtype=np.float64)
     alpha = np.asarray(alpha, dtype=np.float64)
@@ -182,13 +196,42 @@ def signed_distance_to_line(points, r: float, alpha: float) -> np.ndarray:
     """Signed orthogonal distance of points to the line ``(r, alpha)``.
 
     Positive on the far side of the line from the origin. Shape (N,) for points (N, 2).
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        The points, metres.
+    r : float
+        Distance of the line from the origin, metres.
+    alpha : float
+        Angle of its normal, radians.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        The signed distances, metres.
     """
     pts = np.asarray(points, dtype=np.float64)
     return pts[..., 0] * np.cos(alpha) + pts[..., 1] * np.sin(alpha) - r
 
 
 def project_onto_line(points, r: float, alpha: float) -> np.ndarray:
-    """Orthogonal projection of points onto the line ``(r, alpha)``; same shape as points."""
+    """Orthogonal projection of points onto the line ``(r, alpha)``; same shape as points.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        The points, metres.
+    r : float
+        Distance of the line from the origin, metres.
+    alpha : float
+        Angle of its normal, radians.
+
+    Returns
+    -------
+    ndarray of shape (N, 2)
+        The projections, metres.
+    """
     pts = np.asarray(points, dtype=np.float64)
     d = signed_distance_to_line(pts, r, alpha)
     n = np.array([np.cos(alpha), np.sin(alpha)])
@@ -196,7 +239,20 @@ def project_onto_line(points, r: float, alpha: float) -> np.ndarray:
 
 
 def intersect_lines(r1: float, alpha1: float, r2: float, alpha2: float) -> np.ndarray | None:
-    """Intersection point (2,) of two normal-form lines, or ``None`` if they are parallel."""
+    """Intersection point (2,) of two normal-form lines, or ``None`` if they are parallel.
+
+    Parameters
+    ----------
+    r1, alpha1 : float
+        The first line in normal form, metres and radians.
+    r2, alpha2 : float
+        The second line.
+
+    Returns
+    -------
+    ndarray of shape (2,) or None
+        The intersection point, metres; None for parallel lines.
+    """
     a = np.array([[np.cos(alpha1), np.sin(alpha1)], [np.cos(alpha2), np.sin(alpha2)]])
     det = np.linalg.det(a)
     if abs(det) < 1e-12:
@@ -205,27 +261,81 @@ def intersect_lines(r1: float, alpha1: float, r2: float, alpha2: float) -> np.nd
 
 
 def rotation_matrix(theta: float) -> np.ndarray:
-    """2x2 counter-clockwise rotation by ``theta`` radians."""
+    """2x2 counter-clockwise rotation by ``theta`` radians.
+
+    Parameters
+    ----------
+    theta : float
+        The angle, radians.
+
+    Returns
+    -------
+    ndarray of shape (2, 2)
+        ``[[cos, -sin], [sin, cos]]``.
+    """
     c, s = np.cos(theta), np.sin(theta)
     return np.array([[c, -s], [s, c]])
 
 
 def transform_points(points, pose) -> np.ndarray:
-    """Map points from a frame at ``pose = (x, y, theta)`` into the parent frame."""
+    """Map points from a frame at ``pose = (x, y, theta)`` into the parent frame.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        Points in the child frame, metres.
+    pose : array_like of shape (3,)
+        ``(x, y, theta)`` of the child frame in the parent frame, metres and radians.
+
+    Returns
+    -------
+    ndarray of shape (N, 2)
+        ``R(theta) p + (x, y)`` for every point ``p``.
+    """
     x, y, theta = pose
     pts = np.asarray(points, dtype=np.float64)
     return pts @ rotation_matrix(theta).T + np.array([x, y])
 
 
 def inverse_transform_points(points, pose) -> np.ndarray:
-    """Map points from the parent frame into the frame at ``pose = (x, y, theta)``."""
+    """Map points from the parent frame into the frame at ``pose = (x, y, theta)``.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        Points in the parent frame, metres.
+    pose : array_like of shape (3,)
+        ``(x, y, theta)`` of the child frame in the parent frame, metres and radians.
+
+    Returns
+    -------
+    ndarray of shape (N, 2)
+        ``R(theta)^T (p - (x, y))`` for every point ``p``.
+    """
     x, y, theta = pose
     pts = np.asarray(points, dtype=np.float64)
     return (pts - np.array([x, y])) @ rotation_matrix(theta)
 
 
 def arc_points(center, radius: float, start, end, n: int = 32) -> np.ndarray:
-    """Points (n, 2) along the shorter circular arc from ``start`` to ``end`` about ``center``."""
+    """Points (n, 2) along the shorter circular arc from ``start`` to ``end`` about ``center``.
+
+    Parameters
+    ----------
+    center : array_like of shape (2,)
+        Centre of the circle, metres.
+    radius : float
+        Its radius, metres.
+    start, end : array_like of shape (2,)
+        Points whose directions from the centre bound the arc.
+    n : int, default 32
+        The number of points.
+
+    Returns
+    -------
+    ndarray of shape (n, 2)
+        The points, from ``start``'s direction to ``end``'s.
+    """
     c = np.asarray(center, dtype=np.float64)
     a0 = np.arctan2(start[1] - c[1], start[0] - c[0])
     a1 = np.arctan2(end[1] - c[1], end[0] - c[0])

@@ -24,6 +24,7 @@ passed as the second argument (``fn(scan, record)``: use ``fn(scan, **record.kwa
 from __future__ import annotations
 
 import dataclasses
+import re
 import functools
 import inspect
 import math
@@ -277,7 +278,7 @@ def _with_parameters(cls: type) -> str | None:
         value = f.default
         default = (record.__name__ + "()" if record is not None
                    else f"{value:.10g}" if isinstance(value, float) else repr(value))
-        text = str(f.metadata.get("doc", "")).strip()
+        text = re.sub(r"\|([^|\n]+)\|", r"``|\1|``", str(f.metadata.get("doc", "")).strip())  # |x|: not RST
         text = text[:1].upper() + text[1:] if text else "See the record's description."
         out += [f"{pad}{name} : {kind}, default {default}", f"{pad}    {text.rstrip('.')}."]
     return "\n".join(out) + "\n" + pad

@@ -316,12 +316,29 @@ def range_segments(
 
 
 def detector_labels(scan: Scan, segments, range_sigma_m: float | str | None = None) -> np.ndarray:
-    """The range segments a detector works on, as per-beam labels: ``segments`` when given
-    (labels or :class:`RangeSegment` records, see :func:`labels_from`), else the scan's default
-    segmentation (:class:`SegmentationParams`, the pipeline's), whose adaptive breakpoints
-    follow the detector's own range noise as its thresholds do: ``"auto"`` (the scan's estimate)
-    or a number of metres; 0, a detector's fixed tests (the papers'), the fixed settings' noise
-    (:data:`labkit.noise.RANGE_SIGMA_M`); None the segmentation's default."""
+    """The range segments a detector works on, as per-beam labels.
+
+    The range segments a detector works on, as per-beam labels: ``segments`` when given (labels or
+    :class:`RangeSegment` records, see :func:`labels_from`), else the scan's default segmentation
+    (:class:`SegmentationParams`, the pipeline's), whose adaptive breakpoints follow the detector's
+    own range noise as its thresholds do: ``"auto"`` (the scan's estimate) or a number of metres; 0,
+    a detector's fixed tests (the papers'), the fixed settings' noise
+    (:data:`labkit.noise.RANGE_SIGMA_M`); None the segmentation's default.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    segments : ndarray of shape (N,) or list of RangeSegment or None
+        Precomputed segments, or None for the default segmentation.
+    range_sigma_m : float, "auto" or None
+        The detector's range noise (above).
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        One label per beam, -1 for none.
+    """
     if segments is not None:
         return labels_from(scan, segments)
     if range_sigma_m is None:
@@ -336,6 +353,18 @@ def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     consecutive beams, -1 for none). Returns ``(beams, starts, stops)``: segment ``k`` is
     ``beams[starts[k]:stops[k]]``. A segment crossing the seam of a full-circle scan (the same
     label on the first and the last beam) comes first, its beams running N-k..N-1, 0..m.
+
+    Parameters
+    ----------
+    labels : ndarray of shape (N,)
+        One label per beam, -1 for none.
+
+    Returns
+    -------
+    beams : ndarray of int
+        The beams of every segment, segment after segment.
+    starts, stops : ndarray of int
+        Where each segment's beams start and stop in ``beams``.
 
     Examples
     --------
@@ -367,8 +396,23 @@ def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
-    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware (see
-    :func:`segment_order`)."""
+    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware.
+
+    :class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware (see
+    :func:`segment_order`).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the labels belong to.
+    labels : ndarray of shape (N,)
+        One label per beam, -1 for none.
+
+    Returns
+    -------
+    list of RangeSegment
+        One record per label, in the order of :func:`segment_order`.
+    """
     beams, starts, stops = segment_order(labels)
     out = []
     for a, b in zip(starts.tolist(), stops.tolist(), strict=True):
@@ -381,12 +425,30 @@ def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
 
 
 def labels_from(scan: Scan, segments, name: str = "segments") -> np.ndarray:
-    """Per-beam segment labels from ``segments`` given either as per-beam labels (an int
+    """Per-beam segment labels from ``segments``.
+
+    ``segments`` are given either as per-beam labels (an int
     array of shape ``(scan.n_beams,)``, -1 for none, as :func:`segment_labels` returns) or as
     :class:`RangeSegment` records. Labels on invalid beams are set to -1.
 
     This lets one segmentation be shared by every detector of a pipeline.
 
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    segments : ndarray of shape (N,) or list of RangeSegment
+        Per-beam labels or segment records.
+    name : str, default "segments"
+        The argument's name in error messages.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        One label per beam, -1 for none and on invalid beams.
+
+    Examples
+    --------
     >>> s = Scan(ranges=[1.0, 1.0, np.nan, 1.0], angles=np.radians(np.arange(4)))
     >>> labels_from(s, np.array([0, 0, 0, 1])).tolist()
     [0, 0, -1, 1]

@@ -228,7 +228,9 @@ def local_directions(scan: Scan, window: int = 1, straight_sigma: float | None =
 
 
 def auto_direction_window(scan: Scan, sigma: float, eps_theta: float = EPS_THETA, largest: int = MAX_WINDOW) -> int:
-    """``direction_window="auto"``: the narrowest window (half-width, beams) whose local
+    """The half-width of the local-direction window that ``direction_window="auto"`` picks.
+
+    It is the narrowest window (half-width, beams) whose local
     directions range noise ``sigma`` tilts by no more than ``eps_theta`` (one standard
     deviation; see :func:`local_directions`), for beams at the scan's median range and at
     normal incidence, at most ``largest``. Then the directions of one wall fall within DBSCAN's
