@@ -24,10 +24,10 @@ passed as the second argument (``fn(scan, record)``: use ``fn(scan, **record.kwa
 from __future__ import annotations
 
 import dataclasses
-import re
 import functools
 import inspect
 import math
+import re
 import types
 import warnings
 from collections.abc import Callable
