@@ -96,7 +96,7 @@ lint: $(VENV)/.installed-dev
 # The docs: user guides, the API reference, the course with its outputs (kept by the notebook tests in
 # docs/_build/executed/, or executed here once when missing), the exercises' student copies. Warnings are
 # errors (a broken cross-reference fails); --keep-going lists them all. tests/test_docs_site.py runs this.
-SPHINX = $(BIN)/python -m sphinx -b html -W --keep-going -q -j 1
+SPHINX = $(BIN)/python -m sphinx -b html -E -W --keep-going -q -j 2
 docs: $(VENV)/.installed-dev
 	$(SPHINX) docs docs/_build/html
 	@echo "docs: file://$(abspath docs/_build/html/index.html)"

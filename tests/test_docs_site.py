@@ -35,6 +35,8 @@ HTML = REPO / "docs" / "_build" / "html"
 CHROMIUM = Path(os.environ.get("LABKIT_CHROMIUM", "/usr/bin/chromium"))
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync"]
+# make docs's build: a fresh environment (-E: no page left from an older docstring), warnings as errors
+SPHINX_OPTIONS = ["-b", "html", "-E", "-W", "--keep-going", "-q", "-j", "2"]
 PAGES = {
     "index": "index.html",
     "api": "_generated/api/generated/labkit.segmentation.breakpoint_thresholds.html",
@@ -54,8 +56,8 @@ def site(tmp_path_factory) -> Path:
         done = shared / "docs_build.done"
         if not done.exists():
             started = time.monotonic()
-            run = subprocess.run([sys.executable, "-m", "sphinx", "-b", "html", "-W", "--keep-going", "-q",
-                                  "docs", str(HTML)], cwd=REPO, capture_output=True, text=True)
+            run = subprocess.run([sys.executable, "-m", "sphinx", *SPHINX_OPTIONS, "docs", str(HTML)], cwd=REPO,
+                                 capture_output=True, text=True)
             assert run.returncode == 0, (f"the docs build failed (make docs):\n{run.stdout[-4000:]}\n"
                                          f"{run.stderr[-8000:]}")
             done.write_text(f"{time.monotonic() - started:.1f}")
