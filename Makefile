@@ -9,16 +9,17 @@ PIP     = $(BIN)/python -m pip
 # (the tests of tests/test_browser.py share one batch of browsers between the two, under a lock)
 JOBS   ?= 2
 
-.PHONY: demo test lab data release grade lint clean help sandbox chromium
+.PHONY: demo test lab data release grade lint clean help sandbox chromium docs benchmark-tables
 
 help:
 	@echo "make demo     set up .venv and run the demo on the bundled hall bag (out/demo.rrd, out/demo.png)"
-	@echo "make test     set up .venv with the dev tools and run every test"
+	@echo "make test     set up .venv with the dev tools and run every test (the docs build last)"
 	@echo "make lab      open JupyterLab on the course notebooks"
 	@echo "make data     regenerate the bundled recordings in data/ (bit-for-bit identical)"
 	@echo "make release  regenerate the student copies of the exercises (exercises/release/)"
 	@echo "make grade    grade exercises/submitted/ into the gradebook and exercises/grades.csv (EX=ex01 for one)"
-	@echo "make lint     ruff and mypy"
+	@echo "make lint     ruff, mypy and numpydoc's validation of every public docstring"
+	@echo "make docs     build the documentation into docs/_build/html (warnings are errors)"
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -61,9 +62,12 @@ chromium:
 	    echo "note: chromium is missing: 'sudo apt-get install chromium' (the browser test needs it)"; \
 	  fi; }
 
+# The docs are built last (tests/test_docs_site.py: the build with warnings as errors, then its pages in
+# chromium), from the notebook outputs the first run kept: the course is executed once, not twice
 test: $(VENV)/.installed-dev sandbox chromium
 	$(ENGINES)
-	$(BIN)/python -m pytest -n $(JOBS)
+	$(BIN)/python -m pytest -n $(JOBS) --ignore=tests/test_docs_site.py
+	$(BIN)/python -m pytest -n 0 -p no:cacheprovider tests/test_docs_site.py
 
 # The students' JupyterLab: notebooks/.jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
 # hides nbgrader's instructor tools and keeps Validate for exercises; the rerun viewer loads its code
@@ -85,8 +89,28 @@ grade: $(VENV)/.installed sandbox
 	$(BIN)/python -m labkit.grading $(or $(EX),all) --jobs $(JOBS)
 
 lint: $(VENV)/.installed-dev
-	$(BIN)/ruff check labkit tests benchmarks
+	$(BIN)/ruff check labkit tests benchmarks docs
 	$(BIN)/mypy labkit
+	$(BIN)/python -m docs.public_api
+
+# The docs: user guides, the API reference, the course with its outputs (kept by the notebook tests in
+# docs/_build/executed/, or executed here once when missing), the exercises' student copies. Warnings are
+# errors (a broken cross-reference fails); --keep-going lists them all. tests/test_docs_site.py runs this.
+SPHINX = $(BIN)/python -m sphinx -b html -E -W --keep-going -q -j 2
+docs: $(VENV)/.installed-dev
+	$(SPHINX) docs docs/_build/html
+	@echo "docs: file://$(abspath docs/_build/html/index.html)"
+
+# The benchmarks' tables for the docs (docs/benchmarks/*.txt, committed): minutes of both cores; run on a quiet machine
+BENCHMARK_TABLES ?= dbscan1d lines pipeline
+benchmark-tables: $(VENV)/.installed-dev
+	@mkdir -p docs/benchmarks
+	@for b in $(BENCHMARK_TABLES); do \
+	  echo "benchmarks/$$b.py"; \
+	  { echo "\$$ python benchmarks/$$b.py    # $$(date -u +%Y-%m-%d), $$(nproc) cores, load $$(cut -d' ' -f1-3 /proc/loadavg)"; \
+	    $(BIN)/python benchmarks/$$b.py; } > docs/benchmarks/.$$b.txt.tmp && mv docs/benchmarks/.$$b.txt.tmp docs/benchmarks/$$b.txt \
+	  || { rm -f docs/benchmarks/.$$b.txt.tmp; exit 1; }; \
+	done
 
 clean:
-	rm -rf out .pytest_cache
+	rm -rf out .pytest_cache docs/_build docs/_generated

@@ -108,8 +108,9 @@ def _check_border(border) -> str:
 
 # ============================================================================ reference
 class Cluster(NamedTuple):
-    """A cluster found by :func:`dbscan1d_reference`: the inclusive range
-    ``lower .. upper`` of sorted positions it spans, and its label ``id``.
+    """A cluster found by :func:`dbscan1d_reference`.
+
+    It spans the inclusive range ``lower`` to ``upper`` of sorted positions and has the label ``id``.
 
     With ``border="first"`` semantics a border point in the range may carry the label
     of the cluster on its left, which reached it first.
@@ -316,6 +317,11 @@ def dbscan1d(x, eps: float, min_pts: int, *, period: float | None = None, border
         ``min_pts`` not an integer >= 1, ``period`` not a finite number > 0, or an
         unknown ``border``. The message names the argument.
 
+    References
+    ----------
+    B. Meglicki, "Linear time DBSCAN for sorted 1D data and laser range scan
+    segmentation", 2021, section 2.
+
     Examples
     --------
     >>> dbscan1d([0.0, 0.1, 0.2, 5.0, 9.0, 9.1, 9.2], eps=0.15, min_pts=2)
@@ -337,17 +343,12 @@ def dbscan1d(x, eps: float, min_pts: int, *, period: float | None = None, border
     array([ 0,  0,  0,  0, -1,  1,  1,  1,  1])
     >>> dbscan1d(x, 2, 4, border="all")[4]
     array([0, 1])
-
-    References
-    ----------
-    B. Meglicki, "Linear time DBSCAN for sorted 1D data and laser range scan
-    segmentation", 2021, section 2.
     """
     return _dbscan1d(x, eps, min_pts, period, border)[0]
 
 
 class DBSCAN1D:
-    """scikit-learn style estimator around :func:`dbscan1d`.
+    """A scikit-learn style estimator around :func:`dbscan1d`.
 
     Parameters
     ----------

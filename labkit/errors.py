@@ -63,6 +63,29 @@ class CorruptFileError(ValueError):
     exactly when the file says how many it held (a bag's intact index), else as "at least N"
     (a file cut short: what came after the cut is unknown).
 
+    Parameters
+    ----------
+    path : str or Path
+        The damaged file.
+    where : str
+        Where the first fault is.
+    n_read : int
+        How many scans were read.
+    reason : str, default ""
+        What is wrong at ``where``.
+    n_skipped : int, default 0
+        Scans lost (``n_lost``).
+    lost_exact : bool, default True
+        Whether the count of lost scans is exact.
+    n_other : int, default 0
+        Records of other topics lost.
+    places : int, default 1
+        How many damaged places were found.
+    stopped : bool, default False
+        Reading stopped at the first fault.
+    n_unread : int, optional
+        With ``stopped``: the scans after the fault that were not read, when known.
+
     Attributes
     ----------
     path : Path

@@ -77,7 +77,7 @@ __all__ = [
 class LineMatch:
     """How the lines of one scan match its walls (see the module docstring for the rule).
 
-    Attributes
+    Parameters
     ----------
     pairs : tuple of (line index, wall index)
         The matches; wall indices refer to the ``walls`` given (``truth.walls``).
@@ -188,6 +188,7 @@ def match_lines(
     Returns
     -------
     LineMatch
+        The matched pairs with their ``dr`` and ``dalpha``, the false positives and the missed walls.
 
     Examples
     --------
@@ -290,8 +291,23 @@ class LineScores:
 
 
 def score_lines(results: Iterable[tuple[Sequence, object]], **rule) -> LineScores:
-    """Pool :func:`match_lines` over ``(lines, truth)`` pairs, one per scan; ``rule``: the
-    keyword arguments of :func:`match_lines`."""
+    """Pool :func:`match_lines` over ``(lines, truth)`` pairs, one per scan.
+
+    Pool :func:`match_lines` over ``(lines, truth)`` pairs, one per scan; ``rule``: the keyword
+    arguments of :func:`match_lines`.
+
+    Parameters
+    ----------
+    results : iterable of (lines, truth)
+        The extracted lines of each scan and the scan's ground truth.
+    **rule
+        The keyword arguments of :func:`match_lines` (the matching rule).
+
+    Returns
+    -------
+    LineScores
+        True- and false-positive rates and the spread of ``dr`` and ``dalpha`` over every scan.
+    """
     n_scans = n_truth = n_lines = n_scored = n_matched = 0
     dr, da = [], []
     for lines, truth in results:
@@ -329,8 +345,25 @@ class DetectionMatch:
 
 
 def is_occluded_in_truth(scan: Scan, truth, obj) -> bool:
-    """Whether a neighbouring beam of ``obj`` (a true circle or leg with ``first``/``last``
-    beams) hit something nearer than its end beam: then only part of it can be seen."""
+    """Whether a true object is seen only in part, occluded at one of its ends.
+
+    Whether a neighbouring beam of ``obj`` (a true circle or leg with ``first``/``last`` beams) hit
+    something nearer than its end beam: then only part of it can be seen.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    truth : labkit.sim.ScanTruth
+        Its ground truth (the range each beam hit).
+    obj : object
+        A true circle or leg with ``first`` and ``last`` beams.
+
+    Returns
+    -------
+    bool
+        True when a neighbouring beam hit something nearer than the object's end beam.
+    """
     n = scan.n_beams
     hits = truth.hits
     for end, nb in ((obj.first, obj.first - 1), (obj.last, obj.last + 1)):
@@ -376,8 +409,32 @@ def _match_detections(detections, objects, scan, truth, radius_of, true_radius_o
 
 def match_circles(circles: Sequence, scan: Scan, truth, *, max_center_m: float = 0.1, min_beams: int = 4,
                   drop_occluded: bool = True) -> DetectionMatch:
-    """Match detected circles (``center``, ``radius``) to ``truth.circles`` of one scan (see
-    the module docstring for the rule)."""
+    """Match detected circles to the ground truth of one scan (the module docstring has the rule).
+
+    Match detected circles (``center``, ``radius``) to ``truth.circles`` of one scan (see the module
+    docstring for the rule).
+
+    Parameters
+    ----------
+    circles : sequence
+        The detections of one scan (``center``, ``radius``).
+    scan : Scan
+        The scan they were detected in.
+    truth : labkit.sim.ScanTruth
+        The scan's ground truth (one scan of :func:`labkit.sim.read_truth`).
+    max_center_m : float, default 0.1
+        Largest distance between a detection's centre and the true one, metres.
+    min_beams : int, default 4
+        True objects hit by fewer beams are not in the truth scored.
+    drop_occluded : bool, default True
+        Leave out true objects occluded at either end (a neighbouring beam hit something nearer).
+
+    Returns
+    -------
+    DetectionMatch
+        The matched pairs with their centre and radius errors, the true objects and the detections
+        that count.
+    """
     return _match_detections(circles, list(truth.circles), scan, truth, lambda c: float(c.radius),
                              lambda o: float(o.radius), max_center_m=max_center_m, min_beams=min_beams,
                              drop_occluded=drop_occluded)
@@ -385,8 +442,32 @@ def match_circles(circles: Sequence, scan: Scan, truth, *, max_center_m: float =
 
 def match_legs(legs: Sequence, scan: Scan, truth, *, max_center_m: float = 0.1, min_beams: int = 3,
                drop_occluded: bool = True) -> DetectionMatch:
-    """Match detected legs (``center``, ``diameter``) to ``truth.legs`` of one scan (see the
-    module docstring for the rule)."""
+    """Match detected legs to the ground truth of one scan (the module docstring has the rule).
+
+    Match detected legs (``center``, ``diameter``) to ``truth.legs`` of one scan (see the module
+    docstring for the rule).
+
+    Parameters
+    ----------
+    legs : sequence
+        The detections of one scan (``center``, ``diameter``).
+    scan : Scan
+        The scan they were detected in.
+    truth : labkit.sim.ScanTruth
+        The scan's ground truth (one scan of :func:`labkit.sim.read_truth`).
+    max_center_m : float, default 0.1
+        Largest distance between a detection's centre and the true one, metres.
+    min_beams : int, default 3
+        True objects hit by fewer beams are not in the truth scored.
+    drop_occluded : bool, default True
+        Leave out true objects occluded at either end (a neighbouring beam hit something nearer).
+
+    Returns
+    -------
+    DetectionMatch
+        The matched pairs with their centre and radius errors, the true objects and the detections
+        that count.
+    """
     return _match_detections(legs, list(truth.legs), scan, truth, lambda g: float(g.diameter),
                              lambda o: float(o.diameter), max_center_m=max_center_m, min_beams=min_beams,
                              drop_occluded=drop_occluded)
@@ -424,8 +505,21 @@ class DetectionScores:
 
 
 def score_detections(matches: Iterable[DetectionMatch]) -> DetectionScores:
-    """Pool per-scan :class:`DetectionMatch` results (from :func:`match_circles` or
-    :func:`match_legs`)."""
+    """Pool per-scan :class:`DetectionMatch` results (of :func:`match_circles` or :func:`match_legs`).
+
+    Pool per-scan :class:`DetectionMatch` results (from :func:`match_circles` or
+    :func:`match_legs`).
+
+    Parameters
+    ----------
+    matches : iterable of DetectionMatch
+        The per-scan matches.
+
+    Returns
+    -------
+    DetectionScores
+        Precision, recall, the centre and radius errors and the counts they come from.
+    """
     n_scans = n_truth = n_scored = n_matched = n_det = 0
     ce, re = [], []
     for m in matches:
@@ -480,10 +574,24 @@ class RayErrors:
 
 
 def ray_errors(scan: Scan, segments: Sequence) -> RayErrors:
-    """The ray-axis errors of ``segments`` (anything with ``start``/``end``, sensor frame)
-    against ``scan``: for each valid beam, the measured range minus the distance from the
-    sensor to the nearest point where the beam's ray crosses a segment (a ray through a
-    segment's end point meets it, to within a billionth of its length).
+    """The ray-axis errors of ``segments`` against ``scan`` (no ground truth needed).
+
+    The ray-axis errors of ``segments`` (anything with ``start``/``end``, sensor frame) against
+    ``scan``: for each valid beam, the measured range minus the distance from the sensor to the
+    nearest point where the beam's ray crosses a segment (a ray through a segment's end point meets
+    it, to within a billionth of its length).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the segments were extracted from.
+    segments : sequence
+        Line segments (anything with ``start`` and ``end``, sensor frame, metres).
+
+    Returns
+    -------
+    RayErrors
+        The error of each valid beam whose ray meets a segment, with its RMSE and robust summaries.
 
     Examples
     --------

@@ -43,7 +43,7 @@ def frozen_array(a) -> np.ndarray:
 class LineSegment:
     """A line fitted to a run of beams.
 
-    Attributes
+    Parameters
     ----------
     r, alpha : float
         The line in normal form (``r >= 0`` m, ``alpha`` in (-pi, pi]).
@@ -101,8 +101,26 @@ class LineSegment:
 
 
 def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None) -> LineSegment:
-    """Fit :func:`labkit.fitting.fit_line_polar` to ``points`` (M, 2, sensor frame) of the
-    beams ``indices`` and cut the line at the projections of the first and last point.
+    """Fit a line to the points of some beams and cut it at their first and last point.
+
+    Fit :func:`labkit.fitting.fit_line_polar` to ``points`` (M, 2, sensor frame) of the beams
+    ``indices`` and cut the line at the projections of the first and last point.
+
+    Parameters
+    ----------
+    points : ndarray of shape (M, 2)
+        The points of the beams, metres, sensor frame.
+    indices : array_like of shape (M,)
+        Their beam indices.
+    weights : array_like of shape (M,), optional
+        Weights of the polar fit; default ``1 / range`` (:func:`labkit.fitting.fit_line_polar`).
+    range_sigma : float, optional
+        Range noise for the line's covariance, metres.
+
+    Returns
+    -------
+    LineSegment
+        The fitted line with its end points, beam indices and covariance.
 
     Examples
     --------
@@ -128,7 +146,7 @@ def line_segment(points: np.ndarray, indices, *, weights=None, range_sigma=None)
 class Corner:
     """Where two consecutive line segments meet.
 
-    Attributes
+    Parameters
     ----------
     point : ndarray (2,)
         Intersection of the two lines.
@@ -169,8 +187,9 @@ def _side(a, b, p) -> float:
 
 @dataclass(frozen=True)
 class CornerParams(Params):
-    """Parameters of :func:`find_corners` and the ``[corners]`` table of :class:`labkit.Config`,
-    each default once: lengths in metres, angles in degrees."""
+    """Parameters of :func:`find_corners`.
+
+    The ``[corners]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
 
     min_angle_deg: float = param(30.0, "smallest angle between the two lines, degrees", lo=0, strict=True, hi=90)
     max_gap_m: float = param(0.3, "largest gap between the lines' facing ends, metres", lo=0)
@@ -186,7 +205,9 @@ def find_corners(
     max_extension_m: float = CornerParams.max_extension_m,
     wrap: bool = False,
 ) -> list[Corner]:
-    """Corners between consecutive line segments (in the order given, usually scan order).
+    """Corners between consecutive line segments, in the order given (usually scan order).
+
+    Corners between consecutive line segments (in the order given, usually scan order).
 
     Two consecutive segments make a corner when their lines differ in direction by more
     than ``min_angle_deg`` (degrees, default 30) and the end of the first is within ``max_gap_m`` of the start of the
@@ -197,6 +218,24 @@ def find_corners(
     lies beyond the chord joining the two segments' far ends (seen from the sensor at the
     origin) and ``"convex"`` when it lies on the sensor's side. ``wrap=True`` also pairs the
     last segment with the first (a full-circle scan).
+
+    Parameters
+    ----------
+    lines : list of LineSegment
+        The segments, usually in scan order.
+    min_angle_deg : float, default 30.0
+        Smallest change of direction between two segments that makes a corner, degrees.
+    max_gap_m : float, default 0.3
+        Largest distance from the end of one segment to the start of the next, metres.
+    max_extension_m : float, default 0.1
+        How far the lines may be extended to meet before the corner is ``"extrapolated"``, metres.
+    wrap : bool, default False
+        Also pair the last segment with the first (a full-circle scan).
+
+    Returns
+    -------
+    list of Corner
+        The corners, in the order of ``lines``.
 
     Examples
     --------
@@ -249,6 +288,23 @@ class Circle:
     ``center`` (2,) and ``radius`` in metres; ``iav_mean``/``iav_std`` the inscribed-angle
     statistics in radians; ``confidence`` in [0, 1]; ``first``/``last`` beam indices;
     ``n_points``; ``kind`` is ``"circle"``, ``"arc"`` (embedded in a wall) or ``"arc-like"``.
+
+    Parameters
+    ----------
+    center : ndarray of shape (2,)
+        Centre, metres, sensor frame.
+    radius : float
+        Radius, metres.
+    iav_mean, iav_std : float
+        Mean and standard deviation of the inscribed angles, radians.
+    confidence : float
+        In [0, 1].
+    first, last : int
+        The first and last beam index of the segment.
+    n_points : int
+        Its number of points.
+    kind : {"circle", "arc", "arc-like"}, default "circle"
+        ``"arc"``: embedded in a wall.
     """
 
     center: np.ndarray
@@ -271,8 +327,26 @@ class Circle:
 @fast_init
 @dataclass(frozen=True, eq=False)
 class Leg:
-    """A leg candidate: ``center`` (2,) and ``diameter`` in metres, ``middle`` the segment's
-    middle point (Xavier et al. Table I), beam indices, IAV statistics."""
+    """A leg candidate found in a scan.
+
+    A leg candidate: ``center`` (2,) and ``diameter`` in metres, ``middle`` the segment's middle
+    point (Xavier et al. Table I), beam indices, IAV statistics.
+
+    Parameters
+    ----------
+    center : ndarray of shape (2,)
+        Centre of the leg, metres, sensor frame.
+    diameter : float
+        Diameter, metres.
+    middle : ndarray of shape (2,)
+        The segment's middle point (Xavier et al. Table I).
+    first, last : int
+        The first and last beam index of the segment.
+    n_points : int
+        Its number of points.
+    iav_mean, iav_std : float
+        Mean and standard deviation of the inscribed angles, radians.
+    """
 
     center: np.ndarray
     diameter: float
@@ -292,7 +366,15 @@ class Leg:
 
 @dataclass(frozen=True, eq=False)
 class Person:
-    """Two legs closer than the pairing distance; ``center`` is their midpoint."""
+    """Two legs closer than the pairing distance; ``center`` is their midpoint.
+
+    Parameters
+    ----------
+    center : ndarray of shape (2,)
+        The midpoint of the two legs' centres, metres.
+    legs : tuple of Leg
+        The two legs, in scan order.
+    """
 
     center: np.ndarray
     legs: tuple[Leg, Leg]
@@ -305,7 +387,7 @@ class Person:
 class Features:
     """Every feature found in one scan, with the time each stage took.
 
-    Attributes
+    Parameters
     ----------
     stamp_ns : int
         The scan's time stamp.

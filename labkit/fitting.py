@@ -52,7 +52,7 @@ __all__ = [
 class LineFit:
     """A fitted line.
 
-    Attributes
+    Parameters
     ----------
     r : float, metres
         Distance of the line from the origin, ``>= 0``.
@@ -85,8 +85,26 @@ class LineFit:
 
 @dataclass(frozen=True, eq=False)
 class CircleFit:
-    """A fitted circle: ``center`` (2,), ``radius``, RMS of the orthogonal distances
-    ``|p - center| - radius``, point count, the method and its iteration count."""
+    """A fitted circle.
+
+    A fitted circle: ``center`` (2,), ``radius``, RMS of the orthogonal distances ``|p - center| -
+    radius``, point count, the method and its iteration count.
+
+    Parameters
+    ----------
+    center : ndarray of shape (2,)
+        Centre, metres.
+    radius : float
+        Radius, metres.
+    rms : float
+        RMS of the orthogonal distances ``|p - center| - radius``, metres.
+    n_points : int
+        The number of points fitted.
+    method : {"algebraic", "geometric"}
+        The fit.
+    iterations : int, default 0
+        Gauss-Newton iterations of ``"geometric"``.
+    """
 
     center: np.ndarray
     radius: float
@@ -248,16 +266,32 @@ def _normal_cdf(x: np.ndarray) -> np.ndarray:
 
 
 def placement_probability(cov, max_dr_m: float, max_dalpha: float) -> np.ndarray | float:
-    """The probability that a line whose ``(r, alpha)`` has the covariance ``cov`` lies within
-    ``max_dr_m`` in ``r`` and ``max_dalpha`` (radians) in ``alpha`` of the true line: the mass
-    of the zero-mean Gaussian ``N(0, cov)`` in the rectangle ``|dr| <= max_dr_m``,
-    ``|dalpha| <= max_dalpha``.
+    """The probability that a line with covariance ``cov`` lies near the true line.
+
+    The probability that a line whose ``(r, alpha)`` has the covariance ``cov`` lies within
+    ``max_dr_m`` in ``r`` and ``max_dalpha`` (radians) in ``alpha`` of the true line: the mass of
+    the zero-mean Gaussian ``N(0, cov)`` in the rectangle ``|dr| <= max_dr_m``, ``|dalpha| <=
+    max_dalpha``.
 
     A short or distant line is known worse in ``r`` than its angle error alone says: ``r``
     is measured from the sensor, so a turn of the line about its centroid moves ``r`` too; the
     correlation is kept (the rectangle is integrated over ``alpha`` with the conditional
     distribution of ``r``). ``cov``: one (2, 2) matrix (returns a float) or (K, 2, 2)
     (returns K probabilities). A NaN covariance gives 0.
+
+    Parameters
+    ----------
+    cov : ndarray of shape (2, 2) or (K, 2, 2)
+        Covariance of ``(r, alpha)``, metres and radians.
+    max_dr_m : float
+        Half-width of the rectangle in ``r``, metres.
+    max_dalpha : float
+        Half-width of the rectangle in ``alpha``, radians.
+
+    Returns
+    -------
+    float or ndarray of shape (K,)
+        The probability for each covariance (0 for a NaN covariance).
 
     Examples
     --------
@@ -333,6 +367,8 @@ def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
     Returns
     -------
     LineFit
+        The line ``(r, alpha)`` in normal form, its covariance (with ``range_sigma``), the RMS of the
+        orthogonal residuals and the number of points.
 
     Examples
     --------
@@ -390,11 +426,23 @@ def fit_line_polar(rho, theta, weights=None, *, range_sigma=None) -> LineFit:
 
 
 def fit_line_tls(points, *, point_sigma=None) -> LineFit:
-    """Orthogonal regression (total least squares): the line minimising the sum of squared
-    orthogonal distances, all points weighted equally.
+    """Orthogonal regression (total least squares), all points weighted equally.
 
-    ``point_sigma`` (metres) is the isotropic noise of each coordinate for the covariance;
-    by default it is estimated from the residuals.
+    The line minimising the sum of squared orthogonal distances.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        The points, metres, at least two distinct.
+    point_sigma : float, optional
+        Isotropic noise of each coordinate for the covariance, metres; by default estimated from the
+        residuals.
+
+    Returns
+    -------
+    LineFit
+        The line ``(r, alpha)`` in normal form, its covariance, the RMS orthogonal residual and the
+        number of points.
 
     Examples
     --------
@@ -418,6 +466,16 @@ def fit_line_ols(points) -> LineFit:
     It minimises *vertical* distances, so the result depends on the frame and it cannot
     represent a vertical line (``ValueError`` when all ``x`` are equal). ``covariance`` is
     NaN: this fit has no range-noise model. ``rms`` is still the orthogonal RMS.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        The points, metres; not all with the same ``x``.
+
+    Returns
+    -------
+    LineFit
+        The line in normal form, ``covariance`` NaN, ``rms`` the orthogonal RMS.
 
     Examples
     --------
@@ -454,6 +512,28 @@ def fit_circle(points, method: str = "algebraic", *, max_iterations: int = 50, t
     Gauss-Newton started from the algebraic fit.
 
     Raises ``ValueError`` for fewer than 3 points or (nearly) collinear points.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        At least 3 points, not collinear, metres.
+    method : {"algebraic", "geometric"}, default "algebraic"
+        The objective minimised (above).
+    max_iterations : int, default 50
+        Gauss-Newton iterations at most (``"geometric"``).
+    tol : float, default 1e-12
+        Stop when the squared length of a Gauss-Newton step falls under ``tol`` times
+        ``max(1, radius**2)``.
+
+    Returns
+    -------
+    CircleFit
+        Centre, radius, RMS of the orthogonal residuals, number of points, method and iterations.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 3 points or (nearly) collinear points.
 
     Examples
     --------

@@ -97,9 +97,20 @@ LINE_Z = 3.0
 
 
 class IAVStats(NamedTuple):
-    """Mean and (population) standard deviation of the inscribed angles of a segment,
-    radians, and the number of interior points they come from. Unpacks as
-    ``mean, std, n_angles``."""
+    """Mean and (population) standard deviation of the inscribed angles of a segment.
+
+    Mean and (population) standard deviation of the inscribed angles of a segment, radians, and the
+    number of interior points they come from. Unpacks as ``mean, std, n_angles``.
+
+    Parameters
+    ----------
+    mean : float
+        Mean inscribed angle, radians.
+    std : float
+        Population standard deviation of the inscribed angles, radians.
+    n_angles : int
+        The number of interior points they come from.
+    """
 
     mean: float
     std: float
@@ -154,7 +165,8 @@ def inscribed_angles(points, *, signed: bool = False) -> np.ndarray:
 
     Returns
     -------
-    ndarray of shape (M - 2,), radians
+    ndarray of shape (M - 2,)
+        The angle at each interior point, radians.
 
     Raises
     ------
@@ -192,11 +204,25 @@ def inscribed_angles(points, *, signed: bool = False) -> np.ndarray:
 
 
 def iav_stats(points, *, signed: bool = False) -> IAVStats:
-    """Mean and standard deviation of the inscribed angles of ``points``
-    (:meth:`IAVStats.from_angles` of :func:`inscribed_angles`).
+    """Mean and standard deviation of the inscribed angles of ``points``.
+
+    Mean and standard deviation of the inscribed angles of ``points`` (:meth:`IAVStats.from_angles`
+    of :func:`inscribed_angles`).
 
     The standard deviation is the population one (``ddof=0``); Xavier et al. do not say
     which they use. Same arguments and degenerate-input policy as :func:`inscribed_angles`.
+
+    Parameters
+    ----------
+    points : array_like of shape (M, 2)
+        The points of a segment, M >= 3.
+    signed : bool, default False
+        Measure the angles counter-clockwise, in [0, 2 pi), instead of in [0, pi] (:func:`inscribed_angles`).
+
+    Returns
+    -------
+    IAVStats
+        ``mean, std, n_angles``: radians, radians, the number of interior points.
 
     Examples
     --------
@@ -210,8 +236,10 @@ def iav_stats(points, *, signed: bool = False) -> IAVStats:
 
 # ============================================================================ the prerequisite
 def middle_point_offset(points, viewpoint=(0.0, 0.0)) -> float:
-    """The circle prerequisite of Xavier et al. Fig. 5: where the middle point lies
-    relative to the chord, as a fraction of the chord length.
+    """The circle prerequisite of Xavier et al. Fig. 5: the middle point's offset from the chord.
+
+    The circle prerequisite of Xavier et al. Fig. 5: where the middle point lies relative to the
+    chord, as a fraction of the chord length.
 
     The chord joins the extremes ``P_1`` and ``P_M``; the middle point is
     ``P_(M // 2)`` (0-based row ``M // 2``). Returns its distance from the chord's line
@@ -226,6 +254,19 @@ def middle_point_offset(points, viewpoint=(0.0, 0.0)) -> float:
     When the viewpoint lies on the chord's line, the side is taken as the middle
     point's own (the value is then the absolute offset). Degenerate input as
     :func:`inscribed_angles`, plus ``P_1 == P_M`` (no chord).
+
+    Parameters
+    ----------
+    points : array_like of shape (M, 2)
+        The points of a segment, metres.
+    viewpoint : array_like of shape (2,), default (0, 0)
+        Where the sensor is, in the frame of ``points``.
+
+    Returns
+    -------
+    float
+        The middle point's distance from the chord's line over the chord length, positive on the
+        viewpoint's side.
 
     Examples
     --------
@@ -257,8 +298,10 @@ def middle_point_offset(points, viewpoint=(0.0, 0.0)) -> float:
 
 # ============================================================================ the centre
 def circle_from_iav(p_first, p_last, iav_mean: float, side: float) -> tuple[np.ndarray, float]:
-    """Centre and radius of the circle through ``p_first`` and ``p_last`` whose points
-    between them see the chord under ``iav_mean`` (Xavier et al. 2005, Sec. II-C, corrected).
+    """Centre and radius of a circle from its chord and the mean inscribed angle.
+
+    Centre and radius of the circle through ``p_first`` and ``p_last`` whose points between them see
+    the chord under ``iav_mean`` (Xavier et al. 2005, Sec. II-C, corrected).
 
     Derivation. An interior point sees the chord under half the central angle of the
     *other* arc, so the arc that holds the points spans ``360 - 2 IAV`` at the centre
@@ -282,7 +325,10 @@ def circle_from_iav(p_first, p_last, iav_mean: float, side: float) -> tuple[np.n
 
     Returns
     -------
-    center : ndarray (2,), radius : float
+    center : ndarray of shape (2,)
+        The circle's centre, metres.
+    radius : float
+        Its radius, metres.
 
     Examples
     --------

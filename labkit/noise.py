@@ -87,10 +87,20 @@ _CUT_SD = math.sqrt(1.0 - 2.0 * _CUT * math.exp(-_CUT * _CUT / 2) / math.sqrt(2 
 
 
 def range_noise_residuals(scan: Scan) -> np.ndarray:
-    """The residual ``z_i`` of every beam with two valid neighbours, in metres of range noise
-    (zero on any straight wall, standard deviation sigma under Gaussian range noise; see the
-    module docstring). Beams in scan order; on a full-circle scan the first and last beam
-    are neighbours.
+    """The residual ``z_i`` of every beam with two valid neighbours, in metres of range noise.
+
+    It is zero on any straight wall and has standard deviation sigma under Gaussian range noise
+    (see the module docstring). Beams in scan order; on a full-circle scan the first and last beam are neighbours.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+
+    Returns
+    -------
+    ndarray of shape (M,)
+        The residual of every beam with two valid neighbours, in scan order, metres.
 
     Examples
     --------
@@ -144,13 +154,25 @@ def _robust_sigma(z: np.ndarray) -> float:
 
 
 def estimate_range_noise(scans: Scan | Iterable[Scan]) -> float:
-    """The standard deviation of the range noise, metres, estimated from one scan or from the
-    residuals of many pooled (a recording: any iterable of scans).
+    """The standard deviation of the range noise, metres, estimated from one scan or many.
+
+    Many scans (a recording: any iterable of scans) pool their residuals.
 
     Each beam with two valid neighbours gives a residual that is exactly zero on a straight
     wall at any incidence (:func:`range_noise_residuals`); the estimate is a robust standard
     deviation of those, so corners, jump edges and round objects, a few beams each, barely
     move it. NaN when fewer than :data:`MIN_RESIDUALS` beams have two valid neighbours.
+
+    Parameters
+    ----------
+    scans : Scan or iterable of Scan
+        One scan, or many whose residuals are pooled (a recording).
+
+    Returns
+    -------
+    float
+        The estimated standard deviation of the range noise, metres; NaN when too few beams have two
+        valid neighbours.
 
     Examples
     --------
@@ -284,9 +306,22 @@ def noise_config(range_sigma_m: float | str = AUTO) -> dict:
 
 
 def scan_sigma(scan: Scan) -> float:
-    """The range noise ``"auto"`` uses for ``scan``, metres: :func:`estimate_range_noise`,
-    at least :data:`MIN_SIGMA_M`, :data:`RANGE_SIGMA_M` when the scan is too small to tell.
-    Worked out once per scan (every detector of a pipeline asks for it)."""
+    """The range noise ``"auto"`` uses for ``scan``, metres.
+
+    The range noise ``"auto"`` uses for ``scan``, metres: :func:`estimate_range_noise`, at least
+    :data:`MIN_SIGMA_M`, :data:`RANGE_SIGMA_M` when the scan is too small to tell. Worked out once
+    per scan (every detector of a pipeline asks for it).
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+
+    Returns
+    -------
+    float
+        The range noise, metres.
+    """
     cached = scan.__dict__.get("_labkit_sigma")
     if cached is None:
         sigma = estimate_range_noise(scan)
@@ -296,18 +331,48 @@ def scan_sigma(scan: Scan) -> float:
 
 
 def noise_sigma(scan: Scan, range_sigma_m) -> float:
-    """The range noise a detector allows for, metres: ``range_sigma_m`` as given (>= 0), or
-    :func:`scan_sigma` of ``scan`` when it is ``"auto"``."""
+    """The range noise a detector allows for, metres.
+
+    The range noise a detector allows for, metres: ``range_sigma_m`` as given (>= 0), or
+    :func:`scan_sigma` of ``scan`` when it is ``"auto"``.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+    range_sigma_m : float or "auto"
+        A noise in metres (>= 0), or ``"auto"``.
+
+    Returns
+    -------
+    float
+        The range noise, metres.
+    """
     if range_sigma_m == AUTO:
         return scan_sigma(scan)
     return check_nonneg("range_sigma_m", range_sigma_m)
 
 
 def chi2_upper_over_dof(dof, z: float):
-    """About the upper quantile of ``chi2(dof) / dof`` that a standard normal reaches at ``z``
+    """About the upper quantile of ``chi2(dof) / dof`` that a standard normal reaches at ``z``.
+
     (Wilson-Hilferty; ``dof`` may be an array and need not be whole). At z = 3 (one in 741) it
     is 10.53 for 1 degree of freedom (exactly 10.27), 4.00 for 5 (3.96) and 2.46 for 15 (2.45).
 
+    Parameters
+    ----------
+    dof : float or ndarray
+        Degrees of freedom.
+    z : float
+        The standard normal quantile.
+
+    Returns
+    -------
+    float or ndarray
+        The quantile of ``chi2(dof) / dof``, for each ``dof``.
+
+    Examples
+    --------
     >>> round(float(chi2_upper_over_dof(15, 3.0)), 2)
     2.46
     """
@@ -319,8 +384,24 @@ def chi2_upper_over_dof(dof, z: float):
 
 
 def auto_split_threshold(sigma: float, sigmas: float = SPLIT_SIGMAS) -> float:
-    """``split_threshold_m="auto"`` for range noise ``sigma`` at a point seen head-on:
-    ``max(5 sigma, 2 cm)``. At incidence ``i`` a point's threshold is ``max(5 sigma cos(i), 2 cm)``
+    """The ``split_threshold_m="auto"`` for range noise ``sigma``, at a point seen head-on.
+
+    ``split_threshold_m="auto"`` for range noise ``sigma`` at a point seen head-on: ``max(5 sigma, 2
+    cm)``. At incidence ``i`` a point's threshold is ``max(5 sigma cos(i), 2 cm)``
     (:func:`labkit.split_and_merge`), and this is what the trace and the merge report. ``sigmas``:
-    the multiple other extractors' ``"auto"`` uses instead (:data:`INLIER_SIGMAS`, :data:`GROW_SIGMAS`)."""
+    the multiple other extractors' ``"auto"`` uses instead (:data:`INLIER_SIGMAS`,
+    :data:`GROW_SIGMAS`).
+
+    Parameters
+    ----------
+    sigma : float
+        The range noise, metres.
+    sigmas : float, default 5.0
+        The multiple of ``sigma``.
+
+    Returns
+    -------
+    float
+        The threshold, metres.
+    """
     return max(sigmas * sigma, MIN_SPLIT_M)

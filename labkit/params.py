@@ -27,6 +27,7 @@ import dataclasses
 import functools
 import inspect
 import math
+import re
 import types
 import warnings
 from collections.abc import Callable
@@ -135,6 +136,14 @@ class Params:
     _name: ClassVar[str] = ""
     _not_passed: ClassVar[tuple[str, ...]] = ()  # (ClassVar: a class attribute, not a field)
 
+    def __init_subclass__(cls, **kwargs) -> None:
+        """Give every record's docstring a numpydoc Parameters section written from its fields'
+        ``param`` docs and defaults, so that the reference documents each field once, where it is
+        defined (the subclass's dataclass decorator has not run yet: its fields are read from the
+        class body and from the records it inherits from)."""
+        super().__init_subclass__(**kwargs)
+        cls.__doc__ = _with_parameters(cls)
+
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             object.__setattr__(self, f.name, _check_value(self._name, f, getattr(self, f.name)))
@@ -241,6 +250,38 @@ class Params:
 # one default record per class; a dict, as functools.cache would need mypy to take a class as
 # Hashable, which it does not (python/mypy#11470)
 _DEFAULTS: dict[type[Params], Params] = {}
+
+
+def _with_parameters(cls: type) -> str | None:
+    """``cls.__doc__`` with a Parameters section listing its record fields (unchanged when it has one)."""
+    doc = cls.__doc__
+    if not doc or "\nParameters\n" in doc or "\n    Parameters\n" in doc:
+        return doc
+    fields: dict[str, tuple[object, dataclasses.Field]] = {}
+    for base in reversed(cls.__mro__[1:]):
+        if dataclasses.is_dataclass(base):
+            for f in dataclasses.fields(base):
+                fields[f.name] = (f.type, f)
+    annotations = cls.__dict__.get("__annotations__", {})
+    for name, value in cls.__dict__.items():
+        if isinstance(value, dataclasses.Field) and name in annotations:
+            fields[name] = (annotations[name], value)
+    if not fields:
+        return doc
+    lines = doc.expandtabs().splitlines()
+    body = [len(line) - len(line.lstrip()) for line in lines[1:] if line.strip()]
+    pad = " " * (min(body) if body else 0)
+    out = [doc.rstrip(), "", pad + "Parameters", pad + "----------"]
+    for name, (annotation, f) in fields.items():
+        kind = annotation if isinstance(annotation, str) else getattr(annotation, "__name__", str(annotation))
+        record = f.metadata.get("record")
+        value = f.default
+        default = (record.__name__ + "()" if record is not None
+                   else f"{value:.10g}" if isinstance(value, float) else repr(value))
+        text = re.sub(r"\|([^|\n]+)\|", r"``|\1|``", str(f.metadata.get("doc", "")).strip())  # |x|: not RST
+        text = text[:1].upper() + text[1:] if text else "See the record's description."
+        out += [f"{pad}{name} : {kind}, default {default}", f"{pad}    {text.rstrip('.')}."]
+    return "\n".join(out) + "\n" + pad
 
 
 def _defaults(cls: type[Params]) -> Params:

@@ -246,6 +246,31 @@ class Config:
     (:meth:`from_toml`) or file (:meth:`load`); change one with :meth:`updated`. Unknown
     sections or keys and bad values raise ``ValueError`` naming them.
 
+    Each section is its detector's parameter record (``Config().circles`` is a
+    :class:`labkit.CircleParams`, with ``enabled``), so ``labkit.detect_circles(scan,
+    **cfg.circles.kwargs())`` is the pipeline's call. [lines] holds split-and-merge's keys (iepf and
+    split_and_merge) and one table per other line method.
+
+    Parameters
+    ----------
+    segmentation : SegmentationConfig
+        The range segmentation every detector shares (:class:`labkit.SegmentationParams`).
+    legs : LegsConfig
+        Legs and people (:class:`labkit.LegsParams`, with ``enabled``).
+    circles : CirclesConfig
+        IAV circles (:class:`labkit.CircleParams`, with ``enabled``).
+    lines : LinesConfig
+        The line method and split-and-merge's keys (:class:`labkit.SplitMergeParams`), with one table
+        per other method.
+    corners : CornersConfig
+        Corners between lines (:class:`labkit.CornerParams`, with ``enabled``).
+    arcs : ArcsConfig
+        Arcs embedded in walls (:class:`labkit.ArcParams`, with ``enabled``).
+    tracking : TrackingConfig
+        Tracking over time (:class:`labkit.TrackingParams`).
+
+    Examples
+    --------
     >>> c = Config().updated({"lines.method": "angular", "legs": {"enabled": False}})
     >>> c.lines.method, c.legs.enabled, c.circles.min_points
     ('angular', False, 4)
@@ -255,12 +280,6 @@ class Config:
     Traceback (most recent call last):
     ...
     ValueError: unknown key lines.split_threshold; lines has: method, skip_round, split_threshold_m, ...
-
-    Each section is its detector's parameter record (``Config().circles`` is a
-    :class:`labkit.CircleParams`, with ``enabled``), so ``labkit.detect_circles(scan,
-    **cfg.circles.kwargs())`` is the pipeline's call. [lines] holds split-and-merge's keys (iepf and
-    split_and_merge) and one table per other line method:
-
     >>> Config().updated({"lines.ransac.threshold_m": 0.02}).lines.ransac.threshold_m
     0.02
     >>> Config.from_dict({"lines": {"angular_min_points": 6}}).lines.angular.min_points  # an old key
@@ -405,6 +424,19 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
 
     See the module docstring for the stages and their order. Invalid beams are masked,
     never raised; a scan with no valid beam gives empty features.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+    config : Config, optional
+        Every stage's parameters; default ``Config()``.
+
+    Returns
+    -------
+    Features
+        Lines, corners, circles, arcs, legs and people of the scan, the range segment of every beam
+        (``labels``) and the seconds each stage took (``timings``).
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
@@ -462,7 +494,20 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
 
 
 def extract_all(scans: Iterable[Scan], config: Config | None = None) -> Iterator[Features]:
-    """:func:`extract_features` for every scan of a stream, lazily (one scan in memory)."""
+    """:func:`extract_features` for every scan of a stream, lazily (one scan in memory).
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans, e.g. :func:`labkit.read_scans`'s stream.
+    config : Config, optional
+        Every stage's parameters; default ``Config()``.
+
+    Yields
+    ------
+    Features
+        The features of each scan, in the order of ``scans``.
+    """
     cfg = _DEFAULT if config is None else config
     for scan in scans:
         yield extract_features(scan, cfg)
@@ -470,11 +515,29 @@ def extract_all(scans: Iterable[Scan], config: Config | None = None) -> Iterator
 
 def track_scans(scans: Iterable[Scan], config: Config | None = None, *,
                 trace: bool = False) -> Iterator[tuple[Features, TrackTable]]:
-    """:func:`extract_features` and tracking (:class:`labkit.tracking.Tracker` with the
-    ``[tracking]`` section) over a stream of scans, lazily: ``(features, tracks)`` per scan,
-    ``tracks`` a :class:`labkit.tracking.TrackTable` (``(features, (tracks, steps))`` with
-    ``trace``). The scans' poses (:attr:`Scan.pose`) place them in the map frame when
-    ``tracking.frame`` is ``"map"``, or ``"auto"`` and the first scan has one."""
+    """:func:`extract_features` and tracking over a stream of scans, lazily.
+
+    :func:`extract_features` and tracking (:class:`labkit.tracking.Tracker` with the ``[tracking]``
+    section) over a stream of scans, lazily: ``(features, tracks)`` per scan, ``tracks`` a
+    :class:`labkit.tracking.TrackTable` (``(features, (tracks, steps))`` with ``trace``). The scans'
+    poses (:attr:`Scan.pose`) place them in the map frame when ``tracking.frame`` is ``"map"``, or
+    ``"auto"`` and the first scan has one.
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans, in time order.
+    config : Config, optional
+        Every stage's parameters, the ``[tracking]`` section too; default ``Config()``.
+    trace : bool, default False
+        Also yield the tracker's steps of each scan.
+
+    Yields
+    ------
+    (Features, TrackTable)
+        The features of each scan and the tracks after it (``(features, (tracks, steps))`` with
+        ``trace``).
+    """
     cfg = _DEFAULT if config is None else config
     if not isinstance(cfg, Config):
         raise ValueError(f"config must be a labkit.Config, got {type(cfg).__name__}")

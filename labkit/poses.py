@@ -86,20 +86,55 @@ def compose(a, b) -> np.ndarray:
 
 
 def inverse(a) -> np.ndarray:
-    """The pose ``a⁻¹`` with ``compose(a, inverse(a)) == (0, 0, 0)``; shape as ``a``."""
+    """The pose ``a⁻¹`` with ``compose(a, inverse(a)) == (0, 0, 0)``; shape as ``a``.
+
+    Parameters
+    ----------
+    a : array_like of shape (3,) or (N, 3)
+        Poses ``(x, y, theta)``.
+
+    Returns
+    -------
+    ndarray
+        The inverse poses, the shape of ``a``.
+    """
     a = _as_poses("a", a)
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     return np.stack([-c * a[..., 0] - s * a[..., 1], s * a[..., 0] - c * a[..., 1], wrap_angle(-a[..., 2])], axis=-1)
 
 
 def yaw_from_quaternion(x, y, z, w):
-    """The rotation about z (radians, (-pi, pi]) of a unit quaternion: the heading of a 3D
-    orientation projected onto the plane (roll and pitch are dropped)."""
+    """The rotation about z (radians, (-pi, pi]) of a unit quaternion.
+
+    The rotation about z (radians, (-pi, pi]) of a unit quaternion: the heading of a 3D orientation
+    projected onto the plane (roll and pitch are dropped).
+
+    Parameters
+    ----------
+    x, y, z, w : float or ndarray
+        The quaternion.
+
+    Returns
+    -------
+    float or ndarray
+        The yaw, radians in (-pi, pi].
+    """
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def quaternion_from_yaw(theta: float) -> tuple[float, float, float, float]:
-    """The unit quaternion ``(x, y, z, w)`` of a rotation by ``theta`` radians about z."""
+    """The unit quaternion ``(x, y, z, w)`` of a rotation by ``theta`` radians about z.
+
+    Parameters
+    ----------
+    theta : float
+        The yaw, radians.
+
+    Returns
+    -------
+    tuple of float
+        ``(x, y, z, w)``.
+    """
     return 0.0, 0.0, float(np.sin(theta / 2.0)), float(np.cos(theta / 2.0))
 
 

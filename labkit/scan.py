@@ -25,8 +25,10 @@ def polar_to_cartesian(ranges, angles) -> np.ndarray:
 
     Parameters
     ----------
-    ranges : array_like of shape (N,), metres
-    angles : array_like of shape (N,), radians, counter-clockwise from the sensor's x axis
+    ranges : array_like of shape (N,)
+        Ranges, metres.
+    angles : array_like of shape (N,)
+        Bearings, radians, counter-clockwise from the sensor's x axis.
 
     Returns
     -------

@@ -50,8 +50,9 @@ __all__ = ["SegmentationParams", "RANGE_SIGMA_M", "RangeSegment", "segment_label
 
 @dataclass(frozen=True)
 class SegmentationParams(Params):
-    """Parameters of :func:`segment_labels` and the ``[segmentation]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees.
+    """Parameters of :func:`segment_labels`.
+
+    The ``[segmentation]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees.
 
     The default is the adaptive detector with Xavier et al.'s 80 mm as its floor, the
     segmentation every detector uses when given no ``segments`` and the pipeline's
@@ -71,7 +72,7 @@ class SegmentationParams(Params):
 class RangeSegment:
     """A run of neighbouring beams.
 
-    Attributes
+    Parameters
     ----------
     indices : ndarray of shape (M,), int
         Beam indices in scan order (wrapping past N - 1 to 0 for a seam-crossing segment).
@@ -110,8 +111,45 @@ def breakpoint_thresholds(
     incidence_deg: float = SegmentationParams.incidence_deg,
     range_sigma_m: float = RANGE_SIGMA_M,
 ) -> np.ndarray:
-    """Adaptive breakpoint distance (Borges & Aldon 2004) between beams of ranges ``r_a``,
-    ``r_b`` that are ``dphi`` radians apart, floored at ``threshold_m``.
+    """Adaptive breakpoint distance (Borges & Aldon 2004) between neighbouring beams.
+
+    Two beams of ranges :math:`r_a, r_b` that are :math:`\\Delta\\phi` apart belong to one segment
+    when their points are closer than
+
+    .. math::
+
+        D = \\min(r_a, r_b) \\frac{\\sin \\Delta\\phi}{\\sin(\\lambda - \\Delta\\phi)} + 3 \\sigma_r,
+
+    the gap a wall seen at the grazing angle :math:`\\lambda` would leave, plus three times the range
+    noise; :math:`D` is floored at ``threshold_m``.
+
+    Parameters
+    ----------
+    r_a, r_b : ndarray of shape (N,)
+        Ranges of the two beams of each pair, metres.
+    dphi : ndarray of shape (N,)
+        Angle between the two beams of each pair, radians (its absolute value is used).
+    threshold_m : float, default 0.08
+        The floor of the distance, metres.
+    incidence_deg : float, default 10.0
+        The grazing angle :math:`\\lambda`, degrees in (0, 90).
+    range_sigma_m : float, default 0.01
+        The range noise :math:`\\sigma_r` of the sensor, metres.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        The breakpoint distance of each pair, metres (NaN where a range is NaN).
+
+    Raises
+    ------
+    ValueError
+        For ``incidence_deg`` outside (0, 90) or a negative or infinite ``range_sigma_m``.
+
+    References
+    ----------
+    G. A. Borges and M.-J. Aldon, "Line extraction in 2D range images for mobile robotics",
+    Journal of Intelligent and Robotic Systems 40 (2004).
 
     Examples
     --------
@@ -249,21 +287,58 @@ def range_segments(
     incidence_deg: float = SegmentationParams.incidence_deg,
     range_sigma_m: float | str = SegmentationParams.range_sigma_m,
 ) -> list[RangeSegment]:
-    """The segments of :func:`segment_labels` (the same arguments) as :class:`RangeSegment`
-    records, in scan order (a seam-crossing segment is listed first and its indices run
-    N-k..N-1, 0..m)."""
+    """The segments of :func:`segment_labels` as :class:`RangeSegment` records, in scan order.
+
+    A seam-crossing segment is listed first and its indices run N-k..N-1, 0..m.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan to segment.
+    threshold_m : float, default 0.08
+        Largest gap between neighbouring points of a segment, metres (the floor of the adaptive threshold).
+    min_points : int, default 2
+        Smallest segment kept.
+    adaptive : bool, default True
+        Grow the threshold with range and angular step (:func:`breakpoint_thresholds`).
+    incidence_deg : float, default 10.0
+        Grazing angle of the adaptive threshold, degrees.
+    range_sigma_m : float or "auto", default "auto"
+        Range noise of the sensor, metres; ``"auto"`` estimates it from the scan (:mod:`labkit.noise`).
+
+    Returns
+    -------
+    list of RangeSegment
+        One record per kept segment."""
     labels = segment_labels.unchecked(scan, threshold_m=threshold_m, min_points=min_points, adaptive=adaptive,
                                       incidence_deg=incidence_deg, range_sigma_m=range_sigma_m)
     return segments_from_labels(scan, labels)
 
 
 def detector_labels(scan: Scan, segments, range_sigma_m: float | str | None = None) -> np.ndarray:
-    """The range segments a detector works on, as per-beam labels: ``segments`` when given
-    (labels or :class:`RangeSegment` records, see :func:`labels_from`), else the scan's default
-    segmentation (:class:`SegmentationParams`, the pipeline's), whose adaptive breakpoints
-    follow the detector's own range noise as its thresholds do: ``"auto"`` (the scan's estimate)
-    or a number of metres; 0, a detector's fixed tests (the papers'), the fixed settings' noise
-    (:data:`labkit.noise.RANGE_SIGMA_M`); None the segmentation's default."""
+    """The range segments a detector works on, as per-beam labels.
+
+    The range segments a detector works on, as per-beam labels: ``segments`` when given (labels or
+    :class:`RangeSegment` records, see :func:`labels_from`), else the scan's default segmentation
+    (:class:`SegmentationParams`, the pipeline's), whose adaptive breakpoints follow the detector's
+    own range noise as its thresholds do: ``"auto"`` (the scan's estimate) or a number of metres; 0,
+    a detector's fixed tests (the papers'), the fixed settings' noise
+    (:data:`labkit.noise.RANGE_SIGMA_M`); None the segmentation's default.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    segments : ndarray of shape (N,) or list of RangeSegment or None
+        Precomputed segments, or None for the default segmentation.
+    range_sigma_m : float, "auto" or None
+        The detector's range noise (above).
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        One label per beam, -1 for none.
+    """
     if segments is not None:
         return labels_from(scan, segments)
     if range_sigma_m is None:
@@ -278,6 +353,18 @@ def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     consecutive beams, -1 for none). Returns ``(beams, starts, stops)``: segment ``k`` is
     ``beams[starts[k]:stops[k]]``. A segment crossing the seam of a full-circle scan (the same
     label on the first and the last beam) comes first, its beams running N-k..N-1, 0..m.
+
+    Parameters
+    ----------
+    labels : ndarray of shape (N,)
+        One label per beam, -1 for none.
+
+    Returns
+    -------
+    beams : ndarray of int
+        The beams of every segment, segment after segment.
+    starts, stops : ndarray of int
+        Where each segment's beams start and stop in ``beams``.
 
     Examples
     --------
@@ -309,8 +396,23 @@ def segment_order(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
-    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware (see
-    :func:`segment_order`)."""
+    """:class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware.
+
+    :class:`RangeSegment` records for per-beam labels (-1 skipped), seam-aware (see
+    :func:`segment_order`).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the labels belong to.
+    labels : ndarray of shape (N,)
+        One label per beam, -1 for none.
+
+    Returns
+    -------
+    list of RangeSegment
+        One record per label, in the order of :func:`segment_order`.
+    """
     beams, starts, stops = segment_order(labels)
     out = []
     for a, b in zip(starts.tolist(), stops.tolist(), strict=True):
@@ -323,12 +425,30 @@ def segments_from_labels(scan: Scan, labels: np.ndarray) -> list[RangeSegment]:
 
 
 def labels_from(scan: Scan, segments, name: str = "segments") -> np.ndarray:
-    """Per-beam segment labels from ``segments`` given either as per-beam labels (an int
+    """Per-beam segment labels from ``segments``.
+
+    ``segments`` are given either as per-beam labels (an int
     array of shape ``(scan.n_beams,)``, -1 for none, as :func:`segment_labels` returns) or as
     :class:`RangeSegment` records. Labels on invalid beams are set to -1.
 
     This lets one segmentation be shared by every detector of a pipeline.
 
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    segments : ndarray of shape (N,) or list of RangeSegment
+        Per-beam labels or segment records.
+    name : str, default "segments"
+        The argument's name in error messages.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        One label per beam, -1 for none and on invalid beams.
+
+    Examples
+    --------
     >>> s = Scan(ranges=[1.0, 1.0, np.nan, 1.0], angles=np.radians(np.arange(4)))
     >>> labels_from(s, np.array([0, 0, 0, 1])).tolist()
     [0, 0, -1, 1]

@@ -36,7 +36,7 @@ ALGORITHMS = ("split_and_merge", "iepf", "angular", "iav_circles", "iav_lines", 
 class Step:
     """One step of an algorithm, for replay.
 
-    Attributes
+    Parameters
     ----------
     algorithm : str
         Which algorithm took it (one of :data:`ALGORITHMS`): ``"split_and_merge"``

@@ -256,7 +256,20 @@ def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path
 
 
 def read_table(path: str | Path):
-    """A Parquet feature table (:func:`write_features_table`, ``labkit extract -o x.parquet``) as a
-    pandas DataFrame with :func:`features_table`'s column types."""
+    """A Parquet feature table as a pandas DataFrame.
+
+    A Parquet feature table (:func:`write_features_table`, ``labkit extract -o x.parquet``) as a
+    pandas DataFrame with :func:`features_table`'s column types.
+
+    Parameters
+    ----------
+    path : str or Path
+        A Parquet feature table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per feature, with :func:`features_table`'s column types.
+    """
     pq = research_module("pyarrow.parquet")
     return _to_pandas(pq.read_table(path))

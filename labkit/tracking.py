@@ -128,8 +128,9 @@ _I2, _I4 = np.eye(2), np.eye(4)
 
 @dataclass(frozen=True)
 class TrackingParams(Params):
-    """Parameters of :class:`Tracker` and :func:`track` (and the ``[tracking]`` table of
-    :class:`labkit.Config`), each default once: lengths in metres, times in seconds."""
+    """Parameters of :class:`Tracker` and :func:`track`.
+
+    The ``[tracking]`` table of :class:`labkit.Config`, each default once: lengths in metres, times in seconds."""
 
     frame: str = param("auto", "track in the sensor frame, the map frame (moved by each scan's pose) or auto: "
                                "the map frame when the first scan carries a pose", choices=("auto", "sensor", "map"),
@@ -297,7 +298,7 @@ def assign(cost) -> tuple[np.ndarray, np.ndarray]:
 class Detections:
     """One scan's detections, as the tracker takes them.
 
-    Attributes
+    Parameters
     ----------
     stamp_ns : int
         The scan's time stamp.
@@ -441,7 +442,7 @@ class TrackTable:
     at this scan (status ``"deleted"``, its last prediction), once. The moving targets are the
     rows whose status is ``"confirmed"`` (:meth:`confirmed`).
 
-    Attributes
+    Parameters
     ----------
     stamp_ns : int
         The scan's time stamp.
@@ -529,17 +530,34 @@ class Tracker:
 
     Parameters
     ----------
-    frame : {"auto", "sensor", "map"}
-    acceleration_noise_m2_s3 : float, m^2/s^3
-    initial_speed_sigma_mps : float, m/s
-    person_sigma_m, leg_sigma_m, circle_sigma_m : float, metres
-    single_legs : bool
-    gate_probability : float in (0, 1)
-    confirm_hits, confirm_scans : int
-        M of N.
-    max_coast_s : float, seconds
-    min_travel_m : float, metres
-        Each as documented in :class:`TrackingParams`.
+    frame : str, default 'auto'
+        Track in the sensor frame, the map frame (moved by each scan's pose) or auto: the map frame
+        when the first scan carries a pose.
+    acceleration_noise_m2_s3 : float, default 0.5
+        Process noise: spectral density of the white acceleration of the constant-velocity model,
+        m^2/s^3.
+    initial_speed_sigma_mps : float, default 1.5
+        Standard deviation of a new track's velocity in x and in y, m/s.
+    person_sigma_m : float, default 0.08
+        Standard deviation of a person's position measured by a leg pair (their midpoint), metres.
+    leg_sigma_m : float, default 0.2
+        Standard deviation of a person's position measured by one leg, metres.
+    circle_sigma_m : float, default 0.05
+        Standard deviation of a circle's centre, metres.
+    single_legs : bool, default True
+        Update people with single legs (weaker measurements) besides leg pairs.
+    gate_probability : float, default 0.99
+        Gate: a detection is considered for a track when its Mahalanobis distance is within the
+        chi-square (2 dof) quantile at this probability.
+    confirm_hits : int, default 3
+        M: a track is confirmed when detected in M of its first N scans.
+    confirm_scans : int, default 5
+        N: the scans, from its birth, in which a track must be detected M times.
+    max_coast_s : float, default 1.5
+        Delete a track not detected for longer than this, seconds.
+    min_travel_m : float, default 0.3
+        A confirmed track is static until M updates in a row put its estimate this far from where it
+        was first seen (the mean of its first M detections), metres.
     """
 
     @checked_by(TrackingParams)
@@ -899,10 +917,41 @@ def track(
         :attr:`labkit.Scan.pose` places the scan in the map (``frame="map"``, or ``"auto"`` when
         the first scan has one); :class:`Detections` work too, alone or as ``(pose, detections)``.
         :func:`labkit.pipeline.track_scans` runs the pipeline and this together.
-    frame, acceleration_noise_m2_s3, ..., min_travel_m
-        The keywords of :class:`TrackingParams` (``**config.tracking.kwargs()``).
+    frame : str, default 'auto'
+        Track in the sensor frame, the map frame (moved by each scan's pose) or auto: the map frame
+        when the first scan carries a pose.
+    acceleration_noise_m2_s3 : float, default 0.5
+        Process noise: spectral density of the white acceleration of the constant-velocity model,
+        m^2/s^3.
+    initial_speed_sigma_mps : float, default 1.5
+        Standard deviation of a new track's velocity in x and in y, m/s.
+    person_sigma_m : float, default 0.08
+        Standard deviation of a person's position measured by a leg pair (their midpoint), metres.
+    leg_sigma_m : float, default 0.2
+        Standard deviation of a person's position measured by one leg, metres.
+    circle_sigma_m : float, default 0.05
+        Standard deviation of a circle's centre, metres.
+    single_legs : bool, default True
+        Update people with single legs (weaker measurements) besides leg pairs.
+    gate_probability : float, default 0.99
+        Gate: a detection is considered for a track when its Mahalanobis distance is within the
+        chi-square (2 dof) quantile at this probability.
+    confirm_hits : int, default 3
+        M: a track is confirmed when detected in M of its first N scans.
+    confirm_scans : int, default 5
+        N: the scans, from its birth, in which a track must be detected M times.
+    max_coast_s : float, default 1.5
+        Delete a track not detected for longer than this, seconds.
+    min_travel_m : float, default 0.3
+        A confirmed track is static until M updates in a row put its estimate this far from where it
+        was first seen (the mean of its first M detections), metres.
     trace : bool
         Yield ``(table, steps)`` per scan (see :meth:`Tracker.step`).
+
+    Returns
+    -------
+    iterator of TrackTable
+        The tracks after each scan (read lazily); with ``trace``, ``(table, steps)`` per scan.
 
     Examples
     --------

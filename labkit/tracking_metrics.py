@@ -67,7 +67,7 @@ __all__ = ["MOTFrame", "MOTScores", "clear_mot", "sim_frames"]
 class MOTFrame:
     """One frame of a tracking result against its truth.
 
-    Attributes
+    Parameters
     ----------
     truth_ids : sequence of hashable, length n
         The true objects present and visible (names or numbers, unique in the frame).
@@ -162,7 +162,9 @@ def _drop_on_unseen(frame: MOTFrame, max_distance_m: float) -> tuple[tuple, np.n
 
 
 def clear_mot(frames: Iterable[MOTFrame], *, max_distance_m: float = 0.5) -> MOTScores:
-    """CLEAR MOT (MOTA, MOTP, identity switches, fragmentations) and IDF1 of a sequence of
+    """CLEAR MOT (MOTA, MOTP, identity switches, fragmentations) and IDF1 of a sequence of frames.
+
+    CLEAR MOT (MOTA, MOTP, identity switches, fragmentations) and IDF1 of a sequence of
     :class:`MOTFrame` (see the module docstring for the rules).
 
     Parameters
@@ -171,6 +173,12 @@ def clear_mot(frames: Iterable[MOTFrame], *, max_distance_m: float = 0.5) -> MOT
         In time order.
     max_distance_m : float, metres
         The largest distance at which a hypothesis stands for a true object. Default 0.5 m.
+
+    Returns
+    -------
+    MOTScores
+        MOTA, MOTP, IDF1 and the counts they come from (matches, misses, false positives, identity
+        switches, fragmentations).
 
     Examples
     --------

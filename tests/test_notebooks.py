@@ -26,6 +26,7 @@ import pytest
 from nbclient import NotebookClient
 from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
 
+from docs.executed_notebooks import keep as keep_for_docs
 from tests.conftest import SHARED_DATASETS
 
 REPO = Path(__file__).resolve().parents[1]
@@ -276,6 +277,7 @@ def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path, monkeyp
     workdir.mkdir()
     try:
         record_property("slow_steps", run_notebook(nb, workdir, this_python_kernel, _fills(path)))
+        keep_for_docs(path, nb)  # the docs render these outputs instead of running the course again
         return
     except (CellExecutionError, CellTimeoutError, DeadKernelError, AssertionError) as exc:
         error = f"{type(exc).__name__}: {_ANSI.sub('', str(exc))}"

@@ -58,8 +58,21 @@ def data_dir() -> Path:
 
 
 def bundled_data(name: str = "hall.bag") -> Path:
-    """Path of a bundled recording or its ground truth (``"hall.bag"``,
-    ``"hall.truth.jsonl"``, ``"corridor.mcap"``, ``"office"``...), generated if missing."""
+    """Path of a bundled recording or its ground truth, generated if missing.
+
+    Path of a bundled recording or its ground truth (``"hall.bag"``, ``"hall.truth.jsonl"``,
+    ``"corridor.mcap"``, ``"office"``...), generated if missing.
+
+    Parameters
+    ----------
+    name : str, default "hall.bag"
+        A file or folder of ``data/``.
+
+    Returns
+    -------
+    Path
+        Its path.
+    """
     stem = name.removesuffix(".truth.jsonl")
     recording = next((k for k in BUNDLED if k == stem or Path(k).stem == stem), None)
     if recording is None:

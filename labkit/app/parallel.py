@@ -80,7 +80,7 @@ MIN_PIECE_SCANS = 500
 class Result:
     """What one task did with one recording.
 
-    Attributes
+    Parameters
     ----------
     input : str
     output : str or None

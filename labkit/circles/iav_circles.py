@@ -94,8 +94,9 @@ __all__ = ["CircleParams", "ArcParams", "detect_circles", "detect_arcs", "ARC_LI
 # ============================================================================ parameters
 @dataclass(frozen=True)
 class CircleParams(Params):
-    """Parameters of :func:`detect_circles` and the ``[circles]`` table of :class:`labkit.Config`
-    (Xavier et al. Table II), each default once: lengths in metres, angles in degrees."""
+    """Parameters of :func:`detect_circles` (Xavier et al. Table II).
+
+    The ``[circles]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
 
     min_points: int = param(4, "fewest points (circle_min_pts)", lo=3)
     min_chord_m: float = param(0.15, "shortest chord, metres (circle_min_len)", lo=0)
@@ -126,7 +127,9 @@ class CircleParams(Params):
 
 @dataclass(frozen=True)
 class ArcParams(Params):
-    """Parameters of :func:`detect_arcs` and the ``[arcs]`` table of :class:`labkit.Config`, each
+    """Parameters of :func:`detect_arcs`.
+
+    The ``[arcs]`` table of :class:`labkit.Config`, each
     default once: lengths in metres, angles in degrees. ``split_threshold_m`` and
     ``min_length_m`` are the finer line pass's (:data:`ARC_LINE_PARAMS`)."""
 
@@ -210,6 +213,7 @@ def detect_circles(
     Parameters
     ----------
     scan : Scan
+        The laser scan.
     min_points : int
         Table II ``circle_min_pts``: 4 (at least 3 for an inscribed angle).
     min_chord_m, max_chord_m : float, metres
@@ -269,8 +273,10 @@ def detect_circles(
 
     Returns
     -------
-    list of Circle (``kind="circle"`` or ``"arc-like"``), in scan order; with
-    ``trace``, ``(circles, steps)``.
+    circles : list of Circle
+        The circles found (``kind="circle"`` or ``"arc-like"``), in scan order.
+    steps : list of Step
+        Only with ``trace=True``, which returns ``(circles, steps)``: one step per segment.
 
     Examples
     --------
@@ -534,6 +540,7 @@ def detect_arcs(
     Parameters
     ----------
     scan : Scan
+        The laser scan.
     lines : list of LineSegment, optional
         Lines whose ``indices`` are excluded. ``None``: run
         :func:`labkit.split_and_merge` with ``split_threshold_m`` and ``min_length_m``.
@@ -545,24 +552,39 @@ def detect_arcs(
         deprecated.)
     split_threshold_m, min_length_m : float, metres
         The finer line pass when ``lines`` is None (:data:`ARC_LINE_PARAMS`); not used otherwise.
-    line_params : dict, optional
-        Deprecated: ``split_and_merge``'s keywords for the line pass; use ``split_threshold_m``
-        and ``min_length_m``.
+    min_points : int, default 4
+        Fewest points of an arc.
+    min_chord_m, max_chord_m : float, default 0.15 and inf
+        Shortest and longest chord of an arc, metres.
+    middle_range : tuple of float, default (0.1, 0.7)
+        The circle prerequisite's band (:func:`labkit.iav.middle_point_offset`).
+    mean_range_deg : tuple of float, default (90.0, 155.0)
+        The band of the mean inscribed angle, degrees.
+    std_max_deg : float, default 8.59
+        Largest standard deviation of the inscribed angles, degrees.
     center_method : {"geometric", "algebraic", "iav"}
         Default ``"geometric"``, not the paper's construction: embedded arcs are short
         (90 deg or less) and the lines take their ends, which is where the IAV
         construction is weakest. In rooms with rounded corners of 0.4-1.2 m seen by an
         LMS200 from 2-4 m, the median radius error was 0.5-2 % with the geometric fit
         and 2-5 % with the IAV construction (largest 9 % and 18 %).
+    line_params : dict, optional
+        Deprecated: ``split_and_merge``'s keywords for the line pass; use ``split_threshold_m``
+        and ``min_length_m``.
     seg_threshold_m : float or None, metres
         A fixed range segmentation threshold; default None: the default segmentation.
-    Other parameters
-        As :func:`detect_circles`.
+    segments : list of RangeSegment or ndarray of per-beam labels, optional
+        Precomputed segments, as for :func:`detect_circles`.
+    trace : bool, default False
+        Also return one :class:`labkit.Step` per run tested (``algorithm="iav_arcs"``), as
+        :func:`detect_circles`.
 
     Returns
     -------
-    list of Circle in scan order; with ``trace``, ``(arcs, steps)``: one :class:`labkit.Step`
-    per run tested (``algorithm="iav_arcs"``), as :func:`detect_circles`.
+    arcs : list of Circle
+        The arcs found (``kind="arc"``), in scan order.
+    steps : list of Step
+        Only with ``trace=True``, which returns ``(arcs, steps)``.
 
     Examples
     --------

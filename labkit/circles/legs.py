@@ -119,8 +119,9 @@ def is_occluded(scan: Scan, first: int, last: int) -> bool:
 
 @dataclass(frozen=True)
 class LegsParams(Params):
-    """Parameters of :func:`detect_legs` and :func:`pair_legs`, and the ``[legs]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
+    """Parameters of :func:`detect_legs` and :func:`pair_legs`.
+
+    The ``[legs]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
 
     _not_passed = ("pair_max_distance_m",)  # pair_legs's
     min_points: int = param(3, "fewest points of a leg", lo=3)
@@ -167,6 +168,7 @@ def detect_legs(
     Parameters
     ----------
     scan : Scan
+        The laser scan.
     min_points : int
         Fewest points of a leg: 3 (one inscribed angle).
     chord_range_m : (float, float), metres
@@ -221,8 +223,10 @@ def detect_legs(
 
     Returns
     -------
-    list of Leg in scan order (``middle`` is the segment's middle point, the paper's
-    record); with ``trace``, ``(legs, steps)``.
+    legs : list of Leg
+        The legs found, in scan order (``middle`` is the segment's middle point, the paper's record).
+    steps : list of Step
+        Only with ``trace=True``, which returns ``(legs, steps)``: one step per segment.
 
     Examples
     --------
@@ -343,8 +347,9 @@ def _angle_limits(points: np.ndarray, t: LegTest, sigma: float,
 
 
 def pair_legs(legs: list[Leg], max_distance_m: float = LegsParams.pair_max_distance_m) -> list[Person]:
-    """Pair legs into people: greedily, closest pair first, while the two centres are at
-    most ``max_distance_m`` apart.
+    """Pair legs into people, greedily, closest pair first.
+
+    Two legs pair while their centres are at most ``max_distance_m`` apart.
 
     All pairwise distances between leg centres are sorted; each pair in turn becomes a
     :class:`~labkit.features.Person` unless one of its legs is already taken. Unpaired
@@ -355,12 +360,15 @@ def pair_legs(legs: list[Leg], max_distance_m: float = LegsParams.pair_max_dista
     Parameters
     ----------
     legs : list of Leg
-    max_distance_m : float, metres
+        The legs of one scan (:func:`detect_legs`).
+    max_distance_m : float, default 0.6
+        The farthest two leg centres of one person can be, metres.
 
     Returns
     -------
-    list of Person, closest pair first; each person's ``legs`` are in scan order
-    (by ``first``) and ``center`` is the midpoint of the two leg centres.
+    list of Person
+        Closest pair first; each person's ``legs`` are in scan order (by ``first``) and ``center``
+        is the midpoint of the two leg centres.
 
     Examples
     --------

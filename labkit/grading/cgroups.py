@@ -48,7 +48,7 @@ REMOVE_TIMEOUT_S = 5.0
 class Cgroups:
     """What the grader may do with cgroups on this machine.
 
-    Attributes
+    Parameters
     ----------
     version : int or None
         1 or 2; None when no cgroup can be made (then :attr:`problem` says why).

@@ -11,7 +11,7 @@ An exercise is three trusted files:
 - ``grading/<name>.py``: the *spec*, a Python module with the hidden tests. The tests of the graded
   cell ``<grade_id>`` are its functions named ``<grade_id>`` or ``<grade_id>__<anything>``; each takes
   one of the student's functions (by its name) and ``rng``, and counts for that function. See
-  ``exercises/README.md`` for its form.
+  ``docs/guide/exercises.md`` ("Adding an exercise") for its form.
 
 Points are per function: a graded cell's points are shared among the functions in proportion to their
 points (ex01: ``segment`` 5 and ``adaptive_threshold`` 5 share each cell half and half), and a
@@ -61,7 +61,7 @@ class HiddenTest:
 class GradedCell:
     """One graded cell of an exercise.
 
-    Attributes
+    Parameters
     ----------
     grade_id : str
     points : float

@@ -286,6 +286,7 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
 
 
 def cell_source(cell: dict) -> str:
+    """The source of a notebook cell as one string (nbformat stores it as a string or a list of lines)."""
     source = cell.get("source", "")
     return "".join(source) if isinstance(source, list) else source
 
@@ -296,6 +297,7 @@ def nbgrader_metadata(cell: dict) -> dict:
 
 
 def grade_id(cell: dict) -> str | None:
+    """The nbgrader ``grade_id`` of a cell, or None when it has none (or one that is not a string)."""
     value = nbgrader_metadata(cell).get("grade_id")
     return value if type(value) is str else None
 

@@ -118,7 +118,7 @@ class SandboxBroken(RuntimeError):
 class Limits:
     """Resource limits of one worker (``setrlimit``, soft = hard), and the size of its ``/tmp``.
 
-    Attributes
+    Parameters
     ----------
     cpu_s : int
         CPU seconds of the worker process (``RLIMIT_CPU``; it is killed by SIGXCPU beyond).

@@ -551,6 +551,13 @@ def write_bag(
         stamp (frame ``map``, child frame the scan's ``frame_id``: the sensor itself, so no
         mounting transform is needed); default ``/odom``. None: poses are not written.
 
+    Returns
+    -------
+    int
+        The number of scans written.
+
+    Notes
+    -----
     The bag is written under a temporary name beside ``path`` and renamed when complete.
     If iterating ``scans`` raises :class:`~labkit.io.CorruptFileError` (a damaged input
     being converted), the bag holds every scan before it and the error propagates.

@@ -52,8 +52,10 @@ FEATURES_FILE = OutputKind("a labkit features file (.jsonl)", (".jsonl",), first
 
 def write_features(features: Iterable[Features], out, *, overwrite: bool = False, inputs=(),
                    first_scan: int = 0) -> int:
-    """Write one JSON line per :class:`labkit.Features` to ``out`` (a path, ``"-"`` for
-    standard output, or an open text file); returns how many were written.
+    """Write one JSON line per :class:`labkit.Features`; return how many were written.
+
+    Write one JSON line per :class:`labkit.Features` to ``out`` (a path, ``"-"`` for standard
+    output, or an open text file); returns how many were written.
 
     Each record also gets ``"scan"``, its place in the recording: ``first_scan`` (where the
     stream starts, e.g. a scan range's first scan) plus its place in the stream. A path is written under a
@@ -61,6 +63,24 @@ def write_features(features: Iterable[Features], out, *, overwrite: bool = False
     ``features`` raises :class:`~labkit.io.CorruptFileError` (a damaged recording), the file
     holds every scan before it and the error propagates. ``inputs``: the recordings read,
     which the output may not be.
+
+    Parameters
+    ----------
+    features : iterable of Features
+        The features of each scan, in recording order.
+    out : str, Path or text file
+        A path, ``"-"`` for standard output, or an open text file.
+    overwrite : bool, default False
+        Replace an existing features file.
+    inputs : iterable of str or Path
+        The recordings read, which the output may not be.
+    first_scan : int, default 0
+        The place in the recording of the stream's first scan.
+
+    Returns
+    -------
+    int
+        The number of records written.
     """
     if isinstance(out, (str, Path)) and str(out) != "-":
         with safe_output(out, FEATURES_FILE, overwrite=overwrite, inputs=inputs) as tmp, \
@@ -82,9 +102,24 @@ def _write_records(features: Iterable[Features], fh, first_scan: int = 0) -> int
 
 
 def read_features(path: str | Path, *, strict: bool = False) -> Iterator[dict]:
-    """The records of a features file, one dict per scan. A line that is not a features
-    record is skipped and counted; after the last good record :class:`labkit.CorruptFileError`
-    says how many and where the first was (``strict``: reading stops at the first)."""
+    """The records of a features file, one dict per scan.
+
+    The records of a features file, one dict per scan. A line that is not a features record is
+    skipped and counted; after the last good record :class:`labkit.CorruptFileError` says how many
+    and where the first was (``strict``: reading stops at the first).
+
+    Parameters
+    ----------
+    path : str or Path
+        A features file (``labkit extract``'s ``.jsonl``).
+    strict : bool, default False
+        Stop at the first line that is not a features record.
+
+    Yields
+    ------
+    dict
+        One record per scan.
+    """
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path} does not exist")

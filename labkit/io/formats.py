@@ -32,7 +32,7 @@ __all__ = ["FileFormat", "FORMATS", "register_format", "unregister_format", "wri
 class FileFormat:
     """One file format.
 
-    Attributes
+    Parameters
     ----------
     name : str
         The format's name (``read_scans(...).format``, ``labkit convert --format``).

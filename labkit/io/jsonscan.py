@@ -97,7 +97,18 @@ def scan_to_dict(scan: Scan) -> dict:
 
 
 def read_json_scan(path: str | Path) -> Scan:
-    """Read one scan from a ``.json`` file ``{"ranges": [...], "bearings": [...]}``."""
+    """Read one scan from a ``.json`` file ``{"ranges": [...], "bearings": [...]}``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.json`` file.
+
+    Returns
+    -------
+    Scan
+        The scan it holds.
+    """
     path = Path(path)
     try:
         d = json.loads(path.read_text(encoding="utf-8"))

@@ -55,7 +55,7 @@ TF_TYPES = frozenset({"tf2_msgs/TFMessage", "tf2_msgs/msg/TFMessage", "tf/tfMess
 class PosePlan:
     """Which topics of a bag hold its poses (see the module docstring).
 
-    Attributes
+    Parameters
     ----------
     odometry : str or None
         The ``nav_msgs/Odometry`` topic read.

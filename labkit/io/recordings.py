@@ -219,6 +219,11 @@ def read_scans(path: str | Path, topic: str | None = None, *, strict: bool = Fal
         reported (``CorruptFileError`` after the range's scans). The stream's ``first`` is
         where the range starts, ``count`` how many scans it holds (when known).
 
+    Returns
+    -------
+    ScanStream
+        An iterable of :class:`labkit.Scan` (read as it is iterated), with ``count`` and ``first``.
+
     Raises
     ------
     ValueError
@@ -281,6 +286,26 @@ def write_scans(
     Returns the number written. Bags: see :func:`write_bag`. CARMEN logs are read-only.
     ``overwrite`` replaces only an output of the same kind; ``inputs`` are the files the
     scans come from, which the output may not be (see :mod:`labkit._safe`).
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans.
+    path : str or Path
+        The output; its format from its name unless ``format`` is given.
+    format : str, optional
+        A name of :data:`labkit.io.FORMATS` with a writer.
+    topic : str, default "/scan"
+        The topic of the scans in a bag.
+    overwrite : bool, default False
+        Replace an existing output of the same kind.
+    inputs : iterable of str or Path
+        The files the scans come from, which the output may not be.
+
+    Returns
+    -------
+    int
+        The number of scans written.
     """
     p = Path(path)
     fmt = output_format(p, format)
@@ -352,6 +377,34 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     Time stamps that the output bag format cannot hold (CARMEN logs and JSON scans may have
     negative stamps, or garbage) are changed on purpose, as :func:`labkit.io.bags.plan_stamps`
     describes, and a :class:`StampsChangedWarning` says how.
+
+    Parameters
+    ----------
+    src : str or Path
+        The recording to copy.
+    dst : str or Path
+        The output; its format from its name unless ``format`` is given.
+    topic : str, optional
+        The LaserScan topic (for a scans-only copy), as for :func:`read_scans`.
+    format : str, optional
+        The output's format, a name of :data:`labkit.io.FORMATS` with a writer.
+    overwrite : bool, default False
+        Replace an existing ``dst`` of the same kind.
+    progress : bool, default False
+        Show a progress bar.
+    strict : bool, default False
+        Stop at the first record that cannot be decoded.
+    poses : str, bool or None
+        Where the scans' poses come from, as for :func:`read_scans`.
+    only_scans : bool, default False
+        Copy the scans alone, also between bags.
+    scans : slice, optional
+        Only this range of scans, as for :func:`read_scans` (a scans-only copy).
+
+    Returns
+    -------
+    int
+        The number of scans copied.
     """
     return convert_recording(src, dst, topic=topic, format=format, overwrite=overwrite, progress=progress,
                              strict=strict, poses=poses, only_scans=only_scans, scans=scans).scans

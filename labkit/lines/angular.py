@@ -105,11 +105,12 @@ STRAIGHT_Z = 3.0
 
 @dataclass(frozen=True, eq=False)
 class AngularSteps:
-    """The intermediate results of :func:`angular_segmentation`, one array per stage
-    (:func:`angular_arrays`); ``angular_segmentation(..., trace=True)`` gives the same stages
+    """The intermediate results of :func:`angular_segmentation`, one array per stage.
+
+    :func:`angular_arrays` gives them; ``angular_segmentation(..., trace=True)`` gives the same stages
     as :class:`labkit.Step` records for the step viewers.
 
-    Attributes
+    Parameters
     ----------
     local_angles : ndarray of shape (N,), radians in [0, pi)
         Local line direction per beam (step 1). NaN where undefined: the beam or one of
@@ -138,12 +139,14 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 def local_directions(scan: Scan, window: int = 1, straight_sigma: float | None = None) -> np.ndarray:
-    """Local line direction at every beam: total least squares through beams
-    ``i - window .. i + window`` (the paper's three beams by default).
+    """Local line direction at every beam, by total least squares through its neighbours.
+
+    The fit runs through beams ``i - window .. i + window`` (the paper's three beams by default).
 
     Parameters
     ----------
     scan : Scan
+        The laser scan.
     window : int, >= 1
         Half-width of the window. Range noise ``sigma`` tilts a direction fitted to ``2 h + 1``
         points at spacing ``s`` by about ``sigma / (s sqrt(h (h + 1) (2 h + 1) / 3))`` radians,
@@ -225,7 +228,9 @@ def local_directions(scan: Scan, window: int = 1, straight_sigma: float | None =
 
 
 def auto_direction_window(scan: Scan, sigma: float, eps_theta: float = EPS_THETA, largest: int = MAX_WINDOW) -> int:
-    """``direction_window="auto"``: the narrowest window (half-width, beams) whose local
+    """The half-width of the local-direction window that ``direction_window="auto"`` picks.
+
+    It is the narrowest window (half-width, beams) whose local
     directions range noise ``sigma`` tilts by no more than ``eps_theta`` (one standard
     deviation; see :func:`local_directions`), for beams at the scan's median range and at
     normal incidence, at most ``largest``. Then the directions of one wall fall within DBSCAN's
@@ -266,8 +271,9 @@ def _scan_order(beams: np.ndarray, n: int, full_circle: bool) -> np.ndarray:
 
 @dataclass(frozen=True)
 class AngularParams(Params):
-    """Parameters of :func:`angular_segmentation` and the ``[lines.angular]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
+    """Parameters of :func:`angular_segmentation`.
+
+    The ``[lines.angular]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
 
     eps_theta_deg: float = param(math.degrees(EPS_THETA), "DBSCAN1D radius in line direction, degrees", lo=0,
                                  strict=True, hi=89.9)
@@ -405,9 +411,35 @@ def angular_arrays(
     direction_window: int | str = AngularParams.direction_window,
     range_sigma_m: float | str = AngularParams.range_sigma_m,
 ) -> AngularSteps:
-    """The intermediate arrays of :func:`angular_segmentation` (same parameters), one per
-    stage, per beam: local directions, angular labels, the clusters' mean directions, offsets
-    and the final labels (:class:`AngularSteps`), for plotting the stages.
+    """The intermediate arrays of :func:`angular_segmentation`, one per stage, per beam.
+
+    The intermediate arrays of :func:`angular_segmentation` (same parameters), one per stage, per
+    beam: local directions, angular labels, the clusters' mean directions, offsets and the final
+    labels (:class:`AngularSteps`), for plotting the stages.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan.
+    eps_theta_deg : float, default 3.0
+        DBSCAN1D radius in line direction, degrees.
+    eps_dist_m : float, default 0.03
+        DBSCAN1D radius in line offset, metres.
+    min_points : int, default 8
+        DBSCAN1D min_pts of both clusterings.
+    split_gap_m : float, default 0.3
+        Split collinear clusters at gaps wider than this, metres (inf: never).
+    direction_window : int, default 'auto'
+        Half-width of the local directions' window, beams (1: the paper's three beams); auto:
+        the narrowest the range noise allows.
+    range_sigma_m : float, default 'auto'
+        Range noise, metres: a local direction only where its window is straight at that noise
+        (0: no test, the paper); auto: estimated from each scan.
+
+    Returns
+    -------
+    AngularSteps
+        The arrays of each stage.
 
     Examples
     --------

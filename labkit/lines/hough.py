@@ -65,8 +65,9 @@ _MAX_R_CELLS = 1 << 24
 
 @dataclass(frozen=True)
 class HoughParams(PlacingParams):
-    """Parameters of :func:`hough_lines` and the ``[lines.hough]`` table of :class:`labkit.Config`,
-    each default once: lengths in metres, angles in degrees."""
+    """Parameters of :func:`hough_lines`.
+
+    The ``[lines.hough]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees."""
 
     r_step_m: float = param(0.05, "accumulator cell size in r, metres", lo=0, strict=True)
     alpha_step_deg: float = param(1.0, "accumulator cell size in alpha, degrees", lo=math.degrees(1e-3), hi=90)

@@ -41,8 +41,9 @@ __all__ = ["IAVLineParams", "detect_lines_iav"]
 
 @dataclass(frozen=True)
 class IAVLineParams(Params):
-    """Parameters of :func:`detect_lines_iav` and the ``[lines.iav]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres, angles in degrees
+    """Parameters of :func:`detect_lines_iav`.
+
+    The ``[lines.iav]`` table of :class:`labkit.Config`, each default once: lengths in metres, angles in degrees
     (``std_max_deg``: Table II's 0.15 rad)."""
 
     min_points: int = param(5, "fewest points of a line (line_min_pts)", lo=3)
@@ -79,6 +80,7 @@ def detect_lines_iav(
     Parameters
     ----------
     scan : Scan
+        The laser scan.
     seg_threshold_m : float or None, metres
         A fixed range segmentation threshold (Table II ``seg_threshold``, 80 mm). Default None:
         the default segmentation (:func:`labkit.segment_labels`, adaptive with an 80 mm floor),
@@ -101,7 +103,10 @@ def detect_lines_iav(
 
     Returns
     -------
-    list of LineSegment in scan order; with ``trace``, ``(lines, steps)``.
+    lines : list of LineSegment
+        The lines found, in scan order.
+    steps : list of Step
+        Only with ``trace=True``, which returns ``(lines, steps)``.
 
     Examples
     --------

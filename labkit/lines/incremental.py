@@ -74,8 +74,9 @@ __all__ = ["incremental_lines"]
 
 @dataclass(frozen=True)
 class IncrementalParams(PlacingParams):
-    """Parameters of :func:`incremental_lines` and the ``[lines.incremental]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres."""
+    """Parameters of :func:`incremental_lines`.
+
+    The ``[lines.incremental]`` table of :class:`labkit.Config`, each default once: lengths in metres."""
 
     max_error_m: float = param(AUTO, "a point joins the line while within this distance of the refitted line, "
                                      "metres; auto: max(4 sigma, 2 cm) of the scan's range noise",

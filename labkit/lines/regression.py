@@ -73,9 +73,10 @@ _SIGMA_FLOOR_M = 0.001
 
 @dataclass(frozen=True)
 class RegressionParams(Params):
-    """Parameters of :func:`regression_lines` and the ``[lines.regression]`` table of
-    :class:`labkit.Config`, each default once: lengths in metres (``range_sigma_m`` none:
-    estimated from the scan, see the function)."""
+    """Parameters of :func:`regression_lines`.
+
+    The ``[lines.regression]`` table of :class:`labkit.Config`, each default once: lengths in metres
+    (``range_sigma_m`` none: estimated from the scan, see the function)."""
 
     window: int = param(7, "points per sliding window (Nguyen's Nf)", lo=3)
     fidelity_threshold: float = param(12.0, "largest fidelity of a window kept (residual over expected noise)",

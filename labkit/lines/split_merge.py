@@ -109,8 +109,10 @@ _METHODS = ("fit", "endpoints")
 
 @dataclass(frozen=True)
 class SplitMergeParams(Params):
-    """Parameters of :func:`split_and_merge` (both ``"iepf"`` and ``"split_and_merge"`` in the
-    registry, and the ``[lines]`` table of :class:`labkit.Config`), each default once: lengths
+    """Parameters of :func:`split_and_merge`.
+
+    Both ``"iepf"`` and ``"split_and_merge"`` in the
+    registry, and the ``[lines]`` table of :class:`labkit.Config`, each default once: lengths
     in metres (``_m``), angles in degrees (``_deg``)."""
 
     split_threshold_m: float = param(AUTO, "split when the worst point is farther than this from the line, metres; "
@@ -780,6 +782,28 @@ def lines_similar(a: LineSegment, b: LineSegment, *, merge: str = "thresholds",
     ``merge="chi2"`` when the Mahalanobis distance ``d^T (C_a + C_b)^-1 d`` of
     ``d = (dr, dalpha)`` is under ``merge_chi2`` (default 9.21, the 99% point of chi-square
     with 2 degrees of freedom).
+
+    Parameters
+    ----------
+    a, b : LineSegment
+        The two lines (with covariances for ``merge="chi2"``).
+    merge : {"thresholds", "chi2"}, default "thresholds"
+        The test.
+    merge_dr_m : float, default 0.2
+        Largest ``|dr|`` of ``"thresholds"``, metres.
+    merge_dalpha_deg : float, default 10.0
+        Largest ``|dalpha|`` of ``"thresholds"``, degrees.
+    merge_chi2 : float, default 9.21
+        Largest Mahalanobis distance of ``"chi2"``.
+    **deprecated
+        Old names of these keywords (radians without ``_deg``), with a ``DeprecationWarning``.
+
+    Returns
+    -------
+    similar : bool
+        Whether the two lines pass the test.
+    statistic : float
+        The test statistic (below 1 passes ``"thresholds"``; below ``merge_chi2`` passes ``"chi2"``).
 
     Examples
     --------

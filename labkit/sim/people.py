@@ -77,7 +77,7 @@ class PathSpec:
 class Mover:
     """A moving object at one instant, in the world frame: the truth of a track.
 
-    Attributes
+    Parameters
     ----------
     name : str
         The walker's or the cylinder's name.
