@@ -9,7 +9,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits"]
+__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters"]
 
 
 def _axes(ax, figsize):
@@ -71,3 +71,25 @@ def plot_circle_fits(points, circles: dict, ax=None):
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     ax.set_title("centre and radius from the mean inscribed angle")
     return ax
+
+
+def plot_angular_clusters(scan, phi, labels, n_clusters: int, xlim=(-1.5, 19), ylim=(-2, 2.5)):
+    """Notebook 07: a histogram of the local directions ``phi`` (radians) per angular cluster (grey: noise),
+    beside the scan's points coloured by cluster. Returns the figure."""
+    from .plot import plot_scan
+
+    fig, (ax_h, ax_s) = plt.subplots(1, 2, figsize=(14, 4.5), gridspec_kw={"width_ratios": [1, 1.6]})
+    bins = np.arange(0, 181, 2)
+    for k in range(n_clusters):
+        ax_h.hist(np.degrees(phi[labels == k]), bins=bins, color=f"C{k}", label=f"cluster {k}")
+    ax_h.hist(np.degrees(phi[np.isfinite(phi) & (labels == -1)]), bins=bins, color="lightgray", label="noise")
+    ax_h.set_xlabel("local direction (deg)")
+    ax_h.set_ylabel("points")
+    ax_h.legend(fontsize=8)
+    ax_h.set_title("angular clusters (same colour at 0 and 180: one cluster)")
+    plot_scan(scan, ax_s, labels=labels, show_invalid=False, title="points coloured by angular cluster",
+              point_size=6, adjustable="box")
+    ax_s.set_xlim(*xlim)
+    ax_s.set_ylim(*ylim)
+    fig.tight_layout()
+    return fig
