@@ -22,10 +22,16 @@ solution, so a pass is the candidate's alone.
 from __future__ import annotations
 
 import ast
+import collections
 import contextlib
 import functools
 import inspect
+import io
+import keyword
+import re
 import signal
+import textwrap
+import tokenize
 import warnings
 from pathlib import Path
 
@@ -258,3 +264,233 @@ def test_no_notebook_function_passes_the_hidden_tests(exercise_name):
                              f"{function} ({form})")
     assert not found, ("a notebook writes out what an exercise grades (a student could copy it): "
                        + "; ".join(found))
+
+
+# ---------------------------------------------------------------------------- near-copies: token n-grams
+# A notebook can give an exercise away without a function that passes its hidden tests: a cell that
+# computes the same thing inline, a helper with a renamed signature, a comment that spells the lines.
+# So every code cell and every function of every notebook (comments included, read as tokens) is compared
+# with every answer of the course: each solution function of exercises/source (docstring and input
+# guards dropped: they are not the answer) and each independent reference of exercises/grading (a
+# top-level function that is neither a test, nor a checker, nor a generator of random input).
+#
+# Both sides become token streams with names blanked (a local name is "_"; numpy, math, builtins, keywords
+# and attribute names stay: ``x[i] * np.cos(t)`` and ``a[k] * np.cos(b)`` are the same stream) and then
+# sets of 5-token n-grams. An answer's n-gram is *distinctive* when it belongs to the answers of one
+# exercise only and occurs in at most 3 notebook cells (``np.asarray(_, dtype=float)`` is everyone's);
+# the score of a (notebook unit, answer) pair is the share of the answer's distinctive n-grams found in
+# the unit. Measured on the notebooks before this test (the listed near-copies of issue 34), copies
+# scored 0.30-0.52 (ex11's homogeneous matrix 0.52, ex07's triplet direction 0.30-0.36, ex06's
+# brute-force bounds 0.32-0.39) and every other pair at most 0.19: NEAR_COPY sits in that gap.
+NGRAM = 5
+NEAR_COPY = 0.25
+GENERIC_CELLS = 3  # an n-gram in more notebook cells than this is common notebook code, not an answer
+MIN_DISTINCTIVE = 15  # an answer with fewer distinctive n-grams is too short to be told from plain numpy
+
+_KEEP = frozenset({"np", "numpy", "math", "labkit", "scipy"} | set(dir(__builtins__ if isinstance(__builtins__, dict)
+                                                                       else vars(__builtins__))))
+_WORD = re.compile(r"[A-Za-z_]\w*|\d+\.?\d*(?:e-?\d+)?|\*\*|//|==|<=|>=|!=|->|[^\s\w]")
+_NOT_AN_ANSWER = re.compile(r"^_?(test_|check|assert|as_|is_number|same|flat|plain|near|bool|expect|timed|segment$)")
+
+
+def normal_tokens(source: str) -> list[str]:
+    """``source`` as tokens with local names blanked; a comment's words are read as tokens too."""
+    out: list[str] = []
+    previous = ""
+
+    def add(word: str) -> None:
+        nonlocal previous
+        named = word[0].isalpha() or word[0] == "_"
+        out.append("_" if named and previous != "." and word not in _KEEP and not keyword.iskeyword(word) else word)
+        previous = word
+
+    for token in tokenize.generate_tokens(io.StringIO(source).readline):
+        if token.type == tokenize.COMMENT:
+            for word in _WORD.findall(token.string.lstrip("#")):
+                add(word)
+        elif token.type in (tokenize.NAME, tokenize.NUMBER, tokenize.OP):
+            add(token.string)
+        elif token.type == tokenize.STRING:
+            out.append("S")
+            previous = "S"
+    return out
+
+
+def ngrams(tokens: list[str]) -> set[tuple[str, ...]]:
+    return {tuple(tokens[i:i + NGRAM]) for i in range(len(tokens) - NGRAM + 1)}
+
+
+def _answer_source(node: ast.FunctionDef) -> str:
+    """The def without docstrings and input guards (``raise``, ``if ...: raise``): the computation."""
+    node = ast.parse(ast.unparse(node)).body[0]
+    for inner in ast.walk(node):
+        for field in ("body", "orelse"):
+            body = getattr(inner, field, None)
+            if isinstance(body, list) and body and isinstance(body[0], ast.stmt):
+                kept = [s for s in body
+                        if not (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant))
+                        and not isinstance(s, ast.Raise)
+                        and not (isinstance(s, ast.If) and not s.orelse
+                                 and all(isinstance(b, ast.Raise) for b in s.body))]
+                setattr(inner, field, kept or [ast.Pass()])
+    return ast.unparse(node)
+
+
+@functools.cache
+def course_answers() -> list[tuple[str, str, ast.FunctionDef]]:
+    """(exercise, label, def) for every solution function and every reference of the grading files."""
+    found = []
+    for exercise in names():
+        for code in solutions(exercise).values():
+            found += [(exercise, f"{exercise} solution {node.name}", node) for node in ast.parse(code).body
+                      if isinstance(node, ast.FunctionDef)]
+        grading = ast.parse((REPO / "exercises" / "grading" / f"{exercise}.py").read_text(encoding="utf-8"))
+        found += [(exercise, f"exercises/grading/{exercise}.py {node.name}", node) for node in grading.body
+                  if isinstance(node, ast.FunctionDef) and not _NOT_AN_ANSWER.match(node.name)
+                  and "rng" not in [a.arg for a in node.args.args]]
+    return found
+
+
+@functools.cache
+def notebook_units() -> list[tuple[str, str]]:
+    """(where, source) for every code cell of every notebook and every function defined in one."""
+    transform = TransformerManager().transform_cell
+    units = []
+    for nb_path in NOTEBOOKS:
+        for i, cell in enumerate(nbformat.read(nb_path, as_version=4).cells):
+            if cell.cell_type != "code":
+                continue
+            source = transform(cell.source)
+            units.append((f"{nb_path.name} cell {i} ({cell.get('id')})", source))
+            defs = [node for node in ast.walk(ast.parse(source)) if isinstance(node, ast.FunctionDef)]
+            units += [(f"{nb_path.name} cell {i} def {node.name}",
+                       textwrap.dedent(ast.get_source_segment(source, node)))
+                      for node in defs]
+    return units
+
+
+def similarity_table() -> list[tuple[float, int, int, str, str]]:
+    """(score, shared, distinctive, notebook unit, answer) for every pair, highest score first."""
+    units = [(where, ngrams(normal_tokens(source))) for where, source in notebook_units()]
+    in_cells = collections.Counter(g for where, grams in units if " def " not in where for g in grams)
+    answers = [(exercise, label, ngrams(normal_tokens(_answer_source(node))))
+               for exercise, label, node in course_answers()]
+    in_exercises = collections.Counter(g for exercise in {e for e, _, _ in answers}
+                                       for g in set().union(*(grams for e, _, grams in answers if e == exercise)))
+    rows = []
+    for _, label, grams in answers:
+        distinctive = {g for g in grams if in_exercises[g] == 1 and in_cells[g] <= GENERIC_CELLS}
+        if len(distinctive) < MIN_DISTINCTIVE:
+            continue
+        for where, unit in units:
+            shared = len(distinctive & unit)
+            rows.append((shared / len(distinctive), shared, len(distinctive), where, label))
+    return sorted(rows, reverse=True)
+
+
+def test_the_similarity_sees_a_copy_with_other_names():
+    """The measure can fail: an exercise's solution with every name changed and comments added scores 1."""
+    exercise, label, node = next(a for a in course_answers() if a[1] == "ex05_iepf_and_corners solution corner")
+    renamed = _answer_source(node)
+    for old, new in [("line1", "first"), ("line2", "second"), ("det", "d"), ("c1", "ca"), ("s2", "sb")]:
+        renamed = re.sub(rf"\b{old}\b", new, renamed)
+    assert renamed != _answer_source(node)
+    answer, copy = ngrams(normal_tokens(_answer_source(node))), ngrams(normal_tokens("# the corner\n" + renamed))
+    assert answer <= copy
+
+
+def test_no_notebook_cell_or_function_is_a_near_copy_of_an_answer():
+    table = similarity_table()
+    assert table and table[-1][0] == 0.0, "the table covers unrelated pairs too"
+    copies = [f"{where} ~ {label}: {shared}/{n} distinctive n-grams ({score:.2f})"
+              for score, shared, n, where, label in table if score >= NEAR_COPY]
+    assert not copies, "a notebook holds a near-copy of an exercise's answer: " + "; ".join(copies)
+
+
+def test_no_notebook_function_has_an_exercises_name_and_signature():
+    """A notebook function named as an exercise's function, with its parameters, is that exercise's task."""
+    asked = {}
+    for exercise in names():
+        for code in solutions(exercise).values():
+            for node in ast.parse(code).body:
+                if isinstance(node, ast.FunctionDef):
+                    asked[node.name] = (exercise, [a.arg for a in node.args.args])
+    found = []
+    for where, source in notebook_units():
+        if " def " in where:
+            continue  # its cell is read whole
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.FunctionDef) and node.name in asked:
+                exercise, parameters = asked[node.name]
+                if [a.arg for a in node.args.args] == parameters:
+                    found.append(f"{where}: {node.name}({', '.join(parameters)}) is {exercise}'s")
+    assert not found, "; ".join(found)
+
+
+# ---------------------------------------------------------------------------- your-turn cells
+def _your_turn_cells():
+    for nb_path in NOTEBOOKS:
+        for i, cell in enumerate(nbformat.read(nb_path, as_version=4).cells):
+            tags = cell.get("metadata", {}).get("tags", [])
+            if cell.cell_type == "code" and ("your-turn" in tags or "your-turn-check" in tags):
+                yield nb_path.name, i, cell, "your-turn" in tags
+
+
+def test_every_your_turn_check_takes_its_fallback_from_a_module():
+    """The check cell below a task holds no answer: its fallback is ``fallbacks.NAME`` (labkit.course_fallbacks)
+    or a labkit function, never a lambda or a function defined in the cell (nor a name imported into it)."""
+    import labkit.course_fallbacks as fallbacks
+
+    found, checks = [], 0
+    for notebook, i, cell, is_task in _your_turn_cells():
+        if is_task:
+            continue
+        tree = ast.parse(TransformerManager().transform_cell(cell.source))
+        for call in ast.walk(tree):
+            for kw in getattr(call, "keywords", []) if isinstance(call, ast.Call) else []:
+                if kw.arg != "fallback":
+                    continue
+                checks += 1
+                value = kw.value
+                from_module = _root(value) in ("labkit", "iav") or (
+                    _root(value) == "fallbacks" and hasattr(fallbacks, value.attr))
+                ok = isinstance(value, ast.Attribute) and from_module
+                if not ok:
+                    found.append(f"{notebook} cell {i}: fallback={ast.unparse(value)}")
+    assert checks >= 15, f"only {checks} fallbacks found"
+    assert not found, "a check cell writes its fallback out below the task: " + "; ".join(found)
+
+
+def _spelled_statement(text: str) -> str | None:
+    """A piece of ``text`` (from a word to a comma, semicolon or the end) that parses as an assignment,
+    a return or an ``if``/``while`` header; None when there is none."""
+    starts = [m.start() for m in re.finditer(r"\b\w", text)]
+    ends = [m.start() for m in re.finditer(r"[,;]|$", text)]
+    for a in starts:
+        for b in ends:
+            piece = text[a:b].strip().rstrip(".:")
+            if b <= a or not piece:
+                continue
+            try:
+                statement = ast.parse(piece + (" pass" if piece.startswith(("if ", "while ")) else "")).body
+            except SyntaxError:
+                continue
+            if statement and isinstance(statement[0], ast.Assign | ast.AugAssign | ast.Return | ast.While | ast.If):
+                return piece
+    return None
+
+
+def test_no_your_turn_comment_spells_a_line_of_code():
+    """A task's comments give ideas, not lines: no comment line of a your-turn cell parses as an assignment,
+    a return or an ``if``/``while`` header (``keep = min_points // 2`` is the answer, "protect the ends" an idea)."""
+    found = []
+    for notebook, i, cell, is_task in _your_turn_cells():
+        if not is_task:
+            continue
+        for line in cell.source.splitlines():
+            text = line.strip()
+            if not text.startswith("#"):
+                continue
+            if _spelled_statement(text.lstrip("#")):
+                found.append(f"{notebook} cell {i}: {text}")
+    assert not found, "a your-turn comment spells the code: " + "; ".join(found)

@@ -16,15 +16,9 @@ def middle_ratio(points, viewpoint=(0.0, 0.0)):
 '''
 
 _CIRCLE = '''
-def circle_from_angle(p_first, p_last, mean_angle, side):
-    p1 = np.asarray(p_first, dtype=float)
-    pn = np.asarray(p_last, dtype=float)
-    d = pn - p1
-    chord = np.hypot(*d)
+def radius_and_height(chord, mean_angle):
     theta = mean_angle - np.pi / 2
-    normal = np.array([-d[1], d[0]]) / chord              # left of p1 -> pn
-    centre = (p1 + pn) / 2 - np.sign(side) * {height} * np.tan(theta) * normal
-    return centre, chord / 2 / np.cos(theta)
+    return chord / 2 / np.cos(theta), {height} * np.tan(theta)
 '''
 
 FILLS = {

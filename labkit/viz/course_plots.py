@@ -1,0 +1,95 @@
+"""Figures of the course notebooks, kept here so that a notebook's code cell stays a few lines long.
+
+Every function draws into an ``Axes`` (made for you when ``ax`` is None) and returns it, as in
+:mod:`labkit.viz.plot`.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters"]
+
+
+def _axes(ax, figsize):
+    if ax is None:
+        _, ax = plt.subplots(figsize=figsize)
+    return ax
+
+
+def chord_frame(points) -> np.ndarray:
+    """``points`` (N, 2) moved so that the first is at (0, 0) and the last at (1, 0): the chord's own frame,
+    lengths in chord lengths."""
+    p = np.asarray(points, dtype=float)
+    d = p[-1] - p[0]
+    chord = float(np.hypot(d[0], d[1]))
+    if chord == 0.0:
+        raise ValueError("the first and the last point coincide: there is no chord")
+    along = d / chord
+    across = np.array([-along[1], along[0]])
+    q = p - p[0]
+    return np.column_stack([q @ along, q @ across]) / chord
+
+
+def plot_middle_band(examples: dict, ratios: dict, low: float = 0.1, high: float = 0.7, ax=None):
+    """Notebook 08, Fig. 5 of Xavier et al.: each example in its chord's frame (every bulge drawn on the
+    sensor's side), its middle point circled, and the band ``low`` to ``high`` chord lengths away."""
+    ax = _axes(ax, (8, 4.5))
+    ax.axhspan(low, high, color="tab:green", alpha=0.12, label=f"band: {low} d to {high} d")
+    ax.plot([0, 1], [0, 0], "k", lw=2, label="chord (length d)")
+    for k, (name, points) in enumerate(examples.items()):
+        q = chord_frame(points)
+        q[:, 1] = np.abs(q[:, 1])
+        inside = low < ratios[name] < high
+        ax.plot(*q.T, ".-", color=f"C{k}", label=f"{name}: {ratios[name]:.2f} d ({'in' if inside else 'out'})")
+        ax.plot(*q[len(q) // 2], "o", ms=11, mfc="none", mec=f"C{k}", mew=2)
+    ax.annotate("sensor side", (0.5, 0.8), ha="center", color="0.4")
+    ax.set_aspect("equal")
+    ax.set_xlim(-0.1, 1.1)
+    ax.set_ylim(-0.1, 0.95)
+    ax.set_xlabel("along the chord / d")
+    ax.set_ylabel("towards the sensor / d")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
+    ax.set_title("Fig. 5: the middle point (circled) must lie in the band")
+    return ax
+
+
+def plot_circle_fits(points, circles: dict, ax=None):
+    """Notebook 08: ``points`` and the circles ``{name: (centre, radius, colour)}`` fitted to them, the first
+    drawn wide (the truth), with the chord between the extreme points."""
+    ax = _axes(ax, (6, 5))
+    full = np.linspace(0, 2 * np.pi, 200)
+    for k, (name, (c, r, colour)) in enumerate(circles.items()):
+        ax.plot(c[0] + r * np.cos(full), c[1] + r * np.sin(full), color=colour, lw=5 if k == 0 else 2, alpha=0.8,
+                label=f"{name}: R = {r:.3f} m")
+        ax.plot(*c, "+", color=colour, ms=12, mew=2)
+    points = np.asarray(points, dtype=float)
+    ax.plot(*points.T, "o", color="tab:blue", label="points")
+    ax.plot(*points[[0, -1]].T, "k--", lw=1, label="chord")
+    ax.set_aspect("equal")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    ax.set_title("centre and radius from the mean inscribed angle")
+    return ax
+
+
+def plot_angular_clusters(scan, phi, labels, n_clusters: int, xlim=(-1.5, 19), ylim=(-2, 2.5)):
+    """Notebook 07: a histogram of the local directions ``phi`` (radians) per angular cluster (grey: noise),
+    beside the scan's points coloured by cluster. Returns the figure."""
+    from .plot import plot_scan
+
+    fig, (ax_h, ax_s) = plt.subplots(1, 2, figsize=(14, 4.5), gridspec_kw={"width_ratios": [1, 1.6]})
+    bins = np.arange(0, 181, 2)
+    for k in range(n_clusters):
+        ax_h.hist(np.degrees(phi[labels == k]), bins=bins, color=f"C{k}", label=f"cluster {k}")
+    ax_h.hist(np.degrees(phi[np.isfinite(phi) & (labels == -1)]), bins=bins, color="lightgray", label="noise")
+    ax_h.set_xlabel("local direction (deg)")
+    ax_h.set_ylabel("points")
+    ax_h.legend(fontsize=8)
+    ax_h.set_title("angular clusters (same colour at 0 and 180: one cluster)")
+    plot_scan(scan, ax_s, labels=labels, show_invalid=False, title="points coloured by angular cluster",
+              point_size=6, adjustable="box")
+    ax_s.set_xlim(*xlim)
+    ax_s.set_ylim(*ylim)
+    fig.tight_layout()
+    return fig
