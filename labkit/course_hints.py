@@ -67,6 +67,17 @@ HINTS: dict[str, tuple[str, ...]] = {
         "Wrap the angle difference into (-pi, pi]. When it is larger than a right angle, the lines may be the "
         "same line with opposite normals: compare with the second line turned around instead.",
     ),
+    "process_noise": (
+        "Each axis moves on its own: x with vx, y with vy. Work out the 2 x 2 noise of one axis, then place it twice.",
+        "For one axis the noise is q times the integral over the interval of the outer product of how a kick at "
+        "time s moves position and velocity at the end (position by the time left, velocity by one). Put that "
+        "block where x meets vx, and again where y meets vy; x and y share nothing.",
+    ),
+    "best_assignment": (
+        "With a handful of rows, the cheapest pairing can be found by trying them all.",
+        "Every pairing of rows to columns is a permutation of the column indices (the standard library's "
+        "itertools makes them). Sum the costs along each, keep the smallest, and return its pairs by row.",
+    ),
     "intersection": (
         "The corner is the solution of a 2 x 2 linear system: one equation per line.",
         "Write the system as a matrix of the normals' cosines and sines times (x, y) equals (r1, r2), and "
