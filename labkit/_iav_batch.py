@@ -585,6 +585,8 @@ def leg_engine(scan: Scan, runs: Runs, t: LegTest, sigma: float = 0.0, *,
     the legs, and with ``want_trace`` the steps."""
     if runs.starts.size == 0:
         return [], []
+    if not want_trace and t.iav_mean_range is None and t.iav_std_max is None and _engine() is not None:
+        return _compiled_legs(scan, runs, t, sigma), []
     geo = geometry(runs)
     chord = padded_chords(scan, geo, t.chord_padding_beams)
     widened: dict = {}
@@ -627,6 +629,31 @@ def leg_engine(scan: Scan, runs: Runs, t: LegTest, sigma: float = 0.0, *,
     if not want_trace:
         return legs, []
     return legs, trace(runs, geo, chord, ratio, verdict, sel, ang, "legs", leg_limits(t), legs, widened)
+
+
+def _compiled_legs(scan: Scan, runs: Runs, t: LegTest, sigma: float) -> list[Leg]:
+    """:func:`leg_engine`'s legs when neither the angles' mean nor their spread is tested, the tests
+    up to the angles compiled (:func:`labkit._iav_engine.leg_tests`)."""
+    spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
+    verdict, chord, mean, std, side = _ENGINE.leg_tests(runs.pts, runs.starts, runs.ends, runs.check_finite,
+                                                        t.min_points, t.chord_range, t.middle_range,
+                                                        t.chord_padding_beams * spacing, sigma)
+    legs: list[Leg] = []
+    for k in np.flatnonzero(verdict == ACCEPTED).tolist():
+        a, b = runs.starts.item(k), runs.ends.item(k)
+        first, last = runs.idx.item(a), runs.idx.item(b - 1)
+        if t.reject_occluded and occluded(scan, first, last):
+            continue
+        m, sd = mean.item(k), std.item(k)
+        try:
+            center, diameter = leg_center(runs.pts[a:b], chord.item(k), m, side.item(k), t.center_method)
+        except ValueError:
+            continue
+        middle = np.array(runs.pts[a + (b - a) // 2], dtype=np.float64)
+        center.setflags(write=False)
+        middle.setflags(write=False)
+        legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
+    return legs
 
 
 # ============================================================================ lines

@@ -6,7 +6,8 @@
 * :func:`circle_tests` -- the tests of :func:`labkit._iav_batch.circle_engine` up to the centre, on
   every run of a scan in one pass: the cheap tests, the inscribed angles, their noise allowances
   and the angle tests (what numpy rounds its own way is reproduced: its complex product is two
-  fused multiply-adds, ``numpy.bincount`` sums one value after the other).
+  fused multiply-adds, ``numpy.bincount`` sums one value after the other);
+* :func:`leg_tests` -- the same for :func:`labkit._iav_batch.leg_engine` at its defaults.
 
 Both give numpy's results bit for bit (``tests/test_engine.py``); ``LABKIT_NO_JIT=1`` runs numpy's.
 
@@ -31,7 +32,7 @@ import numpy as np
 
 from ._kernels import _fma, jit, jit_inline, segment_sum, sum_at
 
-__all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "COMPLEX_FMA"]
+__all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "COMPLEX_FMA"]
 
 NOISE_Z = 2.0  # (= labkit.iav.NOISE_Z, LINE_Z, ARC_LIKE_STD_MAX and labkit._iav_batch's verdicts:
 LINE_Z = 3.0  # the engine cannot import the modules it serves; tests/test_engine.py checks they agree)
@@ -354,6 +355,70 @@ def _ratio_sd(x0, y0, x1, y1, xm, ym, chord, sigma):
     return sigma * math.sqrt(acc) / chord
 
 
+@jit_inline
+def _cheap(px, py, a, e, tested, min_points, c_lo, c_hi, lo, hi, check_finite, sigma):
+    """:func:`labkit._iav_batch.cheap_tests` of the run ``a:e`` (its chord tested: ``tested``):
+    its verdict and middle ratio (NaN when not reached)."""
+    n = e - a
+    if n < min_points:
+        return FEW, math.nan
+    if tested < c_lo:
+        return SHORT, math.nan
+    if tested > c_hi:
+        return LONG, math.nan
+    x0, y0, x1, y1 = px[a], py[a], px[e - 1], py[e - 1]
+    xm, ym = px[a + n // 2], py[a + n // 2]
+    dx, dy = x1 - x0, y1 - y0
+    c = math.hypot(dx, dy)
+    cross_mid = dx * (ym - y0) - dy * (xm - x0)
+    cross_origin = dy * x0 - dx * y0
+    sd = -cross_mid if cross_origin < 0 else abs(cross_mid) if cross_origin == 0 else cross_mid
+    c2 = c * c
+    r = sd / c2 if c2 > 0 else sd * math.inf if c > 0 else math.nan
+    finite = True
+    if check_finite:
+        for i in range(a, e):
+            if not (math.isfinite(px[i]) and math.isfinite(py[i])):
+                finite = False
+    if math.isnan(r) or not finite:
+        return DEGENERATE, r
+    if sigma > 0.0:
+        w = NOISE_Z * _ratio_sd(x0, y0, x1, y1, xm, ym, c, sigma)
+        return (ACCEPTED if lo - w < r < hi + w else PREREQ), r
+    return (ACCEPTED if lo < r < hi else PREREQ), r
+
+
+@jit_inline
+def _angles(px, py, a, e, ang):
+    """:func:`labkit._iav_batch.batch_angles` of the run ``a:e`` (3 points or more): the angles'
+    mean, standard deviation, side sum, and whether an interior point is on an extreme. With
+    ``z = x + iy``, ``a = z_1 - z_i``, ``b = a + d``: ``b conj(a)`` as numpy multiplies complex
+    numbers (each part one fused multiply-add); the sums in order, as ``numpy.bincount``'s."""
+    x0, y0 = px[a], py[a]
+    dx, dy = px[e - 1] - x0, py[e - 1] - y0
+    m = e - a - 2
+    degenerate = False
+    total = 0.0
+    side_sum = 0.0
+    for i in range(m):
+        ar, ai = x0 - px[a + 1 + i], y0 - py[a + 1 + i]
+        br, bi = ar + dx, ai + dy
+        if (ar == 0 and ai == 0) or (br == 0 and bi == 0):
+            degenerate = True
+        re = _fma(br, ar, -(bi * -ai))
+        im = _fma(br, -ai, bi * ar)
+        t = math.atan2(im, re) % _TWO_PI
+        ang[i] = t
+        total += t
+        side_sum += _fma(dx, -ai, dy * ar)
+    mu = total / m
+    var = 0.0
+    for i in range(m):
+        dv = ang[i] - mu
+        var += dv * dv
+    return mu, math.sqrt(var / m), side_sum, degenerate
+
+
 @jit
 def _circle_tests(px, py, starts, ends, check_finite, min_points, c_lo, c_hi, lo, hi, mean_lo, mean_hi, std_max0,
                   std_max_sq, sigma):
@@ -375,67 +440,12 @@ def _circle_tests(px, py, starts, ends, check_finite, min_points, c_lo, c_hi, lo
     n_sel = 0
     for k in range(k_runs):
         a, e = starts[k], ends[k]
-        n = e - a
         lim[k, 0], lim[k, 1], lim[k, 2] = mean_lo, mean_hi, std_max0
-        x0, y0, x1, y1 = px[a], py[a], px[e - 1], py[e - 1]
-        dx, dy = x1 - x0, y1 - y0
-        c = math.hypot(dx, dy)
-        if n < min_points:
-            verdict[k] = FEW
-            continue
-        if c < c_lo:
-            verdict[k] = SHORT
-            continue
-        if c > c_hi:
-            verdict[k] = LONG
-            continue
-        xm, ym = px[a + n // 2], py[a + n // 2]
-        cross_mid = dx * (ym - y0) - dy * (xm - x0)
-        cross_origin = dy * x0 - dx * y0
-        sd = -cross_mid if cross_origin < 0 else abs(cross_mid) if cross_origin == 0 else cross_mid
-        c2 = c * c
-        r = sd / c2 if c2 > 0 else sd * math.inf if c > 0 else math.nan
-        ratio[k] = r
-        finite = True
-        if check_finite:
-            for i in range(a, e):
-                if not (math.isfinite(px[i]) and math.isfinite(py[i])):
-                    finite = False
-        if math.isnan(r) or not finite:
-            verdict[k] = DEGENERATE
-            continue
-        if sigma > 0.0:
-            w = NOISE_Z * _ratio_sd(x0, y0, x1, y1, xm, ym, c, sigma)
-            verdict[k] = ACCEPTED if lo - w < r < hi + w else PREREQ
-        else:
-            verdict[k] = ACCEPTED if lo < r < hi else PREREQ
+        c = math.hypot(px[e - 1] - px[a], py[e - 1] - py[a])
+        verdict[k], ratio[k] = _cheap(px, py, a, e, c, min_points, c_lo, c_hi, lo, hi, check_finite, sigma)
         if verdict[k] != ACCEPTED:
             continue
-        # the inscribed angles (labkit._iav_batch.batch_angles): z = x + iy, a = z0 - z_i, b = a + d,
-        # b conj(a) as numpy multiplies complex numbers (each part one fused multiply-add)
-        m = n - 2
-        degenerate = False
-        total = 0.0
-        side_sum = 0.0
-        for i in range(m):
-            ar, ai = x0 - px[a + 1 + i], y0 - py[a + 1 + i]
-            br, bi = ar + dx, ai + dy
-            if (ar == 0 and ai == 0) or (br == 0 and bi == 0):
-                degenerate = True
-            re = _fma(br, ar, -(bi * -ai))
-            im = _fma(br, -ai, bi * ar)
-            t = math.atan2(im, re) % _TWO_PI
-            ang[i] = t
-            total += t
-            side_sum += _fma(dx, -ai, dy * ar)
-        mu = total / m
-        var = 0.0
-        for i in range(m):
-            dv = ang[i] - mu
-            var += dv * dv
-        mean[k] = mu
-        std[k] = math.sqrt(var / m)
-        side[k] = side_sum
+        mean[k], std[k], side[k], degenerate = _angles(px, py, a, e, ang)
         if degenerate:
             verdict[k] = DEGENERATE
             continue
@@ -458,6 +468,34 @@ def _circle_tests(px, py, starts, ends, check_finite, min_points, c_lo, c_hi, lo
     return verdict, ratio, mean, std, side, lim
 
 
+@jit
+def _leg_tests(px, py, starts, ends, check_finite, min_points, c_lo, c_hi, lo, hi, padding, sigma):
+    """Per run: verdict (up to the angles: no mean or spread test), the padded chord, the angles'
+    mean, std and side."""
+    k_runs = len(starts)
+    verdict = np.empty(k_runs, np.int64)
+    chord = np.empty(k_runs)
+    mean = np.full(k_runs, math.nan)
+    std = np.full(k_runs, math.nan)
+    side = np.full(k_runs, math.nan)
+    big = 1
+    for k in range(k_runs):
+        big = max(big, ends[k] - starts[k])
+    ang = np.empty(big)
+    for k in range(k_runs):
+        a, e = starts[k], ends[k]
+        mid = a + (e - a) // 2
+        chord[k] = (math.hypot(px[e - 1] - px[a], py[e - 1] - py[a])
+                    + padding * math.hypot(px[mid], py[mid]))
+        verdict[k], _ = _cheap(px, py, a, e, chord[k], min_points, c_lo, c_hi, lo, hi, check_finite, sigma)
+        if verdict[k] != ACCEPTED:
+            continue
+        mean[k], std[k], side[k], degenerate = _angles(px, py, a, e, ang)
+        if degenerate:
+            verdict[k] = DEGENERATE
+    return verdict, chord, mean, std, side
+
+
 def circle_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_finite: bool, min_points: int,
                  chord_range: tuple[float, float], middle_range: tuple[float, float],
                  mean_range: tuple[float, float], std_max: float, sigma: float):
@@ -474,9 +512,23 @@ def circle_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_fi
                          float(std_max) ** 2, float(sigma))  # (the square as Python takes it: C's pow)
 
 
+def leg_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_finite: bool, min_points: int,
+              chord_range: tuple[float, float], middle_range: tuple[float, float], padding: float, sigma: float):
+    """The tests of :func:`labkit._iav_batch.leg_engine` up to the angles (its defaults: no test of
+    their mean or spread), on every run: per run its verdict (``ACCEPTED``: on to the occlusion
+    test), chord padded by ``padding`` metres per metre of the middle point's range, and the
+    inscribed angles' mean, standard deviation and side sum (NaN where not computed)."""
+    p = np.asarray(pts, dtype=np.float64)
+    return _leg_tests(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]),
+                      np.array(starts, dtype=np.int64), np.array(ends, dtype=np.int64), bool(check_finite),
+                      int(min_points), float(chord_range[0]), float(chord_range[1]), float(middle_range[0]),
+                      float(middle_range[1]), float(padding), float(sigma))
+
+
 def compile_all() -> None:
     """Compile (or load from the cache) the kernels, for a warm-up."""
     pts = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [0.7, 0.7]])
     fit_circles(pts, np.array([0]), np.array([5]), "geometric")
     angle_noise_runs(pts, np.array([0]), np.array([5]), 0.01)
     circle_tests(pts, np.array([0]), np.array([5]), False, 4, (0.15, math.inf), (0.1, 0.7), (1.6, 2.4), 0.15, 0.01)
+    leg_tests(pts, np.array([0]), np.array([5]), False, 3, (0.1, 0.25), (0.1, 0.7), 0.01, 0.01)
