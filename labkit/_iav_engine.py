@@ -7,7 +7,8 @@
   every run of a scan in one pass: the cheap tests, the inscribed angles, their noise allowances
   and the angle tests (what numpy rounds its own way is reproduced: its complex product is two
   fused multiply-adds, ``numpy.bincount`` sums one value after the other);
-* :func:`leg_tests` -- the same for :func:`labkit._iav_batch.leg_engine` at its defaults.
+* :func:`leg_tests` -- the same for :func:`labkit._iav_batch.leg_engine` at its defaults;
+* :func:`wider_than_noise` -- the residual test (:func:`labkit._iav_noise.wider_than_noise`).
 
 Both give numpy's results bit for bit (``tests/test_engine.py``); ``LABKIT_NO_JIT=1`` runs numpy's.
 
@@ -32,7 +33,7 @@ import numpy as np
 
 from ._kernels import _fma, jit, jit_inline, segment_sum, sum_at
 
-__all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "COMPLEX_FMA"]
+__all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "wider_than_noise", "COMPLEX_FMA"]
 
 NOISE_Z = 2.0  # (= labkit.iav.NOISE_Z, LINE_Z, ARC_LIKE_STD_MAX and labkit._iav_batch's verdicts:
 LINE_Z = 3.0  # the engine cannot import the modules it serves; tests/test_engine.py checks they agree)
@@ -512,6 +513,86 @@ def circle_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_fi
                          float(std_max) ** 2, float(sigma))  # (the square as Python takes it: C's pow)
 
 
+@jit
+def _wider(px, py, starts, ends, sigma, cx, cy, radii, given, early_steps, early_factor):
+    """:func:`labkit._iav_noise.wider_than_noise`'s verdicts, and False where a fit needs numpy's
+    least-squares step."""
+    k_runs = len(starts)
+    out = np.zeros(k_runs, np.bool_)
+    limit = np.full(k_runs, math.nan)
+    todo = np.empty(k_runs, np.int64)
+    n_todo = 0
+    for k in range(k_runs):
+        if ends[k] - starts[k] > 3:
+            dof = float(ends[k] - starts[k] - 3)
+            ks = 2.0 / (9.0 * dof)
+            base = 1.0 - ks + NOISE_Z * math.sqrt(ks)
+            if not base != base:
+                base = max(base, 0.0)
+            limit[k] = sigma * sigma * math.pow(base, 3.0) * dof / (dof + 3)
+            todo[n_todo] = k
+            n_todo += 1
+    if n_todo == 0:
+        return out, True
+    if given:  # the circle given decides the runs it fits well enough
+        big = 1
+        for j in range(n_todo):
+            big = max(big, ends[todo[j]] - starts[todo[j]])
+        dd = np.empty(big)
+        kept = 0
+        for j in range(n_todo):
+            k = todo[j]
+            a, m = starts[k], ends[k] - starts[k]
+            for i in range(m):
+                d = math.hypot(px[a + i] - cx[k], py[a + i] - cy[k]) - radii[k]
+                dd[i] = d * d
+            if not segment_sum(dd, 0, m) / m <= limit[k]:  # (NaN: no circle given)
+                todo[kept] = k
+                kept += 1
+        n_todo = kept
+    stage = 0 if given else -1  # the fits: (EARLY_STEPS, to convergence), after (0, ...) without a circle
+    while n_todo:
+        steps = 0 if stage == -1 else early_steps if stage == 0 else 50
+        sub_s = np.empty(n_todo, np.int64)
+        sub_e = np.empty(n_todo, np.int64)
+        for j in range(n_todo):
+            sub_s[j], sub_e[j] = starts[todo[j]], ends[todo[j]]
+        _, _, _, rms, _, _, ok = _fit_runs(px, py, sub_s, sub_e, True, steps, 1e-12)
+        if not ok:
+            return out, False
+        kept = 0
+        for j in range(n_todo):
+            k = todo[j]
+            ms, lim = rms[j] * rms[j], limit[k]
+            over = ms > lim
+            if stage == 1:
+                out[k] = over
+            elif stage == 0:
+                out[k] = ms > early_factor * lim
+                over = over and ms <= early_factor * lim
+            if stage != 1 and over:
+                todo[kept] = k
+                kept += 1
+        if stage == 1:
+            break
+        n_todo = kept
+        stage += 1
+    return out, True
+
+
+def wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigma: float, centers: np.ndarray,
+                     radii: np.ndarray, early_steps: int, early_factor: float) -> np.ndarray | None:
+    """:func:`labkit._iav_noise.wider_than_noise` (with a circle per run to try first), bit for bit,
+    or None where a fit needs numpy's least-squares step (the caller then runs numpy's)."""
+    p = np.asarray(pts, dtype=np.float64)
+    c = np.asarray(centers, dtype=np.float64).reshape(-1, 2)
+    out, ok = _wider(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), np.array(starts, dtype=np.int64),
+                     np.array(ends, dtype=np.int64), float(sigma), np.ascontiguousarray(c[:, 0]),
+                     np.ascontiguousarray(c[:, 1]), np.array(radii, dtype=np.float64), True, int(early_steps),
+                     float(early_factor))
+    return out if ok else None
+
+
 def leg_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_finite: bool, min_points: int,
               chord_range: tuple[float, float], middle_range: tuple[float, float], padding: float, sigma: float):
     """The tests of :func:`labkit._iav_batch.leg_engine` up to the angles (its defaults: no test of
@@ -532,3 +613,4 @@ def compile_all() -> None:
     angle_noise_runs(pts, np.array([0]), np.array([5]), 0.01)
     circle_tests(pts, np.array([0]), np.array([5]), False, 4, (0.15, math.inf), (0.1, 0.7), (1.6, 2.4), 0.15, 0.01)
     leg_tests(pts, np.array([0]), np.array([5]), False, 3, (0.1, 0.25), (0.1, 0.7), 0.01, 0.01)
+    wider_than_noise(pts, np.array([0]), np.array([5]), 0.01, np.array([[0.0, 0.0]]), np.array([1.0]), 5, 16.0)
