@@ -27,15 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._iav_noise import (
-    EARLY_FACTOR,
-    EARLY_STEPS,
-    angle_limits,
-    angle_noise_runs,
-    ratio_sd,
-    widen,
-    wider_than_noise,
-)
+from ._iav_noise import angle_limits, angle_noise_runs, ratio_sd, widen, wider_than_noise
 from ._jit import ENABLED as _JIT
 from ._validate import check_positive
 from .features import Circle, Leg, LineSegment, line_segment
@@ -454,11 +446,8 @@ def _compiled_circles(runs: Runs, t: CircleTest, sigma: float) -> list[Circle]:
         circle_of = [c for c, _ in made]
         centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
         radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
-        wider = _ENGINE.wider_than_noise(runs.pts, runs.starts[passed], runs.ends[passed], sigma, centers, radii,
-                                         EARLY_STEPS, EARLY_FACTOR)
-        if wider is None:  # (a fit needs numpy's least-squares step)
-            wider = wider_than_noise(runs.pts, runs.starts[passed], runs.ends[passed], sigma, centers, radii)
-        made = [(None, RESIDUAL) if w else m for w, m in zip(wider.tolist(), made, strict=True)]
+        wider = wider_than_noise(runs.pts, runs.starts[passed], runs.ends[passed], sigma, centers, radii).tolist()
+        made = [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
     return [c for c, _ in made if c is not None]
 
 

@@ -191,7 +191,15 @@ def wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigm
     one circle. (A beam's noise moves its point across the circle by at most sigma, so true
     circles fail this less often than the quantile says.) Runs of 3 points, and runs no finite
     circle fits, are not. ``centers`` (K, 2) and ``radii`` (K,), if given, are a circle per run to
-    try first (the detector's own; NaN: none)."""
+    try first (the detector's own; NaN: none). With them, the compiled engine decides
+    (:mod:`labkit._iav_engine`, the same verdicts bit for bit) unless ``LABKIT_NO_JIT`` is set or a
+    fit needs numpy's least-squares step."""
+    if _JIT and centers is not None and radii is not None:
+        from ._iav_engine import wider_than_noise as engine  # (numba imported on the first call)
+
+        decided = engine(pts, starts, ends, sigma, centers, radii, EARLY_STEPS, EARLY_FACTOR)
+        if decided is not None:
+            return decided
     starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
     out = np.zeros(len(starts), dtype=bool)
     big = np.flatnonzero(ends - starts > 3)
