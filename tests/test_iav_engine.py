@@ -163,9 +163,9 @@ def test_detectors_equal_the_reference_on_real_scans(shared_datasets):
         found += same_as_reference(labkit.read_json_scan(shared_datasets / "single_scans" / f"laser_scan_{k}.json"))
     for log in RADISH:
         path = shared_datasets / "carmen" / f"{log}-corrected.log.gz"
-        for scan in itertools.islice(labkit.read_scans(path), 0, 240, 60):
+        for scan in itertools.islice(labkit.read_scans(path), 0, 240, 120):
             found += same_as_reference(scan)
-    assert found > 20
+    assert found > 10
 
 
 def test_a_difference_is_seen(monkeypatch):
