@@ -16,10 +16,14 @@ Part 2 -- end to end: a bag of 722-beam scans written with labkit, then
 ``labkit.app.record.record`` (read -> extract_features -> .rrd with every feature layer, counts
 and stage times) timed as a whole and by phase.
 
-Goals (issue 6): >= 1000 scans/s through the pipeline at 722 beams on one core; 8x the beams
-for <= 10x the time; >= 500 scans/s from bag to .rrd.
+Part 3 -- ``labkit extract`` of a bag of 541-beam scans (hall world), in this process: its own
+scans/s at the default and with ``FIXED_CONFIG``, interleaved.
 
-Run: ``python benchmarks/pipeline.py [--scans 40] [--repeat 3] [--bag-scans 1000]``
+Goals (issue 6): >= 1000 scans/s through the pipeline at 722 beams on one core; 8x the beams
+for <= 10x the time; >= 500 scans/s from bag to .rrd. Issue 33: ``labkit extract`` >= 3000 scans/s
+on 541-beam scans at the default, and the default <= 1.2x the fixed setting's time.
+
+Run: ``python benchmarks/pipeline.py [--scans 40] [--repeat 3] [--bag-scans 1000] [--extract-scans 2000]``
 """
 
 from __future__ import annotations
@@ -113,14 +117,52 @@ def end_to_end(n_scans: int) -> None:
           f"log .rrd {r['log']:,.0f} scans/s ({phases.log_s / total:.0%})")
 
 
+def extract_rate(n_scans: int, repeat: int) -> None:
+    """``labkit extract`` (in this process, one core) on a bag of 541-beam scans, default against fixed."""
+    import contextlib
+    import io
+    import re
+
+    from labkit.app.cli import main as cli
+
+    print(f"\nPart 3: `labkit extract` of a bag of {n_scans} scans of 541 beams (hall world, 5 mm), one core, "
+          f"best of {repeat} (its own scans/s: read, extract, write the features file)")
+    scans = world_scans("hall", 541, n_scans)
+    rates = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        bag = Path(tmp) / "hall541.bag"
+        write_bag(scans, bag)
+        fixed = Config().updated(FIXED_CONFIG).save(Path(tmp) / "fixed.toml")
+        for s in scans[:5]:  # compile or load the engines before timing
+            extract_features(fresh_scan(s), Config())
+            extract_features(fresh_scan(s), Config().updated(FIXED_CONFIG))
+        settings = {"default (auto)": [], "FIXED_CONFIG": ["--config", str(fixed)]}
+        for _ in range(repeat):  # interleaved: a pause of the machine hits both
+            for label, extra in settings.items():
+                out = io.StringIO()
+                with contextlib.redirect_stdout(out):
+                    cli(["extract", str(bag), "-o", str(Path(tmp) / "out.jsonl"), "--force", "--quiet", *extra])
+                found = re.search(r"\(([\d,]+) scans/s", out.getvalue())
+                assert found, out.getvalue()
+                rates[label] = max(rates.get(label, 0.0), float(found.group(1).replace(",", "")))
+    for label, rate in rates.items():
+        print(f"{label:16s} {rate:8.0f} scans/s")
+    auto, fixed_rate = rates["default (auto)"], rates["FIXED_CONFIG"]
+    print(f"goal (issue 33): >= 3000 scans/s at the default: {'met' if auto >= 3000 else 'not met'} ({auto:.0f}); "
+          f"default <= 1.2x the fixed setting's time: {'met' if fixed_rate / auto <= 1.2 else 'not met'} "
+          f"({fixed_rate / auto:.2f}x)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scans", type=int, default=40)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--bag-scans", type=int, default=1000)
+    ap.add_argument("--extract-scans", type=int, default=2000, help="scans of the bag `labkit extract` reads")
     args = ap.parse_args()
     stage_table(args.scans, args.repeat)
     end_to_end(args.bag_scans)
+    extract_rate(args.extract_scans, args.repeat)
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ._iav_noise import angle_limits, angle_noise_runs, ratio_sd, widen, wider_than_noise
+from ._jit import ENABLED as _JIT
 from ._validate import check_positive
 from .features import Circle, Leg, LineSegment, line_segment
 from .fitting import fit_circle
@@ -371,6 +372,8 @@ def circle_engine(runs: Runs, t: CircleTest, sigma: float = 0.0, *, want_trace: 
     s = runs.starts.size
     if s == 0:
         return [], []
+    if not want_trace and not t.hollow and t.arc_like_std_max is None and _engine() is not None:
+        return _compiled_circles(runs, t, sigma), []
     geo = geometry(runs)
     widened: dict = {}
     verdict, ratio = cheap_tests(geo, geo.chord, max(t.min_points, 3), t.chord_range, t.middle_range, t.hollow,
@@ -407,6 +410,45 @@ def circle_engine(runs: Runs, t: CircleTest, sigma: float = 0.0, *, want_trace: 
         return circles, []
     return circles, trace(runs, geo, geo.chord, ratio, verdict, sel, ang, algorithm, circle_limits(t), circles,
                           widened)
+
+
+def _engine():
+    """labkit._iav_engine, or None where it does not run (LABKIT_NO_JIT=1, or numpy's complex
+    product rounds otherwise than it assumes); imported on the first scan."""
+    global _ENGINE
+    if _ENGINE is False:
+        _ENGINE = None
+        if _JIT:
+            from . import _iav_engine
+
+            _ENGINE = _iav_engine if _iav_engine.COMPLEX_FMA else None
+    return _ENGINE
+
+
+_ENGINE: Any = False
+
+
+def _compiled_circles(runs: Runs, t: CircleTest, sigma: float) -> list[Circle]:
+    """:func:`circle_engine`'s circles, the tests up to the centre compiled
+    (:func:`labkit._iav_engine.circle_tests`)."""
+    verdict, _, mean, std, side, lim = _ENGINE.circle_tests(
+        runs.pts, runs.starts, runs.ends, runs.check_finite, max(t.min_points, 3), t.chord_range, t.middle_range,
+        t.mean_range, t.std_max, sigma)
+    passed = np.flatnonzero(verdict == ACCEPTED)
+    if not passed.size:
+        return []
+    geo = Geometry(runs.ends - runs.starts, None, runs.pts.take(runs.starts, axis=0),  # type: ignore[arg-type]
+                   runs.pts.take(runs.ends - 1, axis=0), None, None)  # type: ignore[arg-type]
+    ang = Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
+    made = [_make_circle(runs, geo, ang, k, k, t, t.kind, ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2)))
+            for k in passed.tolist()]
+    if sigma > 0.0:  # and their points must lie on a circle within the noise
+        circle_of = [c for c, _ in made]
+        centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
+        radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
+        wider = wider_than_noise(runs.pts, runs.starts[passed], runs.ends[passed], sigma, centers, radii).tolist()
+        made = [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
+    return [c for c, _ in made if c is not None]
 
 
 def _angle_verdict(ang: Angles, j: int, t: CircleTest, noise: tuple | None = None,
@@ -543,6 +585,8 @@ def leg_engine(scan: Scan, runs: Runs, t: LegTest, sigma: float = 0.0, *,
     the legs, and with ``want_trace`` the steps."""
     if runs.starts.size == 0:
         return [], []
+    if not want_trace and t.iav_mean_range is None and t.iav_std_max is None and _engine() is not None:
+        return _compiled_legs(scan, runs, t, sigma), []
     geo = geometry(runs)
     chord = padded_chords(scan, geo, t.chord_padding_beams)
     widened: dict = {}
@@ -585,6 +629,31 @@ def leg_engine(scan: Scan, runs: Runs, t: LegTest, sigma: float = 0.0, *,
     if not want_trace:
         return legs, []
     return legs, trace(runs, geo, chord, ratio, verdict, sel, ang, "legs", leg_limits(t), legs, widened)
+
+
+def _compiled_legs(scan: Scan, runs: Runs, t: LegTest, sigma: float) -> list[Leg]:
+    """:func:`leg_engine`'s legs when neither the angles' mean nor their spread is tested, the tests
+    up to the angles compiled (:func:`labkit._iav_engine.leg_tests`)."""
+    spacing = abs(scan.angle_increment) if scan.n_beams > 1 else 0.0
+    verdict, chord, mean, std, side = _ENGINE.leg_tests(runs.pts, runs.starts, runs.ends, runs.check_finite,
+                                                        t.min_points, t.chord_range, t.middle_range,
+                                                        t.chord_padding_beams * spacing, sigma)
+    legs: list[Leg] = []
+    for k in np.flatnonzero(verdict == ACCEPTED).tolist():
+        a, b = runs.starts.item(k), runs.ends.item(k)
+        first, last = runs.idx.item(a), runs.idx.item(b - 1)
+        if t.reject_occluded and occluded(scan, first, last):
+            continue
+        m, sd = mean.item(k), std.item(k)
+        try:
+            center, diameter = leg_center(runs.pts[a:b], chord.item(k), m, side.item(k), t.center_method)
+        except ValueError:
+            continue
+        middle = np.array(runs.pts[a + (b - a) // 2], dtype=np.float64)
+        center.setflags(write=False)
+        middle.setflags(write=False)
+        legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
+    return legs
 
 
 # ============================================================================ lines

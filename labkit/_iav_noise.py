@@ -26,6 +26,7 @@ from typing import overload
 
 import numpy as np
 
+from ._jit import ENABLED as _JIT
 from .fitting import fit_circles
 from .iav import ARC_LIKE_STD_MAX, LINE_Z, NOISE_Z
 from .noise import chi2_upper_over_dof
@@ -81,7 +82,20 @@ def angle_noise_runs(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     and the last point's (``h_i``). With ``gc, hc`` the centred ``g, h``, ``(C J)^T (C J)`` is
     ``[[gc.gc, d_i gc_i, gc.hc], [., d_i d_j (delta_ij - 1/m), d_i hc_i], [., ., hc.hc]]``, so
     ``tr(S)`` and ``tr(S^2)`` (its trace and squared Frobenius norm) are sums over the angles.
+
+    The compiled engine (:mod:`labkit._iav_engine`) computes the same, bit for bit, unless
+    ``LABKIT_NO_JIT`` is set; :func:`angle_noise_reference` is the numpy code below.
     """
+    if _JIT:
+        from ._iav_engine import angle_noise_runs as engine  # (numba imported on the first call)
+
+        return engine(pts, starts, ends, sigma)
+    return angle_noise_reference(pts, starts, ends, sigma)
+
+
+def angle_noise_reference(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray,
+                          sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`angle_noise_runs` as numpy operations over every angle of every run at once."""
     starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
     m_k = ends - starts - 2
     off = np.concatenate([[0], np.cumsum(m_k)[:-1]])
@@ -121,6 +135,19 @@ def angle_noise_runs(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     nu = np.where(pos, tr * tr / np.where(pos, tr2, 1.0), 1.0)
     spread_sq = np.where(pos, sigma * sigma * tr / m * chi2_upper_over_dof(nu, NOISE_Z), 0.0)
     return spread_sq, mean_sd
+
+
+def _fit_circles(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, **kwargs):
+    """Geometric :func:`labkit.fitting.fit_circles`: the compiled one (:mod:`labkit._iav_engine`,
+    the same circles bit for bit) unless ``LABKIT_NO_JIT`` is set or a run needs numpy's
+    least-squares step."""
+    if _JIT:
+        from ._iav_engine import fit_circles as engine  # (numba imported on the first fit)
+
+        fit = engine(pts, starts, ends, "geometric", **kwargs)
+        if fit is not None:
+            return fit
+    return fit_circles(pts, starts, ends, "geometric", **kwargs)
 
 
 def angle_limits(p: np.ndarray, sigma: float, mean_range: tuple[float, float], std_max: float | None,
@@ -164,7 +191,15 @@ def wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigm
     one circle. (A beam's noise moves its point across the circle by at most sigma, so true
     circles fail this less often than the quantile says.) Runs of 3 points, and runs no finite
     circle fits, are not. ``centers`` (K, 2) and ``radii`` (K,), if given, are a circle per run to
-    try first (the detector's own; NaN: none)."""
+    try first (the detector's own; NaN: none). With them, the compiled engine decides
+    (:mod:`labkit._iav_engine`, the same verdicts bit for bit) unless ``LABKIT_NO_JIT`` is set or a
+    fit needs numpy's least-squares step."""
+    if _JIT and centers is not None and radii is not None:
+        from ._iav_engine import wider_than_noise as engine  # (numba imported on the first call)
+
+        decided = engine(pts, starts, ends, sigma, centers, radii, EARLY_STEPS, EARLY_FACTOR)
+        if decided is not None:
+            return decided
     starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)
     out = np.zeros(len(starts), dtype=bool)
     big = np.flatnonzero(ends - starts > 3)
@@ -195,8 +230,7 @@ def wider_than_noise(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, sigm
         if not len(todo):
             return out
     for steps in (EARLY_STEPS, None) if centers is not None else (0, EARLY_STEPS, None):
-        fit = fit_circles(pts, starts[todo], ends[todo], "geometric",
-                          **({} if steps is None else {"max_iterations": steps}))
+        fit = _fit_circles(pts, starts[todo], ends[todo], **({} if steps is None else {"max_iterations": steps}))
         ms, lim = fit.rms ** 2, limit[np.searchsorted(big, todo)]
         with np.errstate(invalid="ignore"):  # (NaN where no circle fits: not wider)
             over = ms > lim

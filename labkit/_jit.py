@@ -1,9 +1,10 @@
 """Whether labkit runs its numba-compiled engines (private: not part of labkit's API).
 
 ``LABKIT_NO_JIT=1`` in the environment turns them off: :func:`labkit.lines.split_and_merge`,
-:func:`labkit.segment_labels` and the noise estimate run their readable numpy code (the same
-features, slower), and numba is not imported at all -- for a machine where numba will not
-install or compile, or to step through the readable code in a debugger.
+:func:`labkit.segment_labels`, the noise estimate and the IAV detectors' tests
+(:mod:`labkit._iav_engine`) run their readable numpy code (the same features, slower), and numba
+is not imported at all -- for a machine where numba will not install or compile, or to step
+through the readable code in a debugger.
 """
 
 from __future__ import annotations

@@ -887,6 +887,7 @@ def compile_all() -> None:
     """Compile (or load from numba's cache) every kernel of the engines, on a small made-up scan.
     The Makefile's set-up runs it, so that no notebook, test or command pays the compilation on
     its first scan."""
+    from .._iav_engine import compile_all as compile_circles
     from .._noise_engine import residuals
     from .._segmentation_engine import labels as segment
 
@@ -903,6 +904,7 @@ def compile_all() -> None:
                   0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, bool(FUSED_DOT))
     cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
     _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
+    compile_circles()
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
