@@ -65,14 +65,11 @@ test: $(VENV)/.installed-dev sandbox chromium
 	$(ENGINES)
 	$(BIN)/python -m pytest -n $(JOBS)
 
-# The students' JupyterLab: notebooks/.jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
-# hides nbgrader's instructor tools and keeps Validate for exercises; the rerun viewer loads its code
-# from the installed package, not the internet. nbgrader 0.9 runs `alembic` from PATH: venv first.
-LAB_ROOT = $(if $(filter 0,$(shell id -u)),--allow-root)
-lab: $(VENV)/.installed
-	JUPYTER_CONFIG_PATH="$(abspath notebooks/.jupyter)$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))" \
-	RERUN_NOTEBOOK_ASSET=serve-local PATH="$(abspath $(BIN)):$$PATH" \
-	  $(BIN)/jupyter lab --notebook-dir=. $(LAB_ROOT) notebooks/00_tour.ipynb
+# The students' JupyterLab: `labkit lab` (labkit/grading/lab.py) hides nbgrader's instructor tools, makes Validate
+# run `labkit grade --check` (student code sandboxed) and serves the rerun viewer offline; any folder works the same,
+# e.g. `labkit lab ~/labkit-exercises`
+lab: $(VENV)/.installed sandbox
+	$(BIN)/labkit lab . --open notebooks/00_tour.ipynb
 
 data: $(VENV)/.installed
 	$(BIN)/labkit simulate --bundled -o data -f
