@@ -769,7 +769,8 @@ def _add_lab_parser(sub) -> None:
         "(your code in the grading sandbox: the verdicts it will be graded with), the rerun viewers offline. "
         "Example: labkit lab ~/labkit-exercises. Stop it with Ctrl-C.")
     lab.add_argument("folder", nargs="?", default=".", help="the folder to serve (default: the current folder)")
-    lab.add_argument("--open", dest="open_path", metavar="NOTEBOOK", help="a notebook to open first, relative to FOLDER")
+    lab.add_argument("--open", dest="open_path", metavar="NOTEBOOK",
+                     help="a notebook to open first, relative to FOLDER")
     lab.add_argument("--no-browser", action="store_true", help="print the address instead of opening a browser")
     lab.add_argument("--port", type=int, help="the port to serve on (default: the first free one from 8888)")
     lab.set_defaults(func=cmd_lab)

@@ -50,7 +50,8 @@ from .runner import (
 from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap, kill_all_workers
 from .text import one_line, printable
 
-__all__ = ["grade", "check", "check_summary", "add_grade_parser", "run_grade", "main", "GradingRun", "GradingInterrupted"]
+__all__ = ["grade", "check", "check_summary", "add_grade_parser", "run_grade", "main", "GradingRun",
+           "GradingInterrupted"]
 
 
 @dataclass
@@ -445,8 +446,9 @@ def check_summary(exercise: Exercise, result: SubmissionResult) -> dict:
     if result.detail and result.status == "invalid notebook":
         summary["invalid"] = printable(result.detail)
         return summary
-    summary["notes"] = [printable(f"the cell that starts `{error['starts']}`: {error['error']}: {error['message']}", 600)
-                        for error in result.cell_errors]
+    summary["notes"] = [
+        printable(f"the cell that starts `{error['starts']}`: {error['error']}: {error['message']}", 600)
+        for error in result.cell_errors]
     for cell, verdict in zip(exercise.cells, result.cells, strict=True):
         hidden_only = cell.auto and not cell.visible
         summary["cells"].append({
@@ -484,7 +486,7 @@ def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
     parser.add_argument("--exercise", dest="check_exercise", metavar="NAME",
                         help="with --check: the exercise, when the notebook's name does not say")
     parser.add_argument("--json", action="store_true",
-                        help="with --check: print the verdicts as JSON (what JupyterLab's Validate in `labkit lab` shows)")
+                        help="with --check: print the verdicts as JSON (what Validate in `labkit lab` shows)")
     parser.add_argument("--no-sandbox", action="store_true",
                         help="run student code without bubblewrap (NOT isolated: it can read your files and "
                         "reach the network); only where you accept that risk")

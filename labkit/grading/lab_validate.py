@@ -29,11 +29,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from jupyter_server.base.handlers import JupyterHandler
-from jupyter_server.utils import url_path_join
-from nbgrader.server_extensions.validate_assignment.handlers import NbGraderVersionHandler
-from tornado import web
-
 __all__ = ["is_exercise", "validate_answer", "CHECK_TIMEOUT_S"]
 
 #: The longest a Validate may take (the check itself limits each call of the student's functions to seconds).
@@ -101,26 +96,33 @@ async def _check(notebook: Path, folder: Path) -> dict[str, Any]:
     return validate_answer(summary)
 
 
-class LabkitValidateHandler(JupyterHandler):
-    """POST ``assignments/validate`` with ``path``: nbgrader's route, answered by ``labkit grade --check``."""
+def _handler() -> type:
+    """The handler of nbgrader's Validate route (built here: jupyter_server is imported when the lab loads this)."""
+    from jupyter_server.base.handlers import JupyterHandler
+    from tornado import web
 
-    @web.authenticated
-    async def post(self) -> None:
-        try:
-            path = self.get_argument("path")
-        except web.MissingArgumentError:
-            path = (self.get_json_body() or {}).get("path", "")
-        root = Path(self.settings["labkit_root_dir"]).expanduser().resolve()
-        target = (root / path).resolve()
-        if not target.is_relative_to(root):
-            raise web.HTTPError(403, "Access denied: path outside allowed directory")
-        if not target.is_file():
-            answer = {"success": False, "value": f"no notebook {path}"}
-        elif not is_exercise(target):
-            answer = {"success": False, "value": NOT_AN_EXERCISE.format(path=path)}
-        else:
-            answer = await _check(target, root)
-        self.finish(json.dumps(answer))
+    class LabkitValidateHandler(JupyterHandler):
+        """POST ``assignments/validate`` with ``path``: nbgrader's route, answered by ``labkit grade --check``."""
+
+        @web.authenticated
+        async def post(self) -> None:
+            try:
+                path = self.get_argument("path")
+            except web.MissingArgumentError:
+                path = (self.get_json_body() or {}).get("path", "")
+            root = Path(self.settings["labkit_root_dir"]).expanduser().resolve()
+            target = (root / path).resolve()
+            if not target.is_relative_to(root):
+                raise web.HTTPError(403, "Access denied: path outside allowed directory")
+            if not target.is_file():
+                answer = {"success": False, "value": f"no notebook {path}"}
+            elif not is_exercise(target):
+                answer = {"success": False, "value": NOT_AN_EXERCISE.format(path=path)}
+            else:
+                answer = await _check(target, root)
+            self.finish(json.dumps(answer))
+
+    return LabkitValidateHandler
 
 
 def _jupyter_server_extension_points() -> list[dict[str, str]]:
@@ -128,11 +130,14 @@ def _jupyter_server_extension_points() -> list[dict[str, str]]:
 
 
 def _load_jupyter_server_extension(server_app: Any) -> None:
+    from jupyter_server.utils import url_path_join
+    from nbgrader.server_extensions.validate_assignment.handlers import NbGraderVersionHandler
+
     web_app = server_app.web_app
     base_url = web_app.settings["base_url"]
     web_app.settings["labkit_root_dir"] = server_app.root_dir
     web_app.add_handlers(".*$", [
-        (url_path_join(base_url, "assignments/validate"), LabkitValidateHandler),
+        (url_path_join(base_url, "assignments/validate"), _handler()),
         (url_path_join(base_url, "nbgrader_version"), NbGraderVersionHandler),
     ])
     server_app.log.info("labkit.grading.lab_validate: Validate runs labkit grade --check (sandboxed)")
