@@ -181,9 +181,10 @@ def test_the_students_lab_configuration(tmp_path):
     disabled = json.loads((CONFIG_DIR / "labconfig" / "page_config.json").read_text())["disabledExtensions"]
     assert {f"@jupyter/nbgrader:{p}" for p in ("formgrader", "create-assignment", "menu", "course-list")} <= {
         name for name, off in disabled.items() if off}
-    config = (CONFIG_DIR / "jupyter_server_config.py").read_text()
-    assert '"labkit.grading.lab_validate": True' in config
-    assert '"nbgrader.server_extensions.validate_assignment": False' in config
+    extensions = json.loads((CONFIG_DIR / "jupyter_server_config.json").read_text())["ServerApp"]["jpserver_extensions"]
+    assert extensions["labkit.grading.lab_validate"] is True
+    assert not extensions["nbgrader.server_extensions.validate_assignment"]
+    assert not extensions["nbgrader.server_extensions.formgrader"]
     command = lab_command(tmp_path)
     assert command[1:4] == ["-m", "jupyter", "lab"] and f"--ServerApp.root_dir={tmp_path.resolve()}" in command
     with pytest.raises(FileNotFoundError, match="no such folder"):

@@ -25,7 +25,10 @@ from pathlib import Path
 
 __all__ = ["CONFIG_DIR", "lab_command", "lab_environment", "run_lab"]
 
-#: labkit's Jupyter configuration for the students' lab: jupyter_server_config.py and labconfig/page_config.json.
+#: labkit's Jupyter configuration for the students' lab (JSON, read by Jupyter, never imported): the server's
+#: extensions in jupyter_server_config.json (nbgrader's formgrader, course list and Validate off, labkit's Validate
+#: on), the lab plugins turned off in labconfig/page_config.json (Formgrader, Create Assignment, nbgrader's menu,
+#: the course list).
 CONFIG_DIR = Path(__file__).resolve().with_name("jupyter")
 
 

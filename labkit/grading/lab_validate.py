@@ -4,7 +4,7 @@ nbgrader's Validate button is on every notebook's toolbar. nbgrader's own server
 an ordinary kernel, with labkit importable, and says "Success! Your notebook passes all the tests" for an answer
 that calls ``labkit.segment_labels`` (which grading gives 0) and for a lesson notebook without graded cells. This
 server extension takes the place of nbgrader's ``validate_assignment`` extension (same routes, see
-``jupyter/jupyter_server_config.py``):
+``jupyter/jupyter_server_config.json``):
 
 - a notebook with nbgrader cells is checked by ``python -m labkit.grading --check NOTEBOOK --json`` in a process
   of its own, in the folder the lab serves: the student's code runs in the grading sandbox (bubblewrap: no labkit,
