@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PIP     = $(BIN)/python -m pip
 # pytest workers: the notebook and grading tests are independent and slow; use both cores
-# (the tests of tests/test_browser.py share one batch of browsers between the two, under a lock)
+# (each worker serves its own JupyterLab to the tests of tests/test_browser.py it gets, one browser at a time)
 JOBS   ?= 2
 
 .PHONY: demo test lab data release grade lint clean help sandbox chromium
