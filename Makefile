@@ -6,7 +6,7 @@ VENV   ?= .venv
 BIN     = $(VENV)/bin
 PIP     = $(BIN)/python -m pip
 # pytest workers: the notebook and grading tests are independent and slow; use both cores
-# (the tests of tests/test_browser.py share one batch of browsers between the two, under a lock)
+# (each worker serves its own JupyterLab to the tests of tests/test_browser.py it gets, one browser at a time)
 JOBS   ?= 2
 
 .PHONY: demo test lab data release grade lint clean help sandbox chromium docs benchmark-tables
@@ -69,14 +69,11 @@ test: $(VENV)/.installed-dev sandbox chromium
 	$(BIN)/python -m pytest -n $(JOBS) --ignore=tests/test_docs_site.py
 	$(BIN)/python -m pytest -n 0 -p no:cacheprovider tests/test_docs_site.py
 
-# The students' JupyterLab: notebooks/.jupyter/ first on JUPYTER_CONFIG_PATH (this project only, not ~/.jupyter)
-# hides nbgrader's instructor tools and keeps Validate for exercises; the rerun viewer loads its code
-# from the installed package, not the internet. nbgrader 0.9 runs `alembic` from PATH: venv first.
-LAB_ROOT = $(if $(filter 0,$(shell id -u)),--allow-root)
-lab: $(VENV)/.installed
-	JUPYTER_CONFIG_PATH="$(abspath notebooks/.jupyter)$(if $(JUPYTER_CONFIG_PATH),:$(JUPYTER_CONFIG_PATH))" \
-	RERUN_NOTEBOOK_ASSET=serve-local PATH="$(abspath $(BIN)):$$PATH" \
-	  $(BIN)/jupyter lab --notebook-dir=. $(LAB_ROOT) notebooks/00_tour.ipynb
+# The students' JupyterLab: `labkit lab` (labkit/grading/lab.py) hides nbgrader's instructor tools, makes Validate
+# run `labkit grade --check` (student code sandboxed) and serves the rerun viewer offline; any folder works the same,
+# e.g. `labkit lab ~/labkit-exercises`
+lab: $(VENV)/.installed sandbox
+	$(BIN)/labkit lab . --open notebooks/00_tour.ipynb
 
 data: $(VENV)/.installed
 	$(BIN)/labkit simulate --bundled -o data -f

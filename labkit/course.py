@@ -23,21 +23,65 @@ not done yet: double still raises NotImplementedError; the notebook goes on with
 Traceback (most recent call last):
 ...
 labkit.course.YourTurnError: double(5) returned 7, expected 10. Hint: twice x, not x + 2
+
+Where arrays differ, the message lists the entries that differ, not a cut-down print of both:
+
+>>> def is_far(ranges):
+...     return np.asarray(ranges) > 2.0
+>>> ranges = np.arange(40.0)
+>>> check(is_far, [Case((ranges,), ranges >= 2.0, hint="at least 2 m")], fallback=None)  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+labkit.course.YourTurnError: is_far(...) returned an array that differs at 1 of 40 entries: [2] is False, ...
+
+In Jupyter a :class:`Feedback` error shows as its message alone: no traceback into labkit.
 """
 
 from __future__ import annotations
 
+import sys
+import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Case", "YourTurnError", "check"]
+__all__ = ["Case", "Feedback", "YourTurnError", "check", "student_frames"]
+
+_LABKIT = Path(__file__).resolve().parent
+_INSTALLED = tuple({str(Path(p).resolve()) for p in (sys.prefix, sys.base_prefix, sys.exec_prefix)})
+#: At most this many differing entries are listed in a message.
+SHOWN_DIFFERENCES = 6
 
 
-class YourTurnError(AssertionError):
+class Feedback(AssertionError):
+    """Feedback on a student's answer: in Jupyter (IPython) it shows as its message alone.
+
+    IPython asks an exception for ``_render_traceback_`` before it formats a traceback: the frames of
+    labkit's checking code say nothing to a student, the message says what was wrong and where.
+    """
+
+    def _render_traceback_(self) -> list[str]:
+        return [f"\x1b[0;31m{type(self).__name__}\x1b[0m: {self}"]
+
+
+class YourTurnError(Feedback):
     """A "your turn" function gave a wrong answer; the message says where and gives a hint."""
+
+
+def student_frames(error: BaseException, limit: int = 3) -> str:
+    """The innermost ``limit`` frames of ``error``'s traceback that are the student's code (not labkit's, not an
+    installed package's nor Python's own), one line each: ``line 7 in segment: x = ranges[i + 1]``."""
+    lines = []
+    for frame in traceback.extract_tb(error.__traceback__):
+        where = str(Path(frame.filename).resolve()) if frame.filename and not frame.filename.startswith("<") else ""
+        if where and (where.startswith(str(_LABKIT)) or where.startswith(_INSTALLED)):
+            continue
+        text = f"line {frame.lineno} in {frame.name}" + (f": {frame.line.strip()}" if frame.line else "")
+        lines.append(text)
+    return "; ".join(lines[-limit:])
 
 
 @dataclass(frozen=True)
@@ -68,6 +112,37 @@ def _show(value: Any, limit: int = 160) -> str:
         text = repr(value)
     text = " ".join(text.split())
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _differences(got: Any, expected: Any, case: Case) -> str:
+    """How an array answer differs from the expected one: its shape, or the entries that differ (index, value,
+    expected value), the first :data:`SHOWN_DIFFERENCES` of them; "" when that cannot be said of these values."""
+    try:
+        g = np.asarray(got)
+        e = np.asarray(expected)
+    except (TypeError, ValueError):
+        return ""
+    if e.ndim == 0 or g.dtype == object or e.dtype == object:
+        return ""
+    if g.shape != e.shape:
+        return f"an array of shape {g.shape}, expected shape {e.shape}"
+    try:
+        if g.dtype.kind in "fc" or e.dtype.kind in "fc":
+            same = np.isclose(g, e, atol=case.atol, rtol=case.rtol, equal_nan=True)
+        else:
+            same = g == e
+    except TypeError:
+        return ""
+    wrong = np.argwhere(~np.asarray(same, dtype=bool))
+    if wrong.size == 0:
+        return ""
+    shown = []
+    for index in wrong[:SHOWN_DIFFERENCES]:
+        key = tuple(int(i) for i in index)
+        at = ", ".join(str(i) for i in key)
+        shown.append(f"[{at}] is {_show(g[key].item(), 40)}, expected {_show(e[key].item(), 40)}")
+    more = f" (and {len(wrong) - SHOWN_DIFFERENCES} more)" if len(wrong) > SHOWN_DIFFERENCES else ""
+    return f"an array that differs at {len(wrong)} of {e.size} entries: {'; '.join(shown)}{more}"
 
 
 def _call_text(name: str, case: Case) -> str:
@@ -119,16 +194,21 @@ def check(student: Callable, cases: Sequence[Case], *, fallback: Callable | None
                 raise YourTurnError(f"{name} still raises NotImplementedError: complete it above") from None
             print(f"not done yet: {name} still raises NotImplementedError; the notebook goes on with labkit's version")
             return fallback
-        except Exception as exc:  # the student's error, reported in words
+        except Exception as exc:  # the student's error, reported in words, with where in their code it happened
             if case.raises is not None and isinstance(exc, case.raises):
                 continue
             expected = f"{case.raises.__name__}" if case.raises else _show(case.expected)
-            raise YourTurnError(f"{call} raised {type(exc).__name__}: {exc}; expected {expected}. "
+            frames = student_frames(exc)
+            where = f" (at {frames})" if frames else ""
+            raise YourTurnError(f"{call} raised {type(exc).__name__}: {exc}{where}; expected {expected}. "
                                 f"Hint: {case.hint}") from None
         if case.raises is not None:
             raise YourTurnError(f"{call} returned {_show(got)}, expected it to raise {case.raises.__name__}. "
                                 f"Hint: {case.hint}")
         if not _equal(got, case.expected, case):
+            differs = _differences(got, case.expected, case) if case.compare is None else ""
+            if differs:
+                raise YourTurnError(f"{call} returned {differs}. Hint: {case.hint}")
             raise YourTurnError(f"{call} returned {_show(got)}, expected {_show(case.expected)}. Hint: {case.hint}")
     if not quiet:
         print(f"well done: {name} passes all {len(cases)} checks; the notebook goes on with your version")

@@ -1,16 +1,17 @@
-"""The course in a real browser: JupyterLab as `make lab` serves it, driven by headless Chromium.
+"""The course in a real browser: the students' JupyterLab (`labkit lab`, `make lab`), driven by headless Chromium.
 
-nbclient (tests/test_notebooks.py) runs the notebooks' code but renders nothing; this test opens
-JupyterLab in Debian's ``chromium`` (driven by the ``playwright`` Python package, with no browser
-download), runs notebooks with Run All and fails on
+nbclient (tests/test_notebooks.py) runs the notebooks' your-turn trials but renders nothing; this test opens
+JupyterLab in Debian's ``chromium`` (driven by the ``playwright`` Python package, with no browser download) and
+runs EVERY notebook of ``notebooks/`` (a glob: a new one is included) with Run All twice in a row, as a student
+who runs it again, in the same kernel. It fails on
 
-- an error output in any cell,
+- a cell that Run All did not run, an error output in any cell, on either Run All,
 - a widget that does not render (ipywidgets' "Error displaying widget", or a widget still loading
   once the notebook has run),
-- an ERROR the inline rerun viewer writes to the browser console,
-- an error badge on a view of an inline rerun viewer (e.g. main's notebook 08: its legs logged as
-  Points2D under a blueprint expecting Ellipses2D, "Component 'Ellipses2D:half_sizes' does not
-  exist on the entity"), an inline viewer that never starts or never gets a recording.
+- an ERROR the inline rerun viewer writes to the browser console (either Run All),
+- after the first Run All of a notebook with inline rerun viewers: an error badge on a view of a viewer (e.g.
+  main's notebook 08: its legs logged as Points2D under a blueprint expecting Ellipses2D, "Component
+  'Ellipses2D:half_sizes' does not exist on the entity"), a viewer that never starts or never gets a recording.
 
 The badge is drawn inside the viewer's canvas (wasm/egui), not in the DOM nor on the console, so the
 test asks each viewer through rerun's Web Viewer API: ``WebViewer.get_state()`` (rerun 0.41) lists
@@ -19,19 +20,21 @@ WebViewer private, so the test serves the pages a copy of rerun's ``widget.js`` 
 viewer on ``window`` (one line after ``new ViewerWidget``; if rerun changes that line the viewers
 fail to load and every viewer test fails, never passes silently). Once a viewer has its data (the
 kernel sent it nothing for QUIET_S and it answers the same twice), it is paused at the start, middle
-and end of its timeline, as a student scrubbing it, and its reports read at each.
+and end of its timeline, as a student scrubbing it, and its reports read at each. Those waits are paid
+only by the notebooks that show inline viewers, and only after their first Run All.
 ``test_viewer_reports_are_caught`` keeps the detector honest: a probe notebook logs the legs as
 main's 08 did (statically and over time, as columns), which must fail, and the same scene logged as
 ellipses, which must not.
 
-The notebooks run on one server, BROWSERS_AT_ONCE at a time, each in its own headless browser; one
-batch serves all the selected tests of this module, whichever xdist worker they reach (the first
-runs it under a lock, the other reads its results).
+Each test runs its own notebook in its own browser; under pytest-xdist each worker has its own server
+(module-scoped), so the notebooks spread over both workers, one browser per worker at a time.
 
-The server runs with the configuration of `make lab` (``notebooks/.jupyter/`` first on JUPYTER_CONFIG_PATH,
-RERUN_NOTEBOOK_ASSET=serve-local, so nothing is fetched from the internet) on copies of the
-notebooks in a temporary folder (Run All must not save outputs into the repository). The same
-server is checked to show students nbgrader's student side only.
+The server is started with `labkit lab`'s own command and environment (:func:`labkit.grading.lab.lab_command`,
+:func:`~labkit.grading.lab.lab_environment`: the instructor tools hidden, Validate = ``labkit grade --check``,
+RERUN_NOTEBOOK_ASSET=serve-local, so nothing is fetched from the internet) on copies of the notebooks in a
+temporary folder (Run All must not save outputs into the repository). The same server is checked to show students
+nbgrader's student side only, and the exercise path is walked in the browser: an exercise opened, filled with a
+wrong answer, an answer that calls labkit, a right one (and one whose error message is markup), each Validated.
 
 Needs /usr/bin/chromium (`.ci/run` and `make test` install it as root with apt-get) and the
 ``playwright`` package (dev extra); skips with the reason when either is missing.
@@ -39,7 +42,6 @@ Needs /usr/bin/chromium (`.ci/run` and `make test` install it as root with apt-g
 
 from __future__ import annotations
 
-import fcntl
 import json
 import os
 import shutil
@@ -49,19 +51,23 @@ import sys
 import time
 import urllib.error
 import urllib.request
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import nbformat
 import pytest
 
+from docs.executed_notebooks import keep as keep_for_docs
+from tests.conftest import SHARED_DATASETS
+
 REPO = Path(__file__).resolve().parents[1]
 CHROMIUM = Path(os.environ.get("LABKIT_CHROMIUM", "/usr/bin/chromium"))
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync"]
-NOTEBOOKS = ["00_tour.ipynb", "08_iav_circles_and_legs.ipynb", "09_bag_playback_in_rerun.ipynb"]
-EXERCISE = REPO / "exercises" / "release" / "ex00_polar_to_cartesian" / "ex00_polar_to_cartesian.ipynb"
+NOTEBOOKS = sorted(p.name for p in (REPO / "notebooks").glob("*.ipynb"))
+EX1 = "ex01_range_segmentation"
 TOKEN = "labkit-browser-test"
+START_LIMIT_S = 300  # for the server to answer: seconds alone, minutes on two cores shared with the rest of make test
 
 pytestmark = [pytest.mark.slow]
 
@@ -93,34 +99,35 @@ def _get(url: str, data: bytes | None = None) -> tuple[int, str]:
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    """A JupyterLab server with `make lab`'s configuration on copies of the notebooks; its base URL."""
+    """The students' JupyterLab, started with `labkit lab`'s command and environment, on copies of the notebooks
+    and of exercise 1; its base URL and folder. One per xdist worker."""
     _playwright()
+    from labkit.grading.lab import lab_command, lab_environment
+
     root = tmp_path_factory.mktemp("lab")
     for name in NOTEBOOKS:
         shutil.copy(REPO / "notebooks" / name, root / name)
-    shutil.copy(EXERCISE, root / EXERCISE.name)
+    shutil.copy(REPO / "exercises" / "release" / EX1 / f"{EX1}.ipynb", root / f"{EX1}.ipynb")
     kernels = root / ".jupyter-data" / "kernels" / "python3"
     kernels.mkdir(parents=True)
     (kernels / "kernel.json").write_text(json.dumps({
         "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
         "display_name": "Python 3 (labkit)", "language": "python"}))
-    env = dict(os.environ,
-               JUPYTER_CONFIG_PATH=str(REPO / "notebooks" / ".jupyter"),  # as `make lab`
-               RERUN_NOTEBOOK_ASSET="serve-local",  # as `make lab`: the viewer's code from the installed package
-               JUPYTER_PATH=str(root / ".jupyter-data"),
-               JUPYTERLAB_WORKSPACES_DIR=str(root / ".workspaces"),
-               JUPYTER_RUNTIME_DIR=str(root / ".runtime"),
-               PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
+    env = lab_environment(dict(os.environ,
+                               JUPYTER_PATH=str(root / ".jupyter-data"),
+                               JUPYTERLAB_WORKSPACES_DIR=str(root / ".workspaces"),
+                               JUPYTER_RUNTIME_DIR=str(root / ".runtime")))
+    if SHARED_DATASETS.is_dir():  # the notebooks' real-data sections run too (they skip without it)
+        env["LABKIT_SHARED_DATASETS"] = str(SHARED_DATASETS.resolve())
     port = _free_port()
     log = (root / "server.log").open("w")
     server = subprocess.Popen(
-        [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ServerApp.ip=127.0.0.1",
-         f"--IdentityProvider.token={TOKEN}", f"--ServerApp.root_dir={root}", "--LabApp.expose_app_in_browser=True",
-         "--ServerApp.allow_root=True"],
+        lab_command(root, extra=["--no-browser", f"--port={port}", "--ServerApp.ip=127.0.0.1",
+                                 f"--IdentityProvider.token={TOKEN}", "--LabApp.expose_app_in_browser=True"]),
         cwd=root, env=env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + START_LIMIT_S
         while True:
             try:
                 if _get(f"{base}/api/status")[0] == 200:
@@ -138,6 +145,14 @@ def lab(tmp_path_factory):
         except subprocess.TimeoutExpired:
             server.kill()
         log.close()
+
+
+@pytest.fixture(scope="module")
+def playwright_driver():
+    """One playwright driver per worker; each test launches its own browser with it."""
+    sync_playwright = _playwright()
+    with sync_playwright() as p:
+        yield p
 
 
 # ---------------------------------------------------------------------------- the students' nbgrader
@@ -159,16 +174,14 @@ def test_lab_shows_students_the_student_side_of_nbgrader(lab):
     assert _get(f"{base}/formgrader")[0] == 404, "the formgrader server extension must be off in make lab"
 
 
-def test_validate_refuses_a_lesson_and_checks_an_exercise(lab):
+def test_validate_refuses_a_lesson(lab):
+    """Validate on a lesson says it is not an exercise (the exercise path is walked in the browser, below)."""
     base, _ = lab
     status, body = _get(f"{base}/assignments/validate", data=b"path=00_tour.ipynb")
     answer = json.loads(body)
     assert status == 200 and answer["success"] is False, f"Validate on a lesson: {answer}"
     assert "lesson notebook, not an exercise" in answer["value"]
-    status, body = _get(f"{base}/assignments/validate", data=f"path={EXERCISE.name}".encode())
-    answer = json.loads(body)
-    assert status == 200 and answer["success"] is True, f"Validate on an exercise: {answer}"
-    assert answer["value"].get("failed"), f"the unchanged release must fail its visible tests: {answer}"
+    assert _get(f"{base}/assignments/validate", data=b"path=../../etc/passwd")[0] == 403
 
 
 # ---------------------------------------------------------------------------- Run All in the browser
@@ -276,12 +289,8 @@ _REPORTS = """async (index) => {
 }"""
 # Console text by which rerun's viewer reports an error (its Rust log level, as it prints it).
 RERUN_ERROR_MARKERS = (" ERROR re_", "panicked at")
-RUN_LIMIT_S = 420  # for all the notebooks together, generous: two cores shared with the rest of `make test`
+RUN_LIMIT_S = 420  # per Run All, generous: two cores shared with the rest of `make test`
 VIEWER_LIMIT_S = 180  # per notebook, for its viewers to take in their data and agree twice on what they report
-# Notebooks run at once. Two at once passed; four at once (00, 08, 09 and the probe) on the loaded
-# two-core machine left viewers of 00, 08 and 09 empty (no message from the kernel ever reached them,
-# cause not found): one at a time until that is understood.
-BROWSERS_AT_ONCE = 1
 QUIET_S = 4  # a viewer has all its data when the kernel has sent it nothing for this long
 
 
@@ -296,17 +305,10 @@ class BrowserRun:
     screenshot: Path | None = None
 
 
-def _selected(request) -> list[str]:
-    """The notebooks the selected tests of this module need (one batch serves them all)."""
-    names: list[str] = []
-    for item in request.session.items:
-        if getattr(item, "module", None) is not request.module:  # doctest items have no module
-            continue
-        if item.originalname == "test_run_all_in_the_browser":
-            names.append(item.callspec.params["name"])
-        elif item.originalname == "test_viewer_reports_are_caught":
-            names.append(PROBE)
-    return sorted(set(names))
+def _has_viewers(path: Path) -> bool:
+    """Whether a notebook shows inline rerun viewers (then its first Run All is followed by the viewer probing)."""
+    return any("show_inline(" in cell.source for cell in nbformat.read(path, as_version=4).cells
+               if cell.cell_type == "code")
 
 
 def _instrument(route) -> None:
@@ -340,89 +342,57 @@ def _settle_viewers(page, run: BrowserRun) -> None:
     run.viewers = states
 
 
-def _run_batch(p, base: str, names: list[str], runs: dict[str, BrowserRun], shots: Path) -> None:
-    """Run All of ``names`` at once, a browser each, then read their viewers."""
-    browsers, pages = [], {}
+def _open(driver, base: str, path: str, sink: list[BrowserRun], *, viewers: bool = True):
+    """A browser of its own (its page is the front one) showing ``path`` in the lab; (browser, page). The console
+    goes to ``sink[0]`` (the run under way)."""
+    browser = driver.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    if viewers:
+        context.route("**/widget.js", _instrument)
+    page = context.new_page()
+    page.set_default_timeout(180_000)
+    page.on("console", lambda message: sink[0].console.append(f"{message.type}: {message.text}"))
+    page.on("pageerror", lambda error: sink[0].console.append(f"pageerror: {error}"))
+    page.goto(f"{base}/lab/workspaces/test-{Path(path).stem}/tree/{path}?token={TOKEN}&reset")
+    page.wait_for_function(_IDLE)
+    return browser, page
+
+
+def _run_all(page, run: BrowserRun) -> None:
+    """Run All, until it has run every cell (or stopped at an error), or RUN_LIMIT_S; then read the notebook."""
+    page.evaluate(_START)
+    deadline = time.monotonic() + RUN_LIMIT_S
+    while (done := page.evaluate(_DONE)) is None:
+        if time.monotonic() > deadline:
+            run.failure = f"Run All did not finish in {RUN_LIMIT_S} s"
+            break
+        page.wait_for_timeout(1000)
+    if done is not None and "error" in done:
+        run.failure = f"Run All failed: {done['error']}"
+    run.notebook, run.unrendered = page.evaluate(_MODEL), page.evaluate(_UNRENDERED)
+
+
+def run_twice(driver, base: str, name: str, shots: Path) -> tuple[BrowserRun, BrowserRun]:
+    """Run All of ``name`` twice in a row in one browser and kernel; the viewers probed after the first."""
+    first, second = BrowserRun(name), BrowserRun(name)
+    sink = [first]
+    browser, page = _open(driver, base, name, sink)
     try:
-        for name in names:
-            # a browser each, so that each page is the front one of its browser
-            browsers.append(browser := p.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS))
-            context = browser.new_context(viewport={"width": 1400, "height": 1000})
-            context.route("**/widget.js", _instrument)
-            page = pages[name] = context.new_page()
-            page.set_default_timeout(180_000)
-            page.on("console", lambda message, run=runs[name]: run.console.append(
-                f"{message.type}: {message.text}"))
-            page.on("pageerror", lambda error, run=runs[name]: run.console.append(f"pageerror: {error}"))
-            page.goto(f"{base}/lab/workspaces/test-{Path(name).stem}/tree/{name}?token={TOKEN}&reset")
-        for page in pages.values():
-            page.wait_for_function(_IDLE)
-            page.evaluate(_START)
-        deadline = time.monotonic() + RUN_LIMIT_S
-        waiting = set(names)
-        while waiting and time.monotonic() < deadline:
-            for name in sorted(waiting):
-                done = pages[name].evaluate(_DONE)
-                if done is not None:
-                    waiting.discard(name)
-                    if "error" in done:
-                        runs[name].failure = f"Run All failed: {done['error']}"
-            if waiting:
-                pages[sorted(waiting)[0]].wait_for_timeout(1000)  # lets playwright serve the pages meanwhile
-        for name in waiting:
-            runs[name].failure = f"Run All did not finish in {RUN_LIMIT_S} s"
-        for name, page in pages.items():
-            run = runs[name]
-            if name not in waiting:
-                _settle_viewers(page, run)
-            run.notebook, run.unrendered = page.evaluate(_MODEL), page.evaluate(_UNRENDERED)
+        _run_all(page, first)
+        if not first.failure and _has_viewers(REPO / "notebooks" / name):
+            _settle_viewers(page, first)
+        sink[0] = second
+        if not first.failure:
+            _run_all(page, second)
     finally:
+        first.screenshot = second.screenshot = shots / f"{name}.png"
         try:
-            for name, page in pages.items():
-                runs[name].screenshot = shots / f"{name}.png"
-                page.screenshot(path=str(runs[name].screenshot))
+            page.screenshot(path=str(first.screenshot))
         finally:
-            for browser in browsers:
-                browser.close()
-
-
-@pytest.fixture(scope="module")
-def browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
-    """One batch of browser runs for the whole session. Under pytest-xdist the module's tests reach
-    both workers (xdist 3.8's loadgroup does not group them under pytest 9.2), and two batches at
-    once leave viewers empty: the first worker runs the batch under a lock shared by the run's
-    workers and leaves the results for the other."""
-    base = tmp_path_factory.getbasetemp()
-    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base  # pytest-N/: this run's workers
-    with (shared / "browser_runs.lock").open("w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        done = shared / "browser_runs.json"
-        if done.exists():
-            return {name: BrowserRun(**run) for name, run in json.loads(done.read_text()).items()}
-        runs = _browser_runs(lab, request, tmp_path_factory)
-        done.write_text(json.dumps({name: {**asdict(run), "screenshot": run.screenshot and str(run.screenshot)}
-                                    for name, run in runs.items()}))
-        return runs
-
-
-def _browser_runs(lab, request, tmp_path_factory) -> dict[str, BrowserRun]:
-    base, root = lab
-    names = _selected(request)
-    if PROBE in names:
-        nbformat.write(nbformat.v4.new_notebook(
-            cells=[nbformat.v4.new_code_cell(source) for source in PROBE_CELLS.values()],
-            metadata={"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}),
-            root / PROBE)
-    shots = tmp_path_factory.mktemp("screenshots")
-    runs = {name: BrowserRun(name) for name in names}
-    sync_playwright = _playwright()
-    with sync_playwright() as p:
-        for first in range(0, len(names), BROWSERS_AT_ONCE):
-            _run_batch(p, base, names[first:first + BROWSERS_AT_ONCE], runs, shots)
-    for run in runs.values():
-        (shots / f"{run.name}.console.log").write_text("\n".join(run.console))
-        (shots / f"{run.name}.viewers.json").write_text(json.dumps(run.viewers, indent=1))
-    return runs
+            browser.close()
+    (shots / f"{name}.console.log").write_text("\n".join(first.console + ["-- second Run All --"] + second.console))
+    (shots / f"{name}.viewers.json").write_text(json.dumps(first.viewers, indent=1))
+    return first, second
 
 
 def _viewer_problems(run: BrowserRun) -> list[str]:
@@ -466,18 +436,40 @@ def _problems(run: BrowserRun) -> list[str]:
     return problems
 
 
+@pytest.fixture(scope="module")
+def shots(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("screenshots")
+
+
 @pytest.mark.parametrize("name", NOTEBOOKS)
-def test_run_all_in_the_browser(browser_runs, name):
-    run = browser_runs[name]
-    problems = _problems(run)
-    assert not problems, f"{name} in the browser (screenshot {run.screenshot}):\n" + "\n".join(problems)
-    assert run.viewers, f"{name}: no inline rerun viewer was seen (is the widget.js hook still in place?)"
+def test_run_all_twice_in_the_browser(lab, playwright_driver, shots, name):
+    """Run All, then Run All again (as a student who runs the notebook once more): no error either time."""
+    base, _ = lab
+    first, second = run_twice(playwright_driver, base, name, shots)
+    problems = [f"first Run All: {p}" for p in _problems(first)] + [
+        f"second Run All: {p}" for p in _problems(second) if first.notebook]
+    assert not problems, f"{name} in the browser (screenshot {first.screenshot}):\n" + "\n".join(problems)
+    if _has_viewers(REPO / "notebooks" / name):
+        assert first.viewers, f"{name}: no inline rerun viewer was seen (is the widget.js hook still in place?)"
+    # the docs render these outputs (docs/executed_notebooks.py) instead of running the course once more
+    keep_for_docs(REPO / "notebooks" / name, nbformat.from_dict(second.notebook))
 
 
-def test_viewer_reports_are_caught(browser_runs):
+def test_viewer_reports_are_caught(lab, playwright_driver):
     """The detector fires: a view missing a component its visualizer needs (main's notebook 08: legs
     as Points2D under the blueprint's ellipses) fails the run, the same scene logged right does not."""
-    run = browser_runs[PROBE]
+    base, root = lab
+    nbformat.write(nbformat.v4.new_notebook(
+        cells=[nbformat.v4.new_code_cell(source) for source in PROBE_CELLS.values()],
+        metadata={"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}),
+        root / PROBE)
+    run = BrowserRun(PROBE)
+    browser, page = _open(playwright_driver, base, PROBE, [run])
+    try:
+        _run_all(page, run)
+        _settle_viewers(page, run)
+    finally:
+        browser.close()
     cells = dict(enumerate(PROBE_CELLS))
     shown = {cells.get(v["cell"]) for v in run.viewers}
     assert shown == {"good", "bad", "bad over time"}, f"expected the three probe viewers, saw {run.viewers}"
@@ -490,3 +482,75 @@ def test_viewer_reports_are_caught(browser_runs):
         else:
             assert not mine, f"{name}: {mine}"
     assert all(p.startswith(("viewer in cell 2,", "viewer in cell 3,")) for p in problems), problems
+
+
+# ---------------------------------------------------------------------------- the exercise path
+# An exercise opened in the students' lab, its answer cells filled as a student types them, Validate clicked
+# (nbgrader's toolbar button: it saves, then asks the server), the dialog read.
+_FILL = """([gradeId, code]) => {
+  const cells = window.jupyterapp.shell.currentWidget.content.model.cells;
+  for (let i = 0; i < cells.length; i++) {
+    const meta = cells.get(i).getMetadata('nbgrader');
+    if (meta && meta.grade_id === gradeId) { cells.get(i).sharedModel.setSource(code); return true; }
+  }
+  return false;
+}"""
+_DIALOG = """() => {
+  const m = document.querySelector('.jp-Dialog #validation-message');
+  return m && { text: m.innerText, classes: [...m.classList], images: m.querySelectorAll('img').length,
+                pwned: window.__labkitPwned === true };
+}"""
+MARKUP = '<img src=x onerror="window.__labkitPwned = true">'
+
+
+def _validate(page, answers: dict[str, str]) -> dict:
+    for grade_id, code in answers.items():
+        assert page.evaluate(_FILL, [grade_id, code]), f"no cell {grade_id} in the exercise"
+    page.locator(".validate-button jp-button, .validate-button button").first.click()
+    page.wait_for_function(_DIALOG, timeout=300_000)
+    page.wait_for_timeout(500)  # an image in the dialog, had it been markup, has had its chance to load and fire
+    dialog = page.evaluate(_DIALOG)
+    page.locator(".jp-Dialog .jp-mod-accept").first.click()
+    page.wait_for_function("() => !document.querySelector('.jp-Dialog')")
+    return dialog
+
+
+def test_the_exercise_path_in_the_students_lab(lab, playwright_driver, shots):
+    """Open exercise 1 in the students' lab, fill it and Validate: first a wrong segment beside an
+    adaptive_threshold that calls labkit, tries to leave a file in the lab's folder and raises an error whose
+    message is markup; then the right answer. (Two checks, not four: each costs a sandboxed grading run.)"""
+    from tests.grading_course import solutions, with_mistake
+
+    base, root = lab
+    notebook = f"{EX1}.ipynb"
+    marker = root / "validate_ran_student_code_here"
+    right = solutions(EX1)
+    hostile = {**with_mistake(EX1, "sizes >= min_points", "sizes > min_points"), "adaptive_threshold": (
+        f"try:\n    open({str(marker)!r}, 'w').write('outside the sandbox')\nexcept OSError:\n    pass\n"
+        "import labkit\n\n\ndef adaptive_threshold(ranges, angles, threshold_m=0.08, incidence_deg=10.0, "
+        "range_sigma_m=0.01):\n    try:\n"
+        "        return labkit.breakpoint_thresholds(ranges[:-1], ranges[1:], np.diff(angles), threshold_m)\n"
+        "    except ModuleNotFoundError as missing:\n"
+        f"        raise ValueError(f{MARKUP + ' {missing}'!r}) from None\n")}
+    run = BrowserRun(notebook)
+    browser, page = _open(playwright_driver, base, notebook, [run], viewers=False)
+    try:
+        page.wait_for_selector(".validate-button")
+        hostile_said, right_said = _validate(page, hostile), _validate(page, right)
+    finally:
+        page.screenshot(path=str(shots / f"{notebook}.png"))
+        browser.close()
+    text = hostile_said["text"]
+    assert "validation-failed" in hostile_said["classes"] and "Success" not in text, f"not failed: {hostile_said}"
+    assert "segment: 0 of 1 points" in text and "adaptive_threshold: 0 of 1 points" in text, (
+        f"the functions are not named: {text}")
+    assert "Hint: the 2 m jump cuts" in text, f"the case is not named: {text}"
+    assert "got array([ 0,  0,  0, -1, -1, -1, -1])" in text, f"the answer is not shown: {text}"
+    assert "Traceback" not in text and "labkit/" not in text, f"a traceback into labkit: {text}"
+    assert "labkit is not available when your notebook is graded" in text, f"labkit was importable: {text}"
+    assert not marker.exists(), "Validate ran the student's code outside the sandbox: it wrote into the lab's folder"
+    assert MARKUP in text, f"the student's message is not shown as text: {text}"
+    assert not hostile_said["images"] and not hostile_said["pwned"], f"markup became HTML: {hostile_said}"
+    assert "validation-success" in right_said["classes"], f"the right answer did not pass: {right_said}"
+    saved = json.loads((root / notebook).read_text())
+    assert any("np.hypot" in "".join(c["source"]) for c in saved["cells"]), "Validate did not save the notebook first"

@@ -1,7 +1,8 @@
-"""The course notebooks: stored clean, free of path tricks, and runnable top to bottom.
+"""The course notebooks: stored clean, free of path tricks, and their "your turn" cells tried.
 
-Every ``notebooks/*.ipynb`` is executed headless by nbclient, in a fresh kernel that runs
-*this* interpreter (so it sees the labkit installed here), with a temporary working
+Every ``notebooks/*.ipynb`` with "your turn" cells is executed headless by nbclient up to its
+last "your turn" check (every notebook runs to the end, twice, in JupyterLab: tests/test_browser.py),
+in a fresh kernel that runs *this* interpreter (so it sees the labkit installed here), with a temporary working
 directory (so whatever a notebook writes, e.g. ``out/``, lands there and not in the
 repository), and with ``LABKIT_SHARED_DATASETS`` pointing at ``../shared/datasets`` when that
 folder exists (so the real-data sections run). Those tests are marked ``slow``.
@@ -26,7 +27,6 @@ import pytest
 from nbclient import NotebookClient
 from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
 
-from docs.executed_notebooks import keep as keep_for_docs
 from tests.conftest import SHARED_DATASETS
 
 REPO = Path(__file__).resolve().parents[1]
@@ -198,12 +198,14 @@ def _run_your_turn(client, nb, stub: int, check: int, fill) -> None:
         f"it printed {_output_text(nb.cells[check])!r}")
 
 
-def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict) -> list[str]:
+def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict, *, to_the_end: bool = True) -> list[str]:
     """Run ``nb`` top to bottom, cell by cell; every "your turn" pair is tried three ways
-    (:func:`_run_your_turn`) before the notebook goes on as shipped. Returns its slow steps
-    (cells, the kernel's start or stop, over ``SLOW_STEP_S``) as "cell 12: 45 s"."""
+    (:func:`_run_your_turn`) before the notebook goes on as shipped. With ``to_the_end=False`` the run
+    stops after the last "your turn" check (the browser test runs every notebook to the end, twice).
+    Returns its slow steps (cells, the kernel's start or stop, over ``SLOW_STEP_S``) as "cell 12: 45 s"."""
     pairs = dict(your_turn_pairs(nb))
     checks = set(pairs.values())
+    last = len(nb.cells) - 1 if to_the_end or not checks else max(checks)
     missing = [nb.cells[i].get("id") for i in pairs if nb.cells[i].get("id") not in fills]
     assert not missing, f"your-turn cells without a fill-in in tests/your_turn/: {missing}"
     client = NotebookClient(nb, timeout=CELL_TIMEOUT_S, kernel_name=kernel_name,
@@ -213,7 +215,7 @@ def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict) -> list[str]:
     with client.setup_kernel():
         _sliced_waits(client.kc)
         steps.append(("kernel start", time.monotonic() - started))
-        for i, cell in enumerate(nb.cells):
+        for i, cell in enumerate(nb.cells[:last + 1]):
             if i in checks:
                 continue  # run with its stub
             if i in pairs:
@@ -263,21 +265,24 @@ def _timed(client) -> list[tuple[str, float]]:
     return steps
 
 
+TRIED = [p for p in NOTEBOOKS if your_turn_pairs(nbformat.read(p, as_version=4))]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_runs_top_to_bottom(path, this_python_kernel, tmp_path, monkeypatch, record_property):
-    """Every notebook runs as shipped; on the way, every "your turn" check fails a planted
-    mistake with its hint and passes a correct fill-in (tests/your_turn/). Its slow steps are
-    listed at the end of the run (conftest's ``slow_steps``): a notebook that takes 10 s alone
-    once took 300 s in the full suite without failing."""
+@pytest.mark.parametrize("path", TRIED, ids=[p.name for p in TRIED])
+def test_your_turn_trials(path, this_python_kernel, tmp_path, monkeypatch, record_property):
+    """Every "your turn" check fails a planted mistake with its hint and passes a correct fill-in
+    (tests/your_turn/), and the notebook goes on with the stub as shipped: the notebook runs as shipped,
+    cell by cell, up to its last check. (Every notebook runs to the end, twice, as shipped, in
+    tests/test_browser.py.) Its slow steps are listed at the end of the run (conftest's ``slow_steps``):
+    a notebook that takes 10 s alone once took 300 s in the full suite without failing."""
     if SHARED_DATASETS.is_dir():  # the notebooks' real-data sections run too (they skip without it)
         monkeypatch.setenv("LABKIT_SHARED_DATASETS", str(SHARED_DATASETS.resolve()))
     nb = nbformat.read(path, as_version=4)
     workdir = tmp_path / "cwd"
     workdir.mkdir()
     try:
-        record_property("slow_steps", run_notebook(nb, workdir, this_python_kernel, _fills(path)))
-        keep_for_docs(path, nb)  # the docs render these outputs instead of running the course again
+        record_property("slow_steps", run_notebook(nb, workdir, this_python_kernel, _fills(path), to_the_end=False))
         return
     except (CellExecutionError, CellTimeoutError, DeadKernelError, AssertionError) as exc:
         error = f"{type(exc).__name__}: {_ANSI.sub('', str(exc))}"

@@ -760,7 +760,31 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     add_grade_parser(sub)  # labkit grade: the instructor's grader (labkit.grading)
+    _add_lab_parser(sub)  # labkit lab: the students' JupyterLab (labkit.grading.lab)
     return p
+
+
+def cmd_lab(args: argparse.Namespace) -> int:
+    """``labkit lab [FOLDER]``: the students' JupyterLab (labkit.grading.lab)."""
+    from labkit.grading.lab import run_lab
+
+    extra = (["--no-browser"] if args.no_browser else []) + ([f"--port={args.port}"] if args.port else [])
+    return run_lab(args.folder, open_path=args.open_path, extra=extra)
+
+
+def _add_lab_parser(sub) -> None:
+    lab = sub.add_parser(
+        "lab", help="open the students' JupyterLab on a folder (instructor tools hidden, Validate = grade --check)",
+        description="Open JupyterLab on FOLDER (default: the current folder) the way the course is meant to be "
+        "worked: nbgrader's instructor tools hidden, Validate running `labkit grade --check` on the notebook "
+        "(your code in the grading sandbox: the verdicts it will be graded with), the rerun viewers offline. "
+        "Example: labkit lab ~/labkit-exercises. Stop it with Ctrl-C.")
+    lab.add_argument("folder", nargs="?", default=".", help="the folder to serve (default: the current folder)")
+    lab.add_argument("--open", dest="open_path", metavar="NOTEBOOK",
+                     help="a notebook to open first, relative to FOLDER")
+    lab.add_argument("--no-browser", action="store_true", help="print the address instead of opening a browser")
+    lab.add_argument("--port", type=int, help="the port to serve on (default: the first free one from 8888)")
+    lab.set_defaults(func=cmd_lab)
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:

@@ -24,9 +24,15 @@ from typing import Any
 
 import numpy as np
 
+from ..course import Feedback, student_frames
 from ..geometry import normalize_line, transform_points, wrap_angle
 
-__all__ = ["run_checks", "Moved", "assert_beams_result", "assert_labels_result", "assert_line_result"]
+__all__ = ["run_checks", "ChecksFailed", "Moved", "assert_beams_result", "assert_labels_result", "assert_line_result"]
+
+
+class ChecksFailed(Feedback):
+    """Visible checks failed: each failing function's error, and where in the notebook's code (the check's line,
+    the line of the student's function) it was raised. In Jupyter it shows as this message alone."""
 
 #: Set by the grader while it runs a visible cell: what :func:`run_checks` hands each check to.
 GRADER: contextvars.ContextVar[Callable[[str, Callable], None] | None] = contextvars.ContextVar(
@@ -38,8 +44,9 @@ def run_checks(**checks: Callable[[np.random.Generator], None]) -> None:
 
     Each check is called with a fresh ``numpy.random.Generator`` (for the examples it draws) and raises
     (an ``AssertionError`` saying what is wrong) when its function gets an example wrong. In Jupyter
-    every check runs, a line per function says whether it passed, and the first failure is raised
-    again at the end; ``visible tests passed`` when none failed.
+    every check runs, a line per function says whether it passed, and :class:`ChecksFailed` is raised at
+    the end with every failure and the lines of the notebook where each was raised (no traceback into
+    labkit); ``visible tests passed`` when none failed.
 
     When the notebook is graded (``labkit grade``, or ``--check``), the grader runs each check on its
     own, with a generator drawn for the submission: a check that fails costs its own function's share
@@ -52,6 +59,16 @@ def run_checks(**checks: Callable[[np.random.Generator], None]) -> None:
     >>> run_checks(double=check_double)
     double: passed
     visible tests passed
+    >>> def check_half(rng):
+    ...     assert 3 // 2 == 1.5, "3 // 2 is floor division: use 3 / 2"
+    >>> try:
+    ...     run_checks(double=check_double, half=check_half)
+    ... except ChecksFailed as failed:
+    ...     print(failed)
+    double: passed
+    half: FAILED
+    half: AssertionError: 3 // 2 is floor division: use 3 / 2
+      at line 2 in check_half: assert 3 // 2 == 1.5, "3 // 2 is floor division: use 3 / 2"
     """
     for function, check in checks.items():
         if not callable(check):
@@ -65,13 +82,14 @@ def run_checks(**checks: Callable[[np.random.Generator], None]) -> None:
     for function, check in checks.items():
         try:
             check(np.random.default_rng())
-        except Exception as error:  # noqa: BLE001 -- reported, and the first one raised again below
-            failures.append(error)
-            print(f"{function}: FAILED: {type(error).__name__}: {error}")
+        except Exception as error:  # noqa: BLE001 -- reported, and raised together below
+            frames = student_frames(error)
+            failures.append(f"{function}: {type(error).__name__}: {error}" + (f"\n  at {frames}" if frames else ""))
+            print(f"{function}: FAILED")
         else:
             print(f"{function}: passed")
     if failures:
-        raise failures[0]
+        raise ChecksFailed("\n".join(failures))
     print("visible tests passed")
 
 

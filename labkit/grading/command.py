@@ -21,6 +21,7 @@ import argparse
 import concurrent.futures
 import contextlib
 import fcntl
+import json
 import multiprocessing
 import os
 import secrets
@@ -47,9 +48,10 @@ from .runner import (
     set_slot,
 )
 from .sandbox import Sandbox, SandboxBroken, Worker, check_bwrap, kill_all_workers
-from .text import one_line
+from .text import one_line, printable
 
-__all__ = ["grade", "check", "add_grade_parser", "run_grade", "main", "GradingRun", "GradingInterrupted"]
+__all__ = ["grade", "check", "check_summary", "add_grade_parser", "run_grade", "main", "GradingRun",
+           "GradingInterrupted"]
 
 
 @dataclass
@@ -434,6 +436,32 @@ def _check_report(exercise: Exercise, result: SubmissionResult) -> tuple[str, bo
     return "\n".join(lines), passed
 
 
+def check_summary(exercise: Exercise, result: SubmissionResult) -> dict:
+    """What :func:`check` found, as plain data (``labkit grade --check NOTEBOOK --json``; JupyterLab's Validate in
+    ``labkit lab`` shows it): the verdict, the notes on cells that raised, and every visible graded cell's points
+    and the verdict of each of its functions. Text the student's code produced is made printable, never HTML."""
+    report, passed = _check_report(exercise, result)
+    summary: dict = {"exercise": exercise.name, "passed": passed, "report": report, "invalid": "", "notes": [],
+                     "cells": []}
+    if result.detail and result.status == "invalid notebook":
+        summary["invalid"] = printable(result.detail)
+        return summary
+    summary["notes"] = [
+        printable(f"the cell that starts `{error['starts']}`: {error['error']}: {error['message']}", 600)
+        for error in result.cell_errors]
+    for cell, verdict in zip(exercise.cells, result.cells, strict=True):
+        hidden_only = cell.auto and not cell.visible
+        summary["cells"].append({
+            "grade_id": cell.grade_id, "points": cell.points, "earned": verdict.points, "hidden_only": hidden_only,
+            "passed": hidden_only or (verdict.points is not None and verdict.points == cell.points),
+            "parts": [{"function": part.function, "points": part.points, "max_points": part.max_points,
+                       "verdict": printable(part.verdict, 2000)} for part in verdict.parts],
+            # where a visible check failed: "segment, in the visible checks, line 24: labels = segment(...)"
+            "where": [printable(line, 600) for output in verdict.outputs if output.get("output_type") == "error"
+                      for line in output.get("traceback", [])[:-1]]})
+    return summary
+
+
 # ---------------------------------------------------------------------------- command line
 def _default_jobs() -> int:
     return max(len(os.sched_getaffinity(0)), 1)
@@ -457,6 +485,8 @@ def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
                         "enough), and print a verdict per test and function")
     parser.add_argument("--exercise", dest="check_exercise", metavar="NAME",
                         help="with --check: the exercise, when the notebook's name does not say")
+    parser.add_argument("--json", action="store_true",
+                        help="with --check: print the verdicts as JSON (what Validate in `labkit lab` shows)")
     parser.add_argument("--no-sandbox", action="store_true",
                         help="run student code without bubblewrap (NOT isolated: it can read your files and "
                         "reach the network); only where you accept that risk")
@@ -470,6 +500,10 @@ def run_grade(args: argparse.Namespace) -> int:
     if args.check:
         exercise, result = check(args.check, course=args.course, exercise=args.check_exercise,
                                  isolate=not args.no_sandbox)
+        if getattr(args, "json", False):
+            summary = check_summary(exercise, result)
+            print(json.dumps(summary))
+            return 0 if summary["passed"] else 1
         report, passed = _check_report(exercise, result)
         print(report)
         return 0 if passed else 1

@@ -195,6 +195,9 @@ def _failure(cell: GradedCell, function: str, raised: BaseException, part: str) 
         name = type(raised).__name__
         message = "".join(traceback.format_exception_only(raised)).strip().removeprefix(f"{name}: ")
         message = "" if message == name else message
+    if not message and not _student_raised(raised):  # a check that says nothing: say at least what failed
+        message = (f"a check of {function} failed without saying why (the test's own assertion has no message)"
+                   if isinstance(raised, AssertionError) else f"a check of {function} raised it without a message")
     if part == "hidden" and _student_raised(raised):  # the student's text, about inputs they have not seen
         first, _, rest = message.partition("\n")
         note = rest.strip().splitlines()[-1] if rest.strip() else ""
