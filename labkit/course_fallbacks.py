@@ -71,24 +71,79 @@ def pose_at(t0, p0, t1, p1, t):
 
 
 def process_noise(dt, q):
-    """Notebook 12: the constant-velocity model's process noise ``Q`` (4 x 4) over ``dt`` seconds."""
+    """Notebook 12: the constant-velocity model's process noise ``Q`` (4 x 4) over ``dt`` seconds.
+
+    Parameters
+    ----------
+    dt : float
+        The time step, seconds.
+    q : float
+        The spectral density of the acceleration white noise in each axis, m^2/s^3.
+
+    Returns
+    -------
+    ndarray of shape (4, 4)
+        ``Q`` for the state ``(x, y, vx, vy)``, the second matrix of :func:`labkit.tracking.cv_model`.
+    """
     return cv_model(dt, q)[1]
 
 
 def best_assignment(cost):
-    """Notebook 12: the (row, column) pairs of least total cost of a square cost matrix, sorted by row."""
+    """Notebook 12: the (row, column) pairs of least total cost of a square cost matrix, sorted by row.
+
+    Parameters
+    ----------
+    cost : array_like of shape (T, D)
+        The cost of each pair of a track (row) and a detection (column); ``inf`` marks a pair outside its
+        gate, which is never chosen. The notebook's matrices are square; :func:`labkit.tracking.assign`
+        takes any shape.
+
+    Returns
+    -------
+    list of tuple of (int, int)
+        The chosen ``(row, column)`` pairs, by :func:`labkit.tracking.assign`, sorted by row.
+    """
     rows, cols = assign(np.asarray(cost, dtype=float))
     return sorted(zip(rows.tolist(), cols.tolist(), strict=True))
 
 
 def cut_points(scan, threshold_m=0.08):
-    """Notebook 01: where the segments of :func:`labkit.segment_labels` (every run kept, a fixed gap) change."""
+    """Notebook 01: where the segments of :func:`labkit.segment_labels` (every run kept, a fixed gap) change.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan (N beams).
+    threshold_m : float, default 0.08
+        The fixed gap, metres: the largest distance between neighbouring points of one segment.
+
+    Returns
+    -------
+    ndarray of shape (N - 1,), bool
+        Entry ``i`` is True when beams ``i`` and ``i + 1`` lie in different segments, or when either of
+        them is invalid.
+    """
     labels = segment_labels(scan, threshold_m=threshold_m, min_points=1, adaptive=False)
     return (labels[:-1] != labels[1:]) | (labels[:-1] < 0) | (labels[1:] < 0)
 
 
 def jacobian(rho, theta, w, h=1e-6):
-    """Notebook 03: labkit's polar fit refitted with one range nudged at a time, the weights held fixed."""
+    """Notebook 03: labkit's polar fit refitted with one range nudged at a time, the weights held fixed.
+
+    Parameters
+    ----------
+    rho, theta, w : array_like of shape (N,)
+        The ranges (metres), bearings (radians) and weights of the points, as for
+        :func:`labkit.fitting.fit_line_polar`.
+    h : float, default 1e-6
+        The nudge of a range, metres.
+
+    Returns
+    -------
+    ndarray of shape (2, N)
+        The Jacobian by central differences: row 0 is ``dr / drho_i``, row 1 is ``dalpha / drho_i``
+        (the angle's difference taken across the wrap).
+    """
     rho = np.asarray(rho, dtype=float)
     columns = []
     for step in h * np.eye(len(rho)):
@@ -98,56 +153,170 @@ def jacobian(rho, theta, w, h=1e-6):
 
 
 def chord_distances(points):
-    """Notebook 04: the distance of every point from the line through the first and the last point."""
+    """Notebook 04: the distance of every point from the line through the first and the last point.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        Points ``(x, y)``, metres; the first and the last must differ.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        The unsigned distances, metres (zero at the first and the last point).
+    """
     points = np.asarray(points, dtype=float)
     r, alpha = geometry.line_through_points(points[0], points[-1])
     return np.abs(signed_distance_to_line(points, r, alpha))
 
 
 def similar_lines(a, b, dr_max_m=0.2, dalpha_max=0.17453292519943295):
-    """Notebook 05: :func:`labkit.lines_similar` with fixed thresholds (by default 0.2 m and 10 degrees)."""
+    """Notebook 05: :func:`labkit.lines_similar` with fixed thresholds (by default 0.2 m and 10 degrees).
+
+    Parameters
+    ----------
+    a, b : LineSegment
+        The two lines.
+    dr_max_m : float, default 0.2
+        The largest difference of the lines' distances from the origin, metres.
+    dalpha_max : float, default 0.17453292519943295
+        The largest difference of their normals' angles, radians (10 degrees).
+
+    Returns
+    -------
+    bool
+        Whether both differences are under their thresholds (strictly), as
+        ``lines_similar(a, b, merge="thresholds", ...)`` decides.
+    """
     return lines_similar(a, b, merge="thresholds", merge_dr_m=dr_max_m, merge_dalpha_deg=np.degrees(dalpha_max))[0]
 
 
 def is_border(L, U, core):
-    """Notebook 06: not a core point, with a core point among its neighbours (counted by a cumulative sum)."""
+    """Notebook 06: not a core point, with a core point among its neighbours (counted by a cumulative sum).
+
+    Parameters
+    ----------
+    L, U : array_like of shape (N,), int
+        The first and the last index of each point's neighbourhood (both included).
+    core : array_like of shape (N,), bool
+        Which points are core points.
+
+    Returns
+    -------
+    ndarray of shape (N,), bool
+        True for the border points.
+    """
     core = np.asarray(core, dtype=bool)
     counts = np.concatenate([[0], np.cumsum(core)])
     return ~core & (counts[np.asarray(U) + 1] - counts[np.asarray(L)] > 0)
 
 
 def triplet_direction(p0, p1, p2):
-    """Notebook 07: :func:`labkit.local_directions` at the middle beam of three points."""
+    """Notebook 07: :func:`labkit.local_directions` at the middle beam of three points.
+
+    Parameters
+    ----------
+    p0, p1, p2 : array_like of shape (2,)
+        Three neighbouring points ``(x, y)`` of a scan in beam order, metres, in the sensor's frame.
+
+    Returns
+    -------
+    float
+        The direction of the line through them (not its normal), radians in [0, pi); NaN when the points
+        coincide.
+    """
     tri = np.array([p0, p1, p2], dtype=float)
     scan = Scan(ranges=np.hypot(tri[:, 0], tri[:, 1]), angles=np.arctan2(tri[:, 1], tri[:, 0]))
     return float(local_directions(scan)[1])
 
 
 def normal_form_match(line_r, line_alpha, wall_r, wall_alpha, max_dr_m=0.05, max_dalpha=0.05235987755982989):
-    """Notebook 10: one pair under :func:`labkit.match_lines`' limits (by default 5 cm and 3 degrees)."""
+    """Notebook 10: one pair under :func:`labkit.match_lines`' limits (by default 5 cm and 3 degrees).
+
+    Parameters
+    ----------
+    line_r, line_alpha : float
+        The extracted line in normal form: distance from the origin (metres) and normal angle (radians).
+    wall_r, wall_alpha : float
+        The ground-truth wall in the same form.
+    max_dr_m : float, default 0.05
+        The largest difference of the distances, metres.
+    max_dalpha : float, default 0.05235987755982989
+        The largest difference of the angles (taken across the wrap), radians (3 degrees).
+
+    Returns
+    -------
+    bool
+        Whether both differences are within their limits (limits included).
+    """
     dalpha = geometry.angle_difference(line_alpha, wall_alpha)
     return bool(abs(line_r - wall_r) <= max_dr_m and abs(dalpha) <= max_dalpha)
 
 
 def three_beam_residual(r_prev, r_mid, r_next, dtheta):
-    """Notebook 10: the three-beam residual of :func:`labkit.range_noise_residuals`, before its scale factor."""
+    """Notebook 10: the three-beam residual of :func:`labkit.range_noise_residuals`, before its scale factor.
+
+    Parameters
+    ----------
+    r_prev, r_mid, r_next : float or ndarray
+        The ranges of three neighbouring beams, metres.
+    dtheta : float
+        The angular step between beams, radians.
+
+    Returns
+    -------
+    float or ndarray
+        ``r_mid (1 - (r_mid / r_prev + r_mid / r_next) / (2 cos dtheta))``, metres: zero on a straight
+        wall without noise.
+    """
     return r_mid * (1.0 - (r_mid / r_prev + r_mid / r_next) / (2.0 * np.cos(dtheta)))
 
 
 def compose_poses(a, b):
-    """Notebook 11: :func:`labkit.poses.compose`."""
+    """Notebook 11: :func:`labkit.poses.compose`.
+
+    Parameters
+    ----------
+    a, b : array_like of shape (3,) or (N, 3)
+        Poses ``(x, y, theta)``, metres and radians: frame ``b`` given in frame ``a``.
+
+    Returns
+    -------
+    ndarray of shape (3,) or (N, 3)
+        The pose ``a ∘ b`` (frame ``b`` in ``a``'s parent), theta wrapped to (-pi, pi].
+    """
     return compose(a, b)
 
 
 def bounds_from_table(near):
-    """Notebook 06: the bounds ``L``, ``U`` read off a brute-force neighbour table (row i: the points within
-    eps of point i): the first and the last True of every row."""
+    """Notebook 06: the bounds ``L``, ``U`` read off a brute-force neighbour table.
+
+    Parameters
+    ----------
+    near : array_like of shape (N, N), bool
+        Row ``i`` marks the points within ``eps`` of point ``i`` (point ``i`` among them).
+
+    Returns
+    -------
+    L, U : ndarray of shape (N,), int
+        The first and the last True of every row.
+    """
     near = np.asarray(near, dtype=bool)
     return near.argmax(axis=1), len(near) - 1 - near[:, ::-1].argmax(axis=1)
 
 
 def expand_upwards(p, L, U, min_pts):
-    """Notebook 06: print the upward walk of DBSCAN's cluster expansion from core point ``p`` (Algorithm 4)."""
+    """Notebook 06: print the upward walk of DBSCAN's cluster expansion from core point ``p`` (Algorithm 4).
+
+    Parameters
+    ----------
+    p : int
+        The index of the core point the walk starts at.
+    L, U : array_like of shape (N,), int
+        The first and the last index of each point's neighbourhood (both included).
+    min_pts : int
+        The number of points a neighbourhood needs for its point to be a core point.
+    """
     u, i = int(U[p]), p + 1
     print(f"start at core point p = {p}, bound u = U[{p}] = {u}")
     while i < len(U) and i <= u:
@@ -159,7 +328,24 @@ def expand_upwards(p, L, U, min_pts):
 
 
 def radius_and_height(chord, mean_angle):
-    """Notebook 08: the radius of the circle whose arc sees a chord of length ``chord`` under ``mean_angle``,
-    and the centre's height above the chord's midpoint, away from the arc (the corrected construction)."""
+    """Notebook 08: the radius of a circle from a chord and the angle its arc sees it under.
+
+    The corrected construction: the circle whose arc sees a chord of length ``chord`` under ``mean_angle``.
+
+    Parameters
+    ----------
+    chord : float
+        The chord's length, metres.
+    mean_angle : float
+        The (mean) inscribed angle under which the arc's points see the chord, radians.
+
+    Returns
+    -------
+    radius : float
+        The circle's radius, metres.
+    height : float
+        The centre's height above the chord's midpoint, counted away from the arc, metres (negative when
+        the centre lies on the arc's side, for ``mean_angle`` under pi / 2).
+    """
     theta = mean_angle - np.pi / 2
     return chord / 2 / np.cos(theta), chord / 2 * np.tan(theta)

@@ -174,6 +174,14 @@ def _solution(name: str):
 def hint(name: str, level: int | str = 1) -> None:
     """Print hint ``level`` (1, 2, ...) for the task ``name``, or its solution for ``level="solution"``.
 
+    Parameters
+    ----------
+    name : str
+        The task: the name of the function the notebook asks for (``"iepf"``, ``"process_noise"``, ...).
+    level : int or str, default 1
+        The hint's number, from 1 to the task's number of hints, or ``"solution"``: the source of the
+        function the notebook falls back on (the task's name is then added to ``SHOWN``).
+
     Raises
     ------
     KeyError

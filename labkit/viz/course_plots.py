@@ -19,8 +19,24 @@ def _axes(ax, figsize):
 
 
 def chord_frame(points) -> np.ndarray:
-    """``points`` (N, 2) moved so that the first is at (0, 0) and the last at (1, 0): the chord's own frame,
-    lengths in chord lengths."""
+    """Points moved into their chord's own frame: the first at (0, 0), the last at (1, 0).
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        Points ``(x, y)``; the first and the last must differ.
+
+    Returns
+    -------
+    ndarray of shape (N, 2)
+        The points along the chord and across it (to its left, seen from the first point towards the
+        last), in chord lengths.
+
+    Raises
+    ------
+    ValueError
+        When the first and the last point coincide.
+    """
     p = np.asarray(points, dtype=float)
     d = p[-1] - p[0]
     chord = float(np.hypot(d[0], d[1]))
@@ -33,8 +49,28 @@ def chord_frame(points) -> np.ndarray:
 
 
 def plot_middle_band(examples: dict, ratios: dict, low: float = 0.1, high: float = 0.7, ax=None):
-    """Notebook 08, Fig. 5 of Xavier et al.: each example in its chord's frame (every bulge drawn on the
-    sensor's side), its middle point circled, and the band ``low`` to ``high`` chord lengths away."""
+    """Notebook 08, Fig. 5 of Xavier et al.: the middle point of each example against the band.
+
+    Each example is drawn in its chord's frame (every bulge on the sensor's side), its middle point
+    circled, with the band ``low`` to ``high`` chord lengths away from the chord.
+
+    Parameters
+    ----------
+    examples : dict
+        ``{name: points}``, the points of each example an array_like of shape (N, 2).
+    ratios : dict
+        ``{name: ratio}``, the middle point's distance from the chord in chord lengths, for each example;
+        the legend says whether it lies in the band.
+    low, high : float, default 0.1, 0.7
+        The band's limits, in chord lengths.
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
+    """
     ax = _axes(ax, (8, 4.5))
     ax.axhspan(low, high, color="tab:green", alpha=0.12, label=f"band: {low} d to {high} d")
     ax.plot([0, 1], [0, 0], "k", lw=2, label="chord (length d)")
@@ -56,8 +92,23 @@ def plot_middle_band(examples: dict, ratios: dict, low: float = 0.1, high: float
 
 
 def plot_circle_fits(points, circles: dict, ax=None):
-    """Notebook 08: ``points`` and the circles ``{name: (centre, radius, colour)}`` fitted to them, the first
-    drawn wide (the truth), with the chord between the extreme points."""
+    """Notebook 08: points and the circles fitted to them, with the chord between the extreme points.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        The points ``(x, y)``, metres.
+    circles : dict
+        ``{name: (centre, radius, colour)}``: a centre ``(x, y)`` and a radius in metres and a matplotlib
+        colour; the first is drawn wide (the truth).
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
+    """
     ax = _axes(ax, (6, 5))
     full = np.linspace(0, 2 * np.pi, 200)
     for k, (name, (c, r, colour)) in enumerate(circles.items()):
@@ -74,8 +125,26 @@ def plot_circle_fits(points, circles: dict, ax=None):
 
 
 def plot_angular_clusters(scan, phi, labels, n_clusters: int, xlim=(-1.5, 19), ylim=(-2, 2.5)):
-    """Notebook 07: a histogram of the local directions ``phi`` (radians) per angular cluster (grey: noise),
-    beside the scan's points coloured by cluster. Returns the figure."""
+    """Notebook 07: a histogram of the local directions per angular cluster, beside the scan's points.
+
+    Parameters
+    ----------
+    scan : Scan
+        The laser scan (N beams).
+    phi : ndarray of shape (N,)
+        The local direction at each beam, radians (NaN where there is none).
+    labels : ndarray of shape (N,), int
+        The angular cluster of each beam, 0 to ``n_clusters - 1``; -1 for noise (drawn grey).
+    n_clusters : int
+        The number of clusters.
+    xlim, ylim : tuple of (float, float), default (-1.5, 19), (-2, 2.5)
+        The limits of the scan's plot, metres.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A new figure: the histogram (degrees) on the left, the points coloured by cluster on the right.
+    """
     from .plot import plot_scan
 
     fig, (ax_h, ax_s) = plt.subplots(1, 2, figsize=(14, 4.5), gridspec_kw={"width_ratios": [1, 1.6]})

@@ -46,10 +46,23 @@ def mpl(name: str) -> tuple[float, float, float]:
 
 
 def track_color(track_id: int) -> tuple[int, int, int]:
-    """The RGB (0-255) colour of a track (:mod:`labkit.tracking`): hues a golden-ratio step apart for
-    successive ids, so that tracks born one after the other differ and an id keeps its colour for its
-    whole life, in rerun and in matplotlib.
+    """The RGB (0-255) colour of a track (:mod:`labkit.tracking`), the same in rerun and in matplotlib.
 
+    Hues a golden-ratio step apart for successive ids, so that tracks born one after the other differ
+    and an id keeps its colour for its whole life.
+
+    Parameters
+    ----------
+    track_id : int
+        The track's id.
+
+    Returns
+    -------
+    tuple of (int, int, int)
+        Red, green and blue, 0 to 255.
+
+    Examples
+    --------
     >>> track_color(1) == track_color(1), track_color(1) != track_color(2)
     (True, True)
     """

@@ -23,14 +23,45 @@ __all__ = ["covariance_ellipse", "draw_filter_run", "draw_gates", "draw_cost_mat
 
 
 def track_rgb(track_id: int) -> tuple[float, float, float]:
-    """The colour of a track in matplotlib (0-1), the same as in rerun (:func:`labkit.viz.style.track_color`)."""
+    """The colour of a track in matplotlib (0-1), the same as in rerun (:func:`labkit.viz.style.track_color`).
+
+    Parameters
+    ----------
+    track_id : int
+        The track's id.
+
+    Returns
+    -------
+    tuple of (float, float, float)
+        Red, green and blue, 0 to 1.
+    """
     r, g, b = track_color(track_id)
     return r / 255, g / 255, b / 255
 
 
 def covariance_ellipse(ax, center, covariance, d2: float = 1.0, **style) -> Ellipse:
-    """Draw the ellipse ``(p - center)' C^-1 (p - center) = d2`` of a 2 x 2 covariance ``C`` (``d2 = 1``: one
-    standard deviation; ``d2 = gate_threshold(p)``: the gate at probability ``p``) and return the patch."""
+    """Draw the ellipse ``(p - center)' C^-1 (p - center) = d2`` of a 2 x 2 covariance ``C``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    center : array_like of shape (2,) or longer
+        The ellipse's centre: its first two entries ``(x, y)`` (a state ``(x, y, vx, vy)`` will do).
+    covariance : array_like of shape (2, 2) or larger
+        The covariance ``C``: its upper-left 2 x 2 block.
+    d2 : float, default 1.0
+        The squared Mahalanobis distance of the ellipse: 1 for one standard deviation,
+        ``gate_threshold(p)`` for the gate at probability ``p``.
+    **style
+        Keywords of :class:`matplotlib.patches.Ellipse` (colour, line width, ...); not filled unless
+        ``fill=True``.
+
+    Returns
+    -------
+    matplotlib.patches.Ellipse
+        The patch, added to ``ax``.
+    """
     values, vectors = np.linalg.eigh(np.asarray(covariance, dtype=float)[:2, :2])
     width, height = 2 * np.sqrt(d2 * np.clip(values, 0.0, None))
     angle = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1]))
@@ -41,8 +72,25 @@ def covariance_ellipse(ax, center, covariance, d2: float = 1.0, **style) -> Elli
 
 
 def draw_filter_run(ax, truth_xy, detections_xy, states, covariances, *, every: int = 5, d2: float = 4.0) -> None:
-    """One target: its true path, the detections, the filter's estimates and, every ``every`` steps, the
-    ellipse of its position covariance at ``d2`` (4: two standard deviations)."""
+    """One target: its true path, the detections, the filter's estimates and covariance ellipses.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    truth_xy : array_like of shape (K, 2)
+        The target's true positions, metres.
+    detections_xy : array_like of shape (M, 2)
+        The detections, metres.
+    states : array_like of shape (K, 4)
+        The filter's estimates ``(x, y, vx, vy)``, one per step.
+    covariances : sequence of array_like of shape (4, 4)
+        The estimates' covariances; the ellipse of the position block is drawn.
+    every : int, default 5
+        Draw an ellipse every ``every`` steps.
+    d2 : float, default 4.0
+        The squared Mahalanobis distance of the ellipses (4: two standard deviations).
+    """
     truth_xy, detections_xy, states = (np.asarray(a, dtype=float) for a in (truth_xy, detections_xy, states))
     ax.plot(truth_xy[:, 0], truth_xy[:, 1], color="0.4", lw=1.5, label="truth")
     ax.scatter(detections_xy[:, 0], detections_xy[:, 1], s=12, color=mpl("people"), label="detections", zorder=3)
@@ -57,9 +105,28 @@ def draw_filter_run(ax, truth_xy, detections_xy, states, covariances, *, every: 
 
 def draw_gates(ax, predicted: Sequence, innovation_covariances: Sequence, detections_xy, *,
                probability: float = 0.99, labels: Sequence[str] | None = None) -> np.ndarray:
-    """Gating ellipses (``d2 = gate_threshold(probability)``) of predicted positions with their innovation
-    covariances ``S``, and the detections, filled when inside at least one gate; returns the (tracks,
-    detections) array of ``d2``."""
+    """Gating ellipses of predicted positions, and the detections, filled when inside at least one gate.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    predicted : sequence of array_like of shape (2,) or longer
+        The predicted position ``(x, y)`` of each track (the first two entries of a state will do).
+    innovation_covariances : sequence of array_like of shape (2, 2)
+        The innovation covariance ``S`` of each track.
+    detections_xy : array_like of shape (D, 2)
+        The detections, metres.
+    probability : float, default 0.99
+        The gates' probability: each ellipse is ``d2 = gate_threshold(probability)``.
+    labels : sequence of str, optional
+        The legend's label of each track; by default ``track i: prediction and gate``.
+
+    Returns
+    -------
+    ndarray of shape (T, D)
+        The squared Mahalanobis distance ``d2`` of every detection from every track's prediction.
+    """
     threshold = gate_threshold(probability)
     detections_xy = np.asarray(detections_xy, dtype=float).reshape(-1, 2)
     d2 = np.zeros((len(predicted), len(detections_xy)))
@@ -82,8 +149,17 @@ def draw_gates(ax, predicted: Sequence, innovation_covariances: Sequence, detect
 
 
 def draw_cost_matrix(ax, cost, rows=None, cols=None) -> None:
-    """A cost matrix as a table of numbers (``inf``: outside the gate), the chosen pairs ``rows[k], cols[k]``
-    framed."""
+    """A cost matrix as a table of numbers (``inf``: outside the gate), the chosen pairs framed.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    cost : array_like of shape (T, D)
+        The cost of each pair of a track (row) and a detection (column).
+    rows, cols : sequence of int, optional
+        The chosen pairs ``rows[k], cols[k]``, framed in red; none when None.
+    """
     cost = np.asarray(cost, dtype=float)
     shown = np.where(np.isfinite(cost), cost, np.nan)
     ax.imshow(shown, cmap="Blues_r")
@@ -96,9 +172,26 @@ def draw_cost_matrix(ax, cost, rows=None, cols=None) -> None:
 
 
 def draw_tracks(ax, tables: Iterable[TrackTable], *, min_scans: int = 1, background=None) -> dict[int, int]:
-    """The paths of every moving track of a recording (confirmed rows only), each in its colour and labelled
-    with its id where it ends; ``background``: (N, 2) points drawn grey beneath (e.g. a map). Tracks
-    confirmed in fewer than ``min_scans`` scans are left out. Returns ``{id: scans confirmed}`` of those drawn."""
+    """The paths of every moving track of a recording, each in its colour and labelled with its id where it ends.
+
+    Only the confirmed rows of the tables are drawn.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    tables : iterable of TrackTable
+        One :class:`labkit.tracking.TrackTable` per scan, in time order.
+    min_scans : int, default 1
+        Tracks confirmed in fewer scans are left out.
+    background : array_like of shape (N, 2), optional
+        Points drawn grey beneath the paths (e.g. a map).
+
+    Returns
+    -------
+    dict of {int: int}
+        ``{id: scans confirmed}`` of the tracks drawn.
+    """
     paths: dict[int, list] = {}
     for table in tables:
         for i in np.flatnonzero(table.status == "confirmed"):

@@ -52,8 +52,21 @@ _SAY = {"birth": "born (tentative)", "confirm": "confirmed, moving", "static": "
 class TrackLogger:
     """Logs one :class:`labkit.tracking.TrackTable` per scan (see the module docstring).
 
-    ``views``: the entity roots to draw in, ``"world"`` (the sensor frame) and/or ``"map"``.
     Call :meth:`send` with a batch of ``(scan index, table)`` pairs (scans in time order).
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording to log into.
+    views : tuple of str, default ("world",)
+        The entity roots to draw in, ``"world"`` (the sensor frame) and/or ``"map"``.
+    trail_s : float, default TRAIL_S
+        Seconds of path drawn behind each moving track, >= 0.
+
+    Raises
+    ------
+    ValueError
+        When ``trail_s`` is negative.
     """
 
     def __init__(self, rec: rr.RecordingStream, views: tuple[str, ...] = ("world",), trail_s: float = TRAIL_S) -> None:
@@ -165,9 +178,29 @@ class TrackLogger:
 
 def log_tracks(rec: rr.RecordingStream, tables: Iterable[TrackTable], *, start_index: int = 0,
                views: tuple[str, ...] = ("world",), trail_s: float = TRAIL_S) -> int:
-    """Log the tracker's tables (one :class:`labkit.tracking.TrackTable` per scan, e.g. from
-    :func:`labkit.track_scans`) at ``scan = start_index + k``, in the ``views`` (``"world"``, and
-    ``"map"`` beside :func:`labkit.viz.rr.log_map`); returns how many. Show them with
-    ``show_inline(rec, with_tracks=True)``."""
+    """Log the tracker's tables, one per scan, as rerun entities (see the module docstring).
+
+    Show them with ``show_inline(rec, with_tracks=True)``.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording to log into.
+    tables : iterable of TrackTable
+        One :class:`labkit.tracking.TrackTable` per scan in time order, e.g. from
+        :func:`labkit.track_scans`; the ``k``-th is logged at ``scan = start_index + k``.
+    start_index : int, default 0
+        The ``scan`` index of the first table.
+    views : tuple of str, default ("world",)
+        The entity roots to draw in: ``"world"`` (the sensor frame) and/or ``"map"`` (beside
+        :func:`labkit.viz.rr.log_map`).
+    trail_s : float, default TRAIL_S
+        Seconds of path drawn behind each moving track, >= 0.
+
+    Returns
+    -------
+    int
+        How many tables were logged.
+    """
     logger = TrackLogger(rec, views, trail_s)
     return _batched(tables, lambda batch, k: logger.send(list(enumerate(batch, start=start_index + k))))
