@@ -419,9 +419,11 @@ def _engine():
     if _ENGINE is False:
         _ENGINE = None
         if _JIT:
-            from . import _iav_engine
+            from types import SimpleNamespace
 
-            _ENGINE = _iav_engine if _iav_engine.COMPLEX_FMA else None
+            from ._iav_engine import COMPLEX_FMA, circle_tests, leg_tests
+
+            _ENGINE = SimpleNamespace(circle_tests=circle_tests, leg_tests=leg_tests) if COMPLEX_FMA else None
     return _ENGINE
 
 

@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ._kernels import _fma, jit, jit_inline, segment_sum, sum_at
+from ._kernels import fma, jit, jit_inline, segment_sum, sum_at
 
 __all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "wider_than_noise", "COMPLEX_FMA"]
 
@@ -406,12 +406,12 @@ def _angles(px, py, a, e, ang):
         br, bi = ar + dx, ai + dy
         if (ar == 0 and ai == 0) or (br == 0 and bi == 0):
             degenerate = True
-        re = _fma(br, ar, -(bi * -ai))
-        im = _fma(br, -ai, bi * ar)
+        re = fma(br, ar, -(bi * -ai))
+        im = fma(br, -ai, bi * ar)
         t = math.atan2(im, re) % _TWO_PI
         ang[i] = t
         total += t
-        side_sum += _fma(dx, -ai, dy * ar)
+        side_sum += fma(dx, -ai, dy * ar)
     mu = total / m
     var = 0.0
     for i in range(m):

@@ -37,8 +37,8 @@ from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-__all__ = ["jit", "jit_inline", "pairwise_sum", "sum_at", "segment_sum", "remainder_2pi", "line_from_sums", "dot2",
-           "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
+__all__ = ["jit", "jit_inline", "fma", "pairwise_sum", "sum_at", "segment_sum", "remainder_2pi", "line_from_sums",
+           "dot2", "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
 
 PI = math.pi
 TWO_PI = 2 * math.pi
@@ -189,7 +189,7 @@ def line_from_sums(sw, sx, sy, sxx, syy, sxy):
 
 
 @intrinsic
-def _fma(typingctx, a, b, c):
+def fma(typingctx, a, b, c):
     """``a * b + c`` rounded once (LLVM's ``llvm.fma.f64``)."""
     sig = types.float64(types.float64, types.float64, types.float64)
 
@@ -207,7 +207,7 @@ def dot2(x, y, c, s, fused):
     machine: once (``fused``, as a fused multiply-add of ``x c`` onto ``y s``) or after each
     operation."""
     if fused:
-        return _fma(x, c, y * s)
+        return fma(x, c, y * s)
     return x * c + y * s
 
 

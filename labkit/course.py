@@ -72,8 +72,22 @@ class YourTurnError(Feedback):
 
 
 def student_frames(error: BaseException, limit: int = 3) -> str:
-    """The innermost ``limit`` frames of ``error``'s traceback that are the student's code (not labkit's, not an
-    installed package's nor Python's own), one line each: ``line 7 in segment: x = ranges[i + 1]``."""
+    """Describe where the student's own code raised ``error``, one entry per frame.
+
+    Only the frames of the student's code count (not labkit's, not an installed package's nor Python's
+    own), each as e.g. ``line 7 in segment: x = ranges[i + 1]``.
+
+    Parameters
+    ----------
+    error : BaseException
+        The exception, with its traceback.
+    limit : int
+        How many of the innermost such frames to keep.
+
+    Returns
+    -------
+    str
+        The entries joined by ``"; "``, innermost last; empty when no frame is the student's."""
     lines = []
     for frame in traceback.extract_tb(error.__traceback__):
         where = str(Path(frame.filename).resolve()) if frame.filename and not frame.filename.startswith("<") else ""

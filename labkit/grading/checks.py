@@ -31,8 +31,10 @@ __all__ = ["run_checks", "ChecksFailed", "Moved", "assert_beams_result", "assert
 
 
 class ChecksFailed(Feedback):
-    """Visible checks failed: each failing function's error, and where in the notebook's code (the check's line,
-    the line of the student's function) it was raised. In Jupyter it shows as this message alone."""
+    """Visible checks failed, with each failing function's error and where it was raised.
+
+    The message says where in the notebook's code each error was raised (the check's line, the line of
+    the student's function). In Jupyter it shows as this message alone."""
 
 #: Set by the grader while it runs a visible cell: what :func:`run_checks` hands each check to.
 GRADER: contextvars.ContextVar[Callable[[str, Callable], None] | None] = contextvars.ContextVar(

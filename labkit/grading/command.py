@@ -437,9 +437,24 @@ def _check_report(exercise: Exercise, result: SubmissionResult) -> tuple[str, bo
 
 
 def check_summary(exercise: Exercise, result: SubmissionResult) -> dict:
-    """What :func:`check` found, as plain data (``labkit grade --check NOTEBOOK --json``; JupyterLab's Validate in
-    ``labkit lab`` shows it): the verdict, the notes on cells that raised, and every visible graded cell's points
-    and the verdict of each of its functions. Text the student's code produced is made printable, never HTML."""
+    """Summarise what :func:`check` found as plain data.
+
+    This is what ``labkit grade --check NOTEBOOK --json`` prints and what JupyterLab's Validate in
+    ``labkit lab`` shows: the verdict, the notes on cells that raised, and every visible graded cell's
+    points and the verdict of each of its functions. Text the student's code produced is made printable,
+    never HTML.
+
+    Parameters
+    ----------
+    exercise : Exercise
+        The exercise the notebook answers.
+    result : SubmissionResult
+        The result of checking the notebook.
+
+    Returns
+    -------
+    dict
+        JSON-ready data: the verdict, the notes and the visible cells."""
     report, passed = _check_report(exercise, result)
     summary: dict = {"exercise": exercise.name, "passed": passed, "report": report, "invalid": "", "notes": [],
                      "cells": []}

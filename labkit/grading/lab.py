@@ -33,8 +33,20 @@ CONFIG_DIR = Path(__file__).resolve().with_name("jupyter")
 
 
 def lab_environment(environ: Mapping[str, str] | None = None) -> dict[str, str]:
-    """``environ`` (default: this process's) with labkit's lab configuration first on ``JUPYTER_CONFIG_PATH``,
-    the offline rerun viewer and this Python's ``bin`` first on ``PATH``."""
+    """Return the environment the students' JupyterLab runs in.
+
+    That is ``environ`` with labkit's lab configuration first on ``JUPYTER_CONFIG_PATH``, the offline
+    rerun viewer and this Python's ``bin`` first on ``PATH``.
+
+    Parameters
+    ----------
+    environ : mapping of str to str, optional
+        The environment to start from (default: this process's).
+
+    Returns
+    -------
+    dict of str to str
+        The lab's environment."""
     env = dict(os.environ if environ is None else environ)
     env["JUPYTER_CONFIG_PATH"] = os.pathsep.join(filter(None, [str(CONFIG_DIR), env.get("JUPYTER_CONFIG_PATH")]))
     env["RERUN_NOTEBOOK_ASSET"] = "serve-local"
@@ -44,9 +56,23 @@ def lab_environment(environ: Mapping[str, str] | None = None) -> dict[str, str]:
 
 def lab_command(folder: Path | str = ".", *, open_path: str | None = None,
                 extra: tuple[str, ...] | list[str] = ()) -> list[str]:
-    """The command that serves ``folder`` in the students' JupyterLab (run it with :func:`lab_environment`).
+    """Build the command that serves ``folder`` in the students' JupyterLab.
 
-    ``open_path`` (relative to ``folder``) is opened first; ``extra`` are more ``jupyter lab`` options.
+    Run it with the environment of :func:`lab_environment`.
+
+    Parameters
+    ----------
+    folder : Path or str
+        The folder the lab serves.
+    open_path : str, optional
+        A notebook (relative to ``folder``) the lab opens first.
+    extra : sequence of str
+        More ``jupyter lab`` options.
+
+    Returns
+    -------
+    list of str
+        The command line.
     """
     root = Path(folder).expanduser()
     if not root.is_dir():
@@ -65,8 +91,23 @@ def lab_command(folder: Path | str = ".", *, open_path: str | None = None,
 
 def run_lab(folder: Path | str = ".", *, open_path: str | None = None,
             extra: tuple[str, ...] | list[str] = ()) -> int:
-    """Serve ``folder`` in the students' JupyterLab until it stops (Ctrl-C: JupyterLab asks, or a second one
-    stops it, and its kernels with it); its exit status."""
+    """Serve ``folder`` in the students' JupyterLab until it stops.
+
+    Ctrl-C: JupyterLab asks, or a second one stops it, and its kernels with it.
+
+    Parameters
+    ----------
+    folder : Path or str
+        The folder the lab serves.
+    open_path : str, optional
+        A notebook (relative to ``folder``) the lab opens first.
+    extra : sequence of str
+        More ``jupyter lab`` options.
+
+    Returns
+    -------
+    int
+        JupyterLab's exit status."""
     process = subprocess.Popen(lab_command(folder, open_path=open_path, extra=extra), env=lab_environment())
     while True:
         try:

@@ -42,7 +42,17 @@ NOT_AN_EXERCISE = (
 
 
 def is_exercise(path: Path) -> bool:
-    """True when the notebook has a cell with nbgrader metadata (an nbgrader assignment)."""
+    """Tell whether a notebook is an exercise: a cell of it has nbgrader metadata.
+
+    Parameters
+    ----------
+    path : Path
+        The notebook.
+
+    Returns
+    -------
+    bool
+        True for an nbgrader assignment."""
     try:
         cells = json.loads(path.read_text(encoding="utf-8")).get("cells", [])
     except (OSError, ValueError, AttributeError):
@@ -51,8 +61,17 @@ def is_exercise(path: Path) -> bool:
 
 
 def validate_answer(summary: dict) -> dict[str, Any]:
-    """nbgrader's Validate answer for the summary of ``labkit grade --check --json``
-    (:func:`labkit.grading.command.check_summary`)."""
+    """Turn the summary of ``labkit grade --check --json`` into nbgrader's Validate answer.
+
+    Parameters
+    ----------
+    summary : dict
+        What :func:`labkit.grading.command.check_summary` returns.
+
+    Returns
+    -------
+    dict
+        The answer nbgrader's Validate dialog shows, its text HTML-escaped."""
     if summary.get("invalid"):
         return {"success": False, "value": f"labkit grade --check: invalid notebook: {summary['invalid']}"}
     failed = []
