@@ -67,7 +67,7 @@ def execute(notebook: Path, *, timeout_s: int = 600) -> Path:
         with tempfile.TemporaryDirectory(prefix="labkit-docs-") as cwd:
             client = NotebookClient(nb, timeout=timeout_s, kernel_name="python3", resources={"metadata": {"path": cwd}})
             with client.setup_kernel():
-                _sliced_waits(client.kc)
+                sliced_waits(client.kc)
                 for index, cell in enumerate(nb.cells):
                     client.execute_cell(cell, index)
     finally:
@@ -79,7 +79,7 @@ def execute(notebook: Path, *, timeout_s: int = 600) -> Path:
 POLL_SLICE_S = 2.0
 
 
-def _sliced_waits(kc) -> None:
+def sliced_waits(kc) -> None:
     """Wait for each kernel message in slices of at most ``POLL_SLICE_S`` seconds.
 
     pyzmq's asyncio poll can miss a socket's wake-up and then sleeps for the whole timeout it was

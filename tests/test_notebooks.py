@@ -27,6 +27,8 @@ import pytest
 from nbclient import NotebookClient
 from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
 
+from docs import executed_notebooks
+from docs.executed_notebooks import sliced_waits
 from tests.conftest import SHARED_DATASETS
 
 REPO = Path(__file__).resolve().parents[1]
@@ -39,7 +41,6 @@ STORED = NOTEBOOKS + EXERCISE_SOURCES
 KERNEL_NAME = "python3"
 CELL_TIMEOUT_S = 300  # per cell; a hung kernel fails its notebook, not the run
 SLOW_STEP_S = 30  # a cell (or the kernel's start or stop) this slow is listed at the end of the run
-POLL_SLICE_S = 2.0  # the longest single wait for a kernel message (see _sliced_waits)
 
 _ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
 _PATH_TRICK = re.compile(
@@ -99,7 +100,7 @@ def test_sliced_waits_find_a_message_whose_wake_up_was_missed(monkeypatch):
     import asyncio
     from types import SimpleNamespace
 
-    monkeypatch.setattr(sys.modules[__name__], "POLL_SLICE_S", 0.05)
+    monkeypatch.setattr(executed_notebooks, "POLL_SLICE_S", 0.05)
 
     class MissedWakeUp:
         def __init__(self, arrives_after_s):
@@ -115,7 +116,7 @@ def test_sliced_waits_find_a_message_whose_wake_up_was_missed(monkeypatch):
             raise queue.Empty
 
     kc = SimpleNamespace(shell_channel=MissedWakeUp(0.1), iopub_channel=MissedWakeUp(1e9))
-    _sliced_waits(kc)
+    sliced_waits(kc)
     started = time.monotonic()
     assert asyncio.run(kc.shell_channel.get_msg(timeout=5.0)) == "reply"
     assert time.monotonic() - started < 1.0
@@ -213,7 +214,7 @@ def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict, *, to_the_end
     steps = _timed(client)
     started = time.monotonic()
     with client.setup_kernel():
-        _sliced_waits(client.kc)
+        sliced_waits(client.kc)
         steps.append(("kernel start", time.monotonic() - started))
         for i, cell in enumerate(nb.cells[:last + 1]):
             if i in checks:
@@ -225,29 +226,6 @@ def run_notebook(nb, workdir: Path, kernel_name: str, fills: dict, *, to_the_end
         stopping = time.monotonic()
     steps.append(("kernel stop", time.monotonic() - stopping))
     return [f"{step}: {seconds:.0f} s" for step, seconds in steps if seconds > SLOW_STEP_S]
-
-
-def _sliced_waits(kc) -> None:
-    """Make ``kc`` wait for messages in slices of at most ``POLL_SLICE_S``.
-
-    pyzmq's asyncio poll watches a socket's edge-triggered descriptor and, when its timeout fires,
-    checks the socket once more; a wake-up it misses therefore costs the whole timeout, and then
-    the message is there. nbclient waits for a cell's reply with the cell's whole timeout
-    (``CELL_TIMEOUT_S``): in a full run notebook 09's widget cell took exactly 300 s and passed
-    (the "slow steps" of that run). Waiting in slices bounds a missed wake-up at one slice; the
-    total wait, and what happens when it runs out (``queue.Empty``), are nbclient's as before."""
-    for channel in (kc.shell_channel, kc.iopub_channel):
-        async def get_msg(timeout=None, *, _get=channel.get_msg):
-            deadline = None if timeout is None else time.monotonic() + timeout
-            while True:
-                left = POLL_SLICE_S if deadline is None else deadline - time.monotonic()
-                try:
-                    return await _get(timeout=max(0.0, min(POLL_SLICE_S, left)))
-                except queue.Empty:
-                    if deadline is not None and time.monotonic() >= deadline:
-                        raise
-
-        channel.get_msg = get_msg
 
 
 def _timed(client) -> list[tuple[str, float]]:
