@@ -444,3 +444,26 @@ def test_ctrl_c_leaves_no_worker_cgroup_behind(course):
     assert [name for name in theirs if os.path.exists(os.path.join(parent, name))] == []
     # (multiprocessing's resource tracker ends when it reads the run's end)
     assert seen and _left(seen)[0] == [], "grading processes outlived the run"
+
+
+def test_a_grading_process_skips_jsonschemas_iri_grammars(tmp_path, monkeypatch):
+    """Every process of a grading run imports nbgrader, hence nbformat and jsonschema, which compiles 38 IRI
+    grammars at import (3 s of CPU per process) for a string format that nothing here checks. The run and its
+    grading processes go without them; nbformat still reads and validates an exercise notebook."""
+    notebook = tmp_path / "n.ipynb"
+    notebook.write_text(json.dumps(release_notebook(EX0)), encoding="utf-8")
+    code = ("import sys\nfrom labkit.grading.command import _skip_iri_grammars\n_skip_iri_grammars()\n"
+            "import nbgrader.api, nbformat\nnbformat.validate(nbformat.read(sys.argv[1], as_version=4))\n"
+            "print(repr(sys.modules.get('rfc3987_syntax', 'never imported')))")
+    out = subprocess.run([sys.executable, "-c", code, str(notebook)], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "None", out
+
+    import labkit.grading.command as command  # noqa: PLC0415
+
+    called = []
+    monkeypatch.setattr(command, "_skip_iri_grammars", lambda: called.append(True))
+    parser = argparse.ArgumentParser()
+    add_grade_parser(parser.add_subparsers())
+    with pytest.raises(ValueError, match="say what to grade"):
+        run_grade(parser.parse_args(["grade"]))
+    assert called, "labkit grade did not skip the grammars"
