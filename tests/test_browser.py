@@ -376,14 +376,19 @@ def run_twice(driver, base: str, name: str, shots: Path) -> tuple[BrowserRun, Br
     """Run All of ``name`` twice in a row in one browser and kernel; the viewers probed after the first."""
     first, second = BrowserRun(name), BrowserRun(name)
     sink = [first]
+    clock = [("start", time.monotonic())]
     browser, page = _open(driver, base, name, sink)
     try:
+        clock.append(("open", time.monotonic()))
         _run_all(page, first)
+        clock.append(("first Run All", time.monotonic()))
         if not first.failure and _has_viewers(REPO / "notebooks" / name):
             _settle_viewers(page, first)
+            clock.append(("viewers", time.monotonic()))
         sink[0] = second
         if not first.failure:
             _run_all(page, second)
+            clock.append(("second Run All", time.monotonic()))
     finally:
         first.screenshot = second.screenshot = shots / f"{name}.png"
         try:
@@ -392,6 +397,8 @@ def run_twice(driver, base: str, name: str, shots: Path) -> tuple[BrowserRun, Br
             browser.close()
     (shots / f"{name}.console.log").write_text("\n".join(first.console + ["-- second Run All --"] + second.console))
     (shots / f"{name}.viewers.json").write_text(json.dumps(first.viewers, indent=1))
+    (shots / f"{name}.seconds.json").write_text(json.dumps(
+        {step: round(t - before, 1) for (_, before), (step, t) in zip(clock, clock[1:], strict=False)}))
     return first, second
 
 
