@@ -309,7 +309,8 @@ def test_a_notebook_a_student_finishes(path):
         f"{_rel(path)}: the title must be followed by one objective in one sentence, '**Objective:** ...', "
         f"not {objective!r}")
     last = [c for c in nb.cells if c.cell_type == "markdown"][-1].source
-    assert "## What you should now be able to do" in last, f"{_rel(path)}: no 'What you should now be able to do' at the end"
+    assert "## What you should now be able to do" in last, (
+        f"{_rel(path)}: no 'What you should now be able to do' at the end")
     max_cells, max_words = OVER_THE_LIMIT.get(path.name, (MAX_CELLS, MAX_WORDS))
     assert len(nb.cells) <= max_cells and _markdown_words(nb) <= max_words, (
         f"{_rel(path)}: {len(nb.cells)} cells and {_markdown_words(nb)} words of prose, more than {max_cells} "
