@@ -275,7 +275,7 @@ def plot_threshold_sweep(sweep, fixed_m: float, marks=(), title: str = ""):
     return fig
 
 
-def plot_round_objects(scan, features, truth, notes, zoom_m: float = 0.6):
+def plot_round_objects(scan, features, truth, notes, zoom_m: float = 0.6, title: str = ""):
     """A scan with its circles and legs, and a zoom on the true legs with a note per true object.
 
     Parameters
@@ -290,6 +290,8 @@ def plot_round_objects(scan, features, truth, notes, zoom_m: float = 0.6):
         ``(centre, text)`` of each true object; those inside the zoom are written beside it.
     zoom_m : float, optional
         Half the width of the zoom around the legs' mean centre, metres.
+    title : str, optional
+        The figure's title.
 
     Returns
     -------
@@ -308,6 +310,7 @@ def plot_round_objects(scan, features, truth, notes, zoom_m: float = 0.6):
     axes[1].legend().remove()
     axes[0].set_title("the scan, truth (thin) and detections (thick)")
     axes[1].set_title("the legs, zoomed")
+    fig.suptitle(title)
     fig.tight_layout()
     return fig
 
@@ -458,13 +461,13 @@ def plot_noise_residuals(beams, z, one_wall, sigma_m: float, estimate_m: float, 
                                     (~one_wall, "tab:red", 22,
                                      f"corner, jump edge or round object ({(~one_wall).sum()})")]:
         ax.scatter(beams[sel & ~out], 1000 * z[sel & ~out], s=size, color=color, label=label, zorder=2 + (size > 8))
-        label = f"beyond ±{1000 * limit:.0f} mm ({(sel & out).sum()})"
+        beyond: str | None = f"beyond ±{1000 * limit:.0f} mm ({(sel & out).sum()})"
         for sign, marker in [(1, "^"), (-1, "v")]:
             far = sel & out & (np.sign(z) == sign)
             if far.any():
                 ax.scatter(beams[far], np.full(far.sum(), sign * 1000 * limit), marker=marker, s=60, color=color,
-                           zorder=4, label=label)
-                label = None
+                           zorder=4, label=beyond)
+                beyond = None  # one legend entry for both arrows
     for sign in (-1, 1):
         ax.axhline(sign * 3.5 * 1000 * estimate_m, color="black", lw=0.8, ls="--",
                    label="±3.5 × the estimate" if sign > 0 else None)
