@@ -26,8 +26,8 @@ from .tracking import assign, cv_model
 
 __all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "config_for", "mean_per_scan", "rates",
            "pose_at", "cut_points", "jacobian", "chord_distances", "similar_lines", "is_border", "triplet_direction",
-           "normal_form_match", "three_beam_residual", "compose_poses", "bounds_from_table", "expand_upwards",
-           "radius_and_height", "process_noise", "best_assignment"]
+           "normal_form_match", "three_beam_residual", "ray_axis_error", "compose_poses", "bounds_from_table",
+           "expand_upwards", "radius_and_height", "process_noise", "best_assignment"]
 
 
 def closed_form_alpha(rho, theta, w):
@@ -254,7 +254,7 @@ def normal_form_match(line_r, line_alpha, wall_r, wall_alpha, max_dr_m=0.05, max
 
 
 def three_beam_residual(r_prev, r_mid, r_next, dtheta):
-    """Notebook 10: the three-beam residual of :func:`labkit.range_noise_residuals`, before its scale factor.
+    """Notebook 10b: the three-beam residual of :func:`labkit.range_noise_residuals`, before its scale factor.
 
     Parameters
     ----------
@@ -270,6 +270,31 @@ def three_beam_residual(r_prev, r_mid, r_next, dtheta):
         wall without noise.
     """
     return r_mid * (1.0 - (r_mid / r_prev + r_mid / r_next) / (2.0 * np.cos(dtheta)))
+
+
+def ray_axis_error(range_m, angle, line_r, line_alpha):
+    """Notebook 10b: a beam's error along its own ray against a line, as :func:`labkit.ray_errors` measures it.
+
+    Parameters
+    ----------
+    range_m : float or ndarray
+        The measured range of the beam, metres.
+    angle : float or ndarray
+        The beam's angle, radians.
+    line_r, line_alpha : float
+        The line in normal form ``x cos(alpha) + y sin(alpha) = r``: metres and radians.
+
+    Returns
+    -------
+    float or ndarray
+        The measured range minus the distance along the ray to the line, metres (positive: the beam
+        measured beyond the line); NaN where the ray never meets the line ahead of the sensor.
+    """
+    c = np.cos(np.asarray(angle, dtype=float) - line_alpha)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        along = np.where(c > 0, line_r / np.where(c > 0, c, 1.0), np.nan)
+    error = np.asarray(range_m, dtype=float) - along
+    return float(error) if error.ndim == 0 else error
 
 
 def compose_poses(a, b):

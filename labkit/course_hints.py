@@ -137,6 +137,12 @@ HINTS: dict[str, tuple[str, ...]] = {
         "Compare the neighbours' inverse ranges with the middle one times 2 cos(dtheta); turn that "
         "inverse-range residual back into metres near the middle range.",
     ),
+    "ray_axis_error": (
+        "Measure along the beam, not across the line: where does the ray itself cross the line?",
+        "The ray's point at distance s satisfies the line's equation when s times the cosine of the angle "
+        "between the beam and the normal equals r; the error is the measured range minus that s, and a ray "
+        "at 90 degrees or more from the normal never reaches the line.",
+    ),
     "compose_poses": (
         "b is given in a's frame: turn it by a's heading, then move it by a's position.",
         "Rotate b's translation by a's angle, add a's translation; the headings add; wrap the sum.",

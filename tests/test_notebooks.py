@@ -285,6 +285,38 @@ def test_your_turn_cells(path):
         assert cell.get("id") in fills, f"{_rel(path)} cell {cell.get('id')} has no fill-in in tests/your_turn/"
 
 
+# ---------------------------------------------------------------------------- a notebook a student finishes
+MAX_CELLS, MAX_WORDS = 46, 3200  # issue 34: "at most ~45 cells and ~3,000 words" of prose
+#: Notebooks not yet split to the limits: (cells, words) as they stand, which may shrink and never grow.
+OVER_THE_LIMIT = {"08_iav_circles_and_legs.ipynb": (56, MAX_WORDS), "09_bag_playback_in_rerun.ipynb": (56, 3480)}
+
+
+def _markdown_words(nb) -> int:
+    return sum(len(c.source.split()) for c in nb.cells if c.cell_type == "markdown")
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_a_notebook_a_student_finishes(path):
+    """A numbered title, one objective in one sentence right under it, "What you should now be able to do"
+    at the end, and a size a student gets through (issue 34, item 3)."""
+    nb = nbformat.read(path, as_version=4)
+    number = re.match(r"(\d\d[a-z]?)_", path.name).group(1)
+    lines = [line for line in nb.cells[0].source.splitlines() if line.strip()]
+    assert nb.cells[0].cell_type == "markdown" and lines[0].startswith(f"# {number} · "), (
+        f"{_rel(path)}: the first cell must start with the numbered title '# {number} · ...', not {lines[0]!r}")
+    objective = lines[1]
+    assert objective.startswith("**Objective:** ") and objective.endswith(".") and ". " not in objective, (
+        f"{_rel(path)}: the title must be followed by one objective in one sentence, '**Objective:** ...', "
+        f"not {objective!r}")
+    last = [c for c in nb.cells if c.cell_type == "markdown"][-1].source
+    assert "## What you should now be able to do" in last, (
+        f"{_rel(path)}: no 'What you should now be able to do' at the end")
+    max_cells, max_words = OVER_THE_LIMIT.get(path.name, (MAX_CELLS, MAX_WORDS))
+    assert len(nb.cells) <= max_cells and _markdown_words(nb) <= max_words, (
+        f"{_rel(path)}: {len(nb.cells)} cells and {_markdown_words(nb)} words of prose, more than {max_cells} "
+        f"and {max_words}: split it by topic or tighten it")
+
+
 # ---------------------------------------------------------------------------- stored clean
 @pytest.mark.parametrize("path", STORED, ids=[_rel(p) for p in STORED])
 def test_stored_without_outputs(path):

@@ -1,5 +1,6 @@
-"""Fill-ins for notebooks/10_evaluation.ipynb: the normal-form test of the matching rule, the two rates,
-the three-beam residual of the range noise estimate."""
+"""Fill-ins for notebooks/10_evaluation.ipynb (the normal-form test of the matching rule, the two rates) and
+notebooks/10b_comparing_extractors.ipynb (the ray-axis error of one beam, the three-beam residual of the range
+noise estimate): both notebooks start with "10", so both read this file."""
 
 from tests.your_turn import Fill
 
@@ -7,6 +8,7 @@ _HEAD = ('def normal_form_match(line_r, line_alpha, wall_r, wall_alpha, max_dr_m
          'max_dalpha=math.radians(3)):\n')
 _RATES = "def rates(n_truth, n_matched, n_scored):\n"
 _RESIDUAL = "def three_beam_residual(r_prev, r_mid, r_next, dtheta):\n"
+_RAY = "def ray_axis_error(range_m, angle, line_r, line_alpha):\n"
 
 FILLS = {
     "ceb8ee6d": Fill(
@@ -30,5 +32,12 @@ FILLS = {
         mistake=_RESIDUAL + ("    u_prev, u_mid, u_next = 1 / r_prev, 1 / r_mid, 1 / r_next\n"
                              "    return r_mid ** 2 * (u_mid - (u_prev + u_next) / 2)\n"),
         hint="divide their sum by 2 cos(dtheta)",
+    ),
+    "a1f0c2d7": Fill(
+        correct=_RAY + ("    c = math.cos(angle - line_alpha)\n"
+                        "    return range_m - line_r / c if c > 0 else math.nan\n"),
+        # the distance across the line (the perpendicular one), not along the beam's ray
+        mistake=_RAY + "    return range_m * math.cos(angle - line_alpha) - line_r\n",
+        hint="measure along the ray",
     ),
 }

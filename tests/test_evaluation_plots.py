@@ -1,0 +1,74 @@
+"""The evaluation notebooks' figures (labkit.viz.evaluation_plots) draw what they are given, where it is."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from labkit.viz import evaluation_plots as ev
+
+
+@pytest.fixture(autouse=True)
+def _close():
+    yield
+    plt.close("all")
+
+
+def _line(start, end):
+    return SimpleNamespace(start=start, end=end)
+
+
+def test_line_status_follows_the_rule_by_hand():
+    # lines 0 and 3 matched, line 1 scored and unmatched, line 2 not scored
+    match = SimpleNamespace(pairs=[(0, 5), (3, 1)], scored=[0, 1, 3])
+    assert ev.line_status(4, match) == ["matched", "false positive", "not scored", "matched"]
+
+
+def test_draw_match_colours_each_line_by_its_fate(monkeypatch):
+    scan = SimpleNamespace()
+    lines = [_line((0.0, 0.0), (1.0, 0.0)), _line((0.0, 1.0), (1.0, 1.0)), _line((2.0, 0.0), (2.0, 1.0))]
+    walls = [SimpleNamespace(start=(0.0, 0.0), end=(1.0, 0.0)), SimpleNamespace(start=(5.0, 0.0), end=(5.0, 2.0))]
+    truth = SimpleNamespace(walls=walls)
+    match = SimpleNamespace(pairs=[(0, 0)], scored=[0, 1], truth=[0, 1], missed=[1], dr=[0.004], dalpha=[0.01])
+    fig, ax = plt.subplots()
+    drawn_scans = []
+    monkeypatch.setattr(ev.lkplot, "plot_scan", lambda s, a, **kw: drawn_scans.append(s))
+    ev.draw_match(ax, scan, truth, lines, match)
+    assert drawn_scans == [scan]
+    by_label = {c.get_label(): np.array(c.get_segments()) for c in ax.collections}
+    assert set(by_label) == {"matched (1)", "false positive (1)", "not scored (1)"}
+    np.testing.assert_allclose(by_label["matched (1)"], [[(0.0, 0.0), (1.0, 0.0)]])
+    np.testing.assert_allclose(by_label["not scored (1)"], [[(2.0, 0.0), (2.0, 1.0)]])
+    walls_drawn = {ln.get_label(): ln.get_linestyle() for ln in ax.lines}
+    assert walls_drawn == {"found wall": "-", "missed wall": "--"}
+    assert [t.get_text() for t in ax.texts] == ["|dr| 4 mm\n|dα| 0.57°"]
+
+
+def test_threshold_sweep_marks_the_rows_it_is_given():
+    levels = (0.005, 0.01, 0.02)
+    sweep = [{"noise_std_m": n, "split_threshold_m": t, "tp_rate": 0.9 - t - n, "fp_rate": t / 2 + n}
+             for n in levels for t in (0.02, 0.05, 0.1)]
+    best = {n: next(r for r in sweep if r["noise_std_m"] == n and r["split_threshold_m"] == 0.1) for n in levels}
+    fig = ev.plot_threshold_sweep(sweep, 0.05, [(best, "best: {cm:g} cm", dict(marker="*"))])
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(shown) == 3 and len(fig.axes) == 4  # a 2 x 2 grid, the fourth panel hidden
+    for ax, noise in zip(shown, levels, strict=True):
+        star = next(ln for ln in ax.lines if ln.get_label() == "best: 10 cm")
+        assert (star.get_xdata()[0], star.get_ydata()[0]) == (best[noise]["fp_rate"], best[noise]["tp_rate"])
+        ring = next(ln for ln in ax.lines if ln.get_label() == "the papers' fixed 5 cm")
+        fixed = next(r for r in sweep if r["noise_std_m"] == noise and r["split_threshold_m"] == 0.05)
+        assert (ring.get_xdata()[0], ring.get_ydata()[0]) == (fixed["fp_rate"], fixed["tp_rate"])
+
+
+def test_rate_bars_are_the_rows_values():
+    rows = [{"noise_std_m": n, "method": m, "tp_rate": tp, "fp_rate": fp, "scans_per_s": sp}
+            for n, m, tp, fp, sp in [(0.005, "a", 0.9, 0.1, 100.0), (0.005, "b", 0.8, 0.2, 1000.0),
+                                     (0.02, "a", 0.7, 0.3, 90.0), (0.02, "b", 0.6, 0.4, 900.0)]]
+    fig = ev.plot_rate_bars(rows, {"b": 0.25})
+    widths = [sorted(p.get_width() for p in ax.patches) for ax in fig.axes]
+    assert widths == [[0.6, 0.7, 0.8, 0.9], [0.1, 0.2, 0.3, 0.4], [90.0, 100.0, 900.0, 1000.0]]
+    (published,) = fig.axes[1].collections
+    assert published.get_offsets()[0][0] == 0.25
