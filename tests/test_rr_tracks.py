@@ -17,6 +17,8 @@ from labkit import read_scans, sim, track_scans
 from labkit.app.data import write_simulation
 from labkit.app.record import record
 from labkit.tracking import Detections, Tracker
+from tests.test_rr import _batches as _rows
+from tests.test_rr import _views
 
 N_SCANS = 50
 BIN = Path(sys.executable).parent
@@ -29,20 +31,6 @@ def crossing(tmp_path_factory):
     bag, truth, _ = write_simulation("crossing_2", folder / "crossing.bag", "ros1", seed=3, n_scans=N_SCANS)
     summary = record(bag, folder / "crossing.rrd", tracks=True)
     return bag, folder / "crossing.rrd", summary
-
-
-def _rows(path, entity):
-    """{scan index: {column: value}} of one entity, from the file."""
-    from rerun.chunk import RrdReader
-
-    out = {}
-    for chunk in RrdReader(path).store().stream():
-        if chunk.entity_path == entity and not chunk.is_static:
-            batch = chunk.to_record_batch()
-            cols = {name: batch.column(name).to_pylist() for name in batch.schema.names}
-            for i, k in enumerate(cols["scan"]):
-                out[k] = {name: v[i] for name, v in cols.items()}
-    return out
 
 
 def _xy(value) -> np.ndarray:
@@ -139,7 +127,6 @@ def test_the_recording_verifies_and_opens_with_a_track_log(crossing):
     _, rrd, _ = crossing
     p = subprocess.run([str(BIN / "rerun"), "rrd", "verify", str(rrd)], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0 and "verified without error" in p.stdout + p.stderr, p.stdout + p.stderr
-    from tests.test_rr import _views
 
     assert ("TextLog", "tracks/events") in _views(rrd)
 
