@@ -21,7 +21,8 @@ the pipeline's time per scan):
 * :func:`manage` -- a static track not detected at this scan put at rest, which tracks are
   confirmed (static or moving) and which are deleted;
 * :func:`predict_and_gate`, :func:`update_and_manage` -- two of them in one call (a call from
-  Python costs a few microseconds, more than the work on a few tracks).
+  Python costs a few microseconds, more than the work on a few tracks; so does every array a
+  kernel returns, hence the outputs the caller gives them).
 
 The readable code in :mod:`labkit.tracking` is the reference, and what ``trace=True`` runs; the
 kernels compute the same formulas in another order of floating-point operations (loops instead of
@@ -40,17 +41,15 @@ from ._kernels import jit
 
 __all__ = ["in_frame", "predict", "gate", "update", "manage", "predict_and_gate", "update_and_manage"]
 
-TENTATIVE, STATIC, CONFIRMED = 0, 1, 2  # = labkit.tracking's status codes (tests/test_tracking_engine.py)
+TENTATIVE, STATIC, CONFIRMED, DELETED = 0, 1, 2, 3  # = labkit.tracking's status codes (tests/test_tracking_engine.py)
 
 
 @jit
-def in_frame(z, R, x, y, theta):
+def in_frame(z, R, x, y, theta, zm, Rm):
     """Positions ``z`` (D, 2) and covariances ``R`` (D, 2, 2) moved from the sensor frame by the
-    pose ``(x, y, theta)``: ``rot z + t`` and ``rot R rot'``, new arrays."""
+    pose ``(x, y, theta)``: ``rot z + t`` and ``rot R rot'``, into ``zm`` and ``Rm``."""
     c = math.cos(theta)
     s = math.sin(theta)
-    zm = np.empty_like(z)
-    Rm = np.empty_like(R)
     for j in range(z.shape[0]):
         zm[j, 0] = (c * z[j, 0] - s * z[j, 1]) + x
         zm[j, 1] = (s * z[j, 0] + c * z[j, 1]) + y
@@ -62,7 +61,6 @@ def in_frame(z, R, x, y, theta):
         Rm[j, 0, 1] = a * s + b * c
         Rm[j, 1, 0] = e * c - f * s
         Rm[j, 1, 1] = e * s + f * c
-    return zm, Rm
 
 
 @jit
@@ -97,19 +95,17 @@ def predict(x, P, dt, q):
 
 
 @jit
-def gate(x, P, kind, status, z, R, det_kind, threshold, cap):
-    """The cost ``d2 + ln det S`` (T, D) of every track and detection of the same kind inside the
-    gate (``d2 <= threshold``), ``inf`` elsewhere; the pairs inside (rows, columns, row after
-    row); per detection whether it is inside any gate; and whether some track or detection is
-    inside two gates (an assignment problem to solve; else the pairs are the assignment).
-    A static track's position covariance is scaled so that its largest eigenvalue is at most
-    ``cap`` (``min_travel_m^2 / threshold``)."""
+def gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some):
+    """Into ``cost`` (T, D): the cost ``d2 + ln det S`` of every track and detection of the same
+    kind inside the gate (``d2 <= threshold``), ``inf`` elsewhere; into ``pairs`` (2, T D) the
+    pairs inside (track, detection), row after row; into ``in_some`` (D,) whether each detection
+    is inside some gate. Returns how many pairs, and whether some track or detection is inside
+    two gates (an assignment problem to solve; else the pairs are the assignment). A static
+    track's position covariance is scaled so that its largest eigenvalue is at most ``cap``
+    (``min_travel_m^2 / threshold``)."""
     n_t = x.shape[0]
     n_d = z.shape[0]
-    cost = np.full((n_t, n_d), np.inf)
-    in_some = np.zeros(n_d, np.bool_)
-    rows = np.empty(n_t * n_d, np.intp)
-    cols = np.empty(n_t * n_d, np.intp)
+    in_some[:] = False
     n_pairs = 0
     conflict = False
     for i in range(n_t):
@@ -126,6 +122,7 @@ def gate(x, P, kind, status, z, R, det_kind, threshold, cap):
             p11 *= scale
         in_row = 0
         for j in range(n_d):
+            cost[i, j] = np.inf
             if det_kind[j] != kind[i]:
                 continue
             a = p00 + R[j, 0, 0]
@@ -138,8 +135,8 @@ def gate(x, P, kind, status, z, R, det_kind, threshold, cap):
             d2 = (d * u * u - (b + c) * u * v + a * v * v) / det
             if d2 <= threshold:
                 cost[i, j] = d2 + math.log(det)
-                rows[n_pairs] = i
-                cols[n_pairs] = j
+                pairs[0, n_pairs] = i
+                pairs[1, n_pairs] = j
                 n_pairs += 1
                 in_row += 1
                 if in_some[j]:
@@ -147,7 +144,7 @@ def gate(x, P, kind, status, z, R, det_kind, threshold, cap):
                 in_some[j] = True
         if in_row > 1:
             conflict = True
-    return cost, rows[:n_pairs], cols[:n_pairs], in_some, conflict
+    return n_pairs, conflict
 
 
 @jit
@@ -213,45 +210,48 @@ def update(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, stamp_ns, c
 
 
 @jit
-def manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns):
+def manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns, confirmed, listed):
     """Rest, confirm and delete, in place on ``x`` and ``status``: a static track not detected at
-    ``now_ns`` is put at rest (velocity zero); then the tracks confirmed at this scan (in track
-    order, with whether as moving), the mask of the tracks to delete and how many they are."""
+    ``now_ns`` is put at rest (velocity zero); ``confirmed`` (T,) is set to 1 for a track confirmed
+    static at this scan, 2 for one confirmed moving, 0 otherwise; ``listed`` (T,) to the status
+    the scan's table lists (3 for a track deleted at this scan). Returns how many were confirmed
+    and how many deleted."""
     n = status.shape[0]
     for i in range(n):
         if status[i] == STATIC and seen[i] != now_ns:
             x[i, 2] = 0.0
             x[i, 3] = 0.0
-    confirmed = np.empty(n, np.int64)
-    as_moving = np.empty(n, np.bool_)
     n_confirmed = 0
-    deleted = np.zeros(n, np.bool_)
     for i in range(n):
+        confirmed[i] = 0
         ready = status[i] == TENTATIVE and hits[i] >= confirm_hits
         if ready or (status[i] == STATIC and moved[i]):
             status[i] = CONFIRMED if moved[i] else STATIC
-            confirmed[n_confirmed] = i
-            as_moving[n_confirmed] = moved[i]
+            confirmed[i] = 2 if moved[i] else 1
             n_confirmed += 1
     n_deleted = 0
     for i in range(n):
         hopeless = status[i] == TENTATIVE and scans[i] - hits[i] > confirm_scans - confirm_hits
-        deleted[i] = hopeless or now_ns - seen[i] > max_coast_ns
-        n_deleted += deleted[i]
-    return confirmed[:n_confirmed], as_moving[:n_confirmed], deleted, n_deleted
+        if hopeless or now_ns - seen[i] > max_coast_ns:
+            listed[i] = DELETED
+            n_deleted += 1
+        else:
+            listed[i] = status[i]
+    return n_confirmed, n_deleted
 
 
 @jit
-def predict_and_gate(x, P, dt, q, kind, status, z, R, det_kind, threshold, cap):
+def predict_and_gate(x, P, dt, q, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some):
     """:func:`predict` (when ``dt > 0``) then :func:`gate`, in one call."""
     if dt > 0.0:
         predict(x, P, dt, q)
-    return gate(x, P, kind, status, z, R, det_kind, threshold, cap)
+    return gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some)
 
 
 @jit
 def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, status, scans, now_ns, confirm_hits,
-                      confirm_scans, min_travel, max_coast_ns):
+                      confirm_scans, min_travel, max_coast_ns, confirmed, listed):
     """:func:`update` then :func:`manage`, in one call (a scan without births)."""
     update(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, now_ns, confirm_hits, min_travel)
-    return manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns)
+    return manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns, confirmed,
+                  listed)

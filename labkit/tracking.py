@@ -646,12 +646,14 @@ class Tracker:
         """:meth:`step`'s steps 1-7 without a trace, as :mod:`labkit._tracking_engine`'s kernels."""
         p, engine = self.params, _ENGINE
         covariances, _, _ = _measured(detections)
+        n_tracks, n_dets = len(self._ids), len(detections)
         det_kind = np.array([_TRACK_KIND_OF[k] for k in detections.kinds], dtype=np.int64)
-        cost, tracks, dets, gated, conflict = engine.predict_and_gate(                     # 1, 2
+        cost, pairs, gated = np.empty((n_tracks, n_dets)), np.empty((2, n_tracks * n_dets), np.intp), \
+            np.empty(n_dets, dtype=bool)
+        n_pairs, conflict = engine.predict_and_gate(                                      # 1, 2
             self._x, self._P, dt, p.acceleration_noise_m2_s3, self._kind, self._status, detections.positions,
-            covariances, det_kind, self._gate, p.min_travel_m**2 / self._gate)
-        if conflict:
-            tracks, dets = assign(cost)                                                    # 3
+            covariances, det_kind, self._gate, p.min_travel_m**2 / self._gate, cost, pairs, gated)
+        tracks, dets = assign(cost) if conflict else (pairs[0, :n_pairs], pairs[1, :n_pairs])  # 3
         inside = gated.tolist()
         new = [j for j, kind in enumerate(detections.kinds) if not inside[j] and _STARTS_TRACKS[kind]]
         state = (self._x, self._P, tracks, dets, detections.positions, covariances, self._hits, self._seen,
@@ -659,26 +661,35 @@ class Tracker:
         if new:
             engine.update(*state, detections.stamp_ns, p.confirm_hits, p.min_travel_m)     # 4
             events = self._add_tracks(new, detections, None)                               # 5
-            confirmed, moving, deleted, n_deleted = engine.manage(                         # 4b, 6, 7
+            confirmed, listed = np.empty(len(self._ids), np.int64), np.empty(len(self._ids), np.int64)
+            n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
                 self._x, self._status, self._hits, self._scans, self._moved, self._seen, detections.stamp_ns,
-                p.confirm_hits, p.confirm_scans, self._max_coast_ns)
+                p.confirm_hits, p.confirm_scans, self._max_coast_ns, confirmed, listed)
         else:
             events = []
-            confirmed, moving, deleted, n_deleted = engine.update_and_manage(              # 4, 4b, 6, 7
+            confirmed, listed = np.empty(n_tracks, np.int64), np.empty(n_tracks, np.int64)
+            n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
                 *state, self._status, self._scans, detections.stamp_ns, p.confirm_hits, p.confirm_scans,
-                p.min_travel_m, self._max_coast_ns)
-        if len(confirmed):
-            events += [("confirm" if m else "static", tid)
-                       for tid, m in zip(self._ids[confirmed].tolist(), moving.tolist(), strict=True)]
+                p.min_travel_m, self._max_coast_ns, confirmed, listed)
+        if n_confirmed:
+            events += [("confirm" if c == 2 else "static", tid)
+                       for tid, c in zip(self._ids.tolist(), confirmed.tolist(), strict=True) if c]
         if n_deleted:
+            deleted = listed == _DELETED
             events += [("delete", tid) for tid in self._ids[deleted].tolist()]
         detection = np.empty(len(self._ids), dtype=np.int64)
         detection.fill(-1)
         detection[tracks] = dets
-        table = self._table(detections, pose, deleted, detection, tuple(events))
+        table = object.__new__(TrackTable)  # (the values are the tracker's own: no checks to run)
+        table.__dict__.update(
+            stamp_ns=detections.stamp_ns, frame=self.frame, pose=pose, ids=self._ids.copy(), kinds=_KINDS[self._kind],
+            status=_STATUS_NAMES[listed], states=self._x.copy(), covariances=self._P.copy(), hits=self._hits.copy(),
+            born_ns=self._born.copy(), last_seen_ns=self._seen.copy(), detection=detection, detections=detections,
+            events=tuple(events), late=False)
         if n_deleted:
             self._keep(~deleted)
-        return _with_seconds(table, perf_counter() - t_start)
+        table.__dict__["seconds"] = perf_counter() - t_start
+        return table
 
     def _detections(self, observed, pose, compiled: bool = False) -> tuple[Detections, tuple | None]:
         """The scan's detections in the tracking frame, and the pose used (None if none);
@@ -707,7 +718,8 @@ class Tracker:
             return Detections._trusted(observed.stamp_ns, (), np.zeros((0, 2)), np.zeros((0, 2, 2)),
                                        np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)), None
         if compiled:
-            z, R = _ENGINE.in_frame(observed.positions, observed.covariances, *pose)
+            z, R = np.empty_like(observed.positions), np.empty_like(observed.covariances)
+            _ENGINE.in_frame(observed.positions, observed.covariances, *pose, z, R)
             return Detections._trusted(observed.stamp_ns, observed.kinds, z, R, observed.first, observed.last), pose
         return observed.in_frame(pose), pose
 
