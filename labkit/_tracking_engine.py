@@ -250,8 +250,12 @@ def predict_and_gate(x, P, dt, q, kind, status, z, R, det_kind, threshold, cap, 
 
 @jit
 def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, status, scans, now_ns, confirm_hits,
-                      confirm_scans, min_travel, max_coast_ns, confirmed, listed):
-    """:func:`update` then :func:`manage`, in one call (a scan without births)."""
+                      confirm_scans, min_travel, max_coast_ns, confirmed, listed, detection):
+    """:func:`update` then :func:`manage`, in one call (a scan without births); ``detection`` (T,)
+    is set to the detection that updated each track, -1 for none."""
     update(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, now_ns, confirm_hits, min_travel)
+    detection[:] = -1
+    for k in range(tracks.shape[0]):
+        detection[tracks[k]] = dets[k]
     return manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns, confirmed,
                   listed)

@@ -647,7 +647,7 @@ class Tracker:
         p, engine = self.params, _ENGINE
         covariances, _, _ = _measured(detections)
         n_tracks, n_dets = len(self._ids), len(detections)
-        det_kind = np.array([_TRACK_KIND_OF[k] for k in detections.kinds], dtype=np.int64)
+        det_kind = _track_kinds_of(detections.kinds)
         cost, pairs, gated = np.empty((n_tracks, n_dets)), np.empty((2, n_tracks * n_dets), np.intp), \
             np.empty(n_dets, dtype=bool)
         n_pairs, conflict = engine.predict_and_gate(                                      # 1, 2
@@ -665,21 +665,20 @@ class Tracker:
             n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
                 self._x, self._status, self._hits, self._scans, self._moved, self._seen, detections.stamp_ns,
                 p.confirm_hits, p.confirm_scans, self._max_coast_ns, confirmed, listed)
+            detection = np.full(len(self._ids), -1, dtype=np.int64)
+            detection[tracks] = dets
         else:
             events = []
-            confirmed, listed = np.empty(n_tracks, np.int64), np.empty(n_tracks, np.int64)
+            confirmed, listed, detection = (np.empty(n_tracks, np.int64) for _ in range(3))
             n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
                 *state, self._status, self._scans, detections.stamp_ns, p.confirm_hits, p.confirm_scans,
-                p.min_travel_m, self._max_coast_ns, confirmed, listed)
+                p.min_travel_m, self._max_coast_ns, confirmed, listed, detection)
         if n_confirmed:
             events += [("confirm" if c == 2 else "static", tid)
                        for tid, c in zip(self._ids.tolist(), confirmed.tolist(), strict=True) if c]
         if n_deleted:
             deleted = listed == _DELETED
             events += [("delete", tid) for tid in self._ids[deleted].tolist()]
-        detection = np.empty(len(self._ids), dtype=np.int64)
-        detection.fill(-1)
-        detection[tracks] = dets
         table = object.__new__(TrackTable)  # (the values are the tracker's own: no checks to run)
         table.__dict__.update(
             stamp_ns=detections.stamp_ns, frame=self.frame, pose=pose, ids=self._ids.copy(), kinds=_KINDS[self._kind],
@@ -948,6 +947,15 @@ def _engine():
             _ENGINE = SimpleNamespace(in_frame=in_frame, predict_and_gate=predict_and_gate, update=update,
                                       manage=manage, update_and_manage=update_and_manage)
     return _ENGINE
+
+
+@functools.lru_cache(maxsize=256)
+def _track_kinds_of(kinds: tuple) -> np.ndarray:
+    """The kind of track (0 person, 1 circle) each detection kind measures, read-only (remembered:
+    scans repeat a few lists of kinds)."""
+    out = np.array([_TRACK_KIND_OF[k] for k in kinds], dtype=np.int64)
+    out.setflags(write=False)
+    return out
 
 
 def _measured(detections: Detections) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

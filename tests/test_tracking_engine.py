@@ -176,7 +176,7 @@ def test_the_engine_gives_the_references_tracks_on_random_cases(monkeypatch):
     counting = _Counting(monkeypatch)
     rng = np.random.default_rng(36)
     total = {"scans": 0, "events": 0, "confirmed": 0, "static": 0, "updates": 0}
-    for case in range(24):
+    for case in range(16):
         params = _random_params(rng) if case % 2 else None
         seen = _side_by_side(_random_case(rng), params)
         total = {k: total[k] + seen[k] for k in total}
