@@ -82,6 +82,7 @@ def test_the_engine_runs_here_and_shares_the_status_codes():
 def test_the_default_path_runs_the_kernels_and_not_the_reference(monkeypatch):
     """Would fail if the default path fell back to the reference silently: the reference's steps
     raise, and every kernel must have run."""
+    assert tracking._engine() is not None, "the kernels are switched off (LABKIT_NO_JIT) or failed to import"
     counting = _Counting(monkeypatch)
     for name in ("_predict", "_gate_all", "_update", "_birth", "_confirm", "_to_delete"):
         monkeypatch.setattr(Tracker, name, lambda *a, _n=name, **k: pytest.fail(f"the reference's {_n} ran"))
