@@ -18,7 +18,7 @@ the pipeline's time per scan):
 * :func:`update` -- :func:`labkit.tracking.kalman_update` (the 2 x 2 inverse in closed form,
   Joseph form) of the assigned tracks in place, and their hits, last detection, anchor and
   "moved" bookkeeping;
-* :func:`manage` -- a static track not detected at this scan put at rest, which tracks are
+* :func:`manage` -- a static circle track not detected at this scan put at rest, which tracks are
   confirmed (static or moving) and which are deleted;
 * :func:`predict_and_gate`, :func:`update_and_manage` -- two of them in one call (a call from
   Python costs a few microseconds, more than the work on a few tracks; so does every array a
@@ -41,7 +41,8 @@ from ._kernels import jit
 
 __all__ = ["in_frame", "predict", "gate", "update", "manage", "predict_and_gate", "update_and_manage"]
 
-TENTATIVE, STATIC, CONFIRMED, DELETED = 0, 1, 2, 3  # = labkit.tracking's status codes (tests/test_tracking_engine.py)
+TENTATIVE, STATIC, CONFIRMED, DELETED = 0, 1, 2, 3  # = labkit.tracking's status codes
+CIRCLE = 1  # and its code of circle tracks (tests/test_tracking_engine.py)
 
 
 @jit
@@ -210,15 +211,16 @@ def update(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, stamp_ns, c
 
 
 @jit
-def manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns, confirmed, listed):
-    """Rest, confirm and delete, in place on ``x`` and ``status``: a static track not detected at
-    ``now_ns`` is put at rest (velocity zero); ``confirmed`` (T,) is set to 1 for a track confirmed
+def manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns, confirmed,
+           listed):
+    """Rest, confirm and delete, in place on ``x`` and ``status``: a static circle track not
+    detected at ``now_ns`` is put at rest (velocity zero); ``confirmed`` (T,) is set to 1 for a track confirmed
     static at this scan, 2 for one confirmed moving, 0 otherwise; ``listed`` (T,) to the status
     the scan's table lists (3 for a track deleted at this scan). Returns how many were confirmed
     and how many deleted."""
     n = status.shape[0]
     for i in range(n):
-        if status[i] == STATIC and seen[i] != now_ns:
+        if status[i] == STATIC and kind[i] == CIRCLE and seen[i] != now_ns:
             x[i, 2] = 0.0
             x[i, 3] = 0.0
     n_confirmed = 0
@@ -249,13 +251,13 @@ def predict_and_gate(x, P, dt, q, kind, status, z, R, det_kind, threshold, cap, 
 
 
 @jit
-def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, status, scans, now_ns, confirm_hits,
-                      confirm_scans, min_travel, max_coast_ns, confirmed, listed, detection):
+def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, kind, status, scans, now_ns,
+                      confirm_hits, confirm_scans, min_travel, max_coast_ns, confirmed, listed, detection):
     """:func:`update` then :func:`manage`, in one call (a scan without births); ``detection`` (T,)
     is set to the detection that updated each track, -1 for none."""
     update(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, now_ns, confirm_hits, min_travel)
     detection[:] = -1
     for k in range(tracks.shape[0]):
         detection[tracks[k]] = dets[k]
-    return manage(x, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns, confirmed,
-                  listed)
+    return manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns,
+                  confirmed, listed)

@@ -75,8 +75,8 @@ def test_the_engine_runs_here_and_shares_the_status_codes():
     kernels = tracking._engine()
     assert kernels is not None, "the kernels must run on this machine (else nothing is compared)"
     assert all(getattr(kernels, name) is getattr(engine, name) for name in _Counting.KERNELS)
-    assert (engine.TENTATIVE, engine.STATIC, engine.CONFIRMED, engine.DELETED) == (
-        tracking._TENTATIVE, tracking._STATIC, tracking._CONFIRMED, tracking._DELETED)
+    assert (engine.TENTATIVE, engine.STATIC, engine.CONFIRMED, engine.DELETED, engine.CIRCLE) == (
+        tracking._TENTATIVE, tracking._STATIC, tracking._CONFIRMED, tracking._DELETED, tracking._CIRCLE)
 
 
 def test_the_default_path_runs_the_kernels_and_not_the_reference(monkeypatch):
