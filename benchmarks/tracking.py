@@ -14,8 +14,10 @@ beams is an unseen object, see :func:`labkit.tracking_metrics.sim_frames`):
 * static: scans in which a confirmed (moving) track stands within 0.3 m of a column or bench foot
   (must be 0), and how many of them were confirmed static;
 * cost: tracking's median time per scan against the pipeline's (:func:`labkit.extract_features`),
-  the same scans in the same run, each timed at its best of 3 (the tracker on copies of its
-  state), and their ratio.
+  the same scans in the same run, each timed at its best of 3 (the tracker on a fresh copy of
+  its state for every timed call), and their ratio; and the same for the tracker's reference
+  code (:mod:`labkit.tracking` as ``trace=True`` runs it, here without the trace), which the
+  default path replaces by compiled kernels (:mod:`labkit._tracking_engine`).
 
 Part 2 -- the frame. The crossing world with 4 walkers seen from a robot driving to and fro and
 turning: tracked in the sensor frame, the columns move with the robot and are confirmed as moving
@@ -30,7 +32,11 @@ Goal (issue 36), printed under the table: in the hall with 4 walkers at 2 cm noi
 MOTP <= 5 cm, at most 1 identity switch per walker per 1000 scans, no static column confirmed as a
 moving track, and tracking <= 10 % of the pipeline's time per scan.
 
-Run: ``python benchmarks/tracking.py [--scans 1000] [--seed 10] [--real-scans 2000] [--plot out]``
+The first line says how long the tracker's first scan took in this process (numba loading the
+compiled kernels from its cache, or compiling them once).
+
+Run: ``python benchmarks/tracking.py [--scans 1000] [--seed 10] [--real-scans 2000] [--plot out]
+[--goal-row] [--skip 2,3]``
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ from __future__ import annotations
 import argparse
 import copy
 import dataclasses
+import functools
 import math
 import sys
 import time
@@ -45,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from labkit import Config, extract_features, read_scans, sim
+from labkit import Config, extract_features, read_scans, sim, tracking
 from labkit.pipeline import track_scans
 from labkit.tracking import Tracker
 from labkit.tracking_metrics import clear_mot, sim_frames
@@ -53,6 +60,10 @@ from labkit.tracking_metrics import clear_mot, sim_frames
 NOISES = (0.005, 0.01, 0.02, 0.03)
 WALKERS = (1, 2, 4, 6)
 DATASETS = Path(__file__).resolve().parents[1].parent / "shared" / "datasets"
+#: Part 2's robot: (t, x, y, theta) keyframes, driving to and fro along the hall and turning
+ROBOT = sim.Trajectory(((0.0, 4.0, 0.4, math.pi / 2), (20.0, 8.0, 0.4, math.pi / 2 + 0.4),
+                        (40.0, 4.0, 0.6, math.pi / 2 - 0.4), (60.0, 6.0, 0.4, math.pi / 2),
+                        (80.0, 8.0, 0.6, math.pi / 2 + 0.3), (100.0, 4.0, 0.4, math.pi / 2)))
 REAL = (("Mapping1.bag", DATASETS / "bags" / "Mapping1.bag"),
         ("intel (Radish)", DATASETS / "carmen" / "intel-corrected.log.gz"))
 
@@ -86,12 +97,15 @@ def run(scenario: sim.Scenario, n_scans: int, seed: int, config: Config) -> dict
             "walkers": len(world.people), "scans": len(tables)}
 
 
-def cost(scenario: sim.Scenario, n_scans: int, seed: int, config: Config, repeat: int = 3) -> tuple[float, float]:
-    """Median seconds per scan of the pipeline and of the tracker, each scan timed at its best of
-    ``repeat`` (the tracker on copies of its state, so that every pass sees the same tracks):
-    a pause of the machine does not pass for a slow scan."""
+def cost(scenario: sim.Scenario, n_scans: int, seed: int, config: Config, repeat: int = 3
+         ) -> tuple[float, float, float]:
+    """Median seconds per scan of the pipeline, of the tracker (its default, compiled path) and of
+    the tracker's reference code (what ``trace=True`` runs, here without recording the steps),
+    each scan timed at its best of ``repeat``: the pipeline on the scan, each tracker on a fresh
+    copy of its state, so that every pass sees the same tracks; a pause of the machine does not
+    pass for a slow scan."""
     tracker = Tracker(**config.tracking.kwargs())
-    pipeline_s, tracking_s = [], []
+    pipeline_s, tracking_s, reference_s = [], [], []
     for scan, _ in sim.simulate(scenario, seed=seed, n_scans=n_scans):
         best = math.inf
         for _ in range(repeat):
@@ -99,15 +113,36 @@ def cost(scenario: sim.Scenario, n_scans: int, seed: int, config: Config, repeat
             features = extract_features(scan, config)
             best = min(best, time.perf_counter() - t0)
         pipeline_s.append(best)
-        best = math.inf
-        for _ in range(repeat):
-            trial = copy.deepcopy(tracker)
-            t0 = time.perf_counter()
-            trial.step(features, pose=scan.pose)
-            best = min(best, time.perf_counter() - t0)
-        tracking_s.append(best)
+        for times, compiled in ((tracking_s, True), (reference_s, False)):
+            best = math.inf
+            for _ in range(repeat):
+                trial = copy.deepcopy(tracker)
+                step = trial.step if compiled else functools.partial(_reference_step, trial)
+                t0 = time.perf_counter()
+                step(features, pose=scan.pose)
+                best = min(best, time.perf_counter() - t0)
+            times.append(best)
         tracker.step(features, pose=scan.pose)
-    return float(np.median(pipeline_s)), float(np.median(tracking_s))
+    return float(np.median(pipeline_s)), float(np.median(tracking_s)), float(np.median(reference_s))
+
+
+def _reference_step(tracker: Tracker, features, pose):
+    """One step of the reference code, without a trace (the compiled kernels switched off)."""
+    kept = tracking._ENGINE
+    tracking._ENGINE = None
+    try:
+        return tracker.step(features, pose=pose)
+    finally:
+        tracking._ENGINE = kept
+
+
+def first_step_seconds() -> float:
+    """The first scan's time in this process: the tracker's compiled kernels loaded from numba's
+    cache (or compiled, the first time after an install or a change)."""
+    tracker = Tracker()
+    t0 = time.perf_counter()
+    tracker.step(tracking.Detections(0, ("person", "circle"), [[0.0, 0.0], [1.0, 1.0]]), pose=(0.0, 0.0, 0.1))
+    return time.perf_counter() - t0
 
 
 def _to_sensor(points: np.ndarray, pose) -> np.ndarray:
@@ -123,27 +158,30 @@ def _scenario(n_walkers: int, noise_m: float, trajectory: sim.Trajectory | None 
     return sc if trajectory is None else dataclasses.replace(sc, trajectory=trajectory)
 
 
-def table(n_scans: int, seed: int, config: Config, cost_scans: int) -> dict:
+def table(n_scans: int, seed: int, config: Config, cost_scans: int, noises=NOISES, walkers=WALKERS) -> dict:
     print(f"Part 1: crossing worlds (hall, static LMS200), {n_scans} scans each, seed {seed}, default Config")
     print(f"{'noise':>6s} {'walk':>4s} | {'MOTA':>6s} {'MOTP':>6s} {'IDSW':>4s} {'/w/1k':>6s} {'FRAG':>4s} "
           f"{'IDF1':>5s} {'FN':>5s} {'FP':>4s} | {'cyl MOTA':>8s} {'IDSW':>4s} | {'col conf':>8s} {'static':>6s} | "
-          f"{'pipe ms':>7s} {'track ms':>8s} {'ratio':>6s}")
+          f"{'pipe ms':>7s} {'+track':>7s} {'track ms':>8s} {'ratio':>6s} {'ref ms':>6s} {'ratio':>6s}")
     results = {}
-    for noise in NOISES:
-        for n in WALKERS:
+    for noise in noises:
+        for n in walkers:
             r = run(_scenario(n, noise), n_scans, seed, config)
-            r["pipeline_s"], r["tracking_s"] = cost(_scenario(n, noise), cost_scans, seed, config)
+            r["pipeline_s"], r["tracking_s"], r["reference_s"] = cost(_scenario(n, noise), cost_scans, seed, config)
             results[(noise, n)] = r
             p, c = r["people"], r["cylinder"]
             per = p.id_switches / n / (r["scans"] / 1000)
+            pipe, track, ref = r["pipeline_s"] * 1e3, r["tracking_s"] * 1e3, r["reference_s"] * 1e3
             print(f"{noise * 100:5.1f}cm {n:4d} | {p.mota:6.3f} {p.motp * 100:5.2f}c {p.id_switches:4d} {per:6.2f} "
                   f"{p.fragmentations:4d} {p.idf1:5.3f} {p.misses:5d} {p.false_positives:4d} | {c.mota:8.3f} "
                   f"{c.id_switches:4d} | {r['on_column']:8d} {r['static_columns']:6d} | "
-                  f"{r['pipeline_s'] * 1e3:7.3f} {r['tracking_s'] * 1e3:8.3f} {r['tracking_s'] / r['pipeline_s']:6.3f}",
+                  f"{pipe:7.3f} {pipe + track:7.3f} {track:8.3f} {track / pipe:6.3f} {ref:6.3f} {ref / pipe:6.3f}",
                   flush=True)
     print("(MOTP in cm; /w/1k: identity switches per walker per 1000 scans; col conf: scans with a confirmed track "
           "within 0.3 m of a column or bench foot; static: tracks confirmed static there; times: median per scan over "
-          f"the first {cost_scans} scans, each the best of 3)")
+          f"the first {cost_scans} scans, each the best of 3: pipe the pipeline alone, +track the pipeline with "
+          "tracking, track the tracker (default, compiled), ref its reference code (what trace=True runs, without "
+          "the trace); ratios to the pipeline's time)")
     return results
 
 
@@ -165,17 +203,15 @@ def goal(results: dict) -> bool:
 
 def frames(n_scans: int, seed: int) -> None:
     print(f"\nPart 2: the robot drives to and fro and turns (crossing, 4 walkers, 2 cm, {n_scans} scans)")
-    robot = sim.Trajectory(((0.0, 4.0, 0.4, math.pi / 2), (20.0, 8.0, 0.4, math.pi / 2 + 0.4),
-                            (40.0, 4.0, 0.6, math.pi / 2 - 0.4), (60.0, 6.0, 0.4, math.pi / 2),
-                            (80.0, 8.0, 0.6, math.pi / 2 + 0.3), (100.0, 4.0, 0.4, math.pi / 2)))
     print(f"{'frame':>7s} | {'MOTA':>6s} {'MOTP':>6s} {'IDSW':>4s} | {'cyl MOTA':>8s} | {'col conf':>8s} "
           f"{'static':>6s}")
     for frame in ("sensor", "map"):
         config = Config().updated({"tracking.frame": frame})
-        r = run(_scenario(4, 0.02, robot), n_scans, seed, config)
+        r = run(_scenario(4, 0.02, ROBOT), n_scans, seed, config)
         p = r["people"]
         print(f"{frame:>7s} | {p.mota:6.3f} {p.motp * 100:5.2f}c {p.id_switches:4d} | {r['cylinder'].mota:8.3f} | "
               f"{r['on_column']:8d} {r['static_columns']:6d}", flush=True)
+    print("(in the map frame, col conf must be 0: a column seen from the moving robot is never confirmed as moving)")
 
 
 def real(n_scans: int, plot: Path | None) -> None:
@@ -255,11 +291,15 @@ def main() -> int:
     ap.add_argument("--real-scans", type=int, default=2000)
     ap.add_argument("--plot", type=Path, default=None, help="folder for the pictures of part 3")
     ap.add_argument("--skip", default="", help="parts to skip, e.g. 2,3")
+    ap.add_argument("--goal-row", action="store_true", help="part 1: only the goal's row (4 walkers, 2 cm)")
     args = ap.parse_args()
     skip = set(args.skip.split(","))
     ok = True
+    print(f"The tracker's first scan in this process: {first_step_seconds():.2f} s (its compiled kernels loaded "
+          "from numba's cache, or compiled when the cache is empty)")
     if "1" not in skip:
-        ok = goal(table(args.scans, args.seed, Config(), args.cost_scans))
+        rows = {"noises": (0.02,), "walkers": (4,)} if args.goal_row else {}
+        ok = goal(table(args.scans, args.seed, Config(), args.cost_scans, **rows))
     if "2" not in skip:
         frames(args.scans, args.seed)
     if "3" not in skip:

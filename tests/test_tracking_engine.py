@@ -1,0 +1,194 @@
+"""labkit._tracking_engine: the tracker's default (compiled) path gives the reference's tracks.
+
+The reference is labkit/tracking.py's readable code, which ``trace=True`` runs; the default path
+runs the same steps as numba kernels. Both trackers are fed the same scans side by side and every
+table compared: identities, kinds, statuses, hits, stamps, which detection updated which track and
+the events exactly; states and covariances to 1e-12 (the kernels take the same formulas in another
+order of floating-point operations)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+
+import numpy as np
+import pytest
+
+from labkit import Config, extract_all, sim, tracking
+from labkit import _tracking_engine as engine
+from labkit.tracking import Detections, Tracker
+
+ATOL = 1e-12
+
+
+def _same(fast, ref, where) -> None:
+    assert not fast.late and not ref.late or fast.late == ref.late, where
+    assert fast.ids.tolist() == ref.ids.tolist(), where
+    assert fast.kinds.tolist() == ref.kinds.tolist(), where
+    assert fast.status.tolist() == ref.status.tolist(), where
+    assert fast.events == ref.events, where
+    assert fast.detection.tolist() == ref.detection.tolist(), where
+    assert fast.hits.tolist() == ref.hits.tolist(), where
+    assert fast.born_ns.tolist() == ref.born_ns.tolist(), where
+    assert fast.last_seen_ns.tolist() == ref.last_seen_ns.tolist(), where
+    np.testing.assert_allclose(fast.states, ref.states, rtol=0, atol=ATOL, err_msg=str(where))
+    np.testing.assert_allclose(fast.covariances, ref.covariances, rtol=0, atol=ATOL, err_msg=str(where))
+
+
+def _side_by_side(stream, params=None) -> dict:
+    """Feed ``(detections or features, pose)`` to a default and a tracing tracker; compare every
+    table; counts of what was seen (to check that the cases are not trivial)."""
+    fast, ref = Tracker(**(params or {})), Tracker(**(params or {}))
+    seen = {"scans": 0, "events": 0, "confirmed": 0, "static": 0, "updates": 0}
+    for k, (observed, pose) in enumerate(stream):
+        a = fast.step(observed, pose=pose)
+        b, steps = ref.step(observed, pose=pose, trace=True)
+        _same(a, b, k)
+        seen["scans"] += 1
+        seen["events"] += len(b.events)
+        seen["confirmed"] += int(b.confirmed().sum())
+        seen["static"] += int((b.status == "static").sum())
+        seen["updates"] += sum(s.kind == "update" for s in steps)
+    return seen
+
+
+class _Counting:
+    """The engine, its kernels wrapped to count their calls (and those of the assignment solver)."""
+
+    KERNELS = ("in_frame", "predict_and_gate", "update", "manage", "update_and_manage")
+
+    def __init__(self, monkeypatch):
+        self.calls = dict.fromkeys((*self.KERNELS, "assign"), 0)
+        proxy = types.SimpleNamespace(**{name: self._counted(name, getattr(engine, name)) for name in self.KERNELS})
+        monkeypatch.setattr(tracking, "_ENGINE", proxy)
+        monkeypatch.setattr(tracking, "assign", self._counted("assign", tracking.assign))
+
+    def _counted(self, name, fn):
+        def wrapper(*args, **kwargs):
+            self.calls[name] += 1
+            return fn(*args, **kwargs)
+        return wrapper
+
+
+def test_the_engine_runs_here_and_shares_the_status_codes():
+    kernels = tracking._engine()
+    assert kernels is not None, "the kernels must run on this machine (else nothing is compared)"
+    assert all(getattr(kernels, name) is getattr(engine, name) for name in _Counting.KERNELS)
+    assert (engine.TENTATIVE, engine.STATIC, engine.CONFIRMED, engine.DELETED, engine.CIRCLE) == (
+        tracking._TENTATIVE, tracking._STATIC, tracking._CONFIRMED, tracking._DELETED, tracking._CIRCLE)
+
+
+def test_the_default_path_runs_the_kernels_and_not_the_reference(monkeypatch):
+    """Would fail if the default path fell back to the reference silently: the reference's steps
+    raise, and every kernel must have run."""
+    assert tracking._engine() is not None, "the kernels are switched off (LABKIT_NO_JIT) or failed to import"
+    counting = _Counting(monkeypatch)
+    for name in ("_predict", "_gate_all", "_update", "_birth", "_confirm", "_to_delete"):
+        monkeypatch.setattr(Tracker, name, lambda *a, _n=name, **k: pytest.fail(f"the reference's {_n} ran"))
+    tracker = Tracker()
+    for k in range(12):
+        seen = Detections(k * 100_000_000, ("person", "person", "circle"),
+                          [[0.1 * k, 0.0], [5.0, 0.1 * k], [3.0, 3.0]])
+        table = tracker.step(seen)
+    assert table.status.tolist() == ["confirmed", "confirmed", "static"]
+    assert all(counting.calls[n] for n in ("predict_and_gate", "update", "manage", "update_and_manage")), \
+        counting.calls
+    assert counting.calls["assign"] == 0, "no conflict in any gate: the assignment problem is not solved"
+
+
+def _scans(name, n_scans, trajectory=None, noise=0.02, seed=4):
+    sc = sim.scenario(name)
+    sc = dataclasses.replace(sc, lidar=dataclasses.replace(sc.lidar, noise_std_m=noise))
+    if trajectory is not None:
+        sc = dataclasses.replace(sc, trajectory=trajectory)
+    scans = [s for s, _ in sim.simulate(sc, seed=seed, n_scans=n_scans)]
+    return scans, extract_all(scans, Config())
+
+
+ROBOT = sim.Trajectory(((0.0, 4.0, 0.4, math.pi / 2), (8.0, 8.0, 0.6, math.pi / 2 + 0.4),
+                        (16.0, 4.0, 0.4, math.pi / 2 - 0.3)))
+
+
+@pytest.mark.parametrize("name, trajectory, frame", [
+    ("crossing_4", None, "auto"),
+    ("crossing_6", ROBOT, "map"),
+    ("crossing_2", ROBOT, "sensor"),
+])
+def test_the_engine_gives_the_references_tracks_on_the_simulated_worlds(monkeypatch, name, trajectory, frame):
+    counting = _Counting(monkeypatch)
+    scans, features = _scans(name, 160, trajectory)
+    seen = _side_by_side(((f, s.pose) for s, f in zip(scans, features, strict=True)), {"frame": frame})
+    assert seen["confirmed"] > 100 and seen["updates"] > 300 and seen["events"] > 5, seen
+    assert counting.calls["predict_and_gate"] > 100, counting.calls
+    assert (counting.calls["in_frame"] > 100) == (frame != "sensor"), counting.calls
+
+
+def _random_case(rng):
+    """Targets moving and standing, a clutter of false detections, targets that vanish, close
+    passes (gates that hold two detections), full covariances, gaps in time and poses."""
+    n_targets = int(rng.integers(1, 7))
+    start = rng.uniform(-5, 5, (n_targets, 2))
+    speed = rng.uniform(-1.5, 1.5, (n_targets, 2)) * (rng.random((n_targets, 1)) < 0.7)
+    kind = rng.choice(["person", "circle"], n_targets)
+    with_pose = rng.random() < 0.5
+    stamp = 0
+    for _ in range(int(rng.integers(20, 60))):
+        stamp += int(rng.choice([50_000_000, 100_000_000, 100_000_000, 400_000_000, 2_000_000_000],
+                                p=[0.2, 0.5, 0.2, 0.08, 0.02]))
+        kinds, xy = [], []
+        for i in range(n_targets):
+            if rng.random() < 0.15:
+                continue
+            p = start[i] + speed[i] * stamp * 1e-9 + rng.normal(0, 0.03, 2)
+            if kind[i] == "person" and rng.random() < 0.3:  # seen as one leg, or two
+                for _ in range(int(rng.integers(1, 3))):
+                    kinds.append("leg")
+                    xy.append(p + rng.normal(0, 0.1, 2))
+            else:
+                kinds.append(str(kind[i]))
+                xy.append(p)
+        for _ in range(int(rng.poisson(1.0))):  # clutter
+            kinds.append(str(rng.choice(["person", "leg", "circle"])))
+            xy.append(rng.uniform(-6, 6, 2))
+        order = rng.permutation(len(kinds))
+        kinds = tuple(kinds[i] for i in order)
+        xy = np.array(xy, dtype=float).reshape(-1, 2)[order]
+        cov = None
+        if rng.random() < 0.5 and len(kinds):
+            L = rng.normal(0, 0.05, (len(kinds), 2, 2))
+            cov = L @ np.swapaxes(L, 1, 2) + 1e-3 * np.eye(2)
+        pose = tuple(rng.uniform([-1, -1, -math.pi], [1, 1, math.pi])) if with_pose else None
+        if pose is not None:  # the targets are in the map: give the detections in the sensor frame
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            xy = (xy - np.array(pose[:2])) @ np.array([[c, -s], [s, c]])
+        yield Detections(stamp, kinds, xy, cov), pose
+
+
+def _random_params(rng) -> dict:
+    m = int(rng.integers(1, 4))
+    return {"acceleration_noise_m2_s3": float(rng.choice([0.0, 0.5, 3.0])), "confirm_hits": m,
+            "confirm_scans": m + int(rng.integers(0, 3)), "max_coast_s": float(rng.choice([0.0, 0.3, 1.5])),
+            "min_travel_m": float(rng.choice([0.05, 0.3])), "gate_probability": float(rng.choice([0.9, 0.99])),
+            "single_legs": bool(rng.random() < 0.8)}
+
+
+def test_the_engine_gives_the_references_tracks_on_random_cases(monkeypatch):
+    counting = _Counting(monkeypatch)
+    rng = np.random.default_rng(36)
+    total = {"scans": 0, "events": 0, "confirmed": 0, "static": 0, "updates": 0}
+    for case in range(16):
+        params = _random_params(rng) if case % 2 else None
+        seen = _side_by_side(_random_case(rng), params)
+        total = {k: total[k] + seen[k] for k in total}
+    assert total["confirmed"] > 200 and total["static"] > 50 and total["updates"] > 500, total
+    assert counting.calls["assign"] > 10, ("conflicts in the gates must have been solved", counting.calls)
+
+
+def test_with_no_jit_the_reference_runs(monkeypatch):
+    monkeypatch.setattr(tracking, "_ENGINE", None)
+    monkeypatch.setattr(tracking.Tracker, "_compiled_step", lambda *a, **k: pytest.fail("the kernels ran"))
+    tracker = Tracker()
+    for k in range(3):
+        table = tracker.step(Detections(k * 100_000_000, ("person",), [[0.5 * k, 0.0]]))
+    assert table.status.tolist() == ["static"] and table.events == (("static", 1),)
