@@ -27,7 +27,7 @@ $(BIN)/python:
 
 # ENGINES: compile labkit's numba engines once into their cache (labkit/**/__pycache__), so that no
 # notebook, test or command pays it on its first scan
-ENGINES = $(BIN)/python -c "from labkit.lines._split_merge_engine import compile_all; compile_all()"
+ENGINES = $(BIN)/python -c "from labkit.lines._split_merge_engine import compile_all; compile_all(); from labkit.tracking import _compile_engine; _compile_engine()"
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(PIP) install --quiet -e ".[research]"

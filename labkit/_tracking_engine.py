@@ -261,3 +261,4 @@ def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, 
         detection[tracks[k]] = dets[k]
     return manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns,
                   confirmed, listed)
+

@@ -1079,3 +1079,15 @@ def _tracked(tracker: Tracker, stream: Iterable, trace: bool) -> Iterator:
                 from None
         pose = getattr(first, "pose", first)  # a Scan's pose, or a pose given as such
         yield tracker.step(observed, pose=pose, trace=trace)
+
+
+def _compile_engine() -> None:
+    """Compile (or load from numba's cache) the kernels of :mod:`labkit._tracking_engine`, on a few
+    made-up scans; the Makefile's set-up runs it beside the other engines', so that no notebook, test
+    or command pays the compilation on its first tracked scan."""
+    for with_pose in (False, True):
+        tracker = Tracker()
+        for k in range(8):
+            z = np.array([[1.0 + 0.05 * k, 0.5], [2.0, -1.0 + 0.02 * k], [3.0, 0.0], [3.3, 0.1 * k]])
+            pose = (0.01 * k, 0.0, 0.002 * k) if with_pose else None
+            tracker.step(Detections(k * 100_000_000, ("person", "leg", "circle", "circle"), z), pose=pose)
