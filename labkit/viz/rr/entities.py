@@ -40,7 +40,7 @@ def new_recording(name: str | None = None, *, recording_id: str | None = None) -
         The recording's name shown by the viewer; None: none (the application id is always
         ``"labkit"``).
     recording_id : str or None
-        rerun's recording id; None: a new one.
+        The rerun recording id; None: a new one.
 
     Returns
     -------
