@@ -10,7 +10,7 @@ is scikit-learn's ``_parameter_constraints`` with ``validate_params``.
 A detector's public function has its real signature: one keyword per field of its record, of
 the same name and unit, whose default *is* the record's (``min_points: int =
 SplitMergeParams.min_points``), so an IDE and :func:`inspect.signature` show what it takes.
-:func:`checked_by` checks, at that boundary and once, the values a caller passes, against the
+:func:`labkit.params.checked_by` checks, at that boundary and once, the values a caller passes, against the
 record's limits; the function's body trusts them. The pipeline, whose configuration is made of
 these records (already checked), calls the function's ``unchecked`` twin with
 :meth:`Params.kwargs`.
@@ -153,7 +153,7 @@ class Params:
     def check_relations(cls, values) -> None:
         """Limits between fields (``min_chord_m < max_chord_m``): ``values`` maps every field to
         its value, each already checked on its own. Raises ``ValueError`` naming a field (see
-        :meth:`_where`). Checked when a record is built and, by :func:`checked_by`, on the keywords
+        ``_where``). Checked when a record is built and, by :func:`labkit.params.checked_by`, on the keywords
         a caller passes; a record with such limits overrides this (there are none here)."""
 
     @classmethod

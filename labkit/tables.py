@@ -227,7 +227,7 @@ def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path
 
     The rows are :func:`features_table`'s, written ``chunk_scans`` scans at a time (one row group
     each); column ``scan`` counts from ``first_scan`` (where the pairs start in the recording,
-    e.g. a scan range's first scan). The file is written through :mod:`labkit._safe`: under a
+    e.g. a scan range's first scan). The file is written through ``labkit._safe``: under a
     temporary name, renamed when complete; if iterating ``pairs`` raises
     :class:`labkit.CorruptFileError` (a damaged recording) the table holds every scan before it and
     the error propagates; interrupted, what was written so far is a valid ``<name>.partial.parquet``.

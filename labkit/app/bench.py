@@ -99,7 +99,7 @@ def time_recording(source: str | Path, config: Config | None = None, *, topic: s
                    scans: slice | None = None) -> BenchResult:
     """Read a recording, extract every scan's features and log both to a temporary .rrd, timing each phase.
 
-    Raises :class:`labkit.RefusedError` when the recording holds no scans; a damaged recording is
+    Raises :class:`labkit.errors.RefusedError` when the recording holds no scans; a damaged recording is
     timed on what could be read and its error kept in ``result.error``.
 
     Parameters

@@ -113,7 +113,7 @@ def write_simulation(
     path : str or Path
         The bag to write; its truth goes to :func:`labkit.sim.truth_path_for` of it.
     format : str or None
-        ``"ros1"``, ``"ros2"`` or ``"mcap"``; None: from the name (:func:`labkit.io.bags.bag_format`).
+        ``"ros1"``, ``"ros2"`` or ``"mcap"``; None: from the name (``labkit.io.bags.bag_format``).
     seed : int
         The simulation's seed.
     n_scans : int or None

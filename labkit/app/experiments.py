@@ -153,7 +153,7 @@ def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVE
     noise_levels : sequence of float
         The range noise levels, metres.
     n_beams : int
-        Beams of the 180 deg scanner (:func:`nguyen_lidar`).
+        Beams of the 180 deg scanner (``nguyen_lidar``).
     seed : int
         The seed of the poses, the random rooms and the noise.
 

@@ -1,7 +1,7 @@
 """Many recordings, many cores, many machines: ``labkit extract`` and ``labkit evaluate`` on Dask.
 
 A task reads one recording (or one range of its scans, below), runs the pipeline on it and
-writes its output itself, through :mod:`labkit._safe` (so a failed or interrupted task leaves
+writes its output itself, through ``labkit._safe`` (so a failed or interrupted task leaves
 no half file), then returns a small :class:`Result`: counts, seconds, peak memory, and the
 one-line error of a damaged or failed recording. The tasks run on
 
@@ -88,7 +88,7 @@ class Result:
         What it wrote (None: nothing, or a part of a joined table).
     status : str
         ``done``, ``damaged`` (the output holds every readable scan), ``refused``, ``system``,
-        ``bug`` or ``interrupted`` (the partial output is ``output``); :data:`STATUS` gives the
+        ``bug`` or ``interrupted`` (the partial output is ``output``); ``STATUS`` gives the
         exit status of each.
     error : str or None
         The one-line error (a bug: the traceback).
@@ -142,7 +142,7 @@ def recordings_in(paths: Iterable[str | Path]) -> list[Path]:
     gives the recordings inside it (bags, MCAP files, ROS2 bag folders and CARMEN logs, sorted by
     name; JSON scans only when named, since a folder's ``.jsonl`` files may be labkit's own
     features). A folder that holds none, or a path that does not exist, is refused
-    (:class:`labkit.RefusedError`).
+    (:class:`labkit.errors.RefusedError`).
 
     Parameters
     ----------
@@ -198,7 +198,7 @@ def _stem(p: Path) -> str:
 def output_paths(inputs: Sequence[Path], folder: str | Path, suffix: str = ".features.jsonl") -> list[Path]:
     """One output per input in a folder: ``<name>.features.jsonl``, ``<name>`` the recording's name without its suffix.
 
-    Two inputs of one name are refused (:class:`labkit.RefusedError`), and so is a ``folder``
+    Two inputs of one name are refused (:class:`labkit.errors.RefusedError`), and so is a ``folder``
     that is a file.
 
     Parameters
@@ -999,7 +999,7 @@ def report(results: Sequence[Result], file=None) -> int:
     Returns
     -------
     int
-        The exit status of the whole run: that of the gravest status (:data:`STATUS`).
+        The exit status of the whole run: that of the gravest status (``STATUS``).
     """
     file = file or sys.stderr
     for r in results:

@@ -295,7 +295,7 @@ def grade(
     progress : bool
         Show a progress bar on stderr.
     first_slot : int
-        The first job's slot: job ``k`` runs student code as :func:`~labkit.grading.sandbox.worker_uid`
+        The first job's slot: job ``k`` runs student code as ``labkit.grading.sandbox.worker_uid``
         ``(first_slot + k)`` (so that concurrent runs, e.g. tests, use different uids).
 
     Raises

@@ -61,7 +61,7 @@ class _Reader:
     """A bounded reader of a notebook's JSON bytes: it walks the structure, builds only the values the grader
     keeps (with ``json.loads`` on their bytes) and skips the others -- outputs, attachments -- without making
     a Python object of them. Memory: the file's bytes and the kept values; time: one step per string, list
-    and object of the skipped values (at most :data:`MAX_NOTEBOOK_STRINGS` and :data:`MAX_NOTEBOOK_CONTAINERS`)."""
+    and object of the skipped values (at most ``MAX_NOTEBOOK_STRINGS`` and ``MAX_NOTEBOOK_CONTAINERS``)."""
 
     def __init__(self, raw: bytes) -> None:
         self.raw = raw
@@ -235,8 +235,8 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
     of yours).
 
     Before anything is built, the file's size (:data:`MAX_NOTEBOOK_BYTES`) and its number of strings
-    (:data:`MAX_NOTEBOOK_STRINGS`) are checked; while it is read, its lists and objects
-    (:data:`MAX_NOTEBOOK_CONTAINERS`) and the bytes of what is kept (:data:`MAX_KEPT_BYTES`). So reading
+    (``MAX_NOTEBOOK_STRINGS``) are checked; while it is read, its lists and objects
+    (``MAX_NOTEBOOK_CONTAINERS``) and the bytes of what is kept (``MAX_KEPT_BYTES``). So reading
     one holds at most the file's bytes and 32 MB of cells in memory, however it is built.
 
     Raises

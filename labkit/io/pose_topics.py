@@ -153,7 +153,7 @@ def _stamp(header, receive_ns: int) -> int:
 class BagPoses:
     """The poses of one bag, read by :func:`read_bag_poses`, and the faults met while reading them.
 
-    It gives the sensor pose of any scan frame at any stamp (:meth:`pose_at`).
+    It gives the sensor pose of any scan frame at any stamp (:meth:`BagPoses.pose_at`).
 
     Parameters
     ----------
@@ -233,7 +233,7 @@ def read_bag_poses(path: Path, fmt: str, plan: PosePlan, readable: bool, strict:
                    expected: int | None = None) -> BagPoses:
     """Read every pose and transform ``plan`` names, in one pass over those topics of the bag.
 
-    A record that cannot be read is skipped and counted in :attr:`BagPoses.faults` (with
+    A record that cannot be read is skipped and counted in the ``faults`` of :class:`BagPoses` (with
     ``strict``, reading stops there); ``labkit.io.bags.iter_bag`` reports them with the scans'.
 
     Parameters

@@ -10,7 +10,7 @@ __all__ = ["APP_ID", "TIME", "SEQUENCE", "STEP", "map_view", "blueprint", "steps
 APP_ID = "labkit"
 TIME = "ros_time"
 SEQUENCE = "scan"
-#: The timeline of an algorithm's steps on one scan (:func:`log_steps`).
+#: The timeline of an algorithm's steps on one scan (:func:`~labkit.viz.rr.replay.log_steps`).
 STEP = "step"
 _ACCUMULATED = ("points", "lines", "corners", "circles", "legs")
 # rerun's 2D views have y pointing down; mirror so that y points up as in matplotlib.
@@ -119,7 +119,7 @@ def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600,
 
 
 def steps_blueprint() -> rrb.Blueprint:
-    """The layout of :func:`log_steps`: the scan and the current step on the left, the numbers on the right.
+    """The layout of :func:`~labkit.viz.rr.replay.log_steps`: the scan and its steps on the left, numbers right.
 
     The right side shows the step's value against its threshold over the steps, and the steps' log.
 

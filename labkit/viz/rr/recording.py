@@ -1,6 +1,6 @@
 """A whole recording to an ``.rrd`` file as the scans come: the default blueprint, the scans, their
 features, the map and the ground truth, written under a temporary name; damage, Ctrl-C and a full disk
-handled as :mod:`labkit._safe` says."""
+handled as ``labkit._safe`` says."""
 
 from __future__ import annotations
 
