@@ -137,10 +137,9 @@ class CirclesConfig(CircleParams):
 
 @dataclass(frozen=True)
 class LinesConfig(SplitMergeParams):
-    """Line extraction: the method, the keys of split-and-merge, and one table per other method.
+    """Line extraction: the method, split-and-merge's keys (iepf, split_and_merge), one table per other method.
 
-    The keys of this table are split-and-merge's (``iepf``, ``split_and_merge``); the other
-    methods have their own tables (``[lines.angular]``, ``[lines.ransac]``, ...)."""
+    The other methods' tables are ``[lines.angular]``, ``[lines.ransac]``, ..."""
 
     _name = "lines"
     method: str = param("iepf", "a registered line extractor (labkit.lines.LINE_EXTRACTORS: iepf splits on the "
