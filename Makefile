@@ -92,8 +92,9 @@ lint: $(VENV)/.installed-dev
 
 # The docs: user guides, the API reference, the course with its outputs (kept by the notebook tests in
 # docs/_build/executed/, or executed here once when missing), the exercises' student copies. Warnings are
-# errors (a broken cross-reference fails); --keep-going lists them all. tests/test_docs_site.py runs this.
-SPHINX = $(BIN)/python -m sphinx -b html -E -W --keep-going -q -j 2
+# errors, and every cross-reference must resolve (-n, nitpicky; docs/xref.py lists what may not: other projects'
+# names, offline); --keep-going lists them all. tests/test_docs_site.py runs this; tests/test_docs.py checks -n.
+SPHINX = $(BIN)/python -m sphinx -b html -E -n -W --keep-going -q -j 2
 docs: $(VENV)/.installed-dev
 	$(SPHINX) docs docs/_build/html
 	@echo "docs: file://$(abspath docs/_build/html/index.html)"

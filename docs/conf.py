@@ -23,7 +23,7 @@ if str(REPO) not in sys.path:  # conf.py is run by sphinx-build, not imported fr
     sys.path.insert(0, str(REPO))
 
 import labkit  # noqa: E402
-from docs import executed_notebooks, public_api  # noqa: E402
+from docs import executed_notebooks, public_api, xref  # noqa: E402
 
 GENERATED = DOCS / "_generated"
 
@@ -51,7 +51,12 @@ autosummary_imported_members = False
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"  # the signature shows the annotations; numpydoc's sections the types
 numpydoc_show_class_members = False
-numpydoc_xref_param_type = False
+# every cross-reference must resolve but those to other projects' names (docs/xref.py says which, and why)
+nitpicky = xref.NITPICKY
+nitpick_ignore_regex = xref.NITPICK_IGNORE_REGEX
+numpydoc_xref_param_type = True  # a parameter's type links to the page of the labkit class it names
+numpydoc_xref_aliases = xref.type_aliases(public_api.public_names())
+numpydoc_xref_ignore = "all"  # ... and nothing else: "list of", "optional", numpy's names stay text
 numpydoc_class_members_toctree = False
 
 # the notebooks: rendered with the outputs prepare() put in them, never executed by myst-nb
@@ -101,14 +106,20 @@ def write_api_pages() -> None:
     for pub in names:
         module = pub.name.rsplit(".", 1)[0]
         by_family.setdefault(pub.family, {}).setdefault(module, []).append(pub.name)
+    modules = [m for m in public_api.public_modules() if m != "labkit"]
     for slug, title, _prefixes in public_api.FAMILIES:
         parts = [_underline(title)]
-        for module in sorted(by_family.get(slug, {})):
+        # every public module of the family, with its names or without (a package whose names live in
+        # its submodules): its ``module`` directive is the target of ``:mod:`` references and sets the module
+        # its docstring's and its names' summaries' short references are resolved in
+        for module in sorted({m for m in modules if public_api.family_of(m) == slug} | set(by_family.get(slug, {}))):
             doc = (importlib.import_module(module).__doc__ or "").strip().split("\n\n")[0]
             parts.append(_underline(module, "-"))
+            parts.append(f".. module:: {module}\n")
             parts.append(f"{' '.join(doc.split())}\n" if doc else "")
-            parts.append(".. autosummary::\n   :toctree: generated\n   :nosignatures:\n")
-            parts.extend(f"   {name}" for name in by_family[slug][module])
+            if module in by_family.get(slug, {}):
+                parts.append(".. autosummary::\n   :toctree: generated\n   :nosignatures:\n")
+                parts.extend(f"   {name.rsplit('.', 1)[1]}" for name in by_family[slug][module])
             parts.append("")
         _write(GENERATED / "api" / f"{slug}.rst", "\n".join(parts) + "\n")
     top = ["| name | documented at |", "|---|---|"]
@@ -122,7 +133,7 @@ def write_api_pages() -> None:
         elif id(obj) in homes:
             top.append(f"| `labkit.{attr}` | {{py:obj}}`{homes[id(obj)]}` |")
     _write(GENERATED / "api" / "top_level.md",
-           "# `labkit`: the names of the package itself\n\n"
+           "# `labkit`: the names of the package itself\n\n```{py:module} labkit\n```\n\n"
            "`import labkit` gives these names (`labkit.__all__`); each is documented once, at the module "
            "that defines it.\n\n" + "\n".join(top) + "\n")
 
@@ -232,16 +243,29 @@ def _alias_targets() -> dict[str, str]:
 ALIASES = _alias_targets()
 
 
+def _home_of(target: str) -> str | None:
+    """Where ``target`` is documented when it is a re-exported name or a member of one
+    (``labkit.Scan.pose`` -> ``labkit.scan.Scan.pose``); None when it is neither."""
+    if target in ALIASES:
+        return ALIASES[target]
+    owner, _, member = target.rpartition(".")
+    return f"{ALIASES[owner]}.{member}" if owner in ALIASES else None
+
+
 def _resolve_alias(app, env, node, contnode):
     """A reference to a re-exported name (``:func:`labkit.split_and_merge```) goes to the page of its
     home (``labkit.lines.split_merge.split_and_merge``), where it is documented once."""
     if node.get("refdomain") != "py":
         return None
     target = node.get("reftarget", "")
-    home = ALIASES.get(target)
+    home = _home_of(target)
     if home is None and not target.startswith("labkit."):
-        module = node.get("py:module") or ""
-        home = ALIASES.get(f"{module}.{target}") if module else None
+        # a short name in a docstring: of the module's own package, or of a package above it that
+        # re-exports it (``log_steps`` in labkit.viz.rr.blueprint is labkit.viz.rr's)
+        parts = (node.get("py:module") or "").split(".")
+        while home is None and parts and parts[0]:
+            home = _home_of(f"{'.'.join(parts)}.{target}")
+            parts.pop()
     if home is None:
         return None
     domain = env.get_domain("py")

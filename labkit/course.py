@@ -102,10 +102,28 @@ def student_frames(error: BaseException, limit: int = 3) -> str:
 class Case:
     """One input of a check, what it should give, and a hint for when it does not.
 
-    ``expected`` is compared with :func:`numpy.allclose` (``atol``, ``rtol``, NaN equal to
-    NaN) for numbers and arrays, by ``==`` otherwise, or by ``compare(got, expected)``
-    when given. ``raises`` instead names the exception type the call must raise (types
-    are checked, never message wording).
+    Parameters
+    ----------
+    args : tuple
+        The positional arguments of the call.
+    expected : object
+        What the call should return: compared with :func:`numpy.allclose` (``atol``, ``rtol``, NaN
+        equal to NaN) for numbers and arrays, by ``==`` otherwise, or by ``compare(got, expected)``
+        when given.
+    hint : str
+        What to look at when the case fails.
+    kwargs : dict
+        The keyword arguments of the call.
+    raises : type of BaseException or None
+        The exception type the call must raise instead (types are checked, never message wording).
+    atol : float
+        The absolute tolerance.
+    rtol : float
+        The relative tolerance.
+    compare : callable or None
+        ``compare(got, expected)`` returning True when they agree.
+    label : str
+        What a message shows between the call's brackets (``name(label)``); empty: the arguments.
     """
 
     args: tuple
@@ -191,9 +209,27 @@ def check(student: Callable, cases: Sequence[Case], *, fallback: Callable | None
           quiet: bool = False) -> Callable:
     """Check a "your turn" function on ``cases``; return the function to go on with.
 
-    Returns ``student`` when every case passes, ``fallback`` (labkit's version) when the
-    stub still raises ``NotImplementedError``; raises :class:`YourTurnError` on the
-    first case that fails, naming the input, the expected and the returned value and the hint.
+    Raises :class:`YourTurnError` on the first case that fails, naming the input, the expected and
+    the returned value and the hint.
+
+    Parameters
+    ----------
+    student : callable
+        The student's function.
+    cases : sequence of Case
+        The inputs and what they should give.
+    fallback : callable or None
+        The labkit version, to go on with while the stub still raises ``NotImplementedError``;
+        None: a stub that still raises is a :class:`YourTurnError`.
+    name : str or None
+        The function's name in messages; None: its ``__name__``.
+    quiet : bool
+        Print nothing when every case passes.
+
+    Returns
+    -------
+    callable
+        ``student`` when every case passes, ``fallback`` when the stub is not written yet.
     """
     own_name: str = getattr(student, "__name__", "your function")
     name = name or own_name

@@ -31,42 +31,162 @@ __all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "con
 
 
 def closed_form_alpha(rho, theta, w):
-    """Notebook 02: the weighted polar line fit's angle."""
+    """Notebook 02: the weighted polar line fit's angle.
+
+    Parameters
+    ----------
+    rho : array_like of shape (N,)
+        The ranges, metres.
+    theta : array_like of shape (N,)
+        The beam angles, radians.
+    w : array_like of shape (N,)
+        The weights.
+
+    Returns
+    -------
+    float
+        The normal angle ``alpha`` of :func:`labkit.fitting.fit_line_polar`, radians.
+    """
     return fit_line_polar(rho, theta, w).alpha
 
 
 def ideal_weights(sigma, theta, alpha):
-    """Notebook 03: ``1 / Var(d_i)`` of each point's distance across the line."""
+    """Notebook 03: ``1 / Var(d_i)`` of each point's distance across the line.
+
+    Parameters
+    ----------
+    sigma : float or array_like of shape (N,)
+        The range noise, metres.
+    theta : array_like of shape (N,)
+        The beam angles, radians.
+    alpha : float
+        The line's normal angle, radians.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        ``1 / (sigma cos(theta - alpha))^2``.
+    """
     return 1 / (np.asarray(sigma) * np.cos(np.asarray(theta) - alpha)) ** 2
 
 
 def is_core(L, U, min_pts):
-    """Notebook 06: a point is a core point when its neighbourhood ``L..U`` holds ``min_pts`` points."""
+    """Notebook 06: a point is a core point when its neighbourhood ``L..U`` holds ``min_pts`` points.
+
+    Parameters
+    ----------
+    L : array_like of int
+        The first sorted position of each point's neighbourhood.
+    U : array_like of int
+        The last one (inclusive).
+    min_pts : int
+        The fewest points of a core point's neighbourhood.
+
+    Returns
+    -------
+    ndarray of bool
+        Whether each point is a core point.
+    """
     return (np.asarray(U) - np.asarray(L) + 1) >= min_pts
 
 
 def wall_offsets(points, direction):
-    """Notebook 07: the signed distances of the points across lines of ``direction`` through the origin."""
+    """Notebook 07: the signed distances of the points across lines of ``direction`` through the origin.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        The points, metres.
+    direction : float
+        The lines' direction, radians.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        Each point's signed distance, metres.
+    """
     return signed_distance_to_line(points, 0.0, direction + np.pi / 2)
 
 
 def config_for(method, split_threshold_cm):
-    """Notebook 09: the default :class:`labkit.Config` with a line method and a split threshold in cm."""
+    """Notebook 09: the default :class:`labkit.Config` with a line method and a split threshold in cm.
+
+    Parameters
+    ----------
+    method : str
+        A line extractor's name.
+    split_threshold_cm : float
+        The split threshold, centimetres.
+
+    Returns
+    -------
+    Config
+        The configuration.
+    """
     return Config().updated({"lines.method": method, "lines.split_threshold_m": split_threshold_cm / 100})
 
 
 def mean_per_scan(feats, kind):
-    """Notebook 09: the mean count of one kind of feature per scan."""
+    """Notebook 09: the mean count of one kind of feature per scan.
+
+    Parameters
+    ----------
+    feats : sequence of Features
+        The features of each scan.
+    kind : str
+        The layer: ``"lines"``, ``"circles"``, ``"legs"``, ...
+
+    Returns
+    -------
+    float
+        The mean number per scan.
+    """
     return float(np.mean([len(getattr(f, kind)) for f in feats]))
 
 
 def rates(n_truth, n_matched, n_scored):
-    """Notebook 10: Nguyen's TruePos and FalsePos rates."""
+    """Notebook 10: Nguyen's TruePos and FalsePos rates.
+
+    Parameters
+    ----------
+    n_truth : int
+        The walls in the truth.
+    n_matched : int
+        The lines matched to a wall.
+    n_scored : int
+        The lines scored.
+
+    Returns
+    -------
+    tp_rate : float
+        ``n_matched / n_truth``.
+    fp_rate : float
+        ``(n_scored - n_matched) / n_scored``.
+    """
     return n_matched / n_truth, (n_scored - n_matched) / n_scored
 
 
 def pose_at(t0, p0, t1, p1, t):
-    """Notebook 11: the pose at ``t`` between two stamped poses."""
+    """Notebook 11: the pose at ``t`` between two stamped poses.
+
+    Parameters
+    ----------
+    t0 : float
+        The first pose's time.
+    p0 : array_like of shape (3,)
+        The first pose ``(x, y, theta)``.
+    t1 : float
+        The second pose's time.
+    p1 : array_like of shape (3,)
+        The second pose.
+    t : float
+        The time asked for.
+
+    Returns
+    -------
+    ndarray of shape (3,)
+        The pose, interpolated as :func:`labkit.poses.interpolate_poses` does.
+    """
     return interpolate_poses([t0, t1], [p0, p1], [t])[0]
 
 

@@ -110,10 +110,17 @@ def _check_border(border) -> str:
 class Cluster(NamedTuple):
     """A cluster found by :func:`dbscan1d_reference`.
 
-    It spans the inclusive range ``lower`` to ``upper`` of sorted positions and has the label ``id``.
-
     With ``border="first"`` semantics a border point in the range may carry the label
     of the cluster on its left, which reached it first.
+
+    Parameters
+    ----------
+    lower : int
+        The first sorted position of the cluster.
+    upper : int
+        The last one (inclusive).
+    id : int
+        Its label.
     """
 
     lower: int

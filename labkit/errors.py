@@ -39,7 +39,13 @@ class RefusedError(ValueError):
 
 
 class OutputExistsError(RefusedError):
-    """The output exists and replacing it was not asked for (``overwrite=True``, ``-f``)."""
+    """The output exists and replacing it was not asked for (``overwrite=True``, ``-f``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The output.
+    """
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
@@ -48,7 +54,15 @@ class OutputExistsError(RefusedError):
 
 
 class EmptyRecordingError(RefusedError):
-    """A recording holds no scans at all (an empty bag, an empty log)."""
+    """A recording holds no scans at all (an empty bag, an empty log).
+
+    Parameters
+    ----------
+    message : str
+        The reason, in the words of the Python API.
+    cli : str, optional
+        The same reason in the words of the command line; default ``message``.
+    """
 
 
 class CorruptFileError(ValueError):

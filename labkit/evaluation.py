@@ -257,6 +257,23 @@ class LineScores:
     ``tp_rate`` = matched walls / walls in the truth; ``fp_rate`` = unmatched lines / lines
     scored; ``sigma_dr`` (m) and ``sigma_dalpha`` (rad) are the standard deviations of the
     errors over all matches (NaN with fewer than two matches).
+
+    Parameters
+    ----------
+    n_scans : int
+        Scans scored.
+    n_truth : int
+        Walls in the truth.
+    n_lines : int
+        All lines found.
+    n_scored : int
+        Lines that count.
+    n_matched : int
+        Lines matched to a wall.
+    dr : ndarray
+        The error in ``r`` of every match, metres.
+    dalpha : ndarray
+        The error in ``alpha`` of every match, radians.
     """
 
     n_scans: int
@@ -331,9 +348,20 @@ def _cat(arrays: list) -> np.ndarray:
 class DetectionMatch:
     """How the circle (or leg) detections of one scan match the truth.
 
-    ``pairs`` are (detection index, truth index); ``center_errors`` (m) and
-    ``radius_errors`` (relative: detected / true - 1) per pair; ``truth`` the true objects
-    that count; ``scored`` the detections that count.
+    Parameters
+    ----------
+    pairs : tuple of tuple of (int, int)
+        The matches: (detection index, truth index).
+    center_errors : ndarray
+        The distance between the centres of each pair, metres.
+    radius_errors : ndarray
+        Each pair's radius error, relative: detected / true - 1.
+    truth : tuple of int
+        The true objects that count.
+    scored : tuple of int
+        The detections that count.
+    n_detections : int
+        All detections of the scan.
     """
 
     pairs: tuple[tuple[int, int], ...]
@@ -475,7 +503,25 @@ def match_legs(legs: Sequence, scan: Scan, truth, *, max_center_m: float = 0.1, 
 
 @dataclass(frozen=True)
 class DetectionScores:
-    """Precision, recall and errors of a detector pooled over scans."""
+    """Precision, recall and errors of a detector pooled over scans.
+
+    Parameters
+    ----------
+    n_scans : int
+        Scans scored.
+    n_truth : int
+        True objects that count.
+    n_detected : int
+        All detections.
+    n_scored : int
+        Detections that count.
+    n_matched : int
+        Detections matched to a true object.
+    center_errors : ndarray
+        The centre error of every match, metres.
+    radius_errors : ndarray
+        The relative radius error of every match.
+    """
 
     n_scans: int
     n_truth: int
@@ -538,12 +584,19 @@ def score_detections(matches: Iterable[DetectionMatch]) -> DetectionScores:
 class RayErrors:
     """Per-beam ray-axis errors of segments against one or more scans (Schaefer et al.).
 
-    ``errors`` holds measured range minus the distance along the ray to the nearest segment,
-    for the valid beams whose ray meets a segment, and ``beams`` those beams' indices (pooled
-    over scans with ``+``: concatenated); ``n_valid`` counts every valid beam. The RMSE is
-    dominated by a few beams whose ray meets a segment far in front of or behind what it
-    hit (a line across a doorway, a piece of clutter): ``median_abs`` and ``share_over``
-    tell those apart from a general misfit.
+    The RMSE is dominated by a few beams whose ray meets a segment far in front of or behind what
+    it hit (a line across a doorway, a piece of clutter): ``median_abs`` and ``share_over`` tell
+    those apart from a general misfit. Pooled over scans with ``+`` (concatenated).
+
+    Parameters
+    ----------
+    errors : ndarray
+        Measured range minus the distance along the ray to the nearest segment, metres, for the
+        valid beams whose ray meets a segment.
+    n_valid : int
+        Every valid beam.
+    beams : ndarray of int
+        The indices of the beams of ``errors``.
     """
 
     errors: np.ndarray = field(repr=False)

@@ -136,8 +136,7 @@ def _check_count(n: int, need: int, name: str, what: str) -> None:
 
 # ---------------------------------------------------------------------------- line core
 def line_from_sums(sw: float, sx: float, sy: float, sxx: float, syy: float, sxy: float) -> tuple[float, float]:
-    """``(r, alpha)`` of the weighted orthogonal fit from the weighted sums ``sum w``,
-    ``sum w x``, ``sum w y``, ``sum w x^2``, ``sum w y^2`` and ``sum w x y`` of the points.
+    """``(r, alpha)`` of the weighted orthogonal fit from six weighted sums of the points.
 
     This is the closed form of :func:`fit_line_polar`. The slides' double sums factor into
     products of single sums, ``sum_i sum_j w_i w_j rho_i rho_j cos(t_i) sin(t_j) =
@@ -145,6 +144,30 @@ def line_from_sums(sw: float, sx: float, sy: float, sxx: float, syy: float, sxy:
     (sum w y)^2``, so six sums are all a fit needs: split-and-merge keeps their prefix sums
     and fits any run of a scan in O(1).
 
+    Parameters
+    ----------
+    sw : float
+        ``sum w``.
+    sx : float
+        ``sum w x``.
+    sy : float
+        ``sum w y``.
+    sxx : float
+        ``sum w x^2``.
+    syy : float
+        ``sum w y^2``.
+    sxy : float
+        ``sum w x y``.
+
+    Returns
+    -------
+    r : float
+        The line's distance from the origin, metres, ``r >= 0``.
+    alpha : float
+        Its normal's angle, radians, in (-pi, pi].
+
+    Examples
+    --------
     >>> line_from_sums(3.0, 6.0, 0.0, 12.0, 2.0, 0.0)   # (2, -1), (2, 0), (2, 1): the line x = 2
     (2.0, 0.0)
     """
@@ -168,13 +191,32 @@ def _line_core(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[float, floa
 
 
 def line_covariance(x, y, w, alpha: float, sigma_x, sigma_y=None, *, ray_noise: bool = True) -> np.ndarray:
-    """Covariance of ``(r, alpha)`` of the weighted orthogonal fit, by first-order error
-    propagation (Arras & Siegwart 1998) with the weights held fixed.
+    """Covariance of ``(r, alpha)`` of the weighted orthogonal fit, by first-order error propagation.
 
-    With ``ray_noise`` (the polar fit) each point moves along its own ray with standard
-    deviation ``sigma_x`` (range noise); otherwise each coordinate is independently noisy
-    with ``sigma_x`` and ``sigma_y`` (isotropic point noise by default). ``r`` is not
-    needed: the weighted centroid fixes it.
+    Arras & Siegwart 1998, with the weights held fixed. ``r`` is not needed: the weighted centroid
+    fixes it.
+
+    Parameters
+    ----------
+    x, y : array_like of shape (N,)
+        The points, metres.
+    w : array_like of shape (N,)
+        Their weights.
+    alpha : float
+        The fitted line's normal angle, radians.
+    sigma_x : float or array_like of shape (N,)
+        With ``ray_noise``: the range noise of each point, metres (each point moves along its own
+        ray); otherwise the noise of its x coordinate.
+    sigma_y : float or array_like of shape (N,), or None
+        Without ``ray_noise``: the noise of each point's y coordinate; None: ``sigma_x``
+        (isotropic point noise).
+    ray_noise : bool
+        The noise model: along the rays (the polar fit) or per coordinate.
+
+    Returns
+    -------
+    ndarray of shape (2, 2)
+        The covariance of ``(r, alpha)``.
     """
     x = np.asarray(x, dtype=float)
     vx = np.broadcast_to(np.asarray(sigma_x, dtype=float) ** 2, x.shape)
@@ -184,18 +226,67 @@ def line_covariance(x, y, w, alpha: float, sigma_x, sigma_y=None, *, ray_noise: 
 
 
 def line_covariances(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bool = True) -> np.ndarray:
-    """:func:`line_covariance` for many lines at once: the points of line ``k`` are
-    ``x[starts[k]:starts[k + 1]]`` (the last runs to the end), its normal ``alpha[k]``;
-    ``var_x``/``var_y`` are per-point variances. Returns (K, 2, 2); NaN for a line whose
-    direction is undetermined (all points identical, or an isotropic cloud)."""
+    """:func:`line_covariance` for many lines at once.
+
+    Parameters
+    ----------
+    x, y : ndarray of shape (N,)
+        The points of every line, metres: line ``k`` has ``x[starts[k]:starts[k + 1]]`` (the last
+        runs to the end).
+    w : ndarray of shape (N,)
+        Their weights.
+    starts : ndarray of int, shape (K,)
+        Where each line's points start.
+    alpha : ndarray of shape (K,)
+        Each line's normal angle, radians.
+    var_x : ndarray of shape (N,)
+        Per-point variances: of the range with ``ray_noise``, else of x.
+    var_y : ndarray of shape (N,) or None
+        Without ``ray_noise``: per-point variances of y; None: ``var_x``.
+    ray_noise : bool
+        The noise model, as for :func:`line_covariance`.
+
+    Returns
+    -------
+    ndarray of shape (K, 2, 2)
+        Each line's covariance of ``(r, alpha)``; NaN for a line whose direction is undetermined
+        (all points identical, or an isotropic cloud).
+    """
     return line_covariances_rms(x, y, w, starts, alpha, var_x, var_y, ray_noise=ray_noise)[0]
 
 
 def line_covariances_rms(x, y, w, starts, alpha, var_x, var_y=None, *, ray_noise: bool = True,
                          r=None) -> tuple[np.ndarray, np.ndarray | None]:
-    """:func:`line_covariances`, and with ``r`` (K,) also the RMS distance of each line's
-    points to the line ``(r[k], alpha[k])`` (it needs the cos and sin of alpha at every
-    point, which the covariances compute anyway; None without ``r``)."""
+    """:func:`line_covariances`, and the RMS distance of each line's points to the line.
+
+    The distances need the cos and sin of alpha at every point, which the covariances compute anyway.
+
+    Parameters
+    ----------
+    x, y : ndarray of shape (N,)
+        The points of every line, as for :func:`line_covariances`.
+    w : ndarray of shape (N,)
+        Their weights.
+    starts : ndarray of int, shape (K,)
+        Where each line's points start.
+    alpha : ndarray of shape (K,)
+        Each line's normal angle, radians.
+    var_x : ndarray of shape (N,)
+        Per-point variances, as for :func:`line_covariances`.
+    var_y : ndarray of shape (N,) or None
+        Per-point variances of y, as for :func:`line_covariances`.
+    ray_noise : bool
+        The noise model.
+    r : ndarray of shape (K,) or None
+        Each line's distance from the origin, metres; None: no RMS distances.
+
+    Returns
+    -------
+    covariances : ndarray of shape (K, 2, 2)
+        As :func:`line_covariances` returns them.
+    rms : ndarray of shape (K,) or None
+        The RMS distance of each line's points to the line ``(r[k], alpha[k])``; None without ``r``.
+    """
     starts = np.asarray(starts)
     if len(starts) == 1:  # one line: plain sums and scalars broadcast (reduceat costs more)
         counts = len(x)
@@ -558,9 +649,22 @@ def fit_circle(points, method: str = "algebraic", *, max_iterations: int = 50, t
 
 
 class CircleFits(NamedTuple):
-    """Circles fitted to many runs of points at once (:func:`fit_circles`): per run, its centre,
-    radius, RMS orthogonal distance, Gauss-Newton iterations and ``status`` (0: fitted, 1: the
-    points are all identical, 2: collinear -- no finite circle; the other fields are then NaN)."""
+    """Circles fitted to many runs of points at once (:func:`fit_circles`), one entry per run.
+
+    Parameters
+    ----------
+    centers : ndarray of shape (K, 2)
+        Each run's centre, metres.
+    radii : ndarray of shape (K,)
+        Each run's radius, metres.
+    rms : ndarray of shape (K,)
+        Each run's RMS orthogonal distance to its circle, metres.
+    iterations : ndarray of shape (K,)
+        The Gauss-Newton iterations each run took.
+    status : ndarray of shape (K,)
+        0: fitted; 1: the points are all identical; 2: collinear, no finite circle (the other
+        fields are then NaN).
+    """
 
     centers: np.ndarray  # (K, 2)
     radii: np.ndarray
@@ -571,8 +675,9 @@ class CircleFits(NamedTuple):
 
 def fit_circles(points: np.ndarray, starts: np.ndarray, ends: np.ndarray, method: str = "algebraic", *,
                 max_iterations: int = 50, tol: float = 1e-12) -> CircleFits:
-    """:func:`fit_circle` on each run ``points[starts[k]:ends[k]]`` (at least 3 points each), all
-    runs at once: every step is a few sums per run, so many small fits cost about what one does.
+    """:func:`fit_circle` on many runs of points, all runs at once.
+
+    Every step is a few sums per run, so many small fits cost about what one does.
 
     Each run is centred and scaled (its mean square distance from its centroid is 1). Then the
     algebraic fit's columns ``(x, y, 1)`` are orthogonal to the last, its normal equations are a
@@ -581,6 +686,27 @@ def fit_circles(points: np.ndarray, starts: np.ndarray, ends: np.ndarray, method
     normal equations in closed form, and a run stops when its step falls under ``tol``; a nearly
     straight run (a huge radius), where the normal equations lose too many digits, takes its
     steps by least squares instead.
+
+    Parameters
+    ----------
+    points : ndarray of shape (N, 2)
+        The points of every run, metres.
+    starts : ndarray of int, shape (K,)
+        Where each run starts in ``points``.
+    ends : ndarray of int, shape (K,)
+        Where each run ends (exclusive): run ``k`` is ``points[starts[k]:ends[k]]``, at least 3 points.
+    method : {"algebraic", "geometric"}
+        The objective minimised, as for :func:`fit_circle`.
+    max_iterations : int
+        Gauss-Newton iterations at most per run (``"geometric"``).
+    tol : float
+        A run stops when the squared length of its Gauss-Newton step falls under ``tol`` times
+        ``max(1, radius**2)``.
+
+    Returns
+    -------
+    CircleFits
+        Each run's circle, RMS distance, iterations and status.
     """
     p = np.asarray(points, dtype=np.float64)
     starts, ends = np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64)

@@ -365,13 +365,27 @@ def is_v_corner(angles, n_neighbours: int = 4, stride: int = 1) -> bool:
 
     The inscribed angles of a "V" grow on both sides of the apex, so: find the smallest
     angle and check whether its ``n_neighbours`` neighbours (half on each side, taken
-    ``stride`` angles apart) grow strictly away from it. True means "V-shaped corner,
-    reject". When the minimum has too few neighbours on one side (it is near an end) the
-    pattern cannot be checked and the answer is False.
+    ``stride`` angles apart) grow strictly away from it. When the minimum has too few
+    neighbours on one side (it is near an end) the pattern cannot be checked and the answer is
+    False.
 
     ``stride=1`` is the paper's literal test. With dense points the range noise breaks
     the strict growth right next to the apex (two angles of 92 deg side by side), so the
     detectors step ``max(1, n_angles // 8)`` angles apart (see :func:`labkit.detect_circles`).
+
+    Parameters
+    ----------
+    angles : array_like of shape (M,)
+        The inscribed angles along the run, radians.
+    n_neighbours : int
+        How many neighbours of the smallest angle must grow away from it (half on each side).
+    stride : int
+        How many angles apart the neighbours are taken.
+
+    Returns
+    -------
+    bool
+        True means "V-shaped corner, reject".
 
     Examples
     --------
@@ -399,15 +413,33 @@ def is_v_corner(angles, n_neighbours: int = 4, stride: int = 1) -> bool:
 
 def circle_confidence(n_angles: int, iav_mean: float, iav_std: float, *, std_max: float = CIRCLE_STD_MAX,
                       mean_range: tuple[float, float] = CIRCLE_MEAN_RANGE) -> float:
-    """Confidence in [0, 1] of an IAV circle (Xavier et al. Sec. II-B: it grows with the
-    number of interior points, with a tighter spread and with a mean near 90 deg).
+    """Confidence in [0, 1] of an IAV circle.
 
-    ``confidence = f_n * f_std * f_mean`` with
+    Xavier et al. Sec. II-B: it grows with the number of interior points, with a tighter spread
+    and with a mean near 90 deg. ``confidence = f_n * f_std * f_mean`` with
 
     * ``f_n = 1 - exp(-n_angles / 5)`` (2 interior points: 0.33, 5: 0.63, 15: 0.95),
     * ``f_std = 1 - 0.5 * min(iav_std / std_max, 1)`` (1 for a perfect arc, 0.5 at the threshold),
     * ``f_mean = 1 - 0.5 * min(|iav_mean - 90 deg| / (mean_range[1] - 90 deg), 1)``
       (1 at a half circle, 0.5 at the upper limit of the mean).
+
+    Parameters
+    ----------
+    n_angles : int
+        The number of inscribed angles (interior points).
+    iav_mean : float
+        Their mean, radians.
+    iav_std : float
+        Their standard deviation, radians.
+    std_max : float
+        The detector's limit on the standard deviation, radians.
+    mean_range : tuple of (float, float)
+        The detector's limits on the mean, radians.
+
+    Returns
+    -------
+    float
+        The confidence.
 
     Examples
     --------

@@ -287,13 +287,25 @@ FIXED = "fixed"
 
 
 def noise_config(range_sigma_m: float | str = AUTO) -> dict:
-    """The changes to a :class:`labkit.Config` that set how every stage follows the range noise:
-    :data:`AUTO_CONFIG` for ``"auto"`` (the noise estimated from each scan, the defaults), the same
-    thresholds derived from a noise you know, ``range_sigma_m`` metres (> 0; a datasheet's, or
-    :func:`estimate_range_noise` over a recording: every ``range_sigma_m`` of the config set to it),
-    or :data:`FIXED_CONFIG` for ``"fixed"`` (the papers' fixed thresholds).
+    """The changes to a :class:`labkit.Config` that set how every stage follows the range noise.
+
     ``labkit extract|view|bench|config --range-noise`` applies it.
 
+    Parameters
+    ----------
+    range_sigma_m : float or str
+        ``"auto"``: :data:`AUTO_CONFIG` (the noise estimated from each scan, the defaults); a
+        number of metres (> 0; a datasheet's, or :func:`estimate_range_noise` over a recording):
+        the same thresholds derived from that noise, every ``range_sigma_m`` of the config set to
+        it; ``"fixed"``: :data:`FIXED_CONFIG` (the papers' fixed thresholds).
+
+    Returns
+    -------
+    dict
+        Dotted config keys (``"lines.range_sigma_m"``) -> values, for :meth:`labkit.Config.updated`.
+
+    Examples
+    --------
     >>> noise_config(0.03)["lines.range_sigma_m"], noise_config(0.03)["lines.split_threshold_m"]
     (0.03, 'auto')
     """

@@ -10,7 +10,7 @@ is scikit-learn's ``_parameter_constraints`` with ``validate_params``.
 A detector's public function has its real signature: one keyword per field of its record, of
 the same name and unit, whose default *is* the record's (``min_points: int =
 SplitMergeParams.min_points``), so an IDE and :func:`inspect.signature` show what it takes.
-:func:`checked_by` checks, at that boundary and once, the values a caller passes, against the
+:func:`labkit.params.checked_by` checks, at that boundary and once, the values a caller passes, against the
 record's limits; the function's body trusts them. The pipeline, whose configuration is made of
 these records (already checked), calls the function's ``unchecked`` twin with
 :meth:`Params.kwargs`.
@@ -45,12 +45,38 @@ AUTO = "auto"
 def param(default, doc: str, *, lo: float | None = None, strict: bool = False, hi: float | None = None,
           finite: bool = True, choices=None, optional: bool = False, kind: type | None = None,
           auto: bool = False):
-    """A record field: its default, a one-line doc, and the checks applied when a record is
-    built (``lo``/``hi`` bounds, ``strict`` for ``> lo``, ``finite=False`` to allow infinity
-    where it means something, such as "never" or "unlimited"; numbers are finite otherwise,
-    ``choices`` for strings (a tuple or a callable giving one), ``optional`` to allow None,
-    ``kind`` when the default is None or ``"auto"``, ``auto`` to allow the value ``"auto"``:
-    a number the function works out from each scan, see :mod:`labkit.noise`)."""
+    """A record field: its default, a one-line doc, and the checks applied when a record is built.
+
+    Parameters
+    ----------
+    default : object
+        The default value (a :class:`Params` record for a nested one).
+    doc : str
+        The one-line doc (shown by ``labkit config`` and the docs).
+    lo : float or None
+        The lower bound.
+    strict : bool
+        ``> lo`` instead of ``>= lo``.
+    hi : float or None
+        The upper bound.
+    finite : bool
+        Numbers must be finite; False allows infinity where it means something, such as "never"
+        or "unlimited".
+    choices : tuple of str, or callable, or None
+        The strings allowed (a tuple, or a callable giving one).
+    optional : bool
+        Allow None.
+    kind : type or None
+        The field's type, when the default is None or ``"auto"``.
+    auto : bool
+        Allow the value ``"auto"``: a number the function works out from each scan (see
+        :mod:`labkit.noise`).
+
+    Returns
+    -------
+    dataclasses.Field
+        The field, its checks in its metadata.
+    """
     if kind is None:
         kind = float if default == AUTO else type(default)
     meta = {"doc": doc, "lo": lo, "strict": strict, "hi": hi, "finite": finite, "choices": choices,
@@ -153,7 +179,7 @@ class Params:
     def check_relations(cls, values) -> None:
         """Limits between fields (``min_chord_m < max_chord_m``): ``values`` maps every field to
         its value, each already checked on its own. Raises ``ValueError`` naming a field (see
-        :meth:`_where`). Checked when a record is built and, by :func:`checked_by`, on the keywords
+        ``_where``). Checked when a record is built and, by :func:`labkit.params.checked_by`, on the keywords
         a caller passes; a record with such limits overrides this (there are none here)."""
 
     @classmethod
@@ -293,21 +319,34 @@ def _defaults(cls: type[Params]) -> Params:
 
 # ---------------------------------------------------------------------------- the public boundary
 def checked_by(record: type[Params], *, positional: tuple[str, ...] = (), renamed: dict | None = None) -> Callable:
-    """Check the keyword arguments of a detector against its parameter ``record``, once, where
-    the user calls in; the signature stays the function's own.
+    """Check the keyword arguments of a detector against its parameter record, once, where the user calls in.
 
-    The decorated ``fn(first, *, <keywords>)`` names each keyword it takes from the record
-    after the field. A value passed under such a name is checked as a config value is (and
-    converted: ``"auto"``, whole numbers, pairs); its other keywords (``segments``, ``trace``,
-    ``method``...) pass through. ``fn.unchecked`` is the undecorated function, for callers that
-    hold a checked record (``fn.unchecked(scan, **record.kwargs())``), and ``fn.params_cls`` the
-    record.
+    The signature stays the function's own. The decorated ``fn(first, *, <keywords>)`` names each
+    keyword it takes from the record after the field. A value passed under such a name is checked
+    as a config value is (and converted: ``"auto"``, whole numbers, pairs); its other keywords
+    (``segments``, ``trace``, ``method``...) pass through. ``fn.unchecked`` is the undecorated
+    function, for callers that hold a checked record (``fn.unchecked(scan, **record.kwargs())``),
+    and ``fn.params_cls`` the record.
 
     Deprecated, for one release, each with a ``DeprecationWarning`` naming the new form: an angle
     in radians under its old name without ``_deg``; the old names of ``renamed`` and of the
     record's :meth:`Params.renamed` (``{old: new}``; a value passed as it is); a record as the
     second positional argument; and the old positional shape, values after ``first`` in the
     order of ``positional``.
+
+    Parameters
+    ----------
+    record : type of Params
+        The parameter record whose fields the keywords are.
+    positional : tuple of str
+        The fields the old positional shape passed after ``first``, in order (deprecated).
+    renamed : dict or None
+        Old keyword -> new field name (deprecated names).
+
+    Returns
+    -------
+    callable
+        The decorator.
     """
 
     def decorate(fn: Callable) -> Callable:

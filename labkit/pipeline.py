@@ -94,8 +94,13 @@ __all__ = [
 
 
 def line_methods() -> tuple[str, ...]:
-    """The values of ``lines.method``: every registered line extractor
-    (:data:`labkit.lines.LINE_EXTRACTORS`), then ``"none"``."""
+    """The values of ``lines.method``.
+
+    Returns
+    -------
+    tuple of str
+        Every registered line extractor (:data:`labkit.lines.LINE_EXTRACTORS`), then ``"none"``.
+    """
     return (*LINE_EXTRACTORS, "none")
 
 
@@ -132,8 +137,9 @@ class CirclesConfig(CircleParams):
 
 @dataclass(frozen=True)
 class LinesConfig(SplitMergeParams):
-    """Line extraction: the method, the keys of split-and-merge (iepf, split_and_merge) and
-    one table per other method ([lines.angular], [lines.ransac], ...)."""
+    """Line extraction: the method, split-and-merge's keys (iepf, split_and_merge), one table per other method.
+
+    The other methods' tables are ``[lines.angular]``, ``[lines.ransac]``, ..."""
 
     _name = "lines"
     method: str = param("iepf", "a registered line extractor (labkit.lines.LINE_EXTRACTORS: iepf splits on the "

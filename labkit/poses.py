@@ -149,6 +149,7 @@ def interpolate_poses(stamps_ns, poses, at_ns, *, tolerance_ns: int = DEFAULT_TO
     poses : array_like of shape (M, 3)
         ``(x, y, theta)`` at each stamp.
     at_ns : array_like of shape (N,), int, nanoseconds
+        The times asked for.
     tolerance_ns, max_gap_ns : int, nanoseconds
         See the module docstring.
 
@@ -202,14 +203,14 @@ def interpolate_poses(stamps_ns, poses, at_ns, *, tolerance_ns: int = DEFAULT_TO
 class PoseTrack:
     """Poses of one frame over time, ready to interpolate.
 
-    Attributes
+    Build one with :meth:`from_samples`, which sorts the samples and keeps the last of equal stamps.
+
+    Parameters
     ----------
     stamps_ns : ndarray of shape (M,), int64
         Strictly increasing.
     poses : ndarray of shape (M, 3)
         ``(x, y, theta)``.
-
-    Build one with :meth:`from_samples`, which sorts the samples and keeps the last of equal stamps.
 
     Examples
     --------
@@ -274,13 +275,21 @@ class PoseTrack:
 
 @dataclass
 class FrameTree:
-    """Frames linked as in ROS tf: each frame has one parent, through a static pose or a
-    :class:`PoseTrack` over time.
+    """Frames linked as in ROS tf: each frame has one parent, through a static pose or a pose track.
+
+    The parent's link is a static pose or a :class:`PoseTrack` over time.
 
     ``add_static(parent, child, pose)`` and ``add_track(parent, child, track)`` link a child
     to its parent (a later link of the same child replaces an earlier one; a frame with both a
     static and a moving link uses the moving one). :meth:`chain` walks from a frame up to
     its root; :meth:`pose_in` composes the links at a time.
+
+    Parameters
+    ----------
+    static : dict of str to tuple of (str, tuple of (float, float, float))
+        Child frame -> its parent and its static pose ``(x, y, theta)`` in it; empty by default.
+    tracks : dict of str to tuple of (str, PoseTrack)
+        Child frame -> its parent and its poses in it over time; empty by default.
 
     Examples
     --------
@@ -346,8 +355,9 @@ class FrameTree:
 
 
 class GridThinning:
-    """Keep one point per square cell of a grid, over many calls: a map accumulated from many
-    scans holds each patch of wall once.
+    """Keep one point per square cell of a grid, over many calls.
+
+    A map accumulated from many scans so holds each patch of wall once.
 
     Parameters
     ----------

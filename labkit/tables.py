@@ -98,8 +98,23 @@ def _normal_form(r: float, alpha: float) -> tuple[float, float]:
 
 
 def feature_rows(scan_index: int, features: Features, pose=None) -> list[tuple]:
-    """The rows (tuples in :data:`COLUMNS` order) of one scan's features; ``pose`` is the
-    sensor's pose ``(x, y, theta)`` in the world frame, or None."""
+    """The rows of one scan's features, as tuples in :data:`COLUMNS` order.
+
+    Parameters
+    ----------
+    scan_index : int
+        The scan's number (the ``scan`` column).
+    features : Features
+        Its features.
+    pose : tuple of (float, float, float) or None
+        The sensor's pose ``(x, y, theta)`` in the world frame, for the pose and world-frame columns; None:
+        those are NaN.
+
+    Returns
+    -------
+    list of tuple
+        One row per feature.
+    """
     rows = []
     head = (scan_index, int(features.stamp_ns))
     world = pose is not None
@@ -223,15 +238,40 @@ def _to_pandas(table):
 def write_features_table(pairs: Iterable[tuple[Scan, Features]], out: str | Path, *, recording: str | None = None,
                          method: str | None = None, overwrite: bool = False, inputs: Iterable[str | Path] = (),
                          chunk_scans: int = 2000, first_scan: int = 0) -> tuple[int, int]:
-    """Stream ``(scan, features)`` pairs into a Parquet table at ``out``; returns ``(scans, rows)``.
+    """Stream ``(scan, features)`` pairs into a Parquet table.
 
     The rows are :func:`features_table`'s, written ``chunk_scans`` scans at a time (one row group
-    each); column ``scan`` counts from ``first_scan`` (where the pairs start in the recording,
-    e.g. a scan range's first scan). The file is written through :mod:`labkit._safe`: under a
-    temporary name, renamed when complete; if iterating ``pairs`` raises
-    :class:`labkit.CorruptFileError` (a damaged recording) the table holds every scan before it and
-    the error propagates; interrupted, what was written so far is a valid ``<name>.partial.parquet``.
-    ``overwrite`` replaces only a Parquet file.
+    each). The file is written under a temporary name, renamed when complete; if iterating
+    ``pairs`` raises :class:`labkit.CorruptFileError` (a damaged recording) the table holds every
+    scan before it and the error propagates; interrupted, what was written so far is a valid
+    ``<name>.partial.parquet``.
+
+    Parameters
+    ----------
+    pairs : iterable of tuple of (Scan, Features)
+        The scans and their features, in order.
+    out : str or Path
+        The Parquet file.
+    recording : str or None
+        The value of a ``recording`` column in front of the others; None: no such column.
+    method : str or None
+        The value of a ``method`` column (the line extractor); None: no such column.
+    overwrite : bool
+        Replace an existing Parquet file (never any other kind of file).
+    inputs : iterable of str or Path
+        The files read, which the output may not be.
+    chunk_scans : int
+        Scans per row group.
+    first_scan : int
+        The ``scan`` column's number of the first pair (where the pairs start in the recording,
+        e.g. a scan range's first scan).
+
+    Returns
+    -------
+    scans : int
+        The scans written.
+    rows : int
+        The rows written.
     """
     pq = research_module("pyarrow.parquet")
     schema = _schema(recording is not None, method is not None)

@@ -72,9 +72,11 @@ class MOTFrame:
     truth_ids : sequence of hashable, length n
         The true objects present and visible (names or numbers, unique in the frame).
     truth_xy : ndarray (n, 2), metres
+        Their positions.
     hyp_ids : sequence of hashable, length m
         The hypotheses (track ids, unique in the frame).
     hyp_xy : ndarray (m, 2), metres
+        Their positions.
     ignored_xy : ndarray (k, 2), metres
         True objects present but not visible (see the module docstring); none by default.
     """
@@ -105,11 +107,38 @@ class MOTFrame:
 class MOTScores:
     """CLEAR MOT and identity scores over a sequence (see the module docstring).
 
-    Counts are over all frames: ``objects`` true objects (visible ones, frame by frame),
-    ``hypotheses`` (after dropping those on unseen objects), ``matches`` (the matched pairs,
-    those with an identity switch included: Bernardin's ``c_t``), ``misses``,
-    ``false_positives``, ``id_switches``, ``fragmentations``; ``mota`` and ``motp`` (metres);
-    ``idtp``, ``idf1``, ``idp``, ``idr``; ``ignored``, the hypotheses dropped on unseen objects.
+    Parameters
+    ----------
+    frames : int
+        Frames scored.
+    objects : int
+        True objects, visible ones, frame by frame, counted over all frames.
+    hypotheses : int
+        Hypotheses over all frames, after dropping those on unseen objects.
+    matches : int
+        The matched pairs, those with an identity switch included (Bernardin's ``c_t``).
+    misses : int
+        True objects not matched.
+    false_positives : int
+        Hypotheses not matched.
+    id_switches : int
+        Identity switches.
+    fragmentations : int
+        Fragmentations of a true object's track.
+    mota : float
+        Multiple object tracking accuracy.
+    motp : float
+        Multiple object tracking precision, metres.
+    idtp : int
+        Identity true positives.
+    idf1 : float
+        Identity F1 score.
+    idp : float
+        Identity precision.
+    idr : float
+        Identity recall.
+    ignored : int
+        The hypotheses dropped on unseen objects.
     """
 
     frames: int
@@ -316,6 +345,11 @@ def sim_frames(world, truths: Iterable, tables: Iterable, *, kind: str | None = 
     min_beams : int
         A mover is visible when at least this many beams hit one of its parts (a leg, the
         cylinder); otherwise it is an unseen object (:attr:`MOTFrame.ignored_xy`).
+
+    Returns
+    -------
+    list of MOTFrame
+        One frame per scan, in order.
     """
     min_beams = check_int("min_beams", min_beams, 1)
     if kind not in (None, "person", "cylinder"):

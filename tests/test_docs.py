@@ -11,6 +11,9 @@ tests/test_docs_site.py.
 from __future__ import annotations
 
 import importlib
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import nbformat
@@ -79,6 +82,114 @@ def test_validation_catches_a_missing_parameter(monkeypatch):
     monkeypatch.setattr(labkit.geometry, "wrap_twice", wrap_twice, raising=False)
     found = public_api.findings([public_api.PublicName("labkit.geometry.wrap_twice", wrap_twice, "scan_io")])
     assert {code for _name, code, _msg in found} == {"PR01", "RT01"}
+
+
+def _make_docs_sphinx_options() -> list[str]:
+    """The options ``make docs`` passes to Sphinx (the Makefile's ``SPHINX =`` line)."""
+    line = next(line for line in (REPO / "Makefile").read_text(encoding="utf-8").splitlines()
+                if line.startswith("SPHINX ="))
+    words = line.split()
+    return words[words.index("sphinx") + 1:]
+
+
+TINY_CONF = """
+import sys
+sys.path.insert(0, {repo!r})
+from docs import xref
+extensions = ["sphinx.ext.autodoc", "numpydoc"]
+nitpicky = xref.NITPICKY
+nitpick_ignore_regex = xref.NITPICK_IGNORE_REGEX
+numpydoc_xref_param_type = True
+numpydoc_xref_aliases = {{"Thing": "tinymod.Thing"}}
+numpydoc_xref_ignore = "all"
+numpydoc_show_class_members = False
+"""
+
+TINY_MODULE = '''
+class Thing:
+    """A documented class."""
+
+
+def helper(x):
+    """The target of a good reference.
+
+    Parameters
+    ----------
+    x : Thing
+        A labkit-like class, linked by numpydoc's type aliases.
+
+    Returns
+    -------
+    int
+        A builtin type: numpydoc links it into Python's inventory, which the offline build lacks.
+    """
+    return 0
+
+
+def user(values):
+    """Uses :func:`helper`, :class:`numpy.ndarray`, :class:`ValueError` and :func:`tinymod.helper`.
+
+    And one reference that goes nowhere: :func:`tinymod.not_there`.
+
+    Parameters
+    ----------
+    values : list of Thing or None
+        Words of a type that are not aliases stay text.
+    """
+'''
+
+
+def test_a_broken_cross_reference_fails_make_docs(tmp_path):
+    """``make docs`` is nitpicky and turns warnings into errors, with the ignore list of docs/xref.py:
+    a small site built with the same options and settings fails on its one broken reference, and on
+    nothing else (references to numpy, to builtins and numpydoc's links for ``int`` are let through;
+    the labkit-like ones resolve)."""
+    options = _make_docs_sphinx_options()
+    assert "-n" in options and "-W" in options, f"make docs must build with -n -W: {options}"
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "conf.py").write_text(TINY_CONF.format(repo=str(REPO)), encoding="utf-8")
+    (src / "tinymod.py").write_text(TINY_MODULE, encoding="utf-8")
+    (src / "index.rst").write_text("Tiny\n====\n\n.. automodule:: tinymod\n   :members:\n", encoding="utf-8")
+    run = subprocess.run([sys.executable, "-m", "sphinx", *options, str(src), str(tmp_path / "html")],
+                         cwd=src, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(src)})
+    warnings = [line for line in run.stderr.splitlines() if "WARNING" in line or "ERROR" in line]
+    assert run.returncode != 0, "a broken reference must fail the build"
+    assert len(warnings) == 1 and "tinymod.not_there" in warnings[0], run.stderr[-3000:]
+
+
+def test_docs_conf_takes_the_cross_reference_settings():
+    """docs/conf.py is nitpicky with docs/xref.py's ignore list (also for builds that do not pass -n,
+    such as tests/test_docs_site.py's)."""
+    import ast
+
+    tree = ast.parse((REPO / "docs" / "conf.py").read_text(encoding="utf-8"))
+    assigned = {target.id: ast.unparse(node.value) for node in tree.body if isinstance(node, ast.Assign)
+                for target in node.targets if isinstance(target, ast.Name)}
+    assert assigned.get("nitpicky") == "xref.NITPICKY"
+    assert assigned.get("nitpick_ignore_regex") == "xref.NITPICK_IGNORE_REGEX"
+    from docs import xref
+
+    assert xref.NITPICKY is True
+
+
+def test_the_ignore_list_never_lets_a_labkit_name_through():
+    """docs/xref.py lets other projects' names through, never labkit's own: its patterns are checked
+    against labkit names, public or private, and against the outside names they are meant for."""
+    import re
+
+    from docs import xref
+
+    def ignored(kind: str, target: str) -> bool:
+        return any(re.fullmatch(k, kind) and re.fullmatch(t, target) for k, t in xref.NITPICK_IGNORE_REGEX)
+
+    for target in ("labkit", "labkit.Scan", "labkit._safe.check_output", "labkit.sim.World.objects", "Scan",
+                   "segment_labels", "STATUS", "CorruptFileError"):
+        assert not ignored("py:func", target) and not ignored("py:class", target), target
+    for kind, target in (("py:class", "numpy.ndarray"), ("py:class", "ValueError"), ("py:class", "python:int"),
+                         ("std:ref", "python:bltin-boolean-values"), ("py:func", "json.loads"),
+                         ("py:class", "rerun.RecordingStream"), ("py:class", "pathlib.Path")):
+        assert ignored(kind, target), target
 
 
 def test_executed_copy_is_keyed_on_the_notebook_source(tmp_path, monkeypatch):

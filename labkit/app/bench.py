@@ -29,7 +29,32 @@ __all__ = ["BenchResult", "time_recording"]
 
 @dataclass
 class BenchResult:
-    """What one timed pass over a recording measured (times in seconds)."""
+    """What one timed pass over a recording measured (times in seconds).
+
+    Parameters
+    ----------
+    source : Path
+        The recording timed.
+    method : str
+        The line extractor of the config (``config.lines.method``).
+    n_scans : int
+        Scans read and extracted.
+    n_beams : int
+        Beams per scan (of the last scan read).
+    read_s : float
+        Seconds spent reading scans.
+    extract_s : float
+        Seconds spent extracting features (warm-up passes not counted).
+    total_s : float
+        Seconds of the whole pass: reading, extracting and logging to the .rrd.
+    stages : dict of str to ndarray
+        Per pipeline stage, its time in seconds on every scan (``Features.timings``).
+    error : Exception or None
+        The :class:`labkit.CorruptFileError` of a damaged recording (what
+        :func:`labkit.viz.rr.record_scans` reports), else None.
+    kind : str
+        What was read, for the report: ``".bag"``, ``"CARMEN .log/.gz"``, ...
+    """
 
     source: Path
     method: str
@@ -72,13 +97,32 @@ class BenchResult:
 def time_recording(source: str | Path, config: Config | None = None, *, topic: str | None = None,
                    strict: bool = False, n_scans: int | None = None, warmup: int = 20,
                    scans: slice | None = None) -> BenchResult:
-    """Read ``source``, extract every scan's features and log both to a temporary .rrd, timing each phase.
+    """Read a recording, extract every scan's features and log both to a temporary .rrd, timing each phase.
 
-    ``n_scans``: only the first so many; ``scans``: only this range (a slice, as
-    :func:`labkit.read_scans` takes it). The first ``warmup`` scans are also extracted once
-    untimed (caches, lazy imports).
-    Raises :class:`RefusedError` when the recording holds no scans; a damaged recording is
+    Raises :class:`labkit.errors.RefusedError` when the recording holds no scans; a damaged recording is
     timed on what could be read and its error kept in ``result.error``.
+
+    Parameters
+    ----------
+    source : str or Path
+        The recording (any format :func:`labkit.read_scans` reads).
+    config : Config or None
+        The pipeline's configuration; None: ``Config()``.
+    topic : str or None
+        The scan topic of a bag; None: the only one.
+    strict : bool
+        Stop at the first bad record instead of skipping it.
+    n_scans : int or None
+        Only the first so many scans; None: all.
+    warmup : int
+        The first ``warmup`` scans are also extracted once untimed (caches, lazy imports).
+    scans : slice or None
+        Only this range of scans (a slice, as :func:`labkit.read_scans` takes it).
+
+    Returns
+    -------
+    BenchResult
+        The counts, phase times and per-stage times of the pass.
     """
     from labkit.viz import rr as lkrr  # the logger is a consumer, imported when timing
 

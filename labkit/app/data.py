@@ -46,8 +46,14 @@ def _repo_data() -> Path:
 
 
 def data_dir() -> Path:
-    """The folder :func:`bundled_data` reads: ``$LABKIT_DATA``, the repository's ``data/``,
-    or the user cache."""
+    """The folder :func:`bundled_data` reads.
+
+    Returns
+    -------
+    Path
+        ``$LABKIT_DATA`` when set, else the repository's ``data/`` when it holds the bundled
+        bags, else the user cache (``$XDG_CACHE_HOME/labkit/data``).
+    """
     env = os.environ.get("LABKIT_DATA")
     if env:
         return Path(env)
@@ -97,10 +103,34 @@ def write_simulation(
 ) -> tuple[Path, Path, int]:
     """Simulate a scenario into a bag and write its ground truth beside it.
 
-    Returns ``(bag_path, truth_path, n_scans)``. ``progress`` may wrap the scan iterator
-    (e.g. ``functools.partial(tqdm, total=...)``). Both files are checked before anything is
-    written (``overwrite`` replaces only a bag and a ground-truth file), and each is written
-    under a temporary name and renamed when complete.
+    Both files are checked before anything is written (``overwrite`` replaces only a bag and a
+    ground-truth file), and each is written under a temporary name and renamed when complete.
+
+    Parameters
+    ----------
+    scenario : str or labkit.sim.Scenario
+        A scenario or the name of one (:func:`labkit.sim.scenario`).
+    path : str or Path
+        The bag to write; its truth goes to :func:`labkit.sim.truth_path_for` of it.
+    format : str or None
+        ``"ros1"``, ``"ros2"`` or ``"mcap"``; None: from the name (``labkit.io.bags.bag_format``).
+    seed : int
+        The simulation's seed.
+    n_scans : int or None
+        Only so many scans; None: the scenario's count.
+    overwrite : bool
+        Replace an existing bag and truth file.
+    progress : callable or None
+        Wraps the scan iterator, e.g. ``functools.partial(tqdm, total=...)``.
+
+    Returns
+    -------
+    bag_path : Path
+        The bag written.
+    truth_path : Path
+        Its ground-truth file.
+    n_scans : int
+        The number of scans written.
     """
     sc = sim.scenario(scenario) if isinstance(scenario, str) else scenario
     path = Path(path)
@@ -122,8 +152,22 @@ def write_simulation(
 
 
 def generate_bundled(folder: str | Path, *, progress: bool = False, overwrite: bool = True) -> list[Path]:
-    """Regenerate every bundled recording (and its truth) into ``folder``. ``overwrite``
-    replaces earlier copies (only bags and ground-truth files: see :mod:`labkit._safe`)."""
+    """Regenerate every bundled recording (and its truth) into a folder.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Where to write them.
+    progress : bool
+        Show a progress bar per recording.
+    overwrite : bool
+        Replace earlier copies (only bags and ground-truth files are ever replaced).
+
+    Returns
+    -------
+    list of Path
+        The paths written: each bag followed by its ground-truth file.
+    """
     folder = Path(folder)
     out = []
     for name, (scenario, fmt, seed) in BUNDLED.items():

@@ -29,6 +29,18 @@ PNG_FILE = OutputKind("a PNG image (.png)", (".png",), starts_with(b"\x89PNG\r\n
 def richest_scan(features: list[Features]) -> int:
     """The scan with the most kinds of feature (lines, circles, legs, ...); ties: the middle one.
 
+    Parameters
+    ----------
+    features : list of Features
+        The features of each scan, in order.
+
+    Returns
+    -------
+    int
+        The index of that scan in ``features``.
+
+    Examples
+    --------
     >>> from types import SimpleNamespace as F
     >>> f = lambda **k: F(LAYERS=("lines", "legs"), **{"lines": [], "legs": [], **k})
     >>> richest_scan([f(lines=[1]), f(lines=[1], legs=[1]), f(lines=[1], legs=[1]), f(lines=[1], legs=[1])])
@@ -43,7 +55,35 @@ def richest_scan(features: list[Features]) -> int:
 
 @dataclass
 class DemoResult:
-    """What :func:`run_demo` did: counts, median stage times, phase rates and the files written."""
+    """What :func:`run_demo` did: counts, median stage times, phase rates and the files written.
+
+    Parameters
+    ----------
+    source : Path
+        The recording shown.
+    rrd : Path
+        The rerun recording written (``out/demo.rrd``).
+    png : Path
+        The picture of the richest scan written (``out/demo.png``).
+    n_scans : int
+        Scans logged.
+    n_beams : int
+        Beams per scan (of the first scan).
+    method : str
+        The line extractor used.
+    scan_shown : int
+        The index of the scan in the picture (:func:`richest_scan`).
+    per_scan : dict of str to float
+        Mean count per scan of each kind of feature.
+    stage_us : dict of str to float
+        Median microseconds per scan of each pipeline stage.
+    seconds : dict of str to float
+        Seconds of each phase: ``"read"``, ``"extract"``, ``"rrd"``.
+    n_truth : int
+        Scans logged with their ground truth.
+    damage : CorruptFileError or None
+        The error of a damaged recording (shown on what could be read), else None.
+    """
 
     source: Path
     rrd: Path
@@ -74,11 +114,30 @@ class DemoResult:
 
 def run_demo(source: str | Path, out: str | Path, config: Config | None = None, *, topic: str | None = None,
              strict: bool = False) -> DemoResult:
-    """Extract every scan of ``source``, write ``out/demo.rrd`` (with the ground truth when the
-    simulator's truth file sits beside it) and ``out/demo.png`` (the richest scan).
+    """Extract every scan of a recording and write ``out/demo.rrd`` and ``out/demo.png``.
 
+    The .rrd holds every scan with its features (and the ground truth when the simulator's truth
+    file sits beside the recording); the picture shows the richest scan (:func:`richest_scan`).
     Only these two files are ever replaced, so the demo can run again and again; nothing else
     is. A damaged recording is shown on what could be read; its error is in ``result.damage``.
+
+    Parameters
+    ----------
+    source : str or Path
+        The recording (any format :func:`labkit.read_scans` reads).
+    out : str or Path
+        The folder to write the two files into.
+    config : Config or None
+        The pipeline's configuration; None: ``Config()``.
+    topic : str or None
+        The scan topic of a bag; None: the only one.
+    strict : bool
+        Stop at the first bad record instead of skipping it.
+
+    Returns
+    -------
+    DemoResult
+        What was written and measured.
     """
     import matplotlib
 

@@ -106,7 +106,19 @@ SENSOR_NOISE_LEVELS_M = (0.005, 0.01, 0.02, 0.03)
 
 @dataclass(frozen=True)
 class SimScan:
-    """One simulated scan with its world's name, its noise level and its ground truth."""
+    """One simulated scan with its world's name, its noise level and its ground truth.
+
+    Parameters
+    ----------
+    world : str
+        The kind of world: ``"office"``, ``"corridor"``, ``"random_polygons"``, ...
+    noise_std_m : float
+        The simulated range noise, metres (standard deviation).
+    scan : Scan
+        The scan.
+    truth : labkit.sim.ScanTruth
+        Its ground truth.
+    """
 
     world: str
     noise_std_m: float
@@ -122,7 +134,7 @@ def nguyen_lidar(n_beams: int = 722, noise_std_m: float = 0.005) -> Lidar:
 
 def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVELS_M, n_beams: int = 722,
                seed: int = 0) -> list[SimScan]:
-    """``n_scans`` simulated scans per noise level, a third from each kind of world.
+    """Simulated scans per noise level, a third from each kind of world.
 
     * ``office``: poses spread along the office scenario's tour (two rooms, a door, a column
       and a walking person);
@@ -133,6 +145,22 @@ def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVE
 
     The same poses and worlds are used at every noise level; the noise itself is drawn from
     ``seed``.
+
+    Parameters
+    ----------
+    n_scans : int
+        Scans per noise level.
+    noise_levels : sequence of float
+        The range noise levels, metres.
+    n_beams : int
+        Beams of the 180 deg scanner (``nguyen_lidar``).
+    seed : int
+        The seed of the poses, the random rooms and the noise.
+
+    Returns
+    -------
+    list of SimScan
+        ``n_scans`` scans for each noise level, in the order of ``noise_levels``.
     """
     if n_scans < 3:
         raise ValueError(f"n_scans must be >= 3 (one per kind of world), got {n_scans}")
@@ -152,11 +180,33 @@ def nguyen_set(n_scans: int = 102, *, noise_levels: Sequence[float] = NOISE_LEVE
 
 def world_scans(name: str, lidar: Lidar, n: int, rng: np.random.Generator, *, first_room: int = 0,
                 headings: Sequence[float] | np.ndarray | None = None) -> list[tuple[Scan, ScanTruth]]:
-    """``n`` simulated ``(scan, truth)`` pairs of one kind of world, seen by ``lidar`` with the
-    noise drawn from ``rng``: for a scenario's world (``office``, ``corridor``, ``hall``, ...)
-    poses spread along its trajectory (moving objects placed at each time); for
-    ``random_polygons`` a new random room per scan (``random_polygons(first_room + k)``) seen
-    from its centre at ``headings[k]`` (default: ``n`` headings spread around the circle)."""
+    """Simulated ``(scan, truth)`` pairs of one kind of world.
+
+    For a scenario's world (``office``, ``corridor``, ``hall``, ...) poses spread along its
+    trajectory (moving objects placed at each time); for ``random_polygons`` a new random room
+    per scan (``random_polygons(first_room + k)``) seen from its centre at ``headings[k]``.
+
+    Parameters
+    ----------
+    name : str
+        The kind of world: a scenario's name or ``"random_polygons"``.
+    lidar : labkit.sim.Lidar
+        The scanner that sees it.
+    n : int
+        How many pairs.
+    rng : numpy.random.Generator
+        Draws the range noise.
+    first_room : int
+        The seed of the first random room (``random_polygons`` only).
+    headings : sequence of float or ndarray or None
+        The scanner's heading in each random room, radians; None: ``n`` headings spread around
+        the circle.
+
+    Returns
+    -------
+    list of tuple of (Scan, labkit.sim.ScanTruth)
+        ``n`` scans, each with its ground truth.
+    """
     if name == "random_polygons":
         if headings is None:
             headings = np.linspace(-math.pi, math.pi, n, endpoint=False)
@@ -187,12 +237,28 @@ def _timed(extract: Callable, scans: Sequence[Scan], progress=None, repeat: int 
 def compare_lines(data: Sequence[SimScan], extractors: Mapping[str, Callable] | None = None, *,
                   by: Sequence[str] = ("noise_std_m",), progress: Callable | None = None, repeat: int = 1,
                   **rule) -> list[dict]:
-    """Every extractor on ``data``, scored per group of scans (``by``: SimScan fields).
+    """Every extractor on a set of simulated scans, scored per group of scans.
 
-    Returns one row per (group, extractor): the group's keys, ``method``, the
-    :meth:`LineScores.as_dict` fields, ``lines_per_scan`` and ``scans_per_s`` (each scan
-    timed at its best of ``repeat`` runs). ``rule``: keyword arguments of
-    :func:`labkit.evaluation.match_lines`.
+    Parameters
+    ----------
+    data : sequence of SimScan
+        The scans with their truth.
+    extractors : mapping of str to callable, or None
+        Name -> ``extract(scan)`` returning line segments; None: :data:`LINE_EXTRACTORS`.
+    by : sequence of str
+        The :class:`SimScan` fields that group the scans.
+    progress : callable or None
+        Called as ``progress(scans, desc=...)`` around the scans of each run (e.g. tqdm).
+    repeat : int
+        Each scan is timed at its best of ``repeat`` runs.
+    **rule
+        Keyword arguments of :func:`labkit.evaluation.match_lines`.
+
+    Returns
+    -------
+    list of dict
+        One row per (group, extractor): the group's keys, ``method``, the
+        :meth:`labkit.evaluation.LineScores.as_dict` fields, ``lines_per_scan`` and ``scans_per_s``.
     """
     methods: Mapping[str, Callable] = LINE_EXTRACTORS if extractors is None else extractors
     groups: dict[tuple, list[SimScan]] = {}
@@ -212,10 +278,31 @@ def compare_lines(data: Sequence[SimScan], extractors: Mapping[str, Callable] | 
 
 def score_round_objects(n_scans: int = 300, *, seed: int = 0, config: Config | None = None,
                         progress: Callable | None = None, noise_std_m: float | None = None) -> dict[str, dict]:
-    """Circles and legs of :func:`labkit.extract_features` on ``n_scans`` of the ``hall``
-    scenario (columns, bench feet, a rolling cylinder, a walking student; LMS200, 5 mm of range
-    noise unless ``noise_std_m`` is given), scored with :func:`labkit.evaluation.match_circles`
-    and :func:`~labkit.evaluation.match_legs`."""
+    """Circles and legs of :func:`labkit.extract_features` on the ``hall`` scenario, scored against its truth.
+
+    The hall has columns, bench feet, a rolling cylinder and a walking student, seen by an LMS200;
+    the detections are scored with :func:`labkit.evaluation.match_circles` and
+    :func:`~labkit.evaluation.match_legs`.
+
+    Parameters
+    ----------
+    n_scans : int
+        Scans simulated.
+    seed : int
+        The simulation's seed.
+    config : Config or None
+        The pipeline's configuration; None: ``Config()``.
+    progress : callable or None
+        Called as ``progress(items, total=n_scans, desc="hall")`` around the simulated scans (e.g. tqdm).
+    noise_std_m : float or None
+        The range noise, metres; None: the scenario's 5 mm.
+
+    Returns
+    -------
+    dict of str to dict
+        ``"circles"`` and ``"legs"``: each ``kind``, the detection scores' fields
+        (:func:`labkit.evaluation.score_detections`) and ``scans_per_s``.
+    """
     circles, legs = [], []
     hall = scenario("hall")
     if noise_std_m is not None:
@@ -239,14 +326,39 @@ def compare_on_logs(paths: Iterable[str | Path], extractors: Mapping[str, Callab
                     n_scans: int = 100, progress: Callable | None = None, repeat: int = 1, topic: str | None = None,
                     strict: bool = False, on_damage: Callable[[Exception], None] | None = None,
                     scans: slice | None = None) -> list[dict]:
-    """Ray-axis RMSE, median error, share of errors over 10 cm, coverage and lines per scan
-    of every extractor on the first ``n_scans`` scans of each recording (any format
-    :func:`labkit.read_scans` reads; ``topic`` and ``strict`` as there), or on the range
-    ``scans`` of each (a slice, as :func:`labkit.read_scans` takes it).
+    """Line extractors on real recordings, scored without truth (ray-axis errors).
 
-    A damaged recording is scored on the scans that could be read; its
-    :class:`labkit.CorruptFileError` goes to ``on_damage`` (default: raised after every
-    recording was scored).
+    For every extractor and recording: ray-axis RMSE, median error, share of errors over 10 cm,
+    coverage and lines per scan (:func:`labkit.evaluation.ray_errors`). A damaged recording is
+    scored on the scans that could be read.
+
+    Parameters
+    ----------
+    paths : iterable of str or Path
+        The recordings (any format :func:`labkit.read_scans` reads).
+    extractors : mapping of str to callable, or None
+        Name -> ``extract(scan)``; None: :data:`LINE_EXTRACTORS`.
+    n_scans : int
+        The first so many scans of each recording.
+    progress : callable or None
+        Called as ``progress(scans, desc=...)`` around the scans of each run (e.g. tqdm).
+    repeat : int
+        Each scan is timed at its best of ``repeat`` runs.
+    topic : str or None
+        The scan topic of a bag, as in :func:`labkit.read_scans`.
+    strict : bool
+        Stop at the first bad record, as in :func:`labkit.read_scans`.
+    on_damage : callable or None
+        Receives the :class:`labkit.CorruptFileError` of a damaged recording; None: the first
+        is raised after every recording was scored.
+    scans : slice or None
+        Score this range of scans of each recording instead of the first ``n_scans``.
+
+    Returns
+    -------
+    list of dict
+        One row per (recording, extractor): ``log``, ``method``, ``scans``, ``beams``, ``rmse_m``,
+        ``median_abs_m``, ``over_10cm``, ``coverage``, ``lines_per_scan``, ``scans_per_s``.
     """
 
     methods: Mapping[str, Callable] = LINE_EXTRACTORS if extractors is None else extractors
@@ -292,11 +404,33 @@ def _first_scans(path, n_scans: int, topic, strict: bool, damage: list, on_damag
 def round_objects_on_logs(paths: Iterable[str | Path], configs: Mapping[str, Config | None], *, n_scans: int = 100,
                           topic: str | None = None, strict: bool = False,
                           on_damage: Callable[[Exception], None] | None = None) -> list[dict]:
-    """Circles, legs and people per scan of :func:`labkit.extract_features` with each of
-    ``configs`` (name -> :class:`labkit.Config`, None for the defaults) on the first ``n_scans``
-    scans of each recording, and the median range noise of those scans
-    (:func:`labkit.noise.scan_sigma`). Real recordings have no truth: this counts, it does not
-    score. Damaged recordings as :func:`compare_on_logs`."""
+    """Circles, legs and people per scan of :func:`labkit.extract_features` on real recordings.
+
+    Real recordings have no truth: this counts, it does not score. The median range noise of the
+    scans (:func:`labkit.noise.scan_sigma`) is given beside. Damaged recordings as
+    :func:`compare_on_logs`.
+
+    Parameters
+    ----------
+    paths : iterable of str or Path
+        The recordings.
+    configs : mapping of str to Config or None
+        Name -> configuration (None for the defaults).
+    n_scans : int
+        The first so many scans of each recording.
+    topic : str or None
+        The scan topic of a bag, as in :func:`labkit.read_scans`.
+    strict : bool
+        Stop at the first bad record, as in :func:`labkit.read_scans`.
+    on_damage : callable or None
+        Receives the error of a damaged recording; None: the first is raised at the end.
+
+    Returns
+    -------
+    list of dict
+        One row per (recording, configuration): ``log``, ``setting``, ``scans``, ``sigma_m``,
+        ``circles_per_scan``, ``legs_per_scan``, ``people_per_scan``.
+    """
     from labkit.noise import scan_sigma
 
     rows = []
@@ -323,10 +457,31 @@ SWEEP_THRESHOLDS_M = (0.01, 0.015, 0.02, 0.03, 0.05, 0.08, 0.12, 0.2, 0.3)
 def sweep_split_and_merge(data: Sequence[SimScan], thresholds: Sequence[float] = SWEEP_THRESHOLDS_M, *,
                           by: Sequence[str] = ("noise_std_m",), progress: Callable | None = None, repeat: int = 1,
                           **fixed) -> list[dict]:
-    """True- and false-positive rates of :func:`labkit.split_and_merge` for each
-    ``split_threshold_m`` in ``thresholds``, per group: the papers' fixed setting
-    (:data:`labkit.noise.FIXED_LINES`: 1 cm of assumed range noise, every line reported) with that
-    threshold, other arguments ``fixed`` over it."""
+    """True- and false-positive rates of :func:`labkit.split_and_merge` for each split threshold.
+
+    Each threshold runs with the papers' fixed setting (:data:`labkit.noise.FIXED_LINES`: 1 cm
+    of assumed range noise, every line reported), other arguments ``fixed`` over it.
+
+    Parameters
+    ----------
+    data : sequence of SimScan
+        The scans with their truth.
+    thresholds : sequence of float
+        The values of ``split_threshold_m``, metres.
+    by : sequence of str
+        The :class:`SimScan` fields that group the scans.
+    progress : callable or None
+        As in :func:`compare_lines`.
+    repeat : int
+        Each scan is timed at its best of ``repeat`` runs.
+    **fixed
+        Further keyword arguments of :func:`labkit.split_and_merge`.
+
+    Returns
+    -------
+    list of dict
+        The rows of :func:`compare_lines`, with ``split_threshold_m`` in place of ``method``.
+    """
     setting = {**FIXED_LINES, **fixed}
     extractors = {f"{t:g}": partial(split_and_merge, **{**setting, "split_threshold_m": t}) for t in thresholds}
     rows = compare_lines(data, extractors, by=by, progress=progress, repeat=repeat)
@@ -337,10 +492,32 @@ def sweep_split_and_merge(data: Sequence[SimScan], thresholds: Sequence[float] =
 
 def false_positive_reasons(data: Sequence[SimScan], noise_std_m: float, extract: Callable = split_and_merge,
                            max_dr_m: float = 0.05, max_dalpha: float = math.radians(3.0), **kwargs) -> list[dict]:
-    """Why the false positives of ``extract(scan, **kwargs)`` on the scans of ``data`` at
-    ``noise_std_m`` failed to match: each is compared with the wall most of its beams hit
-    ("dr", "dalpha", both, "overlap or a second line on the wall", or "not on a wall").
-    One row per reason: count, median length and median number of points."""
+    """Why the false positives of an extractor failed to match their wall.
+
+    Each false line is compared with the wall most of its beams hit: ``"dr"``, ``"dalpha"``,
+    both, ``"overlap or a second line on the wall"``, or ``"not on a wall"``.
+
+    Parameters
+    ----------
+    data : sequence of SimScan
+        The scans with their truth.
+    noise_std_m : float
+        Only the scans of this noise level.
+    extract : callable
+        ``extract(scan, **kwargs)`` returning line segments.
+    max_dr_m : float
+        The matching tolerance in ``r``, metres.
+    max_dalpha : float
+        The matching tolerance in ``alpha``, radians.
+    **kwargs
+        Passed to ``extract``.
+
+    Returns
+    -------
+    list of dict
+        One row per reason, most frequent first: ``reason``, ``lines``, ``median_length_m``,
+        ``median_points``.
+    """
     found: dict[str, list[tuple[float, int]]] = {}
     for item in data:
         if item.noise_std_m != noise_std_m:
@@ -371,16 +548,34 @@ PLACE_DR_M, PLACE_DALPHA_DEG = SplitMergeParams.place_dr_m, SplitMergeParams.pla
 
 def truth_lines(item: SimScan, *, place_confidence: float = 0.0, place_dr_m: float = PLACE_DR_M,
                 place_dalpha_deg: float = PLACE_DALPHA_DEG) -> list[LineSegment]:
-    """The lines of an extractor that knew which beams hit which wall: for every visible wall of
-    ``item``'s truth, one line fitted (weighted polar least squares, as the extractors fit) to
-    exactly the valid beams that hit it, with the covariance of the true range noise; with
-    ``place_confidence`` > 0, only those the data can place, as the ``"auto"`` settings choose
-    (:func:`labkit.fitting.placement_probability` within ``place_dr_m`` and ``place_dalpha_deg``).
+    """The lines of an extractor that knew which beams hit which wall.
+
+    For every visible wall of the scan's truth, one line fitted (weighted polar least squares, as
+    the extractors fit) to exactly the valid beams that hit it, with the covariance of the true
+    range noise; with ``place_confidence`` > 0, only those the data can place, as the ``"auto"``
+    settings choose (:func:`labkit.fitting.placement_probability`).
 
     No extractor knows the truth, so on the same scans none should find more walls with as few
     false lines by that choice: its TruePos / FalsePos are a reference for what the data allows
     (:func:`placement_frontier`). A fit to a wall's own beams misses the matching tolerance only
-    by noise, so its false positives are the lines the noise moved too far."""
+    by noise, so its false positives are the lines the noise moved too far.
+
+    Parameters
+    ----------
+    item : SimScan
+        The scan with its truth.
+    place_confidence : float
+        The placing confidence; 0: every line kept.
+    place_dr_m : float
+        The placing tolerance in ``r``, metres.
+    place_dalpha_deg : float
+        The placing tolerance in ``alpha``, degrees.
+
+    Returns
+    -------
+    list of LineSegment
+        One line per visible wall kept.
+    """
     scan, truth = item.scan, item.truth
     lines = []
     for wall in truth.walls:
@@ -400,17 +595,34 @@ PLACE_CONFIDENCES = (0.0, 0.5, 0.6, 0.7, 0.8, 0.9)
 
 def placement_frontier(data: Sequence[SimScan], confidences: Sequence[float] = PLACE_CONFIDENCES, *,
                        extract: Callable | None = None, progress: Callable | None = None) -> list[dict]:
-    """TruePos against FalsePos as the placing confidence varies, for :func:`truth_lines` (method
-    ``"walls' own beams"``) and for ``extract`` (default: split-and-merge with
-    :data:`labkit.noise.AUTO_LINES`; method ``"extractor"``): one row per noise level, confidence
-    and method, with :func:`compare_lines`' fields (but ``scans_per_s``) and ``place_confidence``.
+    """TruePos against FalsePos as the placing confidence varies.
 
-    Placing is the last step of every extractor that has it, a filter on the lines' covariances
-    (:func:`labkit.fitting.placement_probability`): each method runs once per scan with
-    ``place_confidence=0`` and its lines are placed at each confidence in turn.
+    Compares :func:`truth_lines` (method ``"walls' own beams"``) with ``extract`` (method
+    ``"extractor"``). Placing is the last step of every extractor that has it, a filter on the
+    lines' covariances (:func:`labkit.fitting.placement_probability`): each method runs once per
+    scan with ``place_confidence=0`` and its lines are placed at each confidence in turn.
 
     Where the walls' own beams cannot reach a goal at any confidence, no extractor choosing its
-    lines the same way can: the data is what limits it."""
+    lines the same way can: the data is what limits it.
+
+    Parameters
+    ----------
+    data : sequence of SimScan
+        The scans with their truth.
+    confidences : sequence of float
+        The placing confidences.
+    extract : callable or None
+        ``extract(scan, place_confidence=0)``; None: split-and-merge with
+        :data:`labkit.noise.AUTO_LINES`.
+    progress : callable or None
+        As in :func:`compare_lines`.
+
+    Returns
+    -------
+    list of dict
+        One row per noise level, confidence and method, with :func:`compare_lines`' fields (but
+        ``scans_per_s``) and ``place_confidence``.
+    """
     extract = partial(split_and_merge, **AUTO_LINES) if extract is None else extract
     every = {"walls' own beams": {id(item.scan): truth_lines(item) for item in data},
              "extractor": {id(item.scan): extract(item.scan, place_confidence=0.0) for item in data}}
@@ -447,8 +659,21 @@ SWEEP_COLUMNS = {"noise_std_m": "noise (m)", "split_threshold_m": "split thresho
 
 
 def markdown_table(rows: Sequence[dict], columns: dict[str, str]) -> str:
-    """``rows`` as a Markdown table; ``columns`` maps a row key to ``header`` or
-    ``header:format`` (a format spec such as ``.3f``)."""
+    """Rows as a Markdown table.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        The rows; a missing key gives an empty cell, a NaN a dash.
+    columns : dict of str to str
+        Row key -> ``header`` or ``header:format`` (a format spec such as ``.3f``); a header
+        with ``(mm)`` shows a value stored in metres in millimetres.
+
+    Returns
+    -------
+    str
+        The table, one line per row under the header and its rule.
+    """
     heads, keys, fmts = [], [], []
     for key, spec in columns.items():
         head, _, fmt = spec.partition(":")

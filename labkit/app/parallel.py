@@ -1,7 +1,7 @@
 """Many recordings, many cores, many machines: ``labkit extract`` and ``labkit evaluate`` on Dask.
 
 A task reads one recording (or one range of its scans, below), runs the pipeline on it and
-writes its output itself, through :mod:`labkit._safe` (so a failed or interrupted task leaves
+writes its output itself, through ``labkit._safe`` (so a failed or interrupted task leaves
 no half file), then returns a small :class:`Result`: counts, seconds, peak memory, and the
 one-line error of a damaged or failed recording. The tasks run on
 
@@ -83,11 +83,12 @@ class Result:
     Parameters
     ----------
     input : str
+        The recording.
     output : str or None
         What it wrote (None: nothing, or a part of a joined table).
     status : str
         ``done``, ``damaged`` (the output holds every readable scan), ``refused``, ``system``,
-        ``bug`` or ``interrupted`` (the partial output is ``output``); :data:`STATUS` gives the
+        ``bug`` or ``interrupted`` (the partial output is ``output``); ``STATUS`` gives the
         exit status of each.
     error : str or None
         The one-line error (a bug: the traceback).
@@ -135,10 +136,24 @@ def _is_recording(p: Path) -> bool:
 
 
 def recordings_in(paths: Iterable[str | Path]) -> list[Path]:
-    """The recordings to run on: every path given that is a file or a ROS2 bag folder, and the
-    recordings inside every other folder given (bags, MCAP files, ROS2 bag folders and CARMEN
-    logs, sorted by name; JSON scans only when named, since a folder's ``.jsonl`` files may be
-    labkit's own features). A folder that holds none, or a path that does not exist, is refused."""
+    """The recordings to run on, from paths that name recordings or folders of them.
+
+    Every path given that is a file or a ROS2 bag folder is taken as it is; every other folder
+    gives the recordings inside it (bags, MCAP files, ROS2 bag folders and CARMEN logs, sorted by
+    name; JSON scans only when named, since a folder's ``.jsonl`` files may be labkit's own
+    features). A folder that holds none, or a path that does not exist, is refused
+    (:class:`labkit.errors.RefusedError`).
+
+    Parameters
+    ----------
+    paths : iterable of str or Path
+        Recordings and folders.
+
+    Returns
+    -------
+    list of Path
+        The recordings, each once, in the order given.
+    """
     out: list[Path] = []
     for raw in paths:
         p = Path(raw)
@@ -181,8 +196,25 @@ def _stem(p: Path) -> str:
 
 
 def output_paths(inputs: Sequence[Path], folder: str | Path, suffix: str = ".features.jsonl") -> list[Path]:
-    """One output per input in ``folder``: ``<name>.features.jsonl`` (or ``suffix``), ``<name>``
-    the recording's name without its suffix. Two inputs of one name are refused."""
+    """One output per input in a folder: ``<name>.features.jsonl``, ``<name>`` the recording's name without its suffix.
+
+    Two inputs of one name are refused (:class:`labkit.errors.RefusedError`), and so is a ``folder``
+    that is a file.
+
+    Parameters
+    ----------
+    inputs : sequence of Path
+        The recordings.
+    folder : str or Path
+        Where the outputs go.
+    suffix : str
+        The outputs' suffix.
+
+    Returns
+    -------
+    list of Path
+        The output of each input, in order.
+    """
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise RefusedError(f"{folder} is a file: with several inputs, -o names a folder (one output per input) or "
@@ -199,14 +231,26 @@ def split_ranges(sizes: Sequence[int | None], n_workers: int, *,
                  min_scans: int | None = None) -> list[list[tuple[int, int]] | None]:
     """How to split each recording of a set among ``n_workers`` workers.
 
-    ``sizes`` are the recordings' scan counts (None: unknown, e.g. a damaged bag; never split).
     A recording longer than its share of the work, ``sum(sizes) / n_workers`` scans, is cut into
-    ``ceil(size / share)`` ranges of (nearly) equal length, none shorter than ``min_scans``
-    (default :data:`MIN_PIECE_SCANS`);
+    ``ceil(size / share)`` ranges of (nearly) equal length, none shorter than ``min_scans``;
     the others stay whole, so a set of many similar recordings runs as before, one task each.
-    Returns, per recording, None (one task) or its ranges ``(start, stop)``, counted from its
-    first scan.
 
+    Parameters
+    ----------
+    sizes : sequence of int or None
+        The recordings' scan counts (None: unknown, e.g. a damaged bag; never split).
+    n_workers : int
+        The number of workers; fewer than 2: nothing is split.
+    min_scans : int or None
+        The shortest piece, scans; None: :data:`MIN_PIECE_SCANS`.
+
+    Returns
+    -------
+    list of (list of tuple of (int, int)) or None
+        Per recording, None (one task) or its ranges ``(start, stop)``, counted from its first scan.
+
+    Examples
+    --------
     >>> split_ranges([4791, 1941, 910, 440, 406, 237], 2)[:2]
     [[(0, 2396), (2396, 4791)], None]
     """
@@ -302,10 +346,39 @@ def _guarded(result: Result, run: Callable[[Result], None]) -> Result:
 def extract_one(path: str | Path, out: str | Path | None, *, config=None, topic: str | None = None,
                 poses: str | bool | None = None, strict: bool = False, overwrite: bool = False,
                 recording: str | None = None, stop: str | None = None, scans: slice | None = None) -> Result:
-    """The task of :func:`extract_many`: every feature of one recording (or of the range
-    ``scans`` of it, numbered as in the whole recording) into ``out`` (a features ``.jsonl`` or a
-    ``.parquet`` table, through :mod:`labkit._safe`). Never raises: what goes wrong is the
-    result's status. ``stop`` is the name of the Dask Event that interrupts it."""
+    """The task of :func:`extract_many`: every feature of one recording into a file.
+
+    Never raises: what goes wrong is the result's status. The output is written under a
+    temporary name and renamed when complete.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording.
+    out : str, Path or None
+        A features ``.jsonl`` or a ``.parquet`` table; None: the features are only counted.
+    config : Config or None
+        The pipeline's configuration; None: ``Config()``.
+    topic : str or None
+        The scan topic of a bag, as for :func:`labkit.read_scans`.
+    poses : str, bool or None
+        Where to read poses from, as for :func:`labkit.read_scans`.
+    strict : bool
+        Stop at the first bad record.
+    overwrite : bool
+        Replace an existing output.
+    recording : str or None
+        The ``recording`` column of a table; None: the recording's file name.
+    stop : str or None
+        The name of the Dask Event that interrupts the task.
+    scans : slice or None
+        Only this range of scans, numbered as in the whole recording.
+
+    Returns
+    -------
+    Result
+        What the task did.
+    """
     from labkit.io import read_scans, write_features
     from labkit.pipeline import Config, extract_features
     from labkit.tables import write_features_table
@@ -433,12 +506,33 @@ def run_tasks(task: Callable[..., Result], jobs: Sequence[dict], *, workers: int
               sizes: Sequence[int | None] | None = None, grace_s: float = 60.0) -> list[Result]:
     """Run ``task(**job)`` for every job, on Dask or (``workers=0``) here; the results in job order.
 
-    ``client``: a ``distributed.Client`` to use (else one is made: ``scheduler`` or a local
-    cluster). ``progress(total=..., unit=...)`` is a tqdm-like bar factory, advanced by each
-    job's size (``sizes``, e.g. its scans, when every one is known; else by 1) as it completes.
     Ctrl-C sets the Dask Event every job was given as ``stop``, waits up to ``grace_s`` for the
     jobs to stop (a second Ctrl-C does not wait), and raises KeyboardInterrupt with the
     results so far in its ``results`` attribute.
+
+    Parameters
+    ----------
+    task : callable
+        ``task(**job, stop=name)`` returning a :class:`Result`.
+    jobs : sequence of dict
+        The keyword arguments of each task.
+    workers : int or None
+        A local cluster of ``workers`` processes (None: one per core); 0: in this process.
+    scheduler : str or None
+        The address of an existing Dask scheduler to run on instead.
+    client : distributed.Client or None
+        A Dask client to use (else one is made: ``scheduler`` or a local cluster).
+    progress : callable or None
+        A tqdm-like bar factory, ``progress(total=..., unit=...)``, advanced as each job completes.
+    sizes : sequence of int or None, or None
+        Each job's size (e.g. its scans): the bar advances by it when every one is known, else by 1.
+    grace_s : float
+        Seconds to wait for the jobs to stop after Ctrl-C.
+
+    Returns
+    -------
+    list of Result
+        The results, in job order.
     """
     known = sizes is not None and all(s is not None for s in sizes)
     steps = [s or 0 for s in sizes] if sizes is not None and known else [1] * len(jobs)
@@ -520,10 +614,28 @@ def _ranges(paths: Sequence[Path], topic, poses, scans: slice | None) -> list[tu
 
 def preflight(inputs: Sequence[Path], topic: str | None = None, poses: str | bool | None = None,
               scans: slice | None = None) -> list[int | None]:
-    """Open every recording before anything runs, so that a refusal (unknown format, a topic it
-    does not have, a pose topic that is not one, a range it cannot place) stops the whole run at
-    once, as for one file; return how many scans each says it holds (in the range ``scans``, if
-    given; None when it does not say, or is too damaged to tell: its task reports that)."""
+    """Open every recording before anything runs and say how many scans each holds.
+
+    A refusal (unknown format, a topic it does not have, a pose topic that is not one, a range it
+    cannot place) so stops the whole run at once, as for one file.
+
+    Parameters
+    ----------
+    inputs : sequence of Path
+        The recordings.
+    topic : str or None
+        The scan topic, as for :func:`labkit.read_scans`.
+    poses : str, bool or None
+        Where to read poses from, as for :func:`labkit.read_scans`.
+    scans : slice or None
+        Count only this range of each recording.
+
+    Returns
+    -------
+    list of int or None
+        The scans each recording says it holds (in ``scans``, if given); None when it does not
+        say, or is too damaged to tell (its task reports that).
+    """
     return [n for n, _, _ in _ranges(inputs, topic, poses, scans)]
 
 
@@ -594,8 +706,9 @@ def extract_many(inputs: Iterable[str | Path], out: str | Path, *, config=None, 
                  poses: str | bool | None = None, strict: bool = False, overwrite: bool = False,
                  workers: int | None = None, scheduler: str | None = None, client=None,
                  progress: Callable | None = None, scans: slice | None = None, split: bool = True) -> list[Result]:
-    """Every feature of many recordings on Dask (module docstring): one task per recording, or
-    per scan range of a long one.
+    """Every feature of many recordings on Dask: one task per recording, or per scan range of a long one.
+
+    See the module's docstring for where and how the tasks run.
 
     Parameters
     ----------
@@ -604,13 +717,23 @@ def extract_many(inputs: Iterable[str | Path], out: str | Path, *, config=None, 
     out : path
         A folder (one ``<name>.features.jsonl`` per input; missing folders are made), or a
         ``.parquet`` file: one table for all, rows in input order with a ``recording`` column.
-    config, topic, poses, strict
-        As for :func:`labkit.extract_features` and :func:`labkit.read_scans`.
+    config : Config or None
+        The pipeline's configuration, as for :func:`labkit.extract_features`; None: ``Config()``.
+    topic : str or None
+        The scan topic of a bag, as for :func:`labkit.read_scans`.
+    poses : str, bool or None
+        Where to read poses from, as for :func:`labkit.read_scans`.
+    strict : bool
+        Stop reading a recording at its first bad record, as for :func:`labkit.read_scans`.
     overwrite : bool
-        Replace existing outputs (only labkit's own kind: see :mod:`labkit._safe`).
-    workers, scheduler, client
-        Where to run: a local cluster of ``workers`` processes (default: one per core),
-        ``workers=0`` in this process, an existing scheduler's address, or a ``distributed.Client``.
+        Replace existing outputs (only labkit's own kind of file).
+    workers : int or None
+        A local cluster of ``workers`` processes (None: one per core); ``workers=0`` runs in
+        this process.
+    scheduler : str or None
+        The address of an existing Dask scheduler to run on instead.
+    client : distributed.Client or None
+        A Dask client to run on instead.
     progress : callable, optional
         A tqdm-like bar factory (``progress(total=..., unit=...)``) advanced as tasks finish.
     scans : slice, optional
@@ -821,9 +944,36 @@ def _one_table(paths: list[Path], out: Path, ranges, common: dict, *, overwrite:
 def evaluate_many(inputs: Iterable[str | Path], extractors: dict, *, n_scans: int = 100, topic: str | None = None,
                   strict: bool = False, workers: int | None = None, scheduler: str | None = None, client=None,
                   progress: Callable | None = None, scans: slice | None = None) -> list[Result]:
-    """:func:`labkit.app.experiments.compare_on_logs` on many recordings, one task per recording, on
-    Dask (see :func:`extract_many` for where); each result's ``rows`` are that recording's.
-    ``scans``: score this range of every recording instead of its first ``n_scans``."""
+    """:func:`labkit.app.experiments.compare_on_logs` on many recordings, one task per recording, on Dask.
+
+    Parameters
+    ----------
+    inputs : iterable of str or Path
+        Recordings, or folders of recordings (:func:`recordings_in`).
+    extractors : dict
+        Name -> line extractor, as for :func:`labkit.app.experiments.compare_on_logs`.
+    n_scans : int
+        The first so many scans of each recording.
+    topic : str or None
+        The scan topic, as for :func:`labkit.read_scans`.
+    strict : bool
+        Stop at the first bad record.
+    workers : int or None
+        Where to run, as for :func:`extract_many`.
+    scheduler : str or None
+        Where to run, as for :func:`extract_many`.
+    client : distributed.Client or None
+        Where to run, as for :func:`extract_many`.
+    progress : callable or None
+        A tqdm-like bar factory, as for :func:`run_tasks`.
+    scans : slice or None
+        Score this range of every recording instead of its first ``n_scans``.
+
+    Returns
+    -------
+    list of Result
+        One per recording, in order; each result's ``rows`` are that recording's table rows.
+    """
     paths = [_absolute(p) for p in recordings_in(inputs)]
     sizes = preflight(paths, topic, scans=scans)
     if scans is not None:
@@ -835,8 +985,22 @@ def evaluate_many(inputs: Iterable[str | Path], extractors: dict, *, n_scans: in
 
 
 def report(results: Sequence[Result], file=None) -> int:
-    """Print one ``labkit: error:`` line per recording that did not finish cleanly (a bug: its
-    traceback) and return the exit status of the whole run: the gravest of them."""
+    """Print one ``labkit: error:`` line per recording that did not finish cleanly and return the exit status.
+
+    A bug prints its traceback.
+
+    Parameters
+    ----------
+    results : sequence of Result
+        The results of a run.
+    file : file-like or None
+        Where to print; None: standard error.
+
+    Returns
+    -------
+    int
+        The exit status of the whole run: that of the gravest status (``STATUS``).
+    """
     file = file or sys.stderr
     for r in results:
         if r.status == "done":

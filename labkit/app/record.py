@@ -32,17 +32,48 @@ def record(
     scans: slice | None = None,
     tracks: bool = False,
 ) -> RecordSummary:
-    """Write every scan of a recording (any format :func:`labkit.read_scans` reads) to an
-    ``.rrd`` file with the default blueprint, with the features the pipeline finds in each
-    (``config``, default :class:`labkit.Config` (); ``features=False``: scans and range
-    segments only), plus the ground truth when a ``<name>.truth.jsonl`` lies beside it (read
-    along with the scans). ``scans``: only this range of scans (a slice, as
-    :func:`labkit.read_scans` takes it), numbered on the ``scan`` timeline as in the whole
-    recording. See :func:`labkit.viz.rr.record_scans` for damaged inputs, for ``overwrite`` and for memory;
-    ``strict`` stops reading at the first bad record. When the recording has poses (``poses``
-    as in :func:`labkit.read_scans`), the map view is logged too (see :mod:`labkit.viz.rr`).
-    ``tracks``: also follow people and moving circles (``config.tracking``) and log the tracks,
-    their trails, velocities and life-cycle events (:mod:`labkit.viz.rr.tracks`); needs features.
+    """Write every scan of a recording and its features to an ``.rrd`` file with the default blueprint.
+
+    The ground truth is logged too when a ``<name>.truth.jsonl`` lies beside the recording (read
+    along with the scans). See :func:`labkit.viz.rr.record_scans` for damaged inputs, for
+    ``overwrite`` and for memory. When the recording has poses, the map view is logged too (see
+    :mod:`labkit.viz.rr`).
+
+    Parameters
+    ----------
+    source : str or Path
+        The recording (any format :func:`labkit.read_scans` reads).
+    out : str or Path
+        The ``.rrd`` file to write.
+    topic : str or None
+        The scan topic of a bag; None: the only one.
+    config : Config or None
+        The pipeline's configuration; None: ``Config()``.
+    features : bool
+        Log the pipeline's features; False: scans and range segments only.
+    progress : bool
+        Show a progress bar.
+    segment_threshold_m : float or None
+        The range-jump threshold of the segments logged without features, metres.
+    description : str or None
+        The text shown in the viewer's description panel; None: a generated one.
+    overwrite : bool
+        Replace an existing ``.rrd`` file.
+    strict : bool
+        Stop reading at the first bad record.
+    poses : str, bool or None
+        Where to read poses from, as in :func:`labkit.read_scans`.
+    scans : slice or None
+        Only this range of scans (as :func:`labkit.read_scans` takes it), numbered on the ``scan``
+        timeline as in the whole recording.
+    tracks : bool
+        Also follow people and moving circles (``config.tracking``) and log the tracks, their
+        trails, velocities and life-cycle events (:mod:`labkit.viz.rr.tracks`); needs features.
+
+    Returns
+    -------
+    RecordSummary
+        What was written: counts of scans and features, and the error of a damaged recording.
     """
     if tracks and not features:
         raise ValueError("tracks need features: features=False logs scans and range segments only")

@@ -100,6 +100,21 @@ __all__ = ["LegsParams", "detect_legs", "pair_legs", "is_occluded"]
 def is_occluded(scan: Scan, first: int, last: int) -> bool:
     """Whether the run of beams ``first..last`` is partially occluded (module notes).
 
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    first : int
+        The run's first beam.
+    last : int
+        Its last beam.
+
+    Returns
+    -------
+    bool
+        True when the beam just before or after the run is a valid return closer than the run's
+        end beside it, or when the run touches the edge of a field of view that is not a full circle.
+
     Examples
     --------
     >>> from labkit import Scan

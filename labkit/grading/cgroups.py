@@ -96,7 +96,15 @@ _COUNTER = itertools.count(1)
 
 @dataclass
 class WorkerCgroup:
-    """The cgroup (one folder per v1 hierarchy) of one worker."""
+    """The cgroup (one folder per v1 hierarchy) of one worker.
+
+    Parameters
+    ----------
+    version : int
+        The cgroup version, 1 or 2.
+    folders : dict of str to str
+        Controller -> its folder (one folder for every controller with version 2).
+    """
 
     version: int
     folders: dict[str, str]  # controller -> folder

@@ -54,6 +54,11 @@ def run_checks(**checks: Callable[[np.random.Generator], None]) -> None:
     own, with a generator drawn for the submission: a check that fails costs its own function's share
     of the cell only.
 
+    Parameters
+    ----------
+    **checks
+        Function name -> its check, ``check(rng)``.
+
     Examples
     --------
     >>> def check_double(rng):
@@ -255,6 +260,13 @@ class Moved:
     ``scale`` is a power of two other than 1 (1/4 to 8), so scaled readings keep exact ties (a gap of
     exactly ``eps``, a reading exactly at ``range_min``) and no visible input comes back unchanged
     (with a scale of 1, a table keyed on the ranges found the turned examples again: 1 seed in 6).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the scale, the angle and the shift.
+    shift : bool
+        Shift the plane too (False: turn and scale about the origin, e.g. for scans seen from it).
 
     Examples
     --------

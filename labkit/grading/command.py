@@ -56,7 +56,19 @@ __all__ = ["grade", "check", "check_summary", "add_grade_parser", "run_grade", "
 
 @dataclass
 class GradingRun:
-    """What one ``labkit grade`` run did."""
+    """What one ``labkit grade`` run did.
+
+    Parameters
+    ----------
+    results : list of SubmissionResult
+        One per submission graded.
+    seconds : float
+        The run's wall time.
+    jobs : int
+        The grading processes that worked in parallel.
+    csv : Path or None
+        The grades CSV written.
+    """
 
     results: list[SubmissionResult] = field(default_factory=list)
     seconds: float = 0.0
@@ -95,7 +107,15 @@ class GradingRun:
 
 
 class GradingInterrupted(KeyboardInterrupt):
-    """Ctrl-C during :func:`grade`: ``graded`` of the ``total`` submissions to grade were graded and saved."""
+    """Ctrl-C during :func:`grade`: ``graded`` of the ``total`` submissions to grade were graded and saved.
+
+    Parameters
+    ----------
+    graded : int
+        The submissions graded and saved.
+    total : int
+        The submissions there were to grade.
+    """
 
     def __init__(self, graded: int, total: int) -> None:
         super().__init__(f"{graded} of {total} submissions were graded and saved")
@@ -295,6 +315,8 @@ def grade(
 
     Parameters
     ----------
+    wanted : str
+        An exercise, a prefix such as ``ex01``, or ``all``.
     course : Course or path, optional
         The course folder (default: ``./exercises``).
     jobs : int
@@ -308,8 +330,13 @@ def grade(
     progress : bool
         Show a progress bar on stderr.
     first_slot : int
-        The first job's slot: job ``k`` runs student code as :func:`~labkit.grading.sandbox.worker_uid`
+        The first job's slot: job ``k`` runs student code as ``labkit.grading.sandbox.worker_uid``
         ``(first_slot + k)`` (so that concurrent runs, e.g. tests, use different uids).
+
+    Returns
+    -------
+    GradingRun
+        The results of every submission, the time taken and the CSV written.
 
     Raises
     ------
@@ -400,6 +427,25 @@ def check(notebook: Path | str, *, course: Course | Path | str | None = None, ex
     With a course (``course``, or ``./exercises``) the checks are the course's; without one -- a student with
     only the release -- they are the notebook's own locked cells (as released: a changed one is refused), with
     the functions, points and masked packages its metadata names. The verdicts are the same either way.
+
+    Parameters
+    ----------
+    notebook : Path or str
+        The student's notebook.
+    course : Course or Path or str or None
+        The course; None: ``./exercises`` when there is one, else none.
+    exercise : str or None
+        The exercise (a name or a prefix such as ``ex01``); None: the one the notebook's name or
+        cells point to.
+    isolate : bool
+        Run the student's code in the sandbox (False: ``--no-sandbox``).
+
+    Returns
+    -------
+    exercise : Exercise
+        The exercise checked.
+    result : SubmissionResult
+        The verdicts of its visible checks.
     """
     notebook = Path(notebook)
     if not notebook.is_file():
@@ -496,7 +542,18 @@ def _default_jobs() -> int:
 
 
 def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Add ``grade`` to a command line's sub-commands (the parent parser provides ``-q/--quiet``)."""
+    """Add ``grade`` to a command line's sub-commands (the parent parser provides ``-q/--quiet``).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The parent parser's sub-commands.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``grade`` parser.
+    """
     parser = subparsers.add_parser(
         "grade", help="grade the submissions in exercises/submitted/, or --check one notebook",
         description="Grade every submission of an exercise: student code runs in a bubblewrap sandbox, the tests "
@@ -523,7 +580,18 @@ def add_grade_parser(subparsers: argparse._SubParsersAction) -> argparse.Argumen
 
 
 def run_grade(args: argparse.Namespace) -> int:
-    """Run ``labkit grade``; the exit status."""
+    """Run ``labkit grade``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line of :func:`add_grade_parser`'s parser.
+
+    Returns
+    -------
+    int
+        The exit status.
+    """
     _skip_iri_grammars()
     quiet = getattr(args, "quiet", False)
     if args.check:
@@ -557,7 +625,18 @@ def run_grade(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m labkit.grading``: the ``grade`` command on its own."""
+    """``python -m labkit.grading``: the ``grade`` command on its own.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        The arguments; None: ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status.
+    """
     parser = argparse.ArgumentParser(prog="python -m labkit.grading")
     commands = parser.add_subparsers(dest="command")
     add_grade_parser(commands).add_argument("-q", "--quiet", action="store_true", help="no progress bar")

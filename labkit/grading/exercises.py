@@ -50,7 +50,17 @@ TIMEOUTS = {"CALL_TIMEOUT_S": 5.0, "TEST_TIMEOUT_S": 30.0, "LOAD_TIMEOUT_S": 10.
 
 @dataclass(frozen=True)
 class HiddenTest:
-    """One hidden test of a graded cell: ``test(<function>=..., rng=...)`` counts for ``function``."""
+    """One hidden test of a graded cell: ``test(<function>=..., rng=...)`` counts for ``function``.
+
+    Parameters
+    ----------
+    name : str
+        The test's name in the spec.
+    function : str
+        The student's function it tests.
+    test : callable
+        The test: raises when the function gets its inputs wrong.
+    """
 
     name: str
     function: str
@@ -64,7 +74,9 @@ class GradedCell:
     Parameters
     ----------
     grade_id : str
+        The cell's nbgrader grade id.
     points : float
+        The points it is worth.
     code : str
         The visible checks: the source notebook's code of the cell (empty for a manually graded cell).
     hidden : tuple of HiddenTest
@@ -93,7 +105,41 @@ class GradedCell:
 
 @dataclass(frozen=True)
 class Exercise:
-    """What the grader knows about one exercise; built by :meth:`Course.exercise` or :func:`release_exercise`."""
+    """What the grader knows about one exercise; built by :meth:`Course.exercise` or :func:`release_exercise`.
+
+    Parameters
+    ----------
+    name : str
+        The exercise's name.
+    source : dict
+        The instructor's source notebook.
+    release : dict
+        The student release notebook.
+    module : types.ModuleType or None
+        The spec with the hidden tests (``grading/<name>.py``); None without the course.
+    functions : tuple of str
+        The functions the students write.
+    points : dict of str to float
+        Function -> its share of the points.
+    masked : tuple of str
+        Top-level packages the student's code must not import.
+    setup : tuple of str
+        The code cells that are neither solutions nor graded (run before the student's).
+    cells : tuple of GradedCell
+        The graded cells, in notebook order.
+    test_cells : dict of str to str
+        Grade id -> source text of every test cell.
+    call_timeout_s : float
+        The time limit of each call into the student's code, seconds.
+    test_timeout_s : float
+        The time limit of each test's calls together, seconds.
+    load_timeout_s : float
+        The time limit of each cell when the notebook runs, seconds.
+    submission_timeout_s : float
+        The time limit of all a submission's calls, seconds.
+    limits : Limits
+        The resource limits of the worker.
+    """
 
     name: str
     source: dict
@@ -267,8 +313,19 @@ def build_exercise(name: str, source: dict, release: dict, module: ModuleType | 
 
 
 def release_exercise(notebook: dict) -> Exercise:
-    """The exercise a release notebook (or a student's copy of it) describes, without the course: its visible
-    checks, functions, points and masked packages, no hidden tests.
+    """The exercise a release notebook (or a student's copy of it) describes, without the course.
+
+    It has the notebook's visible checks, functions, points and masked packages, and no hidden tests.
+
+    Parameters
+    ----------
+    notebook : dict
+        The release notebook, or a student's copy of it.
+
+    Returns
+    -------
+    Exercise
+        The exercise, without its spec (``module`` None).
 
     Raises
     ------
@@ -352,7 +409,18 @@ class Course:
 
 
 def find_course(path: Path | str | None = None) -> Course:
-    """The course at ``path``; by default ``./exercises``, or ``.`` when it is a course folder itself."""
+    """The course at ``path``; by default ``./exercises``, or ``.`` when it is a course folder itself.
+
+    Parameters
+    ----------
+    path : Path or str or None
+        The course folder; None: the default.
+
+    Returns
+    -------
+    Course
+        The course.
+    """
     if path is not None:
         return Course(path)
     for candidate in (Path("exercises"), Path(".")):

@@ -209,10 +209,33 @@ def random_iepf_trace(rng: np.random.Generator, n_beams: int | None = None, *, t
     One range segment of all the valid beams, no gap splits, no merging, no length limit: the
     trace holds only the split decisions (``fit``/``split``), runs too short to keep and their
     points joined to a neighbour (``reject``/``absorb``), and the accepted runs (``accept``).
-    Returns ``(scan, threshold_m, min_points, steps)``; ``threshold_m`` (0.02 to 0.5 m) and
-    ``min_points`` (2 to 10) are drawn where not given. The hidden tests of the
-    split-and-merge exercises (ex04's split index, ex05's runs) read their answers from it.
+    The hidden tests of the split-and-merge exercises (ex04's split index, ex05's runs) read
+    their answers from it.
 
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+    n_beams : int or None
+        Beams of the scan before invalid ones are dropped; None: drawn as :func:`random_wall_beams` does.
+    threshold_m : float or None
+        The split threshold, metres; None: drawn from 0.02 to 0.5 m.
+    min_points : int or None
+        The fewest points of a line; None: drawn from 2 to 10.
+
+    Returns
+    -------
+    scan : Scan
+        The scan.
+    threshold_m : float
+        The split threshold used.
+    min_points : int
+        The fewest points used.
+    steps : list of Step
+        The trace of the split step.
+
+    Examples
+    --------
     >>> scan, threshold_m, min_points, steps = random_iepf_trace(np.random.default_rng(1))
     >>> {s.kind for s in steps} <= {"segment", "fit", "split", "accept", "reject", "absorb"}
     True
@@ -244,6 +267,30 @@ def random_threshold_case(rng: np.random.Generator, n_beams: int | None = None, 
     ``adaptive_threshold``: labkit's answer is ``labkit.breakpoint_thresholds`` for every pair of
     neighbours, NaN where either beam is invalid.
 
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+    n_beams : int or None
+        Number of beams, as for :func:`random_wall_beams`.
+    invalid_fraction : float or None
+        Probability of an invalid reading, as for :func:`random_wall_beams`.
+    max_beams : int
+        Upper bound for a drawn ``n_beams``.
+
+    Returns
+    -------
+    beams : dict
+        The beams, as :func:`random_wall_beams` returns them.
+    threshold_m : float
+        The threshold floor, metres.
+    incidence_deg : float
+        The incidence angle, degrees.
+    range_sigma_m : float
+        The range noise, metres.
+
+    Examples
+    --------
     >>> beams, threshold_m, incidence_deg, sigma = random_threshold_case(np.random.default_rng(0), 50)
     >>> bool(np.diff(beams["angles"]).max() < np.radians(incidence_deg))
     True
@@ -259,10 +306,27 @@ def random_threshold_case(rng: np.random.Generator, n_beams: int | None = None, 
 
 
 def random_shape(rng: np.random.Generator, kind: str, n: int) -> np.ndarray:
-    """``n`` points (N x 2, metres) of a random noisy ``kind``: ``"arc"`` (radius 5 cm to 2 m, 20 to 340 degrees),
-    ``"line"`` or ``"corner"`` (a V of two legs, 30 to 170 degrees), shifted by up to 5 m: the shapes of
-    exercise 8's inscribed angles, whose answer is ``labkit.inscribed_angles``.
+    """``n`` points of a random noisy shape: an arc, a line or a corner, shifted by up to 5 m.
 
+    The shapes of exercise 8's inscribed angles, whose answer is ``labkit.inscribed_angles``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+    kind : str
+        ``"arc"`` (radius 5 cm to 2 m, 20 to 340 degrees), ``"line"`` or ``"corner"`` (a V of two
+        legs, 30 to 170 degrees); anything else raises ``ValueError``.
+    n : int
+        The number of points.
+
+    Returns
+    -------
+    ndarray of shape (n, 2)
+        The points, metres.
+
+    Examples
+    --------
     >>> random_shape(np.random.default_rng(0), "arc", 7).shape
     (7, 2)
     """
@@ -291,10 +355,28 @@ def random_shape(rng: np.random.Generator, kind: str, n: int) -> np.ndarray:
 
 
 def random_arc(rng: np.random.Generator):
-    """The chord, mean inscribed angle and side of a random arc of a known circle, and that circle:
-    ``((p_first, p_last, mean_angle, side), center, radius)``, closed-form truth for exercise 8's
-    ``circle_from_angle`` (the points of an arc walked counter-clockwise lie right of its chord, ``side < 0``).
+    """A random arc of a known circle: its chord, mean inscribed angle and side, and that circle.
 
+    Closed-form truth for exercise 8's ``circle_from_angle`` (the points of an arc walked
+    counter-clockwise lie right of its chord, ``side < 0``).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws the circle and the arc.
+
+    Returns
+    -------
+    arc : tuple
+        ``(p_first, p_last, mean_angle, side)``: the chord's ends (ndarray of shape (2,), metres),
+        the mean inscribed angle (radians) and the side of the chord the arc lies on.
+    center : ndarray of shape (2,)
+        The circle's centre, metres.
+    radius : float
+        Its radius, metres.
+
+    Examples
+    --------
     >>> (p_first, p_last, mean_angle, side), center, radius = random_arc(np.random.default_rng(0))
     >>> bool(np.isclose(np.hypot(*(p_first - center)), radius))
     True
@@ -312,11 +394,29 @@ def random_arc(rng: np.random.Generator):
 
 
 def random_band_segment(rng: np.random.Generator, ratio: float | None = None, chord: float | None = None):
-    """Points (N x 2) of a random segment whose middle point (row ``N // 2``) lies ``ratio`` chord lengths from the
-    chord, towards the sensor at the origin (negative: away from it), and that ratio: closed-form truth for
-    exercise 8's band (``in_band``) and legs. ``ratio`` is drawn from [-0.5, 1) and the chord length around
-    5 cm, 20 cm or 1 m where not given.
+    """Points of a random segment whose middle point lies ``ratio`` chord lengths from the chord, and that ratio.
 
+    The middle point (row ``N // 2``) lies towards the sensor at the origin (a negative ratio:
+    away from it). Closed-form truth for exercise 8's band (``in_band``) and legs.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws what is not given, and the segment's place.
+    ratio : float or None
+        The middle point's distance from the chord, in chord lengths; None: drawn from [-0.5, 1).
+    chord : float or None
+        The chord's length, metres; None: around 5 cm, 20 cm or 1 m.
+
+    Returns
+    -------
+    points : ndarray of shape (N, 2)
+        The segment's points, metres.
+    ratio : float
+        The ratio.
+
+    Examples
+    --------
     >>> points, ratio = random_band_segment(np.random.default_rng(0), 0.3, 0.2)
     >>> bool(np.isclose(np.hypot(*(points[-1] - points[0])), 0.2)), ratio
     (True, 0.3)

@@ -61,7 +61,7 @@ class _Reader:
     """A bounded reader of a notebook's JSON bytes: it walks the structure, builds only the values the grader
     keeps (with ``json.loads`` on their bytes) and skips the others -- outputs, attachments -- without making
     a Python object of them. Memory: the file's bytes and the kept values; time: one step per string, list
-    and object of the skipped values (at most :data:`MAX_NOTEBOOK_STRINGS` and :data:`MAX_NOTEBOOK_CONTAINERS`)."""
+    and object of the skipped values (at most ``MAX_NOTEBOOK_STRINGS`` and ``MAX_NOTEBOOK_CONTAINERS``)."""
 
     def __init__(self, raw: bytes) -> None:
         self.raw = raw
@@ -235,9 +235,22 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
     of yours).
 
     Before anything is built, the file's size (:data:`MAX_NOTEBOOK_BYTES`) and its number of strings
-    (:data:`MAX_NOTEBOOK_STRINGS`) are checked; while it is read, its lists and objects
-    (:data:`MAX_NOTEBOOK_CONTAINERS`) and the bytes of what is kept (:data:`MAX_KEPT_BYTES`). So reading
+    (``MAX_NOTEBOOK_STRINGS``) are checked; while it is read, its lists and objects
+    (``MAX_NOTEBOOK_CONTAINERS``) and the bytes of what is kept (``MAX_KEPT_BYTES``). So reading
     one holds at most the file's bytes and 32 MB of cells in memory, however it is built.
+
+    Parameters
+    ----------
+    path : Path
+        The notebook file.
+    inside : Path or None
+        The folder the file must be in (a regular file, reached without a symbolic link); None:
+        anywhere.
+
+    Returns
+    -------
+    dict
+        The notebook's JSON, its cells in the shape above.
 
     Raises
     ------
@@ -286,7 +299,18 @@ def read_notebook(path: Path, *, inside: Path | None = None) -> dict:
 
 
 def cell_source(cell: dict) -> str:
-    """The source of a notebook cell as one string (nbformat stores it as a string or a list of lines)."""
+    """The source of a notebook cell as one string (nbformat stores it as a string or a list of lines).
+
+    Parameters
+    ----------
+    cell : dict
+        The cell.
+
+    Returns
+    -------
+    str
+        Its source.
+    """
     source = cell.get("source", "")
     return "".join(source) if isinstance(source, list) else source
 
@@ -297,7 +321,18 @@ def nbgrader_metadata(cell: dict) -> dict:
 
 
 def grade_id(cell: dict) -> str | None:
-    """The nbgrader ``grade_id`` of a cell, or None when it has none (or one that is not a string)."""
+    """The nbgrader ``grade_id`` of a cell, or None when it has none (or one that is not a string).
+
+    Parameters
+    ----------
+    cell : dict
+        The cell.
+
+    Returns
+    -------
+    str or None
+        Its grade id.
+    """
     value = nbgrader_metadata(cell).get("grade_id")
     return value if type(value) is str else None
 
@@ -307,15 +342,40 @@ def _words(source: str) -> str:
 
 
 def same_code(a: str, b: str) -> bool:
-    """True when two cells hold the same code up to whitespace."""
+    """True when two cells hold the same code up to whitespace.
+
+    Parameters
+    ----------
+    a : str
+        One cell's source.
+    b : str
+        The other's.
+
+    Returns
+    -------
+    bool
+        Whether they are the same code.
+    """
     return _words(a) == _words(b)
 
 
 def student_cells(notebook: dict, test_cells: dict[str, str]) -> list[str]:
     """The code the worker runs: the notebook's code cells, in order, without its test cells.
 
-    A cell is a test cell when its grade id is one of ``test_cells`` (grade id -> the source
-    notebook's text) or when its text is one of theirs (up to whitespace).
+    A cell is a test cell when its grade id is one of ``test_cells`` or when its text is one of
+    theirs (up to whitespace).
+
+    Parameters
+    ----------
+    notebook : dict
+        The submitted notebook (:func:`read_notebook`'s).
+    test_cells : dict of str to str
+        Grade id -> the source notebook's text of every test cell.
+
+    Returns
+    -------
+    list of str
+        The sources of the cells to run.
     """
     texts = {_words(text) for text in test_cells.values()}
     return [
@@ -351,6 +411,11 @@ def autograded_notebook(
         Grade id -> source text of every test cell.
     outputs : dict
         Grade id -> the nbformat outputs to show under that graded cell.
+
+    Returns
+    -------
+    dict
+        The autograded notebook (nbformat 4).
     """
     release_cells = {grade_id(c): c for c in release["cells"] if grade_id(c) is not None}
     cells, seen = [], set()

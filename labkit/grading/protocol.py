@@ -103,6 +103,20 @@ def encode(value: Any, _depth: int = 0, _budget: list[int] | None = None) -> Any
     that returns 160 MB of zeros gets its TypeError at once instead of spending its time limit
     on base64.
 
+    Parameters
+    ----------
+    value : object
+        Tuples, lists, dicts, numbers, strings, None and numeric ndarrays, nested.
+    _depth : int
+        Internal: the nesting depth of ``value`` (callers leave it out).
+    _budget : list of int or None
+        Internal: the values and bytes still allowed (callers leave it out).
+
+    Returns
+    -------
+    object
+        The tagged JSON data, ready for :func:`pack`.
+
     Examples
     --------
     >>> encode((1, [2.5, None], {"k": True}))
@@ -156,11 +170,21 @@ def encode(value: Any, _depth: int = 0, _budget: list[int] | None = None) -> Any
 def decode(data: Any) -> Any:
     """Build plain Python and numpy values from tagged JSON data (as :func:`json.loads` returns it).
 
+    Parameters
+    ----------
+    data : object
+        Tagged JSON data, as :func:`encode` makes it.
+
+    Returns
+    -------
+    object
+        The values: tuples, lists, dicts, numbers, strings, None and numeric ndarrays.
+
     Raises
     ------
     ProtocolError
         For an unknown tag, a dtype outside :data:`NUMERIC_DTYPES`, a buffer whose size does not
-        match its shape, nesting deeper than :data:`MAX_DEPTH` or more than :data:`MAX_ITEMS`
+        match its shape, nesting deeper than ``MAX_DEPTH`` or more than :data:`MAX_ITEMS`
         values.
 
     Examples
@@ -238,7 +262,20 @@ def _buffer(dtype_name: Any, text: Any, shape: list[int]) -> np.ndarray:
 
 # ---------------------------------------------------------------------------- frames
 def pack(message: dict) -> bytes:
-    """One frame: the 4-byte length, then ``message`` as compact JSON (its values already encoded)."""
+    """One frame: the 4-byte length, then ``message`` as compact JSON (its values already encoded).
+
+    A frame longer than :data:`MAX_FRAME_BYTES` raises ``TypeError``.
+
+    Parameters
+    ----------
+    message : dict
+        The message, its values encoded (:func:`encode`).
+
+    Returns
+    -------
+    bytes
+        The frame.
+    """
     body = json.dumps(message, separators=(",", ":"), allow_nan=True).encode("utf-8")
     if len(body) > MAX_FRAME_BYTES:
         raise TypeError(f"the message is {len(body)} bytes, more than the {MAX_FRAME_BYTES} allowed")
@@ -254,7 +291,18 @@ def frame_length(header: bytes) -> int:
 
 
 def unpack(body: bytes) -> dict:
-    """The JSON object of a frame's body; ProtocolError for anything that is not one."""
+    """The JSON object of a frame's body; ProtocolError for anything that is not one.
+
+    Parameters
+    ----------
+    body : bytes
+        The frame's body (without its length).
+
+    Returns
+    -------
+    dict
+        The message.
+    """
     if body.count(b"[") + body.count(b"{") > MAX_CONTAINERS:
         raise ProtocolError(f"a frame with more than {MAX_CONTAINERS} lists and objects")
     try:
@@ -267,14 +315,24 @@ def unpack(body: bytes) -> dict:
 
 
 def clean_text(text: str) -> str:
-    """``text`` with every character UTF-8 cannot hold (a lone surrogate such as ``"\\ud800"``) as ``?``.
+    r"""``text`` with every character UTF-8 cannot hold (a lone surrogate such as ``"\ud800"``) as ``?``.
 
     JSON can carry them and Python strings can hold them, but no file, CSV or database the grader
     writes can: one such string must not stop the class.
 
+    Parameters
+    ----------
+    text : str
+        Any string.
+
+    Returns
+    -------
+    str
+        The string, every character UTF-8 cannot encode replaced by ``?``.
+
     Examples
     --------
-    >>> clean_text("half an emoji: \\ud83d")
+    >>> clean_text("half an emoji: \ud83d")
     'half an emoji: ?'
     """
     if text.isascii():
@@ -300,12 +358,36 @@ BUILTIN_EXCEPTIONS: dict[str, type[Exception]] = {
 
 
 def exception_names(error: BaseException) -> list[str]:
-    """Names of the built-in classes in ``type(error).__mro__``, most specific first."""
+    """Names of the built-in classes in ``type(error).__mro__``, most specific first.
+
+    Parameters
+    ----------
+    error : BaseException
+        The exception.
+
+    Returns
+    -------
+    list of str
+        The names of its built-in exception classes (a student's own classes left out).
+    """
     return [cls.__name__ for cls in type(error).__mro__ if cls.__module__ == "builtins"][:16]
 
 
 def rebuild_exception(names: Any, message: Any) -> Exception:
-    """A fresh built-in exception: the first of ``names`` in :data:`BUILTIN_EXCEPTIONS`, else RuntimeError.
+    """A fresh built-in exception: the first of ``names`` in ``BUILTIN_EXCEPTIONS``, else RuntimeError.
+
+    Parameters
+    ----------
+    names : object
+        The class names sent (:func:`exception_names`); anything else than a list of str raises
+        :class:`ProtocolError`.
+    message : object
+        The message sent; anything else than a str raises :class:`ProtocolError`.
+
+    Returns
+    -------
+    Exception
+        The exception, never a class of the student's.
 
     Examples
     --------

@@ -48,6 +48,16 @@ def student_id_problem(student: str) -> str | None:
 
     Student ids come from folder names under ``submitted/`` and from the gradebook's roster (an
     LMS import): one such as ``../source`` would write outside the student's folders.
+
+    Parameters
+    ----------
+    student : str
+        The student id.
+
+    Returns
+    -------
+    str or None
+        The reason, for a message; None when the id is safe.
     """
     if student in ("", ".", "..") or student.startswith(".") or any(c in student for c in "/\\\0"):
         return "it is not a plain folder name"
@@ -85,7 +95,15 @@ def _beside(path: Path) -> Iterator[str]:
 
 
 def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
+    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    text : str
+        Its new content (UTF-8).
+    """
     with _beside(path) as temporary, open(temporary, "w", encoding="utf-8", errors="replace", newline="") as f:
         f.write(text)
 
@@ -147,7 +165,13 @@ def _timestamp(folder: Path):
 
 
 class Records:
-    """The gradebook and the files of one course; open it with ``with Records(course) as records:``."""
+    """The gradebook and the files of one course; open it with ``with Records(course) as records:``.
+
+    Parameters
+    ----------
+    course : Course
+        The course.
+    """
 
     def __init__(self, course: Course) -> None:
         self.course = course

@@ -75,7 +75,19 @@ MAX_HIDDEN_MESSAGE_CHARS = 400
 
 @dataclass
 class PartResult:
-    """The verdict on one function's part of a graded cell."""
+    """The verdict on one function's part of a graded cell.
+
+    Parameters
+    ----------
+    function : str
+        The student's function.
+    max_points : float
+        The points the part is worth.
+    points : float
+        The points given.
+    verdict : str
+        One line for the console.
+    """
 
     function: str
     max_points: float
@@ -87,9 +99,22 @@ class PartResult:
 class CellResult:
     """The verdict on one graded cell.
 
-    ``points`` is None for a cell a human grades; ``parts`` the verdict per function; ``outputs`` are
-    the nbformat outputs shown under the cell in the autograded notebook; ``verdict`` is one line for
-    the console.
+    Parameters
+    ----------
+    grade_id : str
+        The cell's nbgrader grade id.
+    max_points : float
+        The points it is worth.
+    points : float or None
+        The points given; None for a cell a human grades.
+    verdict : str
+        One line for the console.
+    outputs : list of dict
+        The nbformat outputs shown under the cell in the autograded notebook.
+    seconds : float
+        The time its tests took.
+    parts : list of PartResult
+        The verdict per function.
     """
 
     grade_id: str
@@ -103,7 +128,33 @@ class CellResult:
 
 @dataclass
 class SubmissionResult:
-    """Everything the grader's parent needs to record one submission (plain data, picklable)."""
+    """Everything the grader's parent needs to record one submission (plain data, picklable).
+
+    Parameters
+    ----------
+    exercise : str
+        The exercise's name.
+    student : str
+        The student id.
+    status : str
+        The submission's status: graded, not submitted, invalid notebook, ... (the statuses of
+        :mod:`labkit.grading.command`).
+    cells : list of CellResult
+        The verdict on every graded cell.
+    detail : str
+        One line on what went wrong (cells not passed, notes on the notebook's run).
+    cell_errors : list of dict
+        The student's cells that raised, timed out or crashed the worker when the notebook ran.
+    timing : dict of str to float
+        Seconds of each phase (``total_s``, ``start_s``, ``load_s``, ``calls_s``, ``trusted_s``,
+        ``cpu_s``) and the number of ``workers`` started.
+    notebook : dict or None
+        The autograded notebook (nbformat), feedback for the student.
+    unanswered : list of str
+        The grade ids of solution cells the student left as released.
+    seeds : dict of str to int
+        The seed of every hidden test's inputs, by ``cell/part``.
+    """
 
     exercise: str
     student: str
@@ -129,9 +180,23 @@ class SubmissionResult:
 class Job:
     """One submission to grade (plain data, so that it can go to a child process).
 
-    ``visible_only`` runs the visible checks only (``--check``); with ``course`` None the exercise is the one
-    the notebook itself describes (``--check`` without the course: see
-    :func:`labkit.grading.exercises.release_exercise`).
+    Parameters
+    ----------
+    course : str or None
+        The course folder; None: the exercise is the one the notebook itself describes
+        (``--check`` without the course: see :func:`labkit.grading.exercises.release_exercise`).
+    exercise : str
+        The exercise's name.
+    student : str
+        The student id.
+    notebook : str or None
+        The submitted notebook; None: nothing was submitted.
+    secret : bytes or None
+        The course secret the hidden inputs' seeds are drawn from (:func:`seed_for`); None: none.
+    isolate : bool
+        Run the student's code in the sandbox (False: ``--no-sandbox``).
+    visible_only : bool
+        Run the visible checks only (``--check``).
     """
 
     course: str | None
@@ -149,6 +214,13 @@ class StudentFunction:
     Arguments go out as plain data (see :mod:`labkit.grading.protocol`); the result comes back as
     fresh built-in values, or the exception the student's code raised as a fresh built-in
     exception (noting that the student's function raised it).
+
+    Parameters
+    ----------
+    session : Session
+        The submission's session.
+    name : str
+        The function's name in the student's notebook.
     """
 
     def __init__(self, session: Session, name: str) -> None:
@@ -171,13 +243,47 @@ class StudentFunction:
 
 
 def code_hash(code: list[str]) -> str:
-    """A digest of the code cells a submission runs: any change to them draws fresh hidden inputs."""
+    """A digest of the code cells a submission runs: any change to them draws fresh hidden inputs.
+
+    Parameters
+    ----------
+    code : list of str
+        The code cells, in order.
+
+    Returns
+    -------
+    str
+        The digest, hexadecimal.
+    """
     return hashlib.sha256(json.dumps(code, ensure_ascii=False).encode("utf-8", "replace")).hexdigest()
 
 
 def seed_for(secret: bytes, exercise: str, student: str, cell: str, part: str = "", code: str = "") -> int:
-    """The seed of one test's inputs: unknown without the course secret, other for every student, cell, test
-    (``part``) and submitted code (``code``: :func:`code_hash`), the same on a regrade of the same code."""
+    """The seed of one test's inputs.
+
+    It is unknown without the course secret, other for every student, cell, test and submitted
+    code, and the same on a regrade of the same code.
+
+    Parameters
+    ----------
+    secret : bytes
+        The course secret.
+    exercise : str
+        The exercise's name.
+    student : str
+        The student id.
+    cell : str
+        The graded cell's grade id.
+    part : str
+        The test's name.
+    code : str
+        The digest of the submitted code (:func:`code_hash`).
+
+    Returns
+    -------
+    int
+        The seed.
+    """
     message = "\x00".join((exercise, student, cell, part, code)).encode("utf-8")
     return int.from_bytes(hmac.new(secret, message, hashlib.sha256).digest()[:8], "big")
 
@@ -229,9 +335,23 @@ def run_cells(exercise: Exercise, session: Session, *, seeds: Callable[[str, str
               functions: tuple[str, ...] | None = None) -> list[CellResult]:
     """Run every graded cell's tests against the session's worker, in notebook order, a function at a time.
 
-    ``seeds(cell, part)`` gives the seed of a test's inputs (``part``: the hidden test's name, or
-    ``"visible/<function>"``); None runs the visible checks only, each with fresh inputs from the OS.
-    ``functions`` runs the tests of these functions only (the others' parts score 0, "not run").
+    Parameters
+    ----------
+    exercise : Exercise
+        The exercise, with its tests.
+    session : Session
+        The submission's session, its notebook loaded.
+    seeds : callable or None
+        ``seeds(cell, part)`` gives the seed of a test's inputs (``part``: the hidden test's name,
+        or ``"visible/<function>"``); None runs the visible checks only, each with fresh inputs
+        from the OS.
+    functions : tuple of str or None
+        Run the tests of these functions only (the others' parts score 0, "not run"); None: all.
+
+    Returns
+    -------
+    list of CellResult
+        The verdict on every graded cell, in notebook order.
     """
     wanted = exercise.functions if functions is None else tuple(functions)
     namespace: dict[str, Any] = {"__name__": f"grader_{exercise.name}"}
@@ -400,6 +520,16 @@ def grade_submission(job: Job) -> SubmissionResult:
     """Grade one submission; every problem of the submission is part of the result, never an exception.
 
     (Without a course, ``--check`` on a notebook that is not a release of the course is a ValueError.)
+
+    Parameters
+    ----------
+    job : Job
+        The submission.
+
+    Returns
+    -------
+    SubmissionResult
+        The verdicts, the status and the autograded notebook.
     """
     hidden = _hidden_tests_of(job)
     result = SubmissionResult(job.exercise, job.student, GRADED, [])

@@ -23,7 +23,7 @@ student byte runs, so ``RLIMIT_NPROC`` holds (the kernel does not enforce it for
 student owns nothing. As another user bwrap makes a user namespace and the worker runs as uid
 65534 inside it (your own uid outside), with ``RLIMIT_NPROC`` counting your processes too. The
 worker also sets CPU seconds, address space, file size, open files and processes limits
-(:class:`Limits`). On x86_64 a seccomp filter (:func:`seccomp_filter`) refuses the system calls
+(:class:`Limits`). On x86_64 a seccomp filter (``seccomp_filter``) refuses the system calls
 that would outlive the sandbox (keyrings), escape the memory limit (``memfd_create``) or widen the
 kernel's attack surface (new namespaces, ``ptrace``, ``bpf``, ``io_uring``, ...) or leave the CPUs it was given
 (``sched_setaffinity``).
@@ -33,7 +33,7 @@ worker's whole sandbox is in a cgroup of its own: its processes together hold at
 limit (swap and its tmpfs files included; beyond it the kernel kills one of *them*), make at most
 ``processes`` processes and threads, and use at most ``cpus`` CPUs, as one entity for the
 scheduler (31 forked busy loops get the share of one process, not 31). Elsewhere only the
-per-process rlimits hold, with fewer processes (:data:`UNGROUPED_PROCESSES`), and each parallel
+per-process rlimits hold, with fewer processes (``UNGROUPED_PROCESSES``), and each parallel
 job's workers are pinned to a CPU of their own (inherited from the trusted process at ``fork``;
 the seccomp filter keeps the student from widening it).
 
@@ -132,7 +132,7 @@ class Limits:
         ``RLIMIT_NOFILE``.
     processes : int
         Processes and threads of the sandbox (cgroup ``pids``) and of the worker's uid (``RLIMIT_NPROC``;
-        at most :data:`UNGROUPED_PROCESSES` where there is no cgroup): a fork bomb stops there.
+        at most ``UNGROUPED_PROCESSES`` where there is no cgroup): a fork bomb stops there.
     tmp_bytes : int
         Size of the tmpfs mounted on ``/tmp``, the working directory.
     shm_bytes : int
@@ -163,7 +163,13 @@ class Limits:
 
 
 def check_bwrap() -> str:
-    """The path of ``bwrap``, or FileNotFoundError saying how to install it."""
+    """The path of ``bwrap``, or FileNotFoundError saying how to install it.
+
+    Returns
+    -------
+    str
+        The path of the ``bwrap`` executable.
+    """
     path = shutil.which("bwrap")
     if path is None:
         raise FileNotFoundError(
@@ -246,8 +252,9 @@ class Sandbox:
     masked : tuple of str
         Top-level packages the student's code must not import (labkit is always added).
     limits : Limits
+        The resource limits of each worker.
     slot : int
-        Parallel job number: picks the worker's uid (see :func:`worker_uid`).
+        Parallel job number: picks the worker's uid (see ``worker_uid``).
     isolate : bool
         False runs the worker as a plain subprocess with the same limits, a scrubbed environment,
         an empty temporary working directory and (as root, when the Python runtime is readable by
@@ -297,7 +304,7 @@ class Sandbox:
     def command(self, seccomp_fd: int | None = None, info_fd: int | None = None
                 ) -> tuple[list[str], dict[str, str] | None, str | None]:
         """(argv, environment, working directory) of a new worker; ``seccomp_fd`` is a file descriptor
-        bwrap reads the seccomp filter from (see :func:`seccomp_filter`), ``info_fd`` one it writes the
+        bwrap reads the seccomp filter from (see ``seccomp_filter``), ``info_fd`` one it writes the
         sandbox's pids to."""
         python, prefix, shown, hidden = _runtime()
         if not self.isolate:
@@ -517,7 +524,13 @@ def kill_all_workers() -> None:
 
 
 class Worker:
-    """One running worker process and its channel (stdin/stdout pipes of length-prefixed JSON frames)."""
+    """One running worker process and its channel (stdin/stdout pipes of length-prefixed JSON frames).
+
+    Parameters
+    ----------
+    sandbox : Sandbox
+        How to start it.
+    """
 
     def __init__(self, sandbox: Sandbox) -> None:
         program = seccomp_filter() if sandbox.isolate else None
@@ -763,17 +776,17 @@ class Timing:
 
 
 class BudgetUsed(CallTimedOut):
-    """The time for all of a submission's calls (:attr:`Session.submission_timeout_s`) is used up."""
+    """The time for all of a submission's calls (``submission_timeout_s`` of :class:`Session`) is used up."""
 
 
 class Session:
     """The student's functions for one submission: the notebook run once, a worker replaced after a loss.
 
     :meth:`load` runs the notebook's code cells in a fresh worker before any test, with a time budget of its
-    own: ``load_timeout_s`` per cell and :data:`LOAD_BUDGET` times that for all of them. A cell past its time
+    own: ``load_timeout_s`` per cell and ``LOAD_BUDGET`` times that for all of them. A cell past its time
     is interrupted (a KeyboardInterrupt in the cell, as Jupyter's interrupt) and the cells after it still run;
     one that ignores the interrupt, or crashes the worker, is left out and the notebook runs again without it
-    (at most :data:`MAX_STOPPED_CELLS` times); cells still waiting when the budget is used up are not run. The
+    (at most ``MAX_STOPPED_CELLS`` times); cells still waiting when the budget is used up are not run. The
     functions the cells that ran defined are graded either way; :attr:`cell_errors` says what happened.
 
     Calls go through :meth:`call`, each within ``call_timeout_s``, the current test's calls together within
@@ -782,7 +795,20 @@ class Session:
     call that times out or kills its worker raises :class:`WorkerLost`; further calls in the same test fail at
     once with the same loss, and the next test gets a fresh worker that runs the cells again. So one
     submission takes at most the load budget, plus ``submission_timeout_s``, plus an interrupt's grace
-    (:data:`INTERRUPT_GRACE_S`) per stopped cell, the starts of its workers and the trusted side's own work.
+    (``INTERRUPT_GRACE_S``) per stopped cell, the starts of its workers and the trusted side's own work.
+
+    Parameters
+    ----------
+    sandbox : Sandbox
+        How to start the workers.
+    cells : list of str
+        The notebook's code cells, in order.
+    load_timeout_s : float
+        The time limit of each cell when the notebook runs, seconds.
+    call_timeout_s : float
+        The time limit of each call, seconds.
+    submission_timeout_s : float
+        The time limit of all the submission's calls together, seconds.
     """
 
     def __init__(self, sandbox: Sandbox, cells: list[str], *, load_timeout_s: float, call_timeout_s: float,

@@ -24,12 +24,25 @@ _NUMBERS = re.compile(r"(?<![\w.])[-+]?(?:\d+\.\d*|\.\d+|\d+(?=[eE][-+]?\d))(?:[
 
 
 def printable(text: object, limit: int = 2000) -> str:
-    """``text`` with escape sequences and control characters (but newlines and tabs) removed, at most ``limit``
-    characters (then ``" [...]"``).
+    r"""``text`` with escape sequences and control characters removed, at most ``limit`` characters.
+
+    Newlines and tabs are kept; a longer text is cut and ends with ``" [...]"``.
+
+    Parameters
+    ----------
+    text : object
+        Anything; not a str: its ``str()``.
+    limit : int
+        The most characters kept.
+
+    Returns
+    -------
+    str
+        The printable text.
 
     Examples
     --------
-    >>> printable("score 0\\x1b[1A\\x1b[2K10/10")
+    >>> printable("score 0\x1b[1A\x1b[2K10/10")
     'score 010/10'
     >>> printable("x" * 10, limit=4)
     'xxxx [...]'
@@ -40,13 +53,38 @@ def printable(text: object, limit: int = 2000) -> str:
 
 
 def one_line(text: object, limit: int = 500) -> str:
-    """:func:`printable` on one line (line breaks and tabs become spaces): for a CSV field or a terminal row."""
+    """:func:`printable` on one line (line breaks and tabs become spaces): for a CSV field or a terminal row.
+
+    Parameters
+    ----------
+    text : object
+        Anything; not a str: its ``str()``.
+    limit : int
+        The most characters kept.
+
+    Returns
+    -------
+    str
+        The line.
+    """
     return printable(" ".join(str(text).split()), limit)
 
 
 def without_numbers(text: str) -> str:
-    """``text`` with every number that has a fraction or an exponent, and every integer of five or more digits,
-    replaced by ``#``: what a message about inputs the student has not seen may show.
+    """``text`` with every number that has a fraction or an exponent, and every long integer, as ``#``.
+
+    Long integers are those of five or more digits: what is left is what a message about inputs
+    the student has not seen may show.
+
+    Parameters
+    ----------
+    text : str
+        A message.
+
+    Returns
+    -------
+    str
+        The message without those numbers.
 
     Examples
     --------

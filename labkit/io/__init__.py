@@ -12,7 +12,7 @@ MCAP files are read record by record and pick up again after a garbled stretch
 the first damage is, and the scans kept and lost (exactly when the file's index says how many it
 held; ``strict=True``: reading stops at the first damage).
 
-Writers never lose data (:mod:`labkit._safe`): they write under a temporary name and
+Writers never lose data (``labkit._safe``): they write under a temporary name and
 rename when complete, replace an existing output only when asked and only when it is their
 own kind of file, and never write over their input.
 """

@@ -144,12 +144,37 @@ def _messages(path: Path, fmt: str, topics: frozenset[str], faults: Faults,
 
 def copy_bag(src: Path, src_fmt: str, dst: Path, dst_fmt: str, *, overwrite: bool = False, strict: bool = False,
              progress: bool = False) -> tuple[int, int, Counter]:
-    """Copy every topic of the bag ``src`` into ``dst`` (formats ``src_fmt``, ``dst_fmt``); see
-    the module docstring. Returns ``(scans, messages, written per topic)``.
+    """Copy every topic of a bag into another bag (see the module docstring).
 
     Raises :class:`~labkit.io.CorruptFileError` after the copy is complete when ``src`` is
     damaged (the scans are the messages of its LaserScan topics; the other topics' losses are
     counted as other records).
+
+    Parameters
+    ----------
+    src : Path
+        The bag to copy.
+    src_fmt : str
+        Its format: ``"ros1"``, ``"ros2"`` or ``"mcap"``.
+    dst : Path
+        The bag to write.
+    dst_fmt : str
+        Its format.
+    overwrite : bool
+        Replace an existing bag at ``dst``.
+    strict : bool
+        Stop at the first record that cannot be read.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    scans : int
+        The LaserScan messages copied.
+    messages : int
+        All messages copied.
+    written : collections.Counter
+        The messages written per topic.
     """
     from rosbags.convert.converter import create_connections_converters
 

@@ -382,7 +382,7 @@ class StampRangeError(RefusedError):
 
 
 class StampsChangedWarning(UserWarning):
-    """A writer changed time stamps on purpose so that the output holds them (see :func:`plan_stamps`)."""
+    """A writer changed time stamps on purpose so that the output holds them (see ``plan_stamps``)."""
 
 
 def stamps_fit(fmt: str, stamp_ns: int, receive_ns: int) -> bool:
@@ -534,7 +534,7 @@ def write_bag(
         time is its ``receive_ns`` (its stamp when None), raised where it would go back in
         time so that readers, which order a bag by receive time, keep the scans in order
         (a :class:`StampsChangedWarning` says how many). A stamp the format cannot hold is
-        refused (:class:`StampRangeError`; :func:`labkit.io.convert` shifts such stamps).
+        refused (``StampRangeError``; :func:`labkit.io.convert` shifts such stamps).
     path : str or Path
         ``.bag`` for ROS1; ``.mcap`` for a single MCAP file; any other name is a ROS2
         bag folder (sqlite3, or MCAP with ``format="mcap"``).
@@ -543,7 +543,7 @@ def write_bag(
     topic : str
         Topic name, default ``"/scan"``.
     overwrite : bool
-        Replace an existing bag (only a bag: see :mod:`labkit._safe` for the rules).
+        Replace an existing bag (only a bag: see ``labkit._safe`` for the rules).
     inputs : iterable of paths
         Files being read to make ``scans``: the output may not be one of them.
     pose_topic : str or None

@@ -28,6 +28,15 @@ class Faults:
     lost (``count`` of each :meth:`skip` and :meth:`lose`), "at least" that many when some damage
     cost an unknown number (``known=False``, or a file that ends early).
 
+    Parameters
+    ----------
+    path : str or Path
+        The file read, named by the error.
+    strict : bool
+        Stop at the first damaged place.
+    expected : int or None
+        How many scans the file says it holds (a bag's intact index); None: unknown.
+
     Examples
     --------
     >>> faults = Faults("run.jsonl", strict=False)

@@ -33,8 +33,18 @@ __all__ = ["write_features", "read_features", "json_safe"]
 
 
 def json_safe(obj):
-    """A copy of ``obj`` (dicts, lists, tuples, numbers) that strict JSON can hold: NaN and
-    infinity become null ("no value")."""
+    """A copy of ``obj`` that strict JSON can hold: NaN and infinity become null ("no value").
+
+    Parameters
+    ----------
+    obj : object
+        Dicts, lists, tuples, numbers and strings, nested.
+
+    Returns
+    -------
+    object
+        The same structure, tuples as lists, with every non-finite float replaced by None.
+    """
     if isinstance(obj, np.generic):
         obj = obj.item()
     if isinstance(obj, float):
@@ -59,7 +69,7 @@ def write_features(features: Iterable[Features], out, *, overwrite: bool = False
 
     Each record also gets ``"scan"``, its place in the recording: ``first_scan`` (where the
     stream starts, e.g. a scan range's first scan) plus its place in the stream. A path is written under a
-    temporary name and renamed when complete (see :mod:`labkit._safe`): if iterating
+    temporary name and renamed when complete (see ``labkit._safe``): if iterating
     ``features`` raises :class:`~labkit.io.CorruptFileError` (a damaged recording), the file
     holds every scan before it and the error propagates. ``inputs``: the recordings read,
     which the output may not be.

@@ -49,9 +49,9 @@ class FileFormat:
         None when it is known only by reading them all.
     write : callable or None
         ``write(scans, path, *, topic, overwrite, inputs)`` -> number written, through
-        :mod:`labkit._safe`; None for a read-only format.
+        ``labkit._safe``; None for a read-only format.
     output_kind : OutputKind, callable or None
-        What ``write`` writes (:class:`labkit._safe.OutputKind`), or ``output_kind(path)`` giving it.
+        What ``write`` writes (``labkit._safe.OutputKind``), or ``output_kind(path)`` giving it.
     noun : str
         The files in a sentence ("CARMEN logs"); default ``"<name> files"``.
     label : str
@@ -114,7 +114,7 @@ class FileFormat:
         return self.write is not None
 
     def kind(self, path: Path):
-        """The :class:`labkit._safe.OutputKind` written at ``path``."""
+        """The ``labkit._safe.OutputKind`` written at ``path``."""
         return self.output_kind(path) if callable(self.output_kind) else self.output_kind
 
     def __str__(self) -> str:  # FORMATS[name] used to be the description
@@ -126,9 +126,22 @@ FORMATS: dict[str, FileFormat] = {}
 
 
 def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
-    """Add a row to :data:`FORMATS` (``replace=True`` to change an existing one); returns it.
+    """Add a row to :data:`FORMATS`.
 
-    Refused: a name already taken, or a suffix another format already claims."""
+    Refused (``ValueError``): a name already taken, or a suffix another format already claims.
+
+    Parameters
+    ----------
+    fmt : FileFormat
+        The format.
+    replace : bool
+        Change an existing row of the same name.
+
+    Returns
+    -------
+    FileFormat
+        ``fmt``.
+    """
     if not isinstance(fmt, FileFormat):
         raise TypeError(f"register_format takes a FileFormat, got {type(fmt).__name__}")
     if fmt.name in FORMATS and not replace:
@@ -142,29 +155,74 @@ def register_format(fmt: FileFormat, *, replace: bool = False) -> FileFormat:
 
 
 def unregister_format(name: str) -> FileFormat:
-    """Remove a row from :data:`FORMATS` (tests, plug-ins); returns it."""
+    """Remove a row from :data:`FORMATS` (tests, plug-ins).
+
+    Parameters
+    ----------
+    name : str
+        The format's name.
+
+    Returns
+    -------
+    FileFormat
+        The row removed.
+    """
     if name not in FORMATS:
         raise KeyError(f"no file format named {name!r}; formats: {', '.join(FORMATS)}")
     return FORMATS.pop(name)
 
 
 def writable_formats() -> tuple[str, ...]:
-    """The names of the formats labkit writes."""
+    """The names of the formats labkit writes.
+
+    Returns
+    -------
+    tuple of str
+        Every format with a writer.
+    """
     return tuple(k for k, f in FORMATS.items() if f.writable)
 
 
 def format_from_suffix(name: str) -> str | None:
-    """The format a file name's ending says (longest matching suffix), or None."""
+    """The format a file name's ending says (longest matching suffix), or None.
+
+    Parameters
+    ----------
+    name : str
+        A file name (or path).
+
+    Returns
+    -------
+    str or None
+        The format's name; None when no suffix matches.
+    """
     name = name.lower()
     best = max(((len(s), k) for k, f in FORMATS.items() for s in f.suffixes if name.endswith(s)), default=None)
     return best[1] if best else None
 
 
 def folder_format() -> str | None:
-    """The writable folder format (what a name without suffix is written as)."""
+    """The writable folder format (what a name without suffix is written as).
+
+    Returns
+    -------
+    str or None
+        Its name; None when no registered format writes folders.
+    """
     return next((k for k, f in FORMATS.items() if f.folder and f.writable), None)
 
 
 def recording_suffixes(in_folders_only: bool = False) -> tuple[str, ...]:
-    """Every file suffix of every format (or of those picked up in folders)."""
+    """Every file suffix of every format (or of those picked up in folders).
+
+    Parameters
+    ----------
+    in_folders_only : bool
+        Only the formats found when a folder of recordings is given (:attr:`FileFormat.in_folders`).
+
+    Returns
+    -------
+    tuple of str
+        The suffixes, with their dot.
+    """
     return tuple(s for f in FORMATS.values() if f.in_folders or not in_folders_only for s in f.suffixes)

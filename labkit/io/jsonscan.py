@@ -144,8 +144,19 @@ def read_json_lines(path: str | Path, *, strict: bool = False) -> Iterator[Scan]
     """Yield scans from a ``.jsonl`` file, one JSON object per line.
 
     A line that is not a scan is skipped and counted; after the last good scan a
-    :class:`CorruptFileError` says how many and where the first was (``strict``: reading
-    stops at the first bad line).
+    :class:`~labkit.io.CorruptFileError` says how many and where the first was.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    strict : bool
+        Stop reading at the first bad line.
+
+    Yields
+    ------
+    Scan
+        Each scan, in file order.
     """
     path = Path(path)
     faults = Faults(path, strict)
@@ -170,14 +181,45 @@ JSON_SCAN = OutputKind("a JSON scan (.json)", (".json",), json_object_with("rang
 
 
 def write_json_scan(scan: Scan, path: str | Path, *, overwrite: bool = False, inputs=()) -> None:
-    """Write one scan to a ``.json`` file (under a temporary name, then renamed)."""
+    """Write one scan to a ``.json`` file (under a temporary name, then renamed).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    path : str or Path
+        The file to write.
+    overwrite : bool
+        Replace an existing file of this kind.
+    inputs : iterable of str or Path
+        The files read, which the output may not be.
+    """
     with safe_output(path, JSON_SCAN, overwrite=overwrite, inputs=inputs) as tmp:
         tmp.write_text(json.dumps(scan_to_dict(scan), allow_nan=False) + "\n", encoding="utf-8")
 
 
 def write_json_lines(scans: Iterable[Scan], path: str | Path, *, overwrite: bool = False, inputs=()) -> int:
-    """Write scans one per line (under a temporary name, then renamed); if ``scans`` raises
-    :class:`CorruptFileError`, the file holds every scan before it and the error propagates."""
+    """Write scans to a ``.jsonl`` file, one per line (under a temporary name, then renamed).
+
+    If iterating ``scans`` raises :class:`~labkit.io.CorruptFileError`, the file holds every scan
+    before it and the error propagates.
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans.
+    path : str or Path
+        The file to write.
+    overwrite : bool
+        Replace an existing file of this kind.
+    inputs : iterable of str or Path
+        The files read, which the output may not be.
+
+    Returns
+    -------
+    int
+        How many scans were written.
+    """
     n = 0
     with safe_output(path, JSON_LINES, overwrite=overwrite, inputs=inputs) as tmp, \
             open(tmp, "w", encoding="utf-8", newline="\n") as fh:

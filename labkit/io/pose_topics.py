@@ -88,10 +88,25 @@ def _choices(odometry: list[str], tf: list[str]) -> str:
 
 
 def plan_poses(path: Path, topics, poses: str | bool | None) -> PosePlan | None:
-    """The topics to read the poses of a bag from, given its ``topics`` (``(name, msgtype,
-    count)``) and ``poses`` (None or True: auto; False: none; a topic name); None for no poses.
-    Raises :class:`RefusedError` for a topic that holds no poses, and for several odometry
-    topics without ``/tf`` when none is named."""
+    """The topics to read the poses of a bag from.
+
+    Raises :class:`~labkit.errors.RefusedError` for a topic that holds no poses, and for several
+    odometry topics without ``/tf`` when none is named.
+
+    Parameters
+    ----------
+    path : Path
+        The bag (for messages).
+    topics : iterable of tuple of (str, str, int)
+        The bag's topics: ``(name, msgtype, count)``.
+    poses : str, bool or None
+        None or True: whatever the bag has; False: none; a topic's name: that topic.
+
+    Returns
+    -------
+    PosePlan or None
+        The plan; None for no poses.
+    """
     if poses is False:
         return None
     odometry = sorted(name for name, msgtype, _ in topics if msgtype in ODOMETRY_TYPES)
@@ -136,17 +151,26 @@ def _stamp(header, receive_ns: int) -> int:
 
 
 class BagPoses:
-    """The poses of one bag, read by :func:`read_bag_poses`: the sensor pose of any scan frame
-    at any stamp (:meth:`pose_at`), and the faults met while reading them.
+    """The poses of one bag, read by :func:`read_bag_poses`, and the faults met while reading them.
+
+    It gives the sensor pose of any scan frame at any stamp (:meth:`BagPoses.pose_at`).
+
+    Parameters
+    ----------
+    plan : PosePlan
+        The pose topics read (:func:`plan_poses`).
+    tree : labkit.poses.FrameTree
+        Every transform read (tf and tf_static).
+    odometry : tuple of (str, str, labkit.poses.PoseTrack) or None
+        The odometry read: parent frame, child frame and the poses; None without odometry.
+    faults : labkit.io.faults.Faults
+        Records of the pose topics that could not be read.
+    last_good_ns : int or None
+        With ``strict``: the stamp of the last pose read before the first bad record; scans
+        after it get no pose. None: no bad record.
 
     Attributes
     ----------
-    plan : PosePlan
-    tree : labkit.poses.FrameTree
-        Every transform read (tf and tf_static).
-    odometry : tuple (parent frame, child frame, PoseTrack) or None
-    faults : Faults
-        Records of the pose topics that could not be read.
     sources : dict
         For every scan frame met so far, how its pose is found (for messages and notes).
     """
@@ -209,9 +233,28 @@ def read_bag_poses(path: Path, fmt: str, plan: PosePlan, readable: bool, strict:
                    expected: int | None = None) -> BagPoses:
     """Read every pose and transform ``plan`` names, in one pass over those topics of the bag.
 
-    A record that cannot be read is skipped and counted in :attr:`BagPoses.faults` (with
-    ``strict``, reading stops there); :func:`labkit.io.bags.iter_bag` reports them with the scans'.
-    ``expected``: how many pose messages the bag's index lists, to count the lost ones exactly.
+    A record that cannot be read is skipped and counted in the ``faults`` of :class:`BagPoses` (with
+    ``strict``, reading stops there); ``labkit.io.bags.iter_bag`` reports them with the scans'.
+
+    Parameters
+    ----------
+    path : Path
+        The bag.
+    fmt : str
+        Its format: ``"ros1"``, ``"ros2"`` or ``"mcap"``.
+    plan : PosePlan
+        The topics to read (:func:`plan_poses`).
+    readable : bool
+        Whether rosbags could open the bag's index; False: read it record by record.
+    strict : bool
+        Stop at the first bad record.
+    expected : int or None
+        How many pose messages the bag's index lists, to count the lost ones exactly.
+
+    Returns
+    -------
+    BagPoses
+        The poses and the faults met.
     """
     faults = Faults(path, strict, expected)
     odometry: dict[tuple[str, str], tuple[list, list]] = {}

@@ -46,8 +46,18 @@ def _supported() -> str:
 def detect_format(path: str | Path) -> str:
     """Tell a file's format from its name (and, for folders, their contents).
 
-    Returns one of the keys of :data:`FORMATS`; raises ``ValueError`` listing the
-    supported formats for anything else, and ``FileNotFoundError`` for a missing path.
+    Raises ``ValueError`` listing the supported formats for anything else, and
+    ``FileNotFoundError`` for a missing path.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file or folder.
+
+    Returns
+    -------
+    str
+        One of the keys of :data:`labkit.io.FORMATS`.
     """
     p = Path(path)
     if not p.exists():
@@ -70,11 +80,12 @@ def detect_format(path: str | Path) -> str:
 class ScanStream:
     """The scans of one file, ready to iterate (see :func:`read_scans`).
 
-    Attributes
+    Parameters
     ----------
     path : Path
-    format : str
-        One of :data:`FORMATS`.
+        The file.
+    fmt : str
+        Its format, one of :data:`labkit.io.FORMATS` (the attribute ``format``).
     topic : str or None
         The LaserScan topic being read (bags) or the CARMEN message type.
     count : int or None
@@ -89,6 +100,11 @@ class ScanStream:
         odometry /odom"``, ``"the log's corrected laser poses"``, ...); None when they get none.
     pose_plan : PosePlan or None
         For bags: the pose topics read (:mod:`labkit.io.pose_topics`).
+
+    Attributes
+    ----------
+    format : str
+        The file's format.
     pose_sources : dict
         After reading a bag: for each scan frame, how its pose was found.
     first, stop : int, int or None
@@ -285,7 +301,7 @@ def write_scans(
 
     Returns the number written. Bags: see :func:`write_bag`. CARMEN logs are read-only.
     ``overwrite`` replaces only an output of the same kind; ``inputs`` are the files the
-    scans come from, which the output may not be (see :mod:`labkit._safe`).
+    scans come from, which the output may not be (see ``labkit._safe``).
 
     Parameters
     ----------
@@ -316,8 +332,22 @@ def write_scans(
 
 
 def output_format(p: Path, format: str | None = None) -> str:
-    """The format written to ``p``: from its name (a name without suffix is a ROS2 bag folder),
-    checked against ``format`` when one is given."""
+    """The format written to a path: from its name, checked against ``format`` when one is given.
+
+    A name without suffix is a ROS2 bag folder.
+
+    Parameters
+    ----------
+    p : Path
+        The output.
+    format : str or None
+        The format asked for; None: the name's.
+
+    Returns
+    -------
+    str
+        The format's name.
+    """
     guess = _format_from_suffix(p.name)
     if guess is not None and not FORMATS[guess].writable:
         raise RefusedError(f"labkit reads {FORMATS[guess].noun} but does not write them")
@@ -343,7 +373,20 @@ def output_format(p: Path, format: str | None = None) -> str:
 
 
 def output_kind(p: Path, fmt: str) -> OutputKind:
-    """What the writer of format ``fmt`` writes at ``p`` (for :func:`labkit._safe.check_output`)."""
+    """What the writer of a format writes at a path (for ``labkit._safe.check_output``).
+
+    Parameters
+    ----------
+    p : Path
+        The output.
+    fmt : str
+        Its format.
+
+    Returns
+    -------
+    labkit._safe.OutputKind
+        The kind of file or folder, which an existing output must be to be replaced.
+    """
     return FORMATS[fmt].kind(p)
 
 
@@ -375,7 +418,7 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
     ``overwrite=True`` and only when it is the same kind of output.
 
     Time stamps that the output bag format cannot hold (CARMEN logs and JSON scans may have
-    negative stamps, or garbage) are changed on purpose, as :func:`labkit.io.bags.plan_stamps`
+    negative stamps, or garbage) are changed on purpose, as ``labkit.io.bags.plan_stamps``
     describes, and a :class:`StampsChangedWarning` says how.
 
     Parameters
@@ -412,8 +455,15 @@ def convert(src: str | Path, dst: str | Path, *, topic: str | None = None, forma
 
 @dataclass(frozen=True)
 class Conversion:
-    """What :func:`convert_recording` wrote: the scans, and for a whole-bag copy every message
-    per topic (empty for a scans-only copy)."""
+    """What :func:`convert_recording` wrote.
+
+    Parameters
+    ----------
+    scans : int
+        The scans copied.
+    messages : dict
+        For a whole-bag copy, the messages written per topic (empty for a scans-only copy).
+    """
 
     scans: int
     messages: dict = field(default_factory=dict)
@@ -423,7 +473,36 @@ def convert_recording(src: str | Path, dst: str | Path, *, topic: str | None = N
                       overwrite: bool = False, progress: bool = False, strict: bool = False,
                       poses: str | bool | None = None, only_scans: bool = False,
                       scans: slice | None = None) -> Conversion:
-    """:func:`convert`, saying what it wrote (:class:`Conversion`)."""
+    """:func:`convert`, saying what it wrote (:class:`Conversion`).
+
+    Parameters
+    ----------
+    src : str or Path
+        The recording to copy.
+    dst : str or Path
+        The output; its format from its name unless ``format`` is given.
+    topic : str, optional
+        The LaserScan topic (for a scans-only copy), as for :func:`read_scans`.
+    format : str, optional
+        The output's format, a name of :data:`labkit.io.FORMATS` with a writer.
+    overwrite : bool, default False
+        Replace an existing ``dst`` of the same kind.
+    progress : bool, default False
+        Show a progress bar.
+    strict : bool, default False
+        Stop at the first record that cannot be decoded.
+    poses : str, bool or None
+        Where the scans' poses come from, as for :func:`read_scans`.
+    only_scans : bool, default False
+        Copy the scans alone, also between bags.
+    scans : slice, optional
+        Only this range of scans, as for :func:`convert`.
+
+    Returns
+    -------
+    Conversion
+        The scans copied and, for a whole-bag copy, the messages per topic.
+    """
     src, dst = Path(src), Path(dst)
     fmt = output_format(dst, format)
     src_fmt = detect_format(src)

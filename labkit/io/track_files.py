@@ -29,13 +29,31 @@ TRACKS_FILE = OutputKind("a labkit tracks table (.csv)", (".csv",), starts_with(
 
 def write_tracks(tables: Iterable[TrackTable], out: str | Path, *, overwrite: bool = False, inputs=(),
                  first_scan: int = 0) -> tuple[int, int]:
-    """Write the rows of every :class:`~labkit.tracking.TrackTable` (one per scan, in order) to the
-    CSV file ``out``; returns ``(scans, rows)``.
+    """Write the rows of every :class:`~labkit.tracking.TrackTable` (one per scan, in order) to a CSV file.
 
-    ``first_scan`` numbers the first table (a scan range keeps the recording's numbers). Written
-    under a temporary name and renamed when complete (see :mod:`labkit._safe`): if iterating
-    ``tables`` raises :class:`~labkit.io.CorruptFileError` (a damaged recording), the file holds every
-    scan before it and the error propagates. ``inputs``: the recordings read, which the output may not be.
+    Written under a temporary name and renamed when complete: if iterating ``tables`` raises
+    :class:`~labkit.io.CorruptFileError` (a damaged recording), the file holds every scan before
+    it and the error propagates.
+
+    Parameters
+    ----------
+    tables : iterable of labkit.tracking.TrackTable
+        One per scan, in order.
+    out : str or Path
+        The CSV file.
+    overwrite : bool
+        Replace an existing tracks table.
+    inputs : iterable of str or Path
+        The recordings read, which the output may not be.
+    first_scan : int
+        The number of the first table's scan (a scan range keeps the recording's numbers).
+
+    Returns
+    -------
+    scans : int
+        The tables written.
+    rows : int
+        The rows written.
     """
     with safe_output(out, TRACKS_FILE, overwrite=overwrite, inputs=inputs) as tmp, \
             open(tmp, "w", encoding="utf-8", newline="") as fh:
@@ -57,7 +75,21 @@ def write_tracks(tables: Iterable[TrackTable], out: str | Path, *, overwrite: bo
 
 
 def read_tracks(path: str | Path) -> Iterator[dict]:
-    """The rows of a tracks table written by :func:`write_tracks`, as dicts with typed values."""
+    """The rows of a tracks table written by :func:`write_tracks`, as dicts with typed values.
+
+    A file whose columns are not a tracks table's raises ``ValueError``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+
+    Yields
+    ------
+    dict
+        One row: ``scan``, ``stamp_ns``, ``id`` and ``hits`` as int, ``x``, ``y``, ``vx``, ``vy``
+        as float, the other columns as str.
+    """
     ints, floats = {"scan", "stamp_ns", "id", "hits"}, {"x", "y", "vx", "vy"}
     with open(path, encoding="utf-8", newline="") as fh:
         reader = csv.DictReader(fh)

@@ -236,6 +236,24 @@ def auto_direction_window(scan: Scan, sigma: float, eps_theta: float = EPS_THETA
     normal incidence, at most ``largest``. Then the directions of one wall fall within DBSCAN's
     radius of each other, as the paper's three beams do on a precise, dense scanner.
 
+    Parameters
+    ----------
+    scan : Scan
+        The scan (its median range and angle step).
+    sigma : float
+        The range noise, metres.
+    eps_theta : float
+        The largest tilt of a local direction allowed, radians.
+    largest : int
+        The widest half-width returned, beams.
+
+    Returns
+    -------
+    int
+        The half-width, beams.
+
+    Examples
+    --------
     >>> angles = np.radians(np.arange(-90.0, 90.25, 0.5))
     >>> scan = Scan(ranges=np.full(angles.size, 3.0), angles=angles)
     >>> [auto_direction_window(scan, sigma) for sigma in (0.001, 0.005, 0.01, 0.02, 0.03)]

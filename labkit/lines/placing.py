@@ -23,8 +23,9 @@ __all__ = ["PlacingParams", "placed"]
 
 @dataclass(frozen=True)
 class PlacingParams(Params):
-    """The placing fields RANSAC, the Hough transform and incremental extraction share (the
-    meaning of split-and-merge's): the range noise of the lines' covariances and what a user
+    """The placing fields RANSAC, the Hough transform and incremental extraction share.
+
+    They mean what split-and-merge's do: the range noise of the lines' covariances and what a user
     trusts; a line is reported only if it is likely within ``place_dr_m`` and
     ``place_dalpha_deg`` of the true line."""
 
@@ -40,13 +41,33 @@ class PlacingParams(Params):
 
 def placed(lines: list[LineSegment], place_dr_m: float, place_dalpha_deg: float, place_confidence: float,
            steps=None) -> list[LineSegment]:
-    """The lines the data can place: those whose covariance gives them at least ``place_confidence``
-    of lying within ``place_dr_m`` metres and ``place_dalpha_deg`` degrees of the true line
-    (:func:`labkit.fitting.placement_probability`); every other line is a ``"reject"`` step with
-    ``test="place_confidence"`` in ``steps`` if given. Shared by every extractor with a
+    """The lines the data can place, as their covariances say.
+
+    Those whose covariance gives them at least ``place_confidence`` of lying within
+    ``place_dr_m`` metres and ``place_dalpha_deg`` degrees of the true line
+    (:func:`labkit.fitting.placement_probability`) are kept. Shared by every extractor with a
     ``place_confidence``. (In split-and-merge, joining such a line to its neighbour instead,
     when the joined line still passes the split test, found fewer walls and more false lines on
-    the simulated sets of ``benchmarks/evaluation.py``.)"""
+    the simulated sets of ``benchmarks/evaluation.py``.)
+
+    Parameters
+    ----------
+    lines : list of LineSegment
+        The lines, with their covariances.
+    place_dr_m : float
+        The tolerance in ``r``, metres.
+    place_dalpha_deg : float
+        The tolerance in ``alpha``, degrees.
+    place_confidence : float
+        The probability a line must reach; 0 keeps every line.
+    steps : Steps or None
+        When given, every other line is added as a ``"reject"`` step with ``test="place_confidence"``.
+
+    Returns
+    -------
+    list of LineSegment
+        The lines kept, in order.
+    """
     if place_confidence <= 0 or not lines:
         return lines
     chance = np.asarray(placement_probability(np.array([ln.covariance for ln in lines]), place_dr_m,

@@ -65,7 +65,7 @@ class RansacParams(PlacingParams):
     """Parameters of :func:`ransac_lines`.
 
     The ``[lines.ransac]`` table of :class:`labkit.Config`, each default once: lengths in metres
-    (the random generator is seeded with :data:`DEFAULT_SEED`; pass ``rng=`` to the function for another)."""
+    (the random generator is seeded with ``DEFAULT_SEED``; pass ``rng=`` to the function for another)."""
 
     threshold_m: float = param(AUTO, "a point is an inlier within this distance of the line, metres; auto: "
                                      "max(2.5 sigma, 2 cm) of the scan's range noise", lo=0, strict=True, auto=True)

@@ -25,12 +25,26 @@ class _Checked(Protocol):
 
 @dataclass(frozen=True)
 class LineExtractor:
-    """One registered line extractor: its one ``name`` (config, CLI, experiments), the public
-    function (:func:`labkit.params.checked_by` its record), its parameter record class, a
-    one-line description and the display ``label`` of tables. ``fixed`` are keyword arguments
-    always passed (e.g. split-and-merge's ``method``); ``segmented``: the extractor works on range
-    segments (the pipeline then gives it its segmentation; otherwise only the beams other
-    detectors took are masked)."""
+    """One registered line extractor.
+
+    Parameters
+    ----------
+    name : str
+        Its one name (config, CLI, experiments).
+    fn : callable
+        The public function (:func:`labkit.params.checked_by` its record).
+    params_cls : type of Params
+        Its parameter record class.
+    description : str
+        A one-line description.
+    label : str
+        The display label of tables.
+    fixed : tuple
+        Keyword arguments always passed, as ``(name, value)`` pairs (e.g. split-and-merge's ``method``).
+    segmented : bool
+        The extractor works on range segments (the pipeline then gives it its segmentation;
+        otherwise only the beams other detectors took are masked).
+    """
 
     name: str
     fn: Callable
@@ -68,12 +82,35 @@ LINE_EXTRACTORS: dict[str, LineExtractor] = {}
 
 def register(name: str, fn: Callable, params_cls: type, description: str, *, label: str | None = None,
              fixed: dict | None = None, segmented: bool = True) -> LineExtractor:
-    """Add a line extractor under ``name`` (lower case, no spaces: it is a config value and a
-    CLI argument). ``fn(scan, *, segments=None, trace=False, <keywords>)`` returns a list of
+    """Add a line extractor under ``name``.
+
+    ``fn(scan, *, segments=None, trace=False, <keywords>)`` returns a list of
     :class:`~labkit.LineSegment` (and its steps with ``trace=True``), its keywords named after
-    the fields of ``params_cls``, a frozen :class:`~labkit.params.Params` record holding their
-    defaults; a function not yet :func:`~labkit.params.checked_by` the record is decorated here.
-    ``label`` (default: ``name``) names it in tables; ``segmented``: see :class:`LineExtractor`."""
+    the fields of ``params_cls``; a function not yet :func:`~labkit.params.checked_by` the record
+    is decorated here.
+
+    Parameters
+    ----------
+    name : str
+        Lower case, no spaces: it is a config value and a CLI argument.
+    fn : callable
+        The extractor.
+    params_cls : type
+        A frozen :class:`~labkit.params.Params` record holding its keywords' defaults.
+    description : str
+        A one-line description.
+    label : str or None
+        Its name in tables; None: ``name``.
+    fixed : dict or None
+        Keyword arguments always passed.
+    segmented : bool
+        The extractor works on range segments (see :class:`LineExtractor`).
+
+    Returns
+    -------
+    LineExtractor
+        The registry's entry.
+    """
     if not isinstance(name, str) or not name or name != name.strip().lower() or " " in name or name == "none":
         raise ValueError(f"an extractor name must be a lower-case word other than 'none', got {name!r}")
     if name in LINE_EXTRACTORS:
@@ -106,5 +143,11 @@ def _scan_checked(fn: Callable) -> Callable:
 
 
 def unregister(name: str) -> None:
-    """Remove a registered extractor (for tests that register a toy one)."""
+    """Remove a registered extractor (for tests that register a toy one).
+
+    Parameters
+    ----------
+    name : str
+        Its name.
+    """
     LINE_EXTRACTORS.pop(name)

@@ -455,20 +455,40 @@ class _Lists:
 
 def join_grazing_walls(scan: Scan, labels: np.ndarray, threshold_m: float, min_points: int,
                        sigma: float) -> tuple[np.ndarray, np.ndarray | None]:
-    """``labels`` with the walls seen at a grazing angle that the breakpoint detector cut to
-    pieces joined again (relabelled in scan order), and at which beams ``k`` the pair
-    ``(k, k + 1)`` was joined (None: none). The ``"auto"`` split test only.
+    """Join again the walls seen at a grazing angle that the breakpoint detector cut to pieces.
 
-    The detector (:func:`labkit.segmentation.segment_labels`) cuts between two beams when the
-    line joining their points is within ``incidence_deg`` (10 deg) of the beams: there it cannot
-    tell a wall from a step in depth. A long wall seen far away at a few degrees is cut at every
-    beam, each point alone and up to ``max_gap_m`` or more from the next (0.3-0.7 m for walls of
-    the simulated corridor 7-13 m away), and no line was fitted to it. One cut is a step in
-    depth; a wall is a chain of them: ``min_points`` or more lone beams in a row, each cut from
-    the next at :data:`GRAZING_DEG` or more from the beams, are joined into a segment, and with
-    the segment at either end when it was cut from it the same way. The split tests then cut
-    what is not one line. (Beams without a label closer than the detector's threshold were not
-    cut: the pipeline's beams of circles and legs. They stay out.)"""
+    The ``"auto"`` split test only. The detector (:func:`labkit.segmentation.segment_labels`)
+    cuts between two beams when the line joining their points is within ``incidence_deg``
+    (10 deg) of the beams: there it cannot tell a wall from a step in depth. A long wall seen far
+    away at a few degrees is cut at every beam, each point alone and up to ``max_gap_m`` or more
+    from the next (0.3-0.7 m for walls of the simulated corridor 7-13 m away), and no line was
+    fitted to it. One cut is a step in depth; a wall is a chain of them: ``min_points`` or more
+    lone beams in a row, each cut from the next at :data:`GRAZING_DEG` or more from the beams,
+    are joined into a segment, and with the segment at either end when it was cut from it the
+    same way. The split tests then cut what is not one line. (Beams without a label closer than
+    the detector's threshold were not cut: the pipeline's beams of circles and legs. They stay
+    out.)
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    labels : ndarray of int, shape (N,)
+        Its range segments' labels, -1 for beams in none.
+    threshold_m : float
+        The detector's threshold, metres.
+    min_points : int
+        The fewest lone beams in a row that make a wall.
+    sigma : float
+        The range noise, metres.
+
+    Returns
+    -------
+    labels : ndarray of int, shape (N,)
+        The labels with those walls joined (relabelled in scan order).
+    joined : ndarray of int or None
+        The beams ``k`` at which the pair ``(k, k + 1)`` was joined; None: none.
+    """
     return grazing_runs(scan, labels, threshold_m, min_points, sigma)
 
 

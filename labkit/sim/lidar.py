@@ -34,6 +34,27 @@ class Lidar:
     with probability ``dropout_prob`` and then reads NaN. Angles and limits are rounded
     to float32, as a ``sensor_msgs/LaserScan`` stores them, so that simulated scans and
     scans read back from a bag are identical.
+
+    Parameters
+    ----------
+    name : str
+        The model's name (``"LMS200"``, ...).
+    angle_min : float
+        The first beam's angle, radians.
+    angle_increment : float
+        The angle between neighbouring beams, radians.
+    n_beams : int
+        The number of beams.
+    range_min : float
+        The shortest valid range, metres.
+    range_max : float
+        The longest range, metres.
+    noise_std_m : float
+        The standard deviation of the range noise, metres.
+    dropout_prob : float
+        The probability that a beam reads NaN.
+    rate_hz : float
+        Scans per second.
     """
 
     name: str
@@ -99,8 +120,16 @@ LIDARS = {
 # ============================================================================ trajectory
 @dataclass(frozen=True)
 class Trajectory:
-    """Sensor poses over time: ``(t_s, x, y, theta)`` keyframes, linearly interpolated
-    (theta along the shorter way round); constant before the first and after the last."""
+    """Sensor poses over time: keyframes, linearly interpolated.
+
+    Theta is interpolated along the shorter way round; the pose is constant before the first
+    keyframe and after the last.
+
+    Parameters
+    ----------
+    keyframes : tuple of tuple of (float, float, float, float)
+        ``(t_s, x, y, theta)``: time in seconds, position in metres, heading in radians.
+    """
 
     keyframes: tuple[tuple[float, float, float, float], ...]
 
@@ -131,7 +160,23 @@ class Trajectory:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A world, a lidar, a trajectory and a duration: everything a recording needs."""
+    """A world, a lidar, a trajectory and a duration: everything a recording needs.
+
+    Parameters
+    ----------
+    world : World
+        What the lidar sees.
+    lidar : Lidar
+        The sensor.
+    trajectory : Trajectory
+        The sensor's poses over time.
+    duration_s : float
+        The recording's length, seconds.
+    topic : str
+        The scans' topic in a bag.
+    frame_id : str
+        The scans' frame.
+    """
 
     world: World
     lidar: Lidar
@@ -153,6 +198,16 @@ def scenario(name: str) -> Scenario:
     ``office``: XV-11 (360 deg) touring both rooms, 40 s at 5 Hz. ``random_polygons_<seed>``:
     static LMS200 in the room's centre, one scan. ``crossing`` (4 walkers) and ``crossing_<n>`` (1-6):
     the hall's static LMS200 watching people cross (:func:`labkit.sim.worlds.crossing`), 60 s at 10 Hz.
+
+    Parameters
+    ----------
+    name : str
+        One of the names above.
+
+    Returns
+    -------
+    Scenario
+        The scenario.
     """
     if name == "hall":
         return Scenario(make_world("hall"), LIDARS["lms200"], Trajectory.static(6.0, 0.4, np.pi / 2), 60.0)
@@ -298,7 +353,29 @@ def scan_at(
 ) -> tuple[Scan, ScanTruth]:
     """Simulate one scan from ``pose`` at time ``t`` (moving objects placed at ``t``).
 
-    Without ``rng`` the scan is noise-free and has no dropouts.
+    Parameters
+    ----------
+    world : World
+        What the lidar sees.
+    lidar : Lidar
+        The sensor.
+    pose : tuple of (float, float, float)
+        The sensor's ``(x, y, theta)`` in the world, metres and radians.
+    t : float
+        The time, seconds, that places the moving objects.
+    rng : numpy.random.Generator or None
+        Draws the noise and dropouts; None: a noise-free scan without dropouts.
+    stamp_ns : int or None
+        The scan's time stamp, nanoseconds; None: ``t`` after the simulator's epoch (``EPOCH_NS``).
+    frame_id : str
+        The scan's frame.
+
+    Returns
+    -------
+    scan : Scan
+        The scan.
+    truth : ScanTruth
+        What it contains.
     """
     frame = _frame(world, t)
     angles = lidar.angles

@@ -19,8 +19,12 @@ __all__ = ["PathSpec", "RollingCylinder", "Walker", "Mover"]
 class PathSpec:
     """A polyline path for moving objects, walked at constant speed.
 
-    ``mode="loop"`` closes the polyline and goes round; ``mode="bounce"`` walks to the
-    end and back.
+    Parameters
+    ----------
+    waypoints : tuple of tuple of (float, float)
+        The polyline's points, metres, world frame.
+    mode : str
+        ``"loop"`` closes the polyline and goes round; ``"bounce"`` walks to the end and back.
     """
 
     waypoints: tuple[tuple[float, float], ...]
@@ -99,7 +103,21 @@ class Mover:
 
 @dataclass(frozen=True)
 class RollingCylinder:
-    """A cylinder pulled along a path at ``speed_mps`` (Xavier et al.'s mobile cylinder)."""
+    """A cylinder pulled along a path at ``speed_mps`` (Xavier et al.'s mobile cylinder).
+
+    Parameters
+    ----------
+    radius : float
+        The cylinder's radius, metres.
+    path : PathSpec
+        The path its centre follows.
+    speed_mps : float
+        Its speed, metres per second.
+    name : str
+        Its name in the ground truth.
+    start_offset_m : float
+        Where along the path it is at time 0, metres.
+    """
 
     radius: float
     path: PathSpec
@@ -124,6 +142,23 @@ class Walker:
     last footfall to the next at twice the walking speed, so the legs alternate as in real
     walking. Each leg keeps to its side of the path, also on the way back of a bounce
     path, so the legs never cross.
+
+    Parameters
+    ----------
+    path : PathSpec
+        The path the body follows.
+    speed_mps : float
+        The walking speed, metres per second.
+    leg_diameter_m : float
+        Each leg's diameter, metres.
+    leg_separation_m : float
+        The distance between the two sides the feet fall on, metres.
+    step_length_m : float
+        The distance between footfalls along the path, metres.
+    name : str
+        The person's name in the ground truth.
+    start_offset_m : float
+        Where along the path the person is at time 0, metres.
     """
 
     path: PathSpec

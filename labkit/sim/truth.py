@@ -23,9 +23,28 @@ _ROUND = 6  # decimals kept in ground-truth files (micrometres, micro-radians)
 class VisibleWall:
     """The visible part of a wall in one scan, in the sensor frame.
 
-    ``first``/``last`` are the first and last beam of the run of consecutive beams that
-    hit the wall; ``start``/``end`` are those beams' true (noise-free) hit points. On a
-    full-circle scan a run may cross the seam: then ``first > last``.
+    On a full-circle scan a run of beams may cross the seam: then ``first > last``.
+
+    Parameters
+    ----------
+    wall_id : int
+        Its object id (as in ``hits``).
+    name : str
+        Its name in the world.
+    r : float
+        The wall's line in normal form: distance from the sensor, metres.
+    alpha : float
+        The wall's line in normal form: the normal's angle, radians.
+    start : tuple of (float, float)
+        The true (noise-free) hit point of the first beam of the run that hits it.
+    end : tuple of (float, float)
+        The true hit point of the last beam of that run.
+    first : int
+        The first beam of the run of consecutive beams that hit it.
+    last : int
+        The last beam of that run.
+    n_beams : int
+        How many beams hit it.
     """
 
     wall_id: int
@@ -45,7 +64,27 @@ class VisibleWall:
 
 @dataclass(frozen=True)
 class VisibleCircle:
-    """A circle (column, bench foot, rolling cylinder) seen in one scan, sensor frame."""
+    """A circle (column, bench foot, rolling cylinder) seen in one scan, sensor frame.
+
+    Parameters
+    ----------
+    object_id : int
+        Its object id (as in ``hits``).
+    name : str
+        Its name in the world.
+    kind : str
+        ``"column"``, ``"bench"``, ``"cylinder"``, ...
+    center : tuple of (float, float)
+        Its centre, metres.
+    radius : float
+        Its radius, metres.
+    first : int
+        The first beam that hits it.
+    last : int
+        The last beam that hits it.
+    n_beams : int
+        How many beams hit it.
+    """
 
     object_id: int
     name: str
@@ -59,8 +98,29 @@ class VisibleCircle:
 
 @dataclass(frozen=True)
 class VisibleArc:
-    """An arc (rounded corner) seen in one scan: its circle and the true hit points of
-    its first and last beams, in the sensor frame."""
+    """An arc (rounded corner) seen in one scan, in the sensor frame.
+
+    Parameters
+    ----------
+    object_id : int
+        Its object id (as in ``hits``).
+    name : str
+        Its name in the world.
+    center : tuple of (float, float)
+        The arc's centre, metres.
+    radius : float
+        Its radius, metres.
+    start : tuple of (float, float)
+        The true hit point of its first beam.
+    end : tuple of (float, float)
+        The true hit point of its last beam.
+    first : int
+        The first beam that hits it.
+    last : int
+        The last beam that hits it.
+    n_beams : int
+        How many beams hit it.
+    """
 
     object_id: int
     name: str
@@ -75,7 +135,25 @@ class VisibleArc:
 
 @dataclass(frozen=True)
 class VisibleLeg:
-    """One leg of a person seen in one scan (sensor frame); ``diameter`` in metres."""
+    """One leg of a person seen in one scan (sensor frame).
+
+    Parameters
+    ----------
+    object_id : int
+        Its object id (as in ``hits``).
+    person : str
+        The person's name.
+    center : tuple of (float, float)
+        The leg's centre, metres.
+    diameter : float
+        Its diameter, metres.
+    first : int
+        The first beam that hits it.
+    last : int
+        The last beam that hits it.
+    n_beams : int
+        How many beams hit it.
+    """
 
     object_id: int
     person: str
@@ -90,8 +168,23 @@ class VisibleLeg:
 class ScanTruth:
     """What one simulated scan contains.
 
-    ``hits`` is (N,) int: the object id each beam hit (see :meth:`World.objects`), -1
-    where the beam hit nothing within range. ``pose`` is the sensor pose in the world.
+    Parameters
+    ----------
+    stamp_ns : int
+        The scan's time stamp, nanoseconds.
+    pose : tuple of (float, float, float)
+        The sensor pose in the world, ``(x, y, theta)``.
+    hits : ndarray of shape (N,), int
+        The object id each beam hit (see :meth:`labkit.sim.World.objects`), -1 where the beam hit
+        nothing within range.
+    walls : tuple of VisibleWall
+        The walls seen.
+    circles : tuple of VisibleCircle
+        The circles seen (columns, bench feet, rolling cylinders).
+    arcs : tuple of VisibleArc
+        The arcs seen.
+    legs : tuple of VisibleLeg
+        The legs seen.
     """
 
     stamp_ns: int
@@ -179,7 +272,18 @@ def _run_len(first: int, last: int, n: int) -> int:
 
 # ============================================================================ truth files
 def truth_path_for(bag_path: str | Path) -> Path:
-    """Where the ground truth of a recording lives: ``<name>.truth.jsonl`` beside it."""
+    """Where the ground truth of a recording lives: ``<name>.truth.jsonl`` beside it.
+
+    Parameters
+    ----------
+    bag_path : str or Path
+        The recording.
+
+    Returns
+    -------
+    Path
+        Its ground-truth file (whether or not it exists).
+    """
     p = Path(bag_path)
     stem = p.name[: -len(p.suffix)] if p.suffix in (".bag", ".mcap", ".db3") else p.name
     return p.with_name(f"{stem}.truth.jsonl")
@@ -187,8 +291,17 @@ def truth_path_for(bag_path: str | Path) -> Path:
 
 @dataclass(frozen=True)
 class GroundTruth:
-    """The ground truth of a whole recording: a header and one :class:`ScanTruth` per
-    scan, looked up by stamp (``truth[stamp_ns]``)."""
+    """The ground truth of a whole recording: a header and one :class:`ScanTruth` per scan.
+
+    A scan's truth is looked up by stamp (``truth[stamp_ns]``).
+
+    Parameters
+    ----------
+    header : dict
+        The file's header: format version, world, lidar, object table, seed.
+    scans : dict of int to ScanTruth
+        Each scan's truth by its ``stamp_ns``.
+    """
 
     header: dict
     scans: dict[int, ScanTruth]
@@ -230,11 +343,29 @@ class Recorded(Protocol):
 
 
 def write_truth(path: str | Path, sc: Recorded, truths, *, seed: int, overwrite: bool = False) -> int:
-    """Write ``truths`` (an iterable of :class:`ScanTruth`) as JSON lines; returns the count.
+    """Write the truth of every scan as JSON lines.
 
     Line 1 is a header (format version, world, lidar, object table, seed); every further
     line is one scan's truth keyed by ``stamp_ns``. Written under a temporary name and
-    renamed when complete; ``overwrite`` replaces only a ground-truth file.
+    renamed when complete.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    sc : labkit.sim.Scenario
+        What the header describes: the world, the lidar, the topic and the frame of the scans.
+    truths : iterable of ScanTruth
+        The scans' truths, in time order.
+    seed : int
+        The simulation's seed, kept in the header.
+    overwrite : bool
+        Replace an existing ground-truth file (never any other kind of file).
+
+    Returns
+    -------
+    int
+        How many scans' truths were written.
     """
     header = {
         "labkit_truth": 1,
@@ -256,16 +387,36 @@ def write_truth(path: str | Path, sc: Recorded, truths, *, seed: int, overwrite:
 
 
 def read_truth(path: str | Path) -> GroundTruth:
-    """Read a ground-truth JSON-lines file written by :func:`write_truth` (all of it, into
-    memory; :class:`TruthStream` reads one scan at a time)."""
+    """Read a ground-truth JSON-lines file written by :func:`write_truth`, all of it, into memory.
+
+    :class:`TruthStream` reads one scan at a time.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    GroundTruth
+        The header and every scan's truth.
+    """
     stream = TruthStream(path)
     return GroundTruth(stream.header, {tr.stamp_ns: tr for tr in stream})
 
 
 class TruthStream:
-    """A ground-truth file read one scan at a time, so that memory stays flat however long the
-    recording: ``header`` (line 1) is read at once; iterating gives each scan's
-    :class:`ScanTruth` in file order (the simulator writes them in time order)."""
+    """A ground-truth file read one scan at a time, so that memory stays flat however long the recording.
+
+    ``header`` (line 1) is read at once; iterating gives each scan's :class:`ScanTruth` in file
+    order (the simulator writes them in time order).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (:func:`write_truth`'s). A first line that is not a labkit ground-truth header
+        raises ``ValueError``.
+    """
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)

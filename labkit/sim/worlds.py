@@ -20,7 +20,17 @@ __all__ = ["Wall", "Arc", "Column", "World", "WORLDS", "make_world", "random_pol
 # ============================================================================ world
 @dataclass(frozen=True)
 class Wall:
-    """A wall: the line segment from ``start`` to ``end`` (metres, world frame)."""
+    """A wall: the line segment from ``start`` to ``end`` (metres, world frame).
+
+    Parameters
+    ----------
+    start : tuple of (float, float)
+        One end.
+    end : tuple of (float, float)
+        The other end.
+    name : str
+        Its name in the ground truth.
+    """
 
     start: tuple[float, float]
     end: tuple[float, float]
@@ -32,7 +42,20 @@ class Arc:
     """An arc of a circle, e.g. a rounded wall corner.
 
     The arc covers the directions (seen from ``center``) from ``start_angle``
-    counter-clockwise to ``end_angle`` (radians). It reflects from both sides.
+    counter-clockwise to ``end_angle``. It reflects from both sides.
+
+    Parameters
+    ----------
+    center : tuple of (float, float)
+        The circle's centre, metres, world frame.
+    radius : float
+        Its radius, metres.
+    start_angle : float
+        Where the arc starts, radians.
+    end_angle : float
+        Where it ends, counter-clockwise from the start, radians.
+    name : str
+        Its name in the ground truth.
     """
 
     center: tuple[float, float]
@@ -46,7 +69,16 @@ class Arc:
 class Column:
     """A solid circle: a column, one foot of a bench, a box seen round.
 
-    ``kind`` is a free label carried into the ground truth (``"column"``, ``"bench"``).
+    Parameters
+    ----------
+    center : tuple of (float, float)
+        Its centre, metres, world frame.
+    radius : float
+        Its radius, metres.
+    kind : str
+        A free label carried into the ground truth (``"column"``, ``"bench"``).
+    name : str
+        Its name in the ground truth.
     """
 
     center: tuple[float, float]
@@ -57,8 +89,26 @@ class Column:
 
 @dataclass(frozen=True)
 class World:
-    """Static geometry plus moving objects. Object ids (as in ground truth ``hits``)
-    number walls, then arcs, circles, rolling cylinders, then two legs per person."""
+    """Static geometry plus moving objects.
+
+    Object ids (as in ground truth ``hits``) number walls, then arcs, circles, rolling
+    cylinders, then two legs per person.
+
+    Parameters
+    ----------
+    name : str
+        The world's name.
+    walls : tuple of Wall
+        Its walls.
+    arcs : tuple of Arc
+        Its arcs.
+    circles : tuple of Column
+        Its columns.
+    cylinders : tuple of RollingCylinder
+        The cylinders rolling through it.
+    people : tuple of Walker
+        The people walking through it.
+    """
 
     name: str
     walls: tuple[Wall, ...] = ()
@@ -175,13 +225,25 @@ CROSSING_WALKERS = (
 
 
 def crossing(n_walkers: int = 4) -> World:
-    """The hall (its walls, columns and bench) with ``n_walkers`` (1-6) people crossing and
-    passing close, and the cylinder rolling round the columns: a world for tracking.
+    """The hall with people crossing and passing close, and the cylinder rolling round the columns.
 
-    The walkers of :data:`CROSSING_WALKERS` walk straight lines back and forth (0.75-1.0 m/s),
-    through each other's paths; the cylinder goes round the columns at 0.625 m/s, a lap in 32 s.
-    Named ``crossing`` (4 walkers) or ``crossing_<n>`` in :func:`make_world`.
+    The hall keeps its walls, columns and bench: a world for tracking. The walkers of
+    :data:`CROSSING_WALKERS` walk straight lines back and forth (0.75-1.0 m/s), through each
+    other's paths; the cylinder goes round the columns at 0.625 m/s, a lap in 32 s. Named
+    ``crossing`` (4 walkers) or ``crossing_<n>`` in :func:`make_world`.
 
+    Parameters
+    ----------
+    n_walkers : int
+        How many of the walkers, 1-6.
+
+    Returns
+    -------
+    World
+        The world.
+
+    Examples
+    --------
     >>> [p.name for p in crossing(2).people]
     ['anna', 'ben']
     """
@@ -254,11 +316,29 @@ def random_polygons(
     min_side_m: float = 0.4,
     max_side_m: float = 2.0,
 ) -> World:
-    """A rectangular room with ``n_obstacles`` random convex polygons that do not overlap.
+    """A rectangular room with random convex polygons that do not overlap.
 
     For benchmarks: every wall is a straight segment, so the ground truth is pure lines.
     Obstacles keep 0.5 m from each other and from the room walls, and leave a 1.5 m
     clear disc around the room's centre for the robot.
+
+    Parameters
+    ----------
+    seed : int
+        The seed of the room.
+    n_obstacles : int
+        How many polygons.
+    room_size_m : tuple of (float, float)
+        The room's width and depth, metres.
+    min_side_m : float
+        The smallest size of a polygon (the diameter of the circle its corners lie on), metres.
+    max_side_m : float
+        The largest size of a polygon, metres.
+
+    Returns
+    -------
+    World
+        The room.
     """
     if n_obstacles < 0:
         raise ValueError(f"n_obstacles must be >= 0, got {n_obstacles}")
@@ -292,8 +372,19 @@ WORLDS = {"hall": _hall, "corridor": _corridor, "office": _office, "crossing": c
 
 
 def make_world(name: str) -> World:
-    """Build a named world: ``hall``, ``corridor``, ``office``, ``crossing[_N]`` (N walkers, 1-6;
-    4 without) or ``random_polygons[_SEED]``."""
+    """Build a named world.
+
+    Parameters
+    ----------
+    name : str
+        ``hall``, ``corridor``, ``office``, ``crossing[_N]`` (N walkers, 1-6; 4 without) or
+        ``random_polygons[_SEED]``.
+
+    Returns
+    -------
+    World
+        The world.
+    """
     if name.startswith("random_polygons"):
         rest = name[len("random_polygons"):].lstrip("_")
         return random_polygons(int(rest) if rest else 0)

@@ -35,12 +35,33 @@ def plot_scan(
     title: str | None = None,
     adjustable: str = "datalim",
 ):
-    """Draw a scan's valid points (coloured by ``labels`` when given), the sensor, and
-    faint rays for beams without a valid return.
+    """Draw a scan's valid points, the sensor, and faint rays for beams without a valid return.
 
-    ``labels`` is per beam, shape (N,), as returned by :func:`labkit.segmentation.segment_labels`.
     The axes keep equal scales; pass ``adjustable="box"`` when you set the limits yourself
     (the default, ``"datalim"``, widens them to fit the axes' shape).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+    labels : ndarray of shape (N,) or None
+        Per-beam labels to colour the points by, as :func:`labkit.segmentation.segment_labels`
+        returns them.
+    show_invalid : bool
+        Draw the rays of the beams without a valid return.
+    point_size : float
+        The points' marker size.
+    title : str or None
+        The axes' title.
+    adjustable : str
+        ``"datalim"`` or ``"box"``.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     ax = _axes(ax)
     if show_invalid and (~scan.valid).any():
@@ -70,7 +91,22 @@ def plot_scan(
 
 
 def plot_ranges(scan: Scan, ax=None, *, title: str | None = None):
-    """Range against beam angle: the scan as the sensor reports it, invalid beams marked."""
+    """Range against beam angle: the scan as the sensor reports it, invalid beams marked.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+    title : str or None
+        The axes' title.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _axes(ax)
     deg = np.degrees(scan.angles)
     ok = scan.valid
@@ -90,8 +126,20 @@ def plot_ranges(scan: Scan, ax=None, *, title: str | None = None):
 
 
 def plot_truth(truth, ax=None):
-    """Overlay simulator ground truth (:class:`labkit.sim.ScanTruth`): walls as lines,
-    circles and arcs in green, legs in purple."""
+    """Overlay simulator ground truth: walls as lines, circles and arcs in green, legs in purple.
+
+    Parameters
+    ----------
+    truth : labkit.sim.ScanTruth
+        The scan's ground truth.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _axes(ax)
     for k, w in enumerate(truth.walls):
         ax.plot(*np.array([w.start, w.end]).T, "-", color=mpl("truth"), lw=1.2, alpha=0.7,
@@ -109,8 +157,28 @@ def plot_truth(truth, ax=None):
 
 
 def plot_lines(lines, ax=None, *, label: str | None = None, color=None, lw: float = 2.2, annotate: bool = False):
-    """Draw :class:`labkit.LineSegment` records from ``start`` to ``end`` (legend: ``label``,
-    by default "lines (count)"); with ``annotate`` each is numbered by its place in the list."""
+    """Draw :class:`labkit.LineSegment` records from ``start`` to ``end``.
+
+    Parameters
+    ----------
+    lines : sequence of LineSegment
+        The lines.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+    label : str or None
+        The legend's label; None: "lines (count)".
+    color : color or None
+        A matplotlib colour; None: the lines' colour of the house palette.
+    lw : float
+        The line width, points.
+    annotate : bool
+        Number each line by its place in the list.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _axes(ax)
     segs = [[tuple(ln.start), tuple(ln.end)] for ln in lines]
     if segs:
@@ -125,8 +193,22 @@ def plot_lines(lines, ax=None, *, label: str | None = None, color=None, lw: floa
 
 
 def plot_corners(corners, ax=None):
-    """Draw :class:`labkit.Corner` records: filled diamonds for concave corners, open ones
-    for convex, and a cross for corners extrapolated across a gap."""
+    """Draw :class:`labkit.Corner` records: filled diamonds concave, open convex, a cross across a gap.
+
+    A corner extrapolated across a gap gets the cross.
+
+    Parameters
+    ----------
+    corners : sequence of Corner
+        The corners.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _axes(ax)
     for kind, marker_face in (("concave", mpl("corners")), ("convex", "none")):
         pts = [c.point for c in corners if c.kind == kind and not c.extrapolated]
@@ -141,7 +223,22 @@ def plot_corners(corners, ax=None):
 
 
 def plot_circles(circles, ax=None, *, label: str = "circles"):
-    """Draw :class:`labkit.Circle` records (circles and arcs) with their centres."""
+    """Draw :class:`labkit.Circle` records (circles and arcs) with their centres.
+
+    Parameters
+    ----------
+    circles : sequence of Circle
+        The circles and arcs.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+    label : str
+        The legend's label.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _axes(ax)
     for k, c in enumerate(circles):
         ax.add_patch(CirclePatch(tuple(c.center), c.radius, fill=False, color=mpl("circles"), lw=2.0,
@@ -151,8 +248,22 @@ def plot_circles(circles, ax=None, *, label: str = "circles"):
 
 
 def plot_legs(legs, ax=None, *, people=()):
-    """Draw :class:`labkit.Leg` records as circles of their diameter, and people (pairs of
-    legs) as a star between them."""
+    """Draw :class:`labkit.Leg` records as circles of their diameter, and people as a star between their legs.
+
+    Parameters
+    ----------
+    legs : sequence of Leg
+        The legs.
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+    people : sequence of Person
+        Pairs of legs.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
+    """
     ax = _axes(ax)
     for k, g in enumerate(legs):
         ax.add_patch(CirclePatch(tuple(g.center), g.diameter / 2, fill=False, color=mpl("legs"), lw=2.0,
@@ -169,7 +280,40 @@ def plot_features(scan: Scan, features=None, *, lines=(), corners=(), circles=()
 
     Pass a :class:`labkit.Features` (from :func:`labkit.extract_features`) as ``features``
     to draw all of it, points coloured by its range segments, or the layers one by one.
-    ``adjustable="box"`` for axes shared with others (see :func:`plot_scan`).
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    features : Features or None
+        Every layer at once (and the segments' colours).
+    lines : sequence of LineSegment
+        Lines, when ``features`` is not given.
+    corners : sequence of Corner
+        Corners, when ``features`` is not given.
+    circles : sequence of Circle
+        Circles, when ``features`` is not given.
+    arcs : sequence of Circle
+        Arcs, when ``features`` is not given.
+    legs : sequence of Leg
+        Legs, when ``features`` is not given.
+    people : sequence of Person
+        People, when ``features`` is not given.
+    truth : labkit.sim.ScanTruth or None
+        The scan's ground truth, drawn beneath.
+    labels : ndarray or None
+        Per-beam segment labels to colour the points by (``features``' own otherwise).
+    ax : matplotlib.axes.Axes or None
+        Where to draw; None: a new figure.
+    title : str or None
+        The axes' title.
+    adjustable : str
+        ``"datalim"`` or ``"box"`` (for axes shared with others; see :func:`plot_scan`).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn on.
     """
     if features is not None:
         lines, corners, circles, arcs = features.lines, features.corners, features.circles, features.arcs
@@ -189,7 +333,24 @@ def plot_features(scan: Scan, features=None, *, lines=(), corners=(), circles=()
 
 
 def scan_figure(scan: Scan, *, labels=None, truth=None, title: str | None = None):
-    """A two-panel figure: ranges against angle, and the points in the plane."""
+    """A two-panel figure: ranges against angle, and the points in the plane.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    labels : ndarray or None
+        Per-beam labels to colour the points by.
+    truth : labkit.sim.ScanTruth or None
+        Ground truth drawn over the points.
+    title : str or None
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig, (a0, a1) = plt.subplots(1, 2, figsize=(13, 5.5), gridspec_kw={"width_ratios": [1, 1.3]})
     plot_ranges(scan, a0, title="what the sensor reports")
     plot_scan(scan, a1, labels=labels, title="the same beams as points")

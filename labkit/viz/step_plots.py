@@ -29,8 +29,21 @@ _LINE_LABELS = {"merge": "merged line", "keep": "first line of the pair", "accep
 
 
 def step_beams(scan: Scan, step: Step) -> np.ndarray:
-    """The valid beams a step concerns: ``step.beams`` when given, else ``first..last``
-    (wrapping past the end of a full-circle scan); empty when the step names no beams."""
+    """The valid beams a step concerns.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the step is on.
+    step : Step
+        The step.
+
+    Returns
+    -------
+    ndarray of int
+        ``step.beams`` when given, else ``first..last`` (wrapping past the end of a full-circle
+        scan), valid beams only; empty when the step names no beams.
+    """
     if step.beams:
         beams = np.asarray(step.beams, dtype=np.int64)
     elif step.first < 0 or step.last < 0:
@@ -66,6 +79,17 @@ def draw_step(scan: Scan, steps: Sequence[Step], k: int, axes) -> None:
     points in orange and green), its line dashed black, its circle dashed black, and its
     beam of interest ``at`` a red cross (with its distance to the line when the step has
     one). The left title names the step, the right one gives its reason.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the algorithm ran on.
+    steps : sequence of Step
+        Its trace.
+    k : int
+        The step to draw.
+    axes : tuple of matplotlib.axes.Axes
+        The whole scan's panel and the zoomed one.
     """
     if not 0 <= k < len(steps):
         raise ValueError(f"k must be in 0..{len(steps) - 1}, got {k}")
@@ -129,14 +153,28 @@ def draw_step(scan: Scan, steps: Sequence[Step], k: int, axes) -> None:
 
 def step_viewer(scan: Scan, steps: Sequence[Step] | Mapping[str, Sequence[Step]], *,
                 figsize: tuple[float, float] = (13, 5.5), description: str = "trace"):
-    """A notebook widget that replays ``steps`` on ``scan``: a slider over the steps and the
-    figure of the chosen one (:func:`draw_step`).
+    """A notebook widget that replays ``steps`` on ``scan``: a slider over the steps and the chosen one's figure.
 
-    ``steps`` is one trace (a list of :class:`labkit.Step`) or several by name, e.g.
-    ``{"endpoints": steps_a, "fit": steps_b}``; then toggle buttons switch between them (the
-    slider goes back to the first step). The slider updates on release. The returned
-    ``ipywidgets.VBox`` has the attributes ``slider``, ``choice`` (the buttons, or None),
-    ``output`` and ``figure`` (the figure last drawn).
+    The figure is :func:`draw_step`'s. With several traces by name, toggle buttons switch between
+    them (the slider goes back to the first step). The slider updates on release.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan.
+    steps : sequence of Step, or mapping of str to sequence of Step
+        One trace (a list of :class:`labkit.Step`) or several by name, e.g.
+        ``{"endpoints": steps_a, "fit": steps_b}``.
+    figsize : tuple of float
+        The figure's size, inches.
+    description : str
+        The label of the buttons.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The widget, with the attributes ``slider``, ``choice`` (the buttons, or None), ``output``
+        and ``figure`` (the figure last drawn).
     """
     import ipywidgets as widgets  # here, so that draw_step works without ipywidgets
 

@@ -22,8 +22,23 @@ def scan_browser(
 ) -> widgets.VBox:
     """A slider over ``scans`` and a figure redrawn for the chosen one.
 
-    ``draw(scan, ax, index)`` draws a scan (default: :func:`labkit.viz.plot.plot_scan`).
     The slider updates on release (``continuous_update=False``), so dragging stays smooth.
+
+    Parameters
+    ----------
+    scans : sequence of Scan
+        The scans.
+    draw : callable or None
+        ``draw(scan, ax, index)`` draws a scan; None: :func:`labkit.viz.plot.plot_scan`.
+    description : str
+        The slider's label.
+    figsize : tuple of float
+        The figure's size, inches.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The slider above the figure's output.
     """
     if len(scans) == 0:
         raise ValueError("scans must not be empty")

@@ -10,7 +10,7 @@ __all__ = ["APP_ID", "TIME", "SEQUENCE", "STEP", "map_view", "blueprint", "steps
 APP_ID = "labkit"
 TIME = "ros_time"
 SEQUENCE = "scan"
-#: The timeline of an algorithm's steps on one scan (:func:`log_steps`).
+#: The timeline of an algorithm's steps on one scan (:func:`~labkit.viz.rr.replay.log_steps`).
 STEP = "step"
 _ACCUMULATED = ("points", "lines", "corners", "circles", "legs")
 # rerun's 2D views have y pointing down; mirror so that y points up as in matplotlib.
@@ -21,7 +21,13 @@ _NO_LEGEND = rrb.PlotLegend(visible=False)
 
 
 def map_view() -> rrb.Spatial2DView:
-    """The world-frame view: ``map/**``, the accumulated map shown from the start up to the cursor."""
+    """The world-frame view: ``map/**``, the accumulated map shown from the start up to the cursor.
+
+    Returns
+    -------
+    rerun.blueprint.Spatial2DView
+        The view, for a blueprint.
+    """
     grow = rrb.VisibleTimeRanges([
         rrb.VisibleTimeRange(timeline, start=rrb.TimeRangeBoundary.infinite(),
                              end=rrb.TimeRangeBoundary.cursor_relative())
@@ -32,15 +38,31 @@ def map_view() -> rrb.Spatial2DView:
 
 def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = False,
               with_times: bool = True, timeline: str | None = None, with_tracks: bool = False) -> rrb.Blueprint:
-    """The default layout: the scan view on the left; counts, stage times, log and notes on
-    the right. ``with_map``: the map view (world frame) beside the scan view; ``with_times=False``
-    leaves out the stage-time panel (a recording without features has no stage times);
-    ``timeline``: the timeline the viewer opens on (:data:`SEQUENCE` for a recording whose
-    stamps do not advance); ``with_tracks``: a log of the tracks' births, confirmations and
-    deletions (``tracks/events``) under the log. With
-    ``compare=("A", "B")`` there is one scan view per named configuration
-    (features logged with ``log_features(..., name="A")``), side by side, each showing the
-    scan, the ground truth and that configuration's features."""
+    """The default layout: the scan view on the left; counts, stage times, log and notes on the right.
+
+    With ``compare=("A", "B")`` there is one scan view per named configuration (features logged
+    with ``log_features(..., name="A")``), side by side, each showing the scan, the ground truth
+    and that configuration's features.
+
+    Parameters
+    ----------
+    compare : tuple or list of str
+        The names of the configurations to show side by side; empty: one scan view.
+    with_map : bool
+        The map view (world frame) beside the scan view.
+    with_times : bool
+        The stage-time panel (a recording without features has no stage times).
+    timeline : str or None
+        The timeline the viewer opens on (:data:`SEQUENCE` for a recording whose stamps do not
+        advance); None: the viewer's choice.
+    with_tracks : bool
+        A log of the tracks' births, confirmations and deletions (``tracks/events``) under the log.
+
+    Returns
+    -------
+    rerun.blueprint.Blueprint
+        The layout, to send with the recording.
+    """
     if compare:
         others = {n: [f"- /world/{m}/**" for m in compare if m != n] for n in compare}
         views = [rrb.Spatial2DView(origin="/", contents=["+ /world/**", *others[n]], name=f"{n}")
@@ -75,16 +97,37 @@ def blueprint(compare: tuple[str, ...] | list[str] = (), *, with_map: bool = Fal
 
 def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600, compare=(),
                 with_map: bool = False, with_tracks: bool = False) -> None:
-    """Show a recording in the notebook with the default blueprint (``with_map``: and the map
-    view; ``with_tracks``: and the track events), or the side-by-side one for ``compare``; works
-    offline."""
+    """Show a recording in the notebook with the default blueprint, or the side-by-side one; works offline.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    width : int
+        The viewer's width, pixels.
+    height : int
+        The viewer's height, pixels.
+    compare : tuple or list of str
+        The configurations to show side by side, as in :func:`blueprint`.
+    with_map : bool
+        Also the map view.
+    with_tracks : bool
+        Also the track events.
+    """
     rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map,
                                                                       with_tracks=with_tracks))
 
 
 def steps_blueprint() -> rrb.Blueprint:
-    """The layout of :func:`log_steps`: the scan and the current step on the left; the step's
-    value against its threshold over the steps, and the steps' log, on the right."""
+    """The layout of :func:`~labkit.viz.rr.replay.log_steps`: the scan and its steps on the left, numbers right.
+
+    The right side shows the step's value against its threshold over the steps, and the steps' log.
+
+    Returns
+    -------
+    rerun.blueprint.Blueprint
+        The layout.
+    """
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial2DView(origin="/", contents="world/**", name="Steps (sensor frame)"),

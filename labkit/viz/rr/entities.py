@@ -33,6 +33,19 @@ def new_recording(name: str | None = None, *, recording_id: str | None = None) -
 
     Only the ``ros_time`` and ``scan`` timelines are kept (rerun's own ``log_time`` is
     switched off so that recordings of the same data are the same).
+
+    Parameters
+    ----------
+    name : str or None
+        The recording's name shown by the viewer; None: none (the application id is always
+        ``"labkit"``).
+    recording_id : str or None
+        The rerun recording id; None: a new one.
+
+    Returns
+    -------
+    rerun.RecordingStream
+        The stream.
     """
     rec = rr.RecordingStream(APP_ID, recording_id=recording_id)
     rec.set_log_time_enabled(False)
@@ -42,7 +55,15 @@ def new_recording(name: str | None = None, *, recording_id: str | None = None) -
 
 
 def log_static(rec: rr.RecordingStream, description: str | None = None) -> None:
-    """Log what does not change: the y-up view transform, the sensor, the notes."""
+    """Log what does not change: the y-up view transform, the sensor, the notes.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    description : str or None
+        The Markdown notes (e.g. from :func:`describe`); None: none.
+    """
     rec.log("world", rr.Transform3D(mat3x3=_Y_UP), static=True)
     rec.log("world/sensor", rr.Points2D([[0.0, 0.0]], radii=[-5.0], colors=[COLORS["sensor"]],
                                         labels=["sensor"]), static=True)
@@ -61,7 +82,17 @@ def _hide_labels(rec: rr.RecordingStream, world: str) -> None:
 
 
 def log_text(rec: rr.RecordingStream, text: str, level: str = "INFO") -> None:
-    """Append a line to the ``log`` entity at the current time."""
+    """Append a line to the ``log`` entity at the current time.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    text : str
+        The line.
+    level : str
+        Its level: ``"INFO"``, ``"WARN"``, ``"ERROR"``, ...
+    """
     rec.log("log", rr.TextLog(text, level=level))
 
 
@@ -96,18 +127,38 @@ def log_scans(
     features: Iterable[Features] | None = None,
     show_invalid: bool = True,
 ) -> int:
-    """Log scans in bulk (``send_columns``) on both timelines; return how many.
+    """Log scans in bulk (``send_columns``) on both timelines.
 
-    Each scan is logged at ``scan = start_index + k`` and ``ros_time = scan.stamp_ns``.
-    With ``features`` (one :class:`labkit.Features` per scan, e.g. from
-    :func:`labkit.extract_all`) every feature layer, the per-scan counts and stage times are
-    logged too (see :func:`log_features`), and the segments are the features' own. The
-    points are also logged coloured by range segment (``world/segments``, with the segment
-    count in ``metrics/count/segments``): from ``features``, from ``labels`` (one per-beam
-    label array per scan) or else segmented here as the pipeline does (adaptive breakpoints
-    with ``segment_threshold_m`` as the floor; ``None``: no segment layer). If iterating
-    ``scans`` (or ``features``) raises (a damaged file), every scan before the fault is sent,
-    then the error propagates.
+    Each scan is logged at ``scan = start_index + k`` and ``ros_time = scan.stamp_ns``. The
+    points are also logged coloured by range segment (``world/segments``, with the segment count
+    in ``metrics/count/segments``): from ``features``, from ``labels`` or else segmented here as
+    the pipeline does. If iterating ``scans`` (or ``features``) raises (a damaged file), every
+    scan before the fault is sent, then the error propagates.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    scans : iterable of Scan
+        The scans, in order.
+    start_index : int
+        The ``scan`` timeline's number of the first.
+    segment_threshold_m : float or None
+        The floor of the adaptive breakpoints of the segments computed here, metres; None: no
+        segment layer.
+    labels : iterable of ndarray or None
+        One per-beam label array per scan, the segments to show.
+    features : iterable of Features or None
+        One per scan (e.g. from :func:`labkit.extract_all`): every feature layer, the per-scan
+        counts and stage times are logged too (see :func:`log_features`), and the segments are
+        the features' own.
+    show_invalid : bool
+        Also log the invalid beams, as rays (``world/scan/invalid``).
+
+    Returns
+    -------
+    int
+        How many scans were logged.
     """
 
     def frames():
@@ -273,11 +324,26 @@ def log_features(
     start_index: int = 0,
     name: str | None = None,
 ) -> int:
-    """Log features alone (the scans logged already, e.g. by :func:`log_scans`), at
-    ``scan = start_index + k`` and ``ros_time = features.stamp_ns``; return how many.
+    """Log features alone (the scans logged already, e.g. by :func:`log_scans`).
 
-    ``name`` puts them under ``world/<name>/...`` and ``metrics/<name>/...``, so that two
-    configurations can be compared side by side (``blueprint(compare=[...])``).
+    Each is logged at ``scan = start_index + k`` and ``ros_time = features.stamp_ns``.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    features : iterable of Features
+        One per scan, in order.
+    start_index : int
+        The ``scan`` timeline's number of the first.
+    name : str or None
+        Puts them under ``world/<name>/...`` and ``metrics/<name>/...``, so that two
+        configurations can be compared side by side (``blueprint(compare=[...])``).
+
+    Returns
+    -------
+    int
+        How many were logged.
     """
     world, metrics = ("world", "metrics") if not name else (f"world/{name}", f"metrics/{name}")
 
@@ -290,11 +356,21 @@ def log_features(
 
 
 def log_truth(rec: rr.RecordingStream, truths: Iterable, index_of: dict[int, int]) -> int:
-    """Log simulator ground truth (:class:`labkit.sim.ScanTruth`) under ``world/truth``, in
-    grey so that the detected features (in colour) stand out against it.
+    """Log simulator ground truth under ``world/truth``, in grey, so that the features in colour stand out.
 
-    ``index_of`` maps ``stamp_ns`` to the scan's sequence number; truths of stamps not in
-    it are skipped. Returns how many were logged.
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    truths : iterable of labkit.sim.ScanTruth
+        The truth of each scan.
+    index_of : dict of int to int
+        ``stamp_ns`` -> the scan's sequence number; truths of stamps not in it are skipped.
+
+    Returns
+    -------
+    int
+        How many were logged.
     """
     known = ((index_of[tr.stamp_ns], tr) for tr in truths if tr.stamp_ns in index_of)
     n = _batched(known, lambda batch, _first: _send_truth(rec, batch))

@@ -1,6 +1,6 @@
 """A whole recording to an ``.rrd`` file as the scans come: the default blueprint, the scans, their
 features, the map and the ground truth, written under a temporary name; damage, Ctrl-C and a full disk
-handled as :mod:`labkit._safe` says."""
+handled as ``labkit._safe`` says."""
 
 from __future__ import annotations
 
@@ -43,9 +43,25 @@ _PEEK = 256  # scans looked at before writing: do they carry poses, do their sta
 
 @dataclass(frozen=True)
 class RecordSummary:
-    """What :func:`record` wrote: the file, how many scans and truths, the error that
-    stopped reading (or ``None``), and over all scans the feature counts and the seconds
-    spent per pipeline stage (empty without features)."""
+    """What :func:`record_scans` wrote.
+
+    Parameters
+    ----------
+    path : Path
+        The ``.rrd`` file.
+    n_scans : int
+        Scans logged.
+    n_truth : int
+        Scans logged with their ground truth.
+    error : Exception or None
+        The error that stopped reading (a damaged file), or None.
+    counts : dict
+        Over all scans, the number of each kind of feature (empty without features).
+    stage_seconds : dict
+        Over all scans, the seconds spent per pipeline stage (empty without features).
+    moving_tracks : tuple
+        With tracks: the ids of every track confirmed as moving, in order.
+    """
 
     path: Path
     n_scans: int
@@ -88,9 +104,31 @@ _MAP_NOTES = {
 
 def describe(title: str, *, source: str = "", config: Config | None = None, truth: bool = False,
              compare: dict[str, Config] | None = None, world_map: bool = False, tracks: bool = False) -> str:
-    """The Markdown note logged with a recording: what each entity shows, and the config
-    (``tracks``: and the tracks' entities); with ``compare`` (``{name: config}`` of features
-    logged with ``log_features(..., name=name)``) the named layers and every config."""
+    """The Markdown note logged with a recording: what each entity shows, and the config.
+
+    Parameters
+    ----------
+    title : str
+        The note's title.
+    source : str
+        A paragraph on where the scans come from.
+    config : Config or None
+        The configuration of the features shown; None: no features.
+    truth : bool
+        Describe the ground-truth entities.
+    compare : dict of str to Config, or None
+        ``{name: config}`` of features logged with ``log_features(..., name=name)``: the named
+        layers and every config.
+    world_map : bool
+        Describe the map view's entities.
+    tracks : bool
+        Describe the tracks' entities.
+
+    Returns
+    -------
+    str
+        The note, Markdown.
+    """
     lines = [f"# {title}", ""]
     if source:
         lines += [source, ""]
@@ -138,38 +176,65 @@ def record_scans(
     start_index: int = 0,
     tracks: bool = False,
 ) -> RecordSummary:
-    """Write scans to an ``.rrd`` file with the default blueprint, as they come: the file is
-    written while the scans are read (``RecordingStream.save`` before anything is logged, then
-    ``send_columns`` every :data:`_BATCH` scans), so memory stays flat however long the recording.
+    """Write scans to an ``.rrd`` file with the default blueprint, as they come.
 
-    When the scans carry poses (``with_map=None``: when one of the first 256 does), the map view
-    is logged beside the scan view: the path, the sensor's pose per scan, the scan and its
-    features in the world frame, and the accumulated map (``map_every``, ``map_cell_m``: see the
-    module docstring). ``with_map=False`` leaves it out.
-
-    Features are logged when given (``features``, one per scan) or computed here with
-    ``config`` (a :class:`labkit.Config`); otherwise only the scans and their range
-    segments (``labels`` per scan, or adaptive with ``segment_threshold_m`` as floor). ``truth`` is
-    a :class:`labkit.sim.GroundTruth`, or a :class:`labkit.sim.TruthStream` read along with the
-    scans (both in time order), to log beside them. If iterating ``scans`` raises
-    :class:`labkit.CorruptFileError` (a damaged file), the ``.rrd`` holds every scan that
-    could be read, the error is logged to ``log`` and returned in the summary (not raised).
-    ``start_index``: the ``scan`` timeline's number of the first scan (a range of a recording).
-
-    ``tracks=True`` also follows people and moving circles over the scans
-    (:class:`labkit.tracking.Tracker` with ``config.tracking``, default :class:`labkit.Config` ())
-    and logs the tracks in the scan view and the map view (see :mod:`labkit.viz.rr.tracks`); it
-    needs features (``features`` or ``config``).
+    The file is written while the scans are read (``RecordingStream.save`` before anything is
+    logged, then ``send_columns`` in batches), so memory stays flat however long the recording.
+    If iterating ``scans`` raises :class:`labkit.CorruptFileError` (a damaged file), the ``.rrd``
+    holds every scan that could be read, the error is logged to ``log`` and returned in the
+    summary (not raised).
 
     When the scans' time stamps do not advance (at least 1 % of them no later than the scan
     before, as in the Radish ``infinite-corridor`` log), a :class:`StampsCollapsedWarning` says so:
     scrub the ``scan`` timeline, which the viewer then opens on.
 
-    The file is written under a temporary name and renamed when complete; ``overwrite``
-    replaces only an existing ``.rrd``, and the output may not be one of ``inputs`` (see
-    :mod:`labkit._safe`). Interrupted (Ctrl-C), the recording so far is closed and kept as
-    ``<name>.partial.rrd``. A write that fails (a full disk) raises ``OSError`` naming ``out``,
-    and no file is left.
+    The file is written under a temporary name and renamed when complete. Interrupted (Ctrl-C),
+    the recording so far is closed and kept as ``<name>.partial.rrd``. A write that fails (a full
+    disk) raises ``OSError`` naming ``out``, and no file is left.
+
+    Parameters
+    ----------
+    scans : iterable of Scan
+        The scans, in order.
+    out : str or Path
+        The ``.rrd`` file.
+    name : str
+        The recording's name (the viewer's application id).
+    truth : labkit.sim.GroundTruth or labkit.sim.TruthStream or None
+        Ground truth to log beside the scans (a stream is read along with them; both in time order).
+    labels : iterable of ndarray or None
+        Without features: the range segments of each scan.
+    features : iterable of Features or None
+        One per scan, logged with it.
+    config : Config or None
+        Without ``features``: compute them here with this configuration; neither: only the scans
+        and their range segments.
+    segment_threshold_m : float or None
+        Without features or labels: the floor of the adaptive range segmentation, metres.
+    description : str or None
+        The Markdown notes; None: :func:`describe` of what is logged.
+    overwrite : bool
+        Replace an existing ``.rrd`` (never any other kind of file).
+    inputs : iterable of str or Path
+        The files read, which the output may not be.
+    with_map : bool or None
+        Log the map view (the path, the sensor's pose per scan, the scan and its features in the
+        world frame, and the accumulated map); None: when one of the first 256 scans has a pose.
+    map_every : int
+        Every so many scans with a pose add to the accumulated map (see the module docstring).
+    map_cell_m : float
+        The accumulated map keeps one point per grid cell of this size, metres.
+    start_index : int
+        The ``scan`` timeline's number of the first scan (a range of a recording).
+    tracks : bool
+        Also follow people and moving circles (:class:`labkit.tracking.Tracker` with
+        ``config.tracking``) and log the tracks in the scan view and the map view (see
+        :mod:`labkit.viz.rr.tracks`); needs features (``features`` or ``config``).
+
+    Returns
+    -------
+    RecordSummary
+        What was written.
     """
     scans = iter(scans)
     first: list[Scan] = []  # a look at the first batch: poses? stamps?

@@ -34,16 +34,32 @@ def _step_geometry(scan: Scan, step: Step) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def log_steps(rec: rr.RecordingStream, scan: Scan, steps: list[Step], *, world: str = "world") -> int:
-    """Log the steps of an algorithm on one scan, step ``k`` at ``step = k`` on the ``step``
-    timeline, so that scrubbing that timeline replays the algorithm; return how many.
+    """Log the steps of an algorithm on one scan, so that scrubbing the ``step`` timeline replays it.
 
-    Entities: ``{world}/scan/points`` the scan (static), ``{world}/steps/beams`` the step's
-    beams (orange), ``{world}/steps/line`` and ``{world}/steps/circle`` its line and circle
-    (empty when it has none), ``{world}/steps/at`` its beam of interest (red, labelled with
-    ``value``), ``{world}/steps/accepted`` and ``{world}/steps/accepted_circles`` what the
-    earlier ``"accept"`` steps kept, ``steps/compared/{value,threshold}`` the numbers the
-    step compared (scalars), and ``steps/log`` one text line per step (kind, beams, reason).
-    Use :func:`steps_blueprint` for the layout (or :func:`record_steps` for an ``.rrd``).
+    Step ``k`` is logged at ``step = k``. Entities: ``{world}/scan/points`` the scan (static),
+    ``{world}/steps/beams`` the step's beams (orange), ``{world}/steps/line`` and
+    ``{world}/steps/circle`` its line and circle (empty when it has none), ``{world}/steps/at``
+    its beam of interest (red, labelled with ``value``), ``{world}/steps/accepted`` and
+    ``{world}/steps/accepted_circles`` what the earlier ``"accept"`` steps kept,
+    ``steps/compared/{value,threshold}`` the numbers the step compared (scalars), and
+    ``steps/log`` one text line per step (kind, beams, reason). Use :func:`steps_blueprint` for
+    the layout (or :func:`record_steps` for an ``.rrd``).
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    scan : Scan
+        The scan the algorithm ran on.
+    steps : list of Step
+        Its trace (``trace=True`` of the algorithm).
+    world : str
+        The root entity of the spatial layers.
+
+    Returns
+    -------
+    int
+        How many steps were logged.
     """
     if not isinstance(scan, Scan):
         raise ValueError(f"scan must be a labkit.Scan, got {type(scan).__name__}")
@@ -93,9 +109,29 @@ def log_steps(rec: rr.RecordingStream, scan: Scan, steps: list[Step], *, world: 
 
 def record_steps(scan: Scan, steps: list[Step], out: str | Path, *, name: str = "steps",
                  overwrite: bool = False) -> int:
-    """Write :func:`log_steps` to an ``.rrd`` with :func:`steps_blueprint`; return how many steps.
+    """Write :func:`log_steps` to an ``.rrd`` with :func:`steps_blueprint`.
+
     Open it with ``rerun out.rrd`` and scrub the ``step`` timeline. Written under a temporary
-    name and renamed when complete (see :mod:`labkit._safe`)."""
+    name and renamed when complete.
+
+    Parameters
+    ----------
+    scan : Scan
+        The scan the algorithm ran on.
+    steps : list of Step
+        Its trace.
+    out : str or Path
+        The ``.rrd`` file.
+    name : str
+        The recording's name.
+    overwrite : bool
+        Replace an existing ``.rrd``.
+
+    Returns
+    -------
+    int
+        How many steps were written.
+    """
     with safe_output(out, RRD_FILE, overwrite=overwrite) as tmp:
         rec = new_recording(name)
         rec.save(tmp, default_blueprint=steps_blueprint())

@@ -131,11 +131,34 @@ class _Map:
 
 def log_map(rec: rr.RecordingStream, scans: Iterable[Scan], features: Iterable[Features] | None = None, *,
             start_index: int = 0, truth=None, map_every: int = MAP_EVERY, map_cell_m: float = MAP_CELL_M) -> int:
-    """Log the world frame of scans with poses (module docstring, "Map"): the sensor's transform
-    per scan, the scan and its ``features`` (one per scan, optional) under it, the accumulated
-    map, the path, and the world's walls from ``truth`` (a :class:`labkit.sim.GroundTruth`).
-    Use it beside :func:`log_scans` and show it with ``show_inline(rec, with_map=True)``;
-    returns how many scans were logged."""
+    """Log the world frame of scans with poses (module docstring, "Map").
+
+    The sensor's transform per scan, the scan and its features under it, the accumulated map, the
+    path, and the world's walls from ``truth``. Use it beside :func:`log_scans` and show it with
+    ``show_inline(rec, with_map=True)``.
+
+    Parameters
+    ----------
+    rec : rerun.RecordingStream
+        The recording.
+    scans : iterable of Scan
+        The scans, with poses.
+    features : iterable of Features or None
+        One per scan, optional.
+    start_index : int
+        The ``scan`` timeline's number of the first.
+    truth : labkit.sim.GroundTruth or None
+        The world's walls to draw.
+    map_every : int
+        Every so many scans with a pose add to the accumulated map.
+    map_cell_m : float
+        The accumulated map keeps one point per grid cell of this size, metres.
+
+    Returns
+    -------
+    int
+        How many scans were logged.
+    """
     the_map = _Map(rec, map_every, map_cell_m)
     side = features if features is not None else _forever(None)
     n = _batched(((scan, None, f) for scan, f in zip(scans, side, strict=False)),
