@@ -9,7 +9,9 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters"]
+from labkit.viz import plot as lkplot
+
+__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners"]
 
 
 def _axes(ax, figsize):
@@ -162,3 +164,46 @@ def plot_angular_clusters(scan, phi, labels, n_clusters: int, xlim=(-1.5, 19), y
     ax_s.set_ylim(*ylim)
     fig.tight_layout()
     return fig
+
+
+def plot_lines_and_corners(scan, lines, corners, *, truth=None, title: str | None = None, point_size: float = 5,
+                           show_invalid: bool = True, legend_fontsize: float | None = 7, figsize=(9, 6.5), ax=None):
+    """Notebook 05: a scan with its line segments and corners (and its ground truth when given).
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    lines : list of labkit.LineSegment
+        Its line segments.
+    corners : list of labkit.Corner
+        Its corners.
+    truth : labkit.sim.ScanTruth, optional
+        The ground truth, drawn under the lines.
+    title : str, optional
+        The axes' title.
+    point_size : float, default 5
+        Size of the scan's points.
+    show_invalid : bool, default True
+        Draw faint rays for beams without a valid return.
+    legend_fontsize : float or None, default 7
+        The legend's font size, in the upper right corner; None for no legend.
+    figsize : tuple of float, default (9, 6.5)
+        The figure's size when ``ax`` is None.
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
+    """
+    ax = _axes(ax, figsize)
+    lkplot.plot_scan(scan, ax, point_size=point_size, show_invalid=show_invalid, title=title)
+    if truth is not None:
+        lkplot.plot_truth(truth, ax)
+    lkplot.plot_lines(lines, ax)
+    lkplot.plot_corners(corners, ax)
+    if legend_fontsize is not None:
+        ax.legend(loc="upper right", fontsize=legend_fontsize)
+    return ax

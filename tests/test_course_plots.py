@@ -1,0 +1,46 @@
+"""labkit.viz.course_plots draws what it is given, where it is."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import labkit
+from labkit.viz import course_plots as cp
+
+
+@pytest.fixture(autouse=True)
+def _close():
+    yield
+    plt.close("all")
+
+
+def _wall_scan():
+    # a wall x = 2 seen from -30 to 30 degrees, one beam per degree: points (2, 2 tan theta)
+    angles = np.radians(np.arange(-30.0, 30.5, 1.0))
+    return labkit.Scan(ranges=2.0 / np.cos(angles), angles=angles, range_min=0.05, range_max=10.0)
+
+
+def test_lines_and_corners_draws_the_given_layers(monkeypatch):
+    scan = _wall_scan()
+    line = labkit.line_segment(scan.points[:31], np.arange(31))          # the lower half of the wall
+    drawn = {}
+    monkeypatch.setattr(cp.lkplot, "plot_truth", lambda truth, ax: drawn.setdefault("truth", truth))
+    monkeypatch.setattr(cp.lkplot, "plot_corners", lambda corners, ax: drawn.setdefault("corners", corners))
+    truth, corners = object(), ["a corner"]
+    ax = cp.plot_lines_and_corners(scan, [line], corners, truth=truth, title="t", point_size=3)
+    assert drawn == {"truth": truth, "corners": corners}
+    # the scan's 61 points, and the line from (2, -2 tan 30 deg) = (2, -1.155) to (2, 0)
+    np.testing.assert_allclose(ax.collections[0].get_offsets(), scan.xy)
+    (segment,) = [c for c in ax.collections if c.get_label().startswith("lines")]
+    np.testing.assert_allclose(segment.get_segments()[0], [(2.0, -2 * np.tan(np.radians(30))), (2.0, 0.0)],
+                               atol=1e-9)
+    assert ax.get_title() == "t" and ax.get_legend().get_texts()[0].get_fontsize() == 7
+
+
+def test_lines_and_corners_without_truth_or_legend():
+    scan = _wall_scan()
+    fig, ax = plt.subplots()
+    assert cp.plot_lines_and_corners(scan, [], [], legend_fontsize=None, ax=ax) is ax
+    assert ax.get_legend() is None
