@@ -182,9 +182,27 @@ class TrackingParams(Params):
 
 # ============================================================================ the filter
 def cv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
-    """The constant-velocity model over ``dt`` seconds: transition ``F`` (4, 4) and process
-    noise ``Q`` (4, 4) for the state ``(x, y, vx, vy)``, the acceleration white noise of
-    spectral density ``q`` (m^2/s^3) in each axis (Bar-Shalom et al. 2001, eq. 6.2.2-12).
+    """Build the constant-velocity model over ``dt`` seconds.
+
+    The state is ``(x, y, vx, vy)``; the process noise is an acceleration white noise of spectral
+    density ``q`` in each axis (Bar-Shalom et al. 2001, eq. 6.2.2-12).
+
+    Parameters
+    ----------
+    dt : float
+        The time step, seconds.
+    q : float
+        The acceleration's spectral density, m^2/s^3.
+
+    Returns
+    -------
+    F : ndarray of shape (4, 4)
+        The transition matrix.
+    Q : ndarray of shape (4, 4)
+        The process noise covariance.
+
+    Examples
+    --------
 
     >>> F, Q = cv_model(0.5, 2.0)
     >>> F[0].tolist(), np.round(Q[0], 4).tolist()
@@ -198,8 +216,30 @@ def cv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def cv_predict(x, P, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
-    """Predict states ``x`` (..., 4) and covariances ``P`` (..., 4, 4) ``dt`` seconds ahead:
-    ``x' = F x``, ``P' = F P F' + Q`` (:func:`cv_model`). Works on one track or a stack.
+    """Predict states and covariances ``dt`` seconds ahead with the constant-velocity model.
+
+    ``x' = F x`` and ``P' = F P F' + Q`` (:func:`cv_model`), on one track or a stack of them.
+
+    Parameters
+    ----------
+    x : array_like of shape (..., 4)
+        States ``(x, y, vx, vy)``.
+    P : array_like of shape (..., 4, 4)
+        Their covariances.
+    dt : float
+        The time step, seconds.
+    q : float
+        The acceleration's spectral density, m^2/s^3.
+
+    Returns
+    -------
+    x : ndarray of shape (..., 4)
+        The predicted states.
+    P : ndarray of shape (..., 4, 4)
+        Their covariances.
+
+    Examples
+    --------
 
     >>> x, P = cv_predict(np.array([0.0, 0.0, 1.0, 0.5]), np.eye(4), 0.1, 0.0)
     >>> x.tolist()
@@ -221,17 +261,55 @@ def _cv_model(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def innovation(x, P, z, R) -> tuple[np.ndarray, np.ndarray]:
-    """The innovation ``nu = z - H x`` (..., 2) of a position measurement ``z`` (..., 2) with
-    covariance ``R`` (..., 2, 2), and its covariance ``S = H P H' + R`` (..., 2, 2); ``H``
-    picks the position out of ``(x, y, vx, vy)``. Arrays broadcast (tracks against detections)."""
+    """Compute the innovation of a position measurement and its covariance.
+
+    ``nu = z - H x`` and ``S = H P H' + R``, where ``H`` picks the position out of ``(x, y, vx, vy)``.
+    The arrays broadcast (tracks against detections).
+
+    Parameters
+    ----------
+    x : array_like of shape (..., 4)
+        States.
+    P : array_like of shape (..., 4, 4)
+        Their covariances.
+    z : array_like of shape (..., 2)
+        Position measurements, metres.
+    R : array_like of shape (..., 2, 2)
+        Their covariances.
+
+    Returns
+    -------
+    nu : ndarray of shape (..., 2)
+        The innovations.
+    S : ndarray of shape (..., 2, 2)
+        Their covariances.
+    """
     x = np.asarray(x, dtype=np.float64)
     P = np.asarray(P, dtype=np.float64)
     return np.asarray(z, dtype=np.float64) - x[..., :2], P[..., :2, :2] + np.asarray(R, dtype=np.float64)
 
 
 def mahalanobis2(nu, S) -> tuple[np.ndarray, np.ndarray]:
-    """The squared Mahalanobis distance ``nu' S^-1 nu`` of innovations ``nu`` (..., 2) with
-    covariances ``S`` (..., 2, 2), and ``ln det S``; ``S`` is inverted in closed form (2 x 2).
+    """Compute the squared Mahalanobis distance ``nu' S^-1 nu`` and ``ln det S``.
+
+    ``S`` is inverted in closed form (2 x 2).
+
+    Parameters
+    ----------
+    nu : array_like of shape (..., 2)
+        Innovations.
+    S : array_like of shape (..., 2, 2)
+        Their covariances.
+
+    Returns
+    -------
+    d2 : ndarray of shape (...)
+        The squared distances.
+    logdet : ndarray of shape (...)
+        ``ln det S``.
+
+    Examples
+    --------
 
     >>> d2, logdet = mahalanobis2(np.array([0.3, 0.0]), 0.01 * np.eye(2))
     >>> round(float(d2), 9), round(float(logdet), 4)
@@ -246,9 +324,28 @@ def mahalanobis2(nu, S) -> tuple[np.ndarray, np.ndarray]:
 
 
 def gate_threshold(probability: float) -> float:
-    """The chi-square quantile of 2 degrees of freedom at ``probability``: ``-2 ln(1 - p)``
-    (with 2 dof the chi-square law is exponential, so the quantile has this closed form). A true
-    detection's ``d2`` exceeds it with probability ``1 - p``.
+    """Compute the gate: the chi-square quantile of 2 degrees of freedom at ``probability``.
+
+    With 2 degrees of freedom the chi-square law is exponential, so the quantile has the closed form
+    ``-2 ln(1 - p)``. A true detection's ``d2`` exceeds it with probability ``1 - p``.
+
+    Parameters
+    ----------
+    probability : float
+        The share of true detections the gate keeps, in (0, 1).
+
+    Returns
+    -------
+    float
+        The threshold on the squared Mahalanobis distance.
+
+    Raises
+    ------
+    ValueError
+        When ``probability`` is not in (0, 1).
+
+    Examples
+    --------
 
     >>> round(gate_threshold(0.99), 4)
     9.2103
@@ -259,10 +356,32 @@ def gate_threshold(probability: float) -> float:
 
 
 def kalman_update(x, P, z, R) -> tuple[np.ndarray, np.ndarray]:
-    """The Kalman update of states ``x`` (..., 4), covariances ``P`` (..., 4, 4) by position
-    measurements ``z`` (..., 2) with covariances ``R`` (..., 2, 2): gain ``K = P H' S^-1``,
-    ``x + K nu``, and the covariance in Joseph form ``(I - K H) P (I - K H)' + K R K'``
-    (symmetric and positive definite also when rounding hurts the short form ``(I - K H) P``).
+    """Update states and covariances by position measurements (the Kalman update).
+
+    The gain is ``K = P H' S^-1``, the state ``x + K nu``, and the covariance is taken in Joseph form
+    ``(I - K H) P (I - K H)' + K R K'`` (symmetric and positive definite also when rounding hurts the
+    short form ``(I - K H) P``).
+
+    Parameters
+    ----------
+    x : array_like of shape (..., 4)
+        States.
+    P : array_like of shape (..., 4, 4)
+        Their covariances.
+    z : array_like of shape (..., 2)
+        Position measurements, metres.
+    R : array_like of shape (..., 2, 2)
+        Their covariances.
+
+    Returns
+    -------
+    x : ndarray of shape (..., 4)
+        The updated states.
+    P : ndarray of shape (..., 4, 4)
+        Their covariances.
+
+    Examples
+    --------
 
     >>> x, P = kalman_update(np.zeros(4), np.eye(4), np.array([1.0, 0.0]), np.eye(2))
     >>> x.tolist(), float(P[0, 0])
@@ -287,13 +406,25 @@ def _inverse2(S: np.ndarray) -> np.ndarray:
 
 
 def assign(cost) -> tuple[np.ndarray, np.ndarray]:
-    """Global nearest neighbour: ``(rows, cols)``, the pairs of tracks (rows) and detections
-    (columns) of a ``cost`` matrix (T, D) in which a pair outside its gate costs ``inf``.
+    """Pair tracks with detections by global nearest neighbour.
 
     As many pairs inside the gates as possible, and among those the least total cost: the
     pairs outside the gates are given a cost larger than any assignment of pairs inside them
     can reach (``2 r c + 1`` for ``r = min(T, D)`` pairs of costs within ``[-c, c]``), the
     problem is solved by ``scipy.optimize.linear_sum_assignment`` and those pairs are dropped.
+
+    Parameters
+    ----------
+    cost : array_like of shape (T, D)
+        The cost of each pair of a track (row) and a detection (column); ``inf`` outside the gate.
+
+    Returns
+    -------
+    rows, cols : ndarray of int
+        The pairs: track ``rows[k]`` takes detection ``cols[k]``.
+
+    Examples
+    --------
 
     >>> rows, cols = assign(np.array([[1.0, 2.0], [1.5, np.inf]]))
     >>> list(zip(rows.tolist(), cols.tolist()))   # not (0, 0): then track 1 would go without
@@ -414,9 +545,30 @@ def detections_from(
     circle_sigma_m: float = TrackingParams.circle_sigma_m,
     single_legs: bool = TrackingParams.single_legs,
 ) -> Detections:
-    """The detections of one scan's :class:`labkit.Features`, in the sensor frame: every person
-    (the midpoint of its two legs), every leg in no person (with ``single_legs``) and every
-    circle of kind ``"circle"`` (not ``"arc-like"``), each with ``sigma^2 I`` of its kind."""
+    """Take the detections the tracker follows out of one scan's features, in the sensor frame.
+
+    Every person (the midpoint of its two legs), every leg in no person (with ``single_legs``) and
+    every circle of kind ``"circle"`` (not ``"arc-like"``), each with ``sigma^2 I`` of its kind.
+
+    Parameters
+    ----------
+    features : labkit.Features
+        One scan's features.
+    person_sigma_m, leg_sigma_m, circle_sigma_m : float
+        The position sigma of each kind of detection, metres.
+    single_legs : bool
+        Whether legs that belong to no person are detections too.
+
+    Returns
+    -------
+    Detections
+        The scan's detections.
+
+    Raises
+    ------
+    ValueError
+        When ``features`` is not a :class:`labkit.Features`.
+    """
     if not isinstance(features, Features):
         raise ValueError(f"features must be labkit.Features, got {type(features).__name__}")
     people = features.people
