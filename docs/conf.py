@@ -22,6 +22,8 @@ REPO = DOCS.parent
 if str(REPO) not in sys.path:  # conf.py is run by sphinx-build, not imported from the repository
     sys.path.insert(0, str(REPO))
 
+from numpydoc.xref import DEFAULT_LINKS as numpydoc_default_links  # noqa: E402
+
 import labkit  # noqa: E402
 from docs import executed_notebooks, public_api, xref  # noqa: E402
 
@@ -55,7 +57,11 @@ numpydoc_show_class_members = False
 nitpicky = xref.NITPICKY
 nitpick_ignore_regex = xref.NITPICK_IGNORE_REGEX
 numpydoc_xref_param_type = True  # a parameter's type links to the page of the labkit class it names
-numpydoc_xref_aliases = xref.type_aliases(public_api.public_names())
+# numpydoc links the common words of types (float, None, array_like) into the Python and NumPy inventories,
+# which an offline build has not got: the links would show as "python:float". Each such word is its own
+# alias here, so it stays plain text
+numpydoc_xref_aliases = {**{word: word for word in numpydoc_default_links},
+                         **xref.type_aliases(public_api.public_names())}
 numpydoc_xref_ignore = "all"  # ... and nothing else: "list of", "optional", numpy's names stay text
 numpydoc_class_members_toctree = False
 
@@ -98,8 +104,13 @@ def _underline(title: str, char: str = "=") -> str:
 
 
 def write_api_pages() -> None:
-    """One reStructuredText page per family, listing every public name by module."""
+    """One reStructuredText page per family, listing every public name by module. The pages autosummary
+    generated for the last build are removed first: one of a name no longer public would be in no toctree,
+    a warning, so a failed build."""
     import importlib
+    import shutil
+
+    shutil.rmtree(GENERATED / "api" / "generated", ignore_errors=True)  # written by this build's autosummary
 
     names = list(public_api.public_names())
     by_family: dict[str, dict[str, list[str]]] = {}

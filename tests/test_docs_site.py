@@ -21,6 +21,7 @@ import fcntl
 import functools
 import http.server
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -178,3 +179,6 @@ def test_pages_open_whole_in_a_browser(server, tmp_path):
     assert "interactive widget" in texts["notebook"], "a widget shows as a note, not as its Python repr"
     assert "Parameters" in texts["api"] and "Returns" in texts["api"]
     assert "breakpoint_thresholds(" in texts["api"]
+    # the words of parameter types are plain text: an inventory link the offline build cannot resolve would
+    # show its target ("python:float", "numpy:array_like")
+    assert not re.search(r"\b(?:python|numpy):\w", texts["api"]), texts["api"]
