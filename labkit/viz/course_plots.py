@@ -10,14 +10,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from labkit.viz import plot as lkplot
+from labkit.viz.plot import axes_or_new
 
 __all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners"]
-
-
-def _axes(ax, figsize):
-    if ax is None:
-        _, ax = plt.subplots(figsize=figsize)
-    return ax
 
 
 def chord_frame(points) -> np.ndarray:
@@ -73,7 +68,7 @@ def plot_middle_band(examples: dict, ratios: dict, low: float = 0.1, high: float
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (8, 4.5))
+    ax = axes_or_new(ax, (8, 4.5))
     ax.axhspan(low, high, color="tab:green", alpha=0.12, label=f"band: {low} d to {high} d")
     ax.plot([0, 1], [0, 0], "k", lw=2, label="chord (length d)")
     for k, (name, points) in enumerate(examples.items()):
@@ -111,7 +106,7 @@ def plot_circle_fits(points, circles: dict, ax=None):
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (6, 5))
+    ax = axes_or_new(ax, (6, 5))
     full = np.linspace(0, 2 * np.pi, 200)
     for k, (name, (c, r, colour)) in enumerate(circles.items()):
         ax.plot(c[0] + r * np.cos(full), c[1] + r * np.sin(full), color=colour, lw=5 if k == 0 else 2, alpha=0.8,
@@ -198,7 +193,7 @@ def plot_lines_and_corners(scan, lines, corners, *, truth=None, title: str | Non
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, figsize)
+    ax = axes_or_new(ax, figsize)
     lkplot.plot_scan(scan, ax, point_size=point_size, show_invalid=show_invalid, title=title)
     if truth is not None:
         lkplot.plot_truth(truth, ax)

@@ -10,18 +10,14 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
+from labkit.viz.plot import axes_or_new
+
 __all__ = ["ROLE_STYLE", "plot_roles", "plot_policy", "plot_reference_clusters", "plot_timings"]
 
 #: The colour and the marker of each DBSCAN role.
 ROLE_STYLE = {"core": ("tab:blue", "o"), "border": ("tab:orange", "s"), "noise": ("tab:gray", "x")}
 
 _MARKERS = ("o-", "^-", "s-", "d-", "v-")
-
-
-def _axes(ax, figsize):
-    if ax is None:
-        _, ax = plt.subplots(figsize=figsize)
-    return ax
 
 
 def _cluster_colours(labels) -> list[str]:
@@ -49,7 +45,7 @@ def plot_roles(x, role, eps: float, *, title: str | None = None, ax=None):
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (11, 3.6))
+    ax = axes_or_new(ax, (11, 3.6))
     x, role = np.asarray(x, dtype=float), np.asarray(role)
     for name, (colour, marker) in ROLE_STYLE.items():
         sel = role == name
@@ -92,7 +88,7 @@ def plot_policy(x, eps: float, core, border, labels, *, title: str = "", ax=None
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (11, 2.6))
+    ax = axes_or_new(ax, (11, 2.6))
     x, c, b, labels = np.asarray(x, dtype=float), np.asarray(core), np.asarray(border), np.asarray(labels)
     first, second = (labels[:, 0], labels[:, 1]) if labels.ndim == 2 else (labels, np.full(len(x), -1))
     for name, sel, marker in [("core", c, "o"), ("border", b, "s"), ("noise", ~c & ~b, "x")]:
@@ -135,7 +131,7 @@ def plot_reference_clusters(x, labels, clusters, *, ax=None):
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (11, 2.2))
+    ax = axes_or_new(ax, (11, 2.2))
     x = np.asarray(x, dtype=float)
     for c in clusters:
         ax.axvspan(x[c.lower] - 0.1, x[c.upper] + 0.1, color=f"C{c.id}", alpha=0.2,

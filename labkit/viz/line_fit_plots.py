@@ -6,22 +6,16 @@ returns the ``Axes`` it drew into (made for you when ``ax`` is None), as in :mod
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from labkit.geometry import angle_difference
+from labkit.viz.plot import axes_or_new
 from labkit.viz.style import mpl
 
 __all__ = ["FIT_STYLE", "draw_line", "plot_normal_form", "plot_objective", "plot_sum_timings", "plot_fits"]
 
 #: The line style and colour of each of the three fits.
 FIT_STYLE = {"OLS": ("-", mpl("corners")), "TLS": ("--", mpl("circles")), "weighted polar": (":", mpl("lines"))}
-
-
-def _axes(ax, figsize):
-    if ax is None:
-        _, ax = plt.subplots(figsize=figsize)
-    return ax
 
 
 def _sensor(ax) -> None:
@@ -73,7 +67,7 @@ def plot_normal_form(x, y, r: float, alpha: float, *, along: float = 1.2, beyond
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (7, 6))
+    ax = axes_or_new(ax, (7, 6))
     normal = np.array([np.cos(alpha), np.sin(alpha)])
     tangent = np.array([-normal[1], normal[0]])
     foot = r * normal + along * tangent
@@ -118,7 +112,7 @@ def plot_objective(alpha_grid, objective, alpha_fit: float, *, ax=None):
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (8, 3.5))
+    ax = axes_or_new(ax, (8, 3.5))
     ax.plot(np.degrees(alpha_grid), objective, color=mpl("points"))
     ax.axvline(np.degrees(alpha_fit), color=mpl("lines"), ls="--", label="closed-form alpha")
     ax.set_xlabel("alpha (deg)")
@@ -146,7 +140,7 @@ def plot_sum_timings(sizes, t_double, t_product, *, ax=None):
         The axes drawn into. The slope-2 line runs from the third size to the last, through the last
         double-sum time.
     """
-    ax = _axes(ax, (7, 4.5))
+    ax = axes_or_new(ax, (7, 4.5))
     sizes, t_double = np.asarray(sizes), np.asarray(t_double, dtype=float)
     ax.loglog(sizes, 1e3 * t_double, "o-", color=mpl("lines"), label="double sums, all pairs: O(n^2)")
     ax.loglog(sizes, 1e3 * np.asarray(t_product, dtype=float), "s-", color=mpl("points"),
@@ -182,7 +176,7 @@ def plot_fits(r: float, alpha: float, points, fits: dict, *, title: str = "", ax
     matplotlib.axes.Axes
         The axes drawn into: a square window around the points and the sensor.
     """
-    ax = _axes(ax, (7, 6))
+    ax = axes_or_new(ax, (7, 6))
     pts = np.asarray(points, dtype=float)
     ax.scatter(*pts.T, s=8, color=mpl("points"), label="points", zorder=3)
     draw_line(ax, r, alpha, color=mpl("truth"), lw=4, alpha=0.5, label="true wall")

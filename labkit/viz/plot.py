@@ -19,9 +19,10 @@ __all__ = ["plot_scan", "plot_ranges", "plot_truth", "plot_lines", "plot_corners
            "plot_features", "scan_figure"]
 
 
-def _axes(ax):
+def axes_or_new(ax, figsize=(7, 6)):
+    """The axes to draw into: ``ax``, or new ones of ``figsize`` (inches) when ``ax`` is None."""
     if ax is None:
-        _, ax = plt.subplots(figsize=(7, 6))
+        _, ax = plt.subplots(figsize=figsize)
     return ax
 
 
@@ -63,7 +64,7 @@ def plot_scan(
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     if show_invalid and (~scan.valid).any():
         a = scan.angles[~scan.valid]
         reach = 0.5 * float(np.nanmax(np.abs(scan.xy))) if len(scan.xy) else 1.0
@@ -107,7 +108,7 @@ def plot_ranges(scan: Scan, ax=None, *, title: str | None = None):
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     deg = np.degrees(scan.angles)
     ok = scan.valid
     ax.plot(deg[ok], scan.ranges[ok], ".", ms=3, color=mpl("points"), label="valid")
@@ -140,7 +141,7 @@ def plot_truth(truth, ax=None):
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     for k, w in enumerate(truth.walls):
         ax.plot(*np.array([w.start, w.end]).T, "-", color=mpl("truth"), lw=1.2, alpha=0.7,
                 label="true walls" if k == 0 else None, zorder=2)
@@ -179,7 +180,7 @@ def plot_lines(lines, ax=None, *, label: str | None = None, color=None, lw: floa
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     segs = [[tuple(ln.start), tuple(ln.end)] for ln in lines]
     if segs:
         ax.add_collection(LineCollection(segs, colors=[color or mpl("lines")], linewidths=lw, zorder=5,
@@ -209,7 +210,7 @@ def plot_corners(corners, ax=None):
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     for kind, marker_face in (("concave", mpl("corners")), ("convex", "none")):
         pts = [c.point for c in corners if c.kind == kind and not c.extrapolated]
         if pts:
@@ -239,7 +240,7 @@ def plot_circles(circles, ax=None, *, label: str = "circles"):
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     for k, c in enumerate(circles):
         ax.add_patch(CirclePatch(tuple(c.center), c.radius, fill=False, color=mpl("circles"), lw=2.0,
                                  zorder=6, label=f"{label} ({len(circles)})" if k == 0 else None))
@@ -264,7 +265,7 @@ def plot_legs(legs, ax=None, *, people=()):
     matplotlib.axes.Axes
         The axes drawn on.
     """
-    ax = _axes(ax)
+    ax = axes_or_new(ax)
     for k, g in enumerate(legs):
         ax.add_patch(CirclePatch(tuple(g.center), g.diameter / 2, fill=False, color=mpl("legs"), lw=2.0,
                                  zorder=6, label=f"legs ({len(legs)})" if k == 0 else None))

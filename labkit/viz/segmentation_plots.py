@@ -7,18 +7,12 @@ given. Each returns the ``Axes`` it drew into (made for you when ``ax`` is None)
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 
+from labkit.viz.plot import axes_or_new
 from labkit.viz.style import mpl
 
 __all__ = ["wall_spacing", "plot_neighbour_gaps", "plot_threshold_curves"]
-
-
-def _axes(ax, figsize):
-    if ax is None:
-        _, ax = plt.subplots(figsize=figsize)
-    return ax
 
 
 def wall_spacing(rho, dphi: float, incidence_deg: float) -> np.ndarray:
@@ -68,7 +62,7 @@ def plot_neighbour_gaps(rho, gap, incidence, dphi: float, *, incidences=(0, 60, 
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (9, 5))
+    ax = axes_or_new(ax, (9, 5))
     points = ax.scatter(rho, 1000 * np.asarray(gap, dtype=float), c=incidence, s=10, cmap="viridis", vmin=0, vmax=90,
                         zorder=3)
     rho_axis = np.linspace(0.1, rho_max, 200)
@@ -116,7 +110,7 @@ def plot_threshold_curves(rho, thresholds: dict, dphi: float, *, incidences=(0, 
     matplotlib.axes.Axes
         The axes drawn into.
     """
-    ax = _axes(ax, (9, 5))
+    ax = axes_or_new(ax, (9, 5))
     for k, (step_deg, d) in enumerate(thresholds.items()):
         ax.plot(rho, 1000 * np.asarray(d, dtype=float), "--" if k else "-", color=mpl("lines"), lw=2,
                 label=f"adaptive, step {step_deg} deg")
