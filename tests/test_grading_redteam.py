@@ -1255,7 +1255,11 @@ def test_a_cell_past_its_limit_is_reported_and_the_functions_graded(second_class
 def test_a_notebook_that_used_its_budget_is_reported_and_its_functions_graded(second_class):
     result = second_class.result("the_budget_used_up", EX0)
     notes = _load_notes(result)
-    assert any(f"had used their {LOAD_BUDGET_S:g} s" in note and "interrupted" in note for note in notes), notes
+    # the budget runs out within a cell (it is interrupted, and says why) or, when a cell's answer comes back just
+    # after it, between two cells (seen once in a loaded make test): the cells after it are not run, either way
+    interrupted = [note for note in notes if "interrupted" in note]
+    assert all(f"had used their {LOAD_BUDGET_S:g} s" in note for note in interrupted), notes
+    assert len(interrupted) <= 1, notes
     assert any(note.startswith("TimeoutError: not run") for note in notes), notes
     assert result.score == FULL and "not run" in result.detail
 

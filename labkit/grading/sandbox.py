@@ -862,8 +862,9 @@ class Session:
             for index, source in enumerate(self.cells):
                 if index in self.stopped_cells:
                     continue
-                if time.monotonic() >= budget:
+                if time.monotonic() >= budget:  # used up between two cells: as much "timed out" as within one
                     self.unrun_cells = {i for i in range(index, len(self.cells)) if i not in self.stopped_cells}
+                    self.timed_out = True
                     break
                 stopped = self._run_cell(worker, index, source, min(time.monotonic() + self.load_timeout_s, budget),
                                          budget_s, errors)
