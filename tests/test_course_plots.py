@@ -44,3 +44,17 @@ def test_lines_and_corners_without_truth_or_legend():
     fig, ax = plt.subplots()
     assert cp.plot_lines_and_corners(scan, [], [], legend_fontsize=None, ax=ax) is ax
     assert ax.get_legend() is None
+
+
+def test_lines_and_corners_grid_one_panel_per_scan():
+    scan = _wall_scan()
+    line = labkit.line_segment(scan.points[:31], np.arange(31))          # (2, -1.155) to (2, 0), as above
+    fig = cp.plot_lines_and_corners_grid([(scan, [line], [], "first"), (scan, [], [], "second")], ncols=3)
+    first, second, spare = fig.axes
+    assert (first.get_title(), second.get_title()) == ("first", "second") and not spare.get_visible()
+    np.testing.assert_allclose(second.collections[0].get_offsets(), scan.xy)
+    (segment,) = [c for c in first.collections if c.get_label().startswith("lines")]
+    np.testing.assert_allclose(segment.get_segments()[0], [(2.0, -2 * np.tan(np.radians(30))), (2.0, 0.0)], atol=1e-9)
+    assert first.get_legend() is not None and second.get_legend() is None
+    fig = cp.plot_lines_and_corners_grid([(scan, [], [], "a")] * 4, ncols=3, legend=False)
+    assert len(fig.axes) == 6 and sum(ax.get_visible() for ax in fig.axes) == 4 and fig.axes[0].get_legend() is None

@@ -12,7 +12,8 @@ import numpy as np
 from labkit.viz import plot as lkplot
 from labkit.viz.plot import axes_or_new
 
-__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners"]
+__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners",
+           "plot_lines_and_corners_grid"]
 
 
 def chord_frame(points) -> np.ndarray:
@@ -202,3 +203,40 @@ def plot_lines_and_corners(scan, lines, corners, *, truth=None, title: str | Non
     if legend_fontsize is not None:
         ax.legend(loc="upper right", fontsize=legend_fontsize)
     return ax
+
+
+def plot_lines_and_corners_grid(panels, ncols: int = 3, *, point_size: float = 5, legend: bool = True,
+                                figsize=(15, 9.5)):
+    """Notebook 05: several scans side by side, each with its line segments and corners.
+
+    Parameters
+    ----------
+    panels : sequence of tuple
+        ``(scan, lines, corners, title)`` per panel, drawn as :func:`plot_lines_and_corners` draws one
+        (without faint rays for invalid beams), row by row.
+    ncols : int, default 3
+        Panels per row.
+    point_size : float, default 5
+        Size of the scans' points.
+    legend : bool, default True
+        One legend, in the first panel's lower left corner.
+    figsize : tuple of float, default (15, 9.5)
+        The figure's size, inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A new figure; axes left over in the last row are hidden.
+    """
+    panels = list(panels)
+    nrows = max(1, -(-len(panels) // ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=figsize, squeeze=False)
+    for ax, (scan, lines, corners, title) in zip(axes.flat, panels, strict=False):
+        plot_lines_and_corners(scan, lines, corners, title=title, point_size=point_size, show_invalid=False,
+                               legend_fontsize=None, ax=ax)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    if legend and panels:
+        axes.flat[0].legend(loc="lower left", fontsize=7)
+    fig.tight_layout()
+    return fig
