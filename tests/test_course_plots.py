@@ -58,3 +58,16 @@ def test_lines_and_corners_grid_one_panel_per_scan():
     assert first.get_legend() is not None and second.get_legend() is None
     fig = cp.plot_lines_and_corners_grid([(scan, [], [], "a")] * 4, ncols=3, legend=False)
     assert len(fig.axes) == 6 and sum(ax.get_visible() for ax in fig.axes) == 4 and fig.axes[0].get_legend() is None
+
+
+def test_extraction_controls_call_show_with_the_values():
+    calls = []
+    box = cp.extraction_controls(lambda **values: calls.append(values), ["hall", "corridor"], n_scans=7)
+    (scene, k), method, (split, min_points, merge), _out = [getattr(w, "children", w) for w in box.children]
+    assert scene.value == "corridor" and list(scene.options) == ["hall", "corridor"] and (k.min, k.max) == (0, 6)
+    assert (split.value, min_points.value, merge.value, method.value) == (0.05, 5, "thresholds", "endpoints")
+    split.value = 0.2
+    assert calls[-1] == {"scene": "corridor", "k": 0, "method": "endpoints", "split_threshold_m": 0.2,
+                         "min_points": 5, "merge": "thresholds"}
+    merge.value = "none"
+    assert calls[-1]["merge"] == "none"
