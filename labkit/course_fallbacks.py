@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import geometry
+from .circles.legs import pair_legs
+from .features import Leg
 from .fitting import fit_line_polar
 from .geometry import signed_distance_to_line
 from .lines.angular import local_directions
@@ -27,7 +29,7 @@ from .tracking import assign, cv_model
 __all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "config_for", "mean_per_scan", "rates",
            "pose_at", "cut_points", "jacobian", "chord_distances", "similar_lines", "is_border", "triplet_direction",
            "normal_form_match", "three_beam_residual", "ray_axis_error", "compose_poses", "bounds_from_table",
-           "expand_upwards", "radius_and_height", "process_noise", "best_assignment"]
+           "expand_upwards", "radius_and_height", "pair_two_legs", "process_noise", "best_assignment"]
 
 
 def closed_form_alpha(rho, theta, w):
@@ -494,3 +496,25 @@ def radius_and_height(chord, mean_angle):
     """
     theta = mean_angle - np.pi / 2
     return chord / 2 / np.cos(theta), chord / 2 * np.tan(theta)
+
+
+def pair_two_legs(centre_a, centre_b, max_distance_m=0.6):
+    """Notebook 08b: the person :func:`labkit.circles.legs.pair_legs` makes of two legs, if any.
+
+    Parameters
+    ----------
+    centre_a, centre_b : array_like of shape (2,)
+        The two legs' centres ``(x, y)``, metres.
+    max_distance_m : float, default 0.6
+        The farthest two leg centres of one person can be, metres (the limit included).
+
+    Returns
+    -------
+    ndarray of shape (2,) or None
+        The person's centre, the midpoint of the two leg centres, metres; None when the centres are
+        farther apart than ``max_distance_m``.
+    """
+    legs = [Leg(np.asarray(c, dtype=float), 0.0, np.asarray(c, dtype=float), k, k, 3, np.nan, np.nan)
+            for k, c in enumerate((centre_a, centre_b))]
+    people = pair_legs(legs, max_distance_m)
+    return people[0].center if people else None

@@ -116,6 +116,11 @@ HINTS: dict[str, tuple[str, ...]] = {
         "the chord's midpoint and one end, the angle at the centre follows from the mean inscribed angle; "
         "half the chord is the opposite side.",
     ),
+    "pair_two_legs": (
+        "Two legs are one person's when they stand close enough; the person stands between them.",
+        "Measure the straight-line distance between the two centres in the plane; beyond the limit there is no "
+        "person, otherwise the person's centre is the average of the two leg centres.",
+    ),
     "config_for": (
         "Start from the default configuration and change two keys.",
         "Config().updated takes a dict of dotted keys; the split threshold is in metres.",

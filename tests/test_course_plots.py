@@ -44,3 +44,30 @@ def test_lines_and_corners_without_truth_or_legend():
     fig, ax = plt.subplots()
     assert cp.plot_lines_and_corners(scan, [], [], legend_fontsize=None, ax=ax) is ax
     assert ax.get_legend() is None
+
+
+def test_lines_and_corners_grid_one_panel_per_scan():
+    scan = _wall_scan()
+    line = labkit.line_segment(scan.points[:31], np.arange(31))          # (2, -1.155) to (2, 0), as above
+    fig = cp.plot_lines_and_corners_grid([(scan, [line], [], "first"), (scan, [], [], "second")], ncols=3)
+    first, second, spare = fig.axes
+    assert (first.get_title(), second.get_title()) == ("first", "second") and not spare.get_visible()
+    np.testing.assert_allclose(second.collections[0].get_offsets(), scan.xy)
+    (segment,) = [c for c in first.collections if c.get_label().startswith("lines")]
+    np.testing.assert_allclose(segment.get_segments()[0], [(2.0, -2 * np.tan(np.radians(30))), (2.0, 0.0)], atol=1e-9)
+    assert first.get_legend() is not None and second.get_legend() is None
+    fig = cp.plot_lines_and_corners_grid([(scan, [], [], "a")] * 4, ncols=3, legend=False)
+    assert len(fig.axes) == 6 and sum(ax.get_visible() for ax in fig.axes) == 4 and fig.axes[0].get_legend() is None
+
+
+def test_extraction_controls_call_show_with_the_values():
+    calls = []
+    box = cp.extraction_controls(lambda **values: calls.append(values), ["hall", "corridor"], n_scans=7)
+    (scene, k), method, (split, min_points, merge), _out = [getattr(w, "children", w) for w in box.children]
+    assert scene.value == "corridor" and list(scene.options) == ["hall", "corridor"] and (k.min, k.max) == (0, 6)
+    assert (split.value, min_points.value, merge.value, method.value) == (0.05, 5, "thresholds", "endpoints")
+    split.value = 0.2
+    assert calls[-1] == {"scene": "corridor", "k": 0, "method": "endpoints", "split_threshold_m": 0.2,
+                         "min_points": 5, "merge": "thresholds"}
+    merge.value = "none"
+    assert calls[-1]["merge"] == "none"

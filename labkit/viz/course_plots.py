@@ -12,7 +12,8 @@ import numpy as np
 from labkit.viz import plot as lkplot
 from labkit.viz.plot import axes_or_new
 
-__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners"]
+__all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners",
+           "plot_lines_and_corners_grid", "extraction_controls"]
 
 
 def chord_frame(points) -> np.ndarray:
@@ -202,3 +203,80 @@ def plot_lines_and_corners(scan, lines, corners, *, truth=None, title: str | Non
     if legend_fontsize is not None:
         ax.legend(loc="upper right", fontsize=legend_fontsize)
     return ax
+
+
+def plot_lines_and_corners_grid(panels, ncols: int = 3, *, point_size: float = 5, legend: bool = True,
+                                figsize=(15, 9.5)):
+    """Notebook 05: several scans side by side, each with its line segments and corners.
+
+    Parameters
+    ----------
+    panels : sequence of tuple
+        ``(scan, lines, corners, title)`` per panel, drawn as :func:`plot_lines_and_corners` draws one
+        (without faint rays for invalid beams), row by row.
+    ncols : int, default 3
+        Panels per row.
+    point_size : float, default 5
+        Size of the scans' points.
+    legend : bool, default True
+        One legend, in the first panel's lower left corner.
+    figsize : tuple of float, default (15, 9.5)
+        The figure's size, inches.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A new figure; axes left over in the last row are hidden.
+    """
+    panels = list(panels)
+    nrows = max(1, -(-len(panels) // ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=figsize, squeeze=False)
+    for ax, (scan, lines, corners, title) in zip(axes.flat, panels, strict=False):
+        plot_lines_and_corners(scan, lines, corners, title=title, point_size=point_size, show_invalid=False,
+                               legend_fontsize=None, ax=ax)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    if legend and panels:
+        axes.flat[0].legend(loc="lower left", fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def extraction_controls(show, scenes, n_scans: int = 20, scene: str | None = None):
+    """Notebook 05: controls for split-and-merge on a simulated scan, calling ``show`` when one changes.
+
+    Parameters
+    ----------
+    show : callable
+        ``show(scene, k, method, split_threshold_m, min_points, merge)``: extracts and draws scan ``k`` of
+        ``scene``; ``method`` is ``"endpoints"`` or ``"fit"``, ``merge`` ``"thresholds"``, ``"chi2"`` or
+        ``"none"``.
+    scenes : sequence of str
+        The scenes to choose from.
+    n_scans : int, default 20
+        The scans of each scene, numbered 0 to ``n_scans - 1``.
+    scene : str, optional
+        The scene shown first; None: ``"corridor"`` when offered, else the first.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The controls (scene and scan, method, split threshold, min points and merge) above ``show``'s output.
+    """
+    import ipywidgets as widgets
+
+    scenes = list(scenes)
+    first = scene if scene is not None else ("corridor" if "corridor" in scenes else scenes[0])
+    controls = {
+        "scene": widgets.Dropdown(options=scenes, value=first, description="scene"),
+        "k": widgets.IntSlider(value=0, min=0, max=n_scans - 1, description="scan", continuous_update=False),
+        "method": widgets.ToggleButtons(options=["endpoints", "fit"], description="method"),
+        "split_threshold_m": widgets.FloatSlider(value=0.05, min=0.005, max=0.5, step=0.005, readout_format=".3f",
+                                                 description="split (m)", continuous_update=False),
+        "min_points": widgets.IntSlider(value=5, min=2, max=30, description="min points", continuous_update=False),
+        "merge": widgets.Dropdown(options=["thresholds", "chi2", "none"], value="thresholds", description="merge"),
+    }
+    plot_area = widgets.interactive_output(show, controls)
+    return widgets.VBox([widgets.HBox([controls["scene"], controls["k"]]), controls["method"],
+                         widgets.HBox([controls["split_threshold_m"], controls["min_points"], controls["merge"]]),
+                         plot_area])

@@ -1,4 +1,6 @@
-"""Fill-ins for notebooks/08_iav_circles_and_legs.ipynb (see tests/your_turn/__init__.py)."""
+"""Fill-ins for notebooks/08_iav_circles.ipynb (the V-corner test, the middle point's offset, radius and centre
+height) and notebooks/08b_legs.ipynb (two legs make a person): both notebooks start with "08", so both read this
+file (see tests/your_turn/__init__.py)."""
 
 from tests.your_turn import Fill
 
@@ -50,4 +52,18 @@ FILLS["9de4f9a5"] = Fill(
     correct=_V_SHAPED.format(step="stride"),
     mistake=_V_SHAPED.format(step="1"),  # the neighbours taken next to each other, whatever the stride
     hint="stride angles apart",
+)
+
+_PAIR = '''
+def pair_two_legs(centre_a, centre_b, max_distance_m=0.6):
+    a, b = np.asarray(centre_a, dtype=float), np.asarray(centre_b, dtype=float)
+    if {too_far}:
+        return None
+    return (a + b) / 2
+'''
+
+FILLS["e60922ca"] = Fill(
+    correct=_PAIR.format(too_far="np.hypot(*(b - a)) > max_distance_m"),
+    mistake=_PAIR.format(too_far="np.any(np.abs(b - a) > max_distance_m)"),  # x and y apart, each within the limit
+    hint="the distance between the centres",
 )

@@ -1,0 +1,17 @@
+"""The fallbacks a notebook goes on with while a "your turn" cell is a stub give the task's answer: checked
+against values worked out by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from labkit import course_fallbacks as fallbacks
+
+
+def test_pair_two_legs_by_the_distance_between_the_centres():
+    # (0, 0) and (0.3, 0.4) are 0.5 m apart: one person, at the midpoint (0.15, 0.2)
+    np.testing.assert_allclose(fallbacks.pair_two_legs((0.0, 0.0), (0.3, 0.4)), (0.15, 0.2))
+    np.testing.assert_allclose(fallbacks.pair_two_legs((0.0, 1.0), (0.6, 1.0)), (0.3, 1.0))   # 0.6 m: the limit pairs
+    assert fallbacks.pair_two_legs((0.0, 0.0), (0.5, 0.5)) is None       # 0.71 m, though 0.5 m apart in x and in y
+    assert fallbacks.pair_two_legs((2.0, 1.0), (2.3, 1.0), max_distance_m=0.2) is None
+    np.testing.assert_allclose(fallbacks.pair_two_legs((2.0, 1.0), (2.3, 1.0), max_distance_m=0.35), (2.15, 1.0))
