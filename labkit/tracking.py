@@ -96,7 +96,9 @@ One person walking at 1 m/s along x, seen every 0.1 s:
 from __future__ import annotations
 
 import functools
+import itertools
 import math
+import operator
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from time import perf_counter
@@ -772,14 +774,13 @@ class Tracker:
         Scans must come in time order: one stamped before the last one tracked is not tracked
         (its table has ``late=True``, the tracks as they were; :attr:`late_scans` counts them)."""
         t_start = perf_counter()
+        if not trace and _engine() is not None:  # the same steps, compiled (labkit._tracking_engine)
+            return self._compiled_step(observed, pose, t_start)
         steps: list[Step] | None = [] if trace else None
-        compiled = steps is None and _engine() is not None  # the same steps, compiled (labkit._tracking_engine)
-        detections, pose = self._detections(observed, pose, compiled)
+        detections, pose = self._detections(observed, pose)
         if self._stamp is not None and detections.stamp_ns < self._stamp:
             return self._late(detections, pose, steps, t_start)
         dt = self._advance_clock(detections.stamp_ns)
-        if compiled:
-            return self._compiled_step(detections, pose, dt, t_start)
         self._predict(dt, steps)                                      # 1
         cost = self._gate_all(detections, steps)                      # 2
         tracks, dets = assign(cost)                                   # 3
@@ -797,25 +798,29 @@ class Tracker:
         table = _with_seconds(table, perf_counter() - t_start)
         return (table, steps) if trace else table
 
-    def _compiled_step(self, detections: Detections, pose, dt: float, t_start: float) -> TrackTable:
-        """:meth:`step`'s steps 1-7 without a trace, as :mod:`labkit._tracking_engine`'s kernels."""
+    def _compiled_step(self, observed: Features | Detections, pose, t_start: float) -> TrackTable:
+        """:meth:`step` without a trace: the detections taken in bulk (:meth:`_fast_detections`),
+        steps 1-7 as :mod:`labkit._tracking_engine`'s kernels."""
         p, engine = self.params, _ENGINE
-        covariances, _, _ = _measured(detections)
+        detections, det_kind, starts, pose = self._fast_detections(observed, pose)
+        if self._stamp is not None and detections.stamp_ns < self._stamp:
+            return self._late(detections, pose, None, t_start)
+        dt = 0.0 if self._stamp is None else (detections.stamp_ns - self._stamp) * 1e-9  # _advance_clock's
+        self._stamp = detections.stamp_ns
+        covariances = detections.covariances
         n_tracks, n_dets = len(self._ids), len(detections)
-        det_kind = _track_kinds_of(detections.kinds)
-        cost, pairs, gated = np.empty((n_tracks, n_dets)), np.empty((2, n_tracks * n_dets), np.intp), \
-            np.empty(n_dets, dtype=bool)
-        n_pairs, conflict = engine.predict_and_gate(                                      # 1, 2
-            self._x, self._P, dt, p.acceleration_noise_m2_s3, self._kind, self._status, detections.positions,
-            covariances, det_kind, self._gate, p.min_travel_m**2 / self._gate, cost, pairs, gated)
+        cost, pairs, gated, new = np.empty((n_tracks, n_dets)), np.empty((2, n_tracks * n_dets), np.intp), \
+            np.empty(n_dets, dtype=bool), np.empty(n_dets, np.intp)
+        n_pairs, conflict, n_new = engine.predict_and_gate(                               # 1, 2 (and 5's births)
+            self._x, self._P, dt, p.acceleration_noise_m2_s3, self._scans, self._kind, self._status,
+            detections.positions, covariances, det_kind, starts, self._gate, p.min_travel_m**2 / self._gate, cost,
+            pairs, gated, new)
         tracks, dets = assign(cost) if conflict else (pairs[0, :n_pairs], pairs[1, :n_pairs])  # 3
-        inside = gated.tolist()
-        new = [j for j, kind in enumerate(detections.kinds) if not inside[j] and _STARTS_TRACKS[kind]]
         state = (self._x, self._P, tracks, dets, detections.positions, covariances, self._hits, self._seen,
                  self._anchor, self._far, self._moved)
-        if new:
+        if n_new:
             engine.update(*state, detections.stamp_ns, p.confirm_hits, p.min_travel_m)     # 4
-            events = self._add_tracks(new, detections, None)                               # 5
+            events = self._add_tracks(new[:n_new].tolist(), detections, None)              # 5
             confirmed, listed = np.empty(len(self._ids), np.int64), np.empty(len(self._ids), np.int64)
             n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
                 self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen,
@@ -845,9 +850,8 @@ class Tracker:
         table.__dict__["seconds"] = perf_counter() - t_start
         return table
 
-    def _detections(self, observed, pose, compiled: bool = False) -> tuple[Detections, tuple | None]:
-        """The scan's detections in the tracking frame, and the pose used (None if none);
-        ``compiled``: moved into the map by the engine's kernel (:meth:`Detections.in_frame`'s)."""
+    def _detections(self, observed, pose) -> tuple[Detections, tuple | None]:
+        """The scan's detections in the tracking frame, and the pose used (None if none)."""
         p = self.params
         if isinstance(observed, Features):
             observed = detections_from(observed, person_sigma_m=p.person_sigma_m, leg_sigma_m=p.leg_sigma_m,
@@ -855,27 +859,51 @@ class Tracker:
         elif isinstance(observed, Detections):
             observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
         else:
-            raise ValueError(f"observed must be labkit.Features or labkit.tracking.Detections, got "
-                             f"{type(observed).__name__}")
-        if pose is not None:
-            try:
-                pose = tuple(float(v) for v in pose)
-            except (TypeError, ValueError):
-                raise ValueError(f"pose must be (x, y, theta) or None, got {pose!r}") from None
-            if len(pose) != 3 or not all(math.isfinite(v) for v in pose):
-                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}")
-        if self.frame is None:
-            self.frame = "map" if pose is not None else "sensor"
+            raise _not_observed(observed)
+        pose = self._pose(pose)
         if self.frame == "sensor":
             return observed, None
         if pose is None:  # the map frame without a pose: nothing can be placed
-            return Detections._trusted(observed.stamp_ns, (), np.zeros((0, 2)), np.zeros((0, 2, 2)),
-                                       np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)), None
-        if compiled:
-            z, R = np.empty_like(observed.positions), np.empty_like(observed.covariances)
-            _ENGINE.in_frame(observed.positions, observed.covariances, *pose, z, R)
-            return Detections._trusted(observed.stamp_ns, observed.kinds, z, R, observed.first, observed.last), pose
+            return _no_detections(observed.stamp_ns), None
         return observed.in_frame(pose), pose
+
+    def _pose(self, pose) -> tuple | None:
+        """The scan's pose checked, as a tuple of floats (or None); the first scan's decides the
+        frame when it is ``"auto"``."""
+        if pose is not None:
+            try:
+                pose = tuple(map(float, pose))
+            except (TypeError, ValueError):
+                raise ValueError(f"pose must be (x, y, theta) or None, got {pose!r}") from None
+            if len(pose) != 3 or not all(map(math.isfinite, pose)):
+                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}")
+        if self.frame is None:
+            self.frame = "map" if pose is not None else "sensor"
+        return pose
+
+    def _fast_detections(self, observed, pose) -> tuple[Detections, np.ndarray, np.ndarray, tuple | None]:
+        """:meth:`_detections` for the compiled path: a scan's features taken in bulk
+        (:func:`_bulk_detections`), moved into the map by the engine's kernel; also the kind of
+        track each detection measures (0 person, 1 circle) and whether it may start one."""
+        p = self.params
+        if isinstance(observed, Features):
+            observed, det_kind, starts = _bulk_detections(observed, p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m,
+                                                          p.single_legs)
+        elif isinstance(observed, Detections):
+            observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
+            det_kind, starts = _track_kinds_of(observed.kinds)
+        else:
+            raise _not_observed(observed)
+        pose = self._pose(pose)
+        if self.frame == "sensor":
+            return observed, det_kind, starts, None
+        if pose is None:
+            det_kind, starts = _track_kinds_of(())
+            return _no_detections(observed.stamp_ns), det_kind, starts, None
+        z, R = np.empty_like(observed.positions), np.empty_like(observed.covariances)
+        _ENGINE.in_frame(observed.positions, observed.covariances, *pose, z, R)
+        return Detections._trusted(observed.stamp_ns, observed.kinds, z, R, observed.first, observed.last), det_kind, \
+            starts, pose
 
     def _late(self, detections: Detections, pose, steps, t_start: float):
         """A scan older than the last one tracked (a recording whose stamps go back): not tracked.
@@ -1105,13 +1133,74 @@ def _engine():
     return _ENGINE
 
 
+def _not_observed(observed) -> ValueError:
+    return ValueError(f"observed must be labkit.Features or labkit.tracking.Detections, got "
+                      f"{type(observed).__name__}")
+
+
+def _no_detections(stamp_ns: int) -> Detections:
+    return Detections._trusted(stamp_ns, (), np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64),
+                               np.zeros(0, dtype=np.int64))
+
+
+# ---------------------------------------------------------------- the compiled path's glue
 @functools.lru_cache(maxsize=256)
-def _track_kinds_of(kinds: tuple) -> np.ndarray:
-    """The kind of track (0 person, 1 circle) each detection kind measures, read-only (remembered:
-    scans repeat a few lists of kinds)."""
+def _track_kinds_of(kinds: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The kind of track (0 person, 1 circle) each detection kind measures, and whether it starts
+    tracks; read-only (remembered: scans repeat a few lists of kinds)."""
     out = np.array([_TRACK_KIND_OF[k] for k in kinds], dtype=np.int64)
+    starts = np.array([_STARTS_TRACKS[k] for k in kinds], dtype=bool)
     out.setflags(write=False)
-    return out
+    starts.setflags(write=False)
+    return out, starts
+
+
+@functools.lru_cache(maxsize=512)
+def _layout(n_people: int, n_legs: int, n_circles: int, person_var: float, leg_var: float,
+            circle_var: float) -> tuple[tuple, np.ndarray, np.ndarray, np.ndarray]:
+    """What :func:`detections_from` gives a scan of so many people, single legs and circles
+    besides their positions and beams: the kinds, the covariances (``sigma^2 I``, read-only), the
+    kind of track each detection measures and whether it starts one (remembered: scans repeat a
+    few counts)."""
+    kinds = ("person",) * n_people + ("leg",) * n_legs + ("circle",) * n_circles
+    var = np.array([person_var] * n_people + [leg_var] * n_legs + [circle_var] * n_circles, dtype=np.float64)
+    covariances = var[:, None, None] * _I2
+    covariances.setflags(write=False)
+    return (kinds, covariances, *_track_kinds_of(kinds))
+
+
+def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float,
+                     single_legs: bool) -> tuple[Detections, np.ndarray, np.ndarray]:
+    """:func:`detections_from` (the same arrays; ``tests/test_tracking_engine.py`` checks) in a few
+    calls: the positions in one ``concatenate``, the beams in one ``fromiter``, and what depends only
+    on the counts (kinds, covariances) remembered (:func:`_layout`). Also the kind of track each
+    detection measures and whether it starts one."""
+    people = features.people
+    legs = features.legs if single_legs else ()
+    if people and legs:
+        paired = {id(leg) for person in people for leg in person.legs}
+        legs = [leg for leg in legs if id(leg) not in paired]
+    circles = [circle for circle in features.circles if circle.kind == "circle"]
+    others = (*legs, *circles)
+    n = len(people) + len(others)
+    layout = _layout(len(people), len(legs), len(circles), person_sigma_m**2, leg_sigma_m**2, circle_sigma_m**2)
+    kinds, covariances, det_kind, starts = layout
+    if not n:
+        return _no_detections(int(features.stamp_ns)), det_kind, starts
+    positions = np.concatenate([f.center for f in (*people, *others)])
+    if positions.dtype != np.float64 or positions.shape != (2 * n,):  # centres built by hand: as the reference
+        observed = detections_from(features, person_sigma_m=person_sigma_m, leg_sigma_m=leg_sigma_m,
+                                   circle_sigma_m=circle_sigma_m, single_legs=single_legs)
+        return observed, det_kind, starts
+    ends = [(min(a.first, b.first), max(a.last, b.last)) for a, b in (person.legs for person in people)]
+    ends += map(_ENDS, others)
+    beams = np.fromiter(_chain(ends), np.int64, 2 * n).reshape(n, 2).T
+    return Detections._trusted(int(features.stamp_ns), kinds, positions.reshape(n, 2), covariances, beams[0],
+                               beams[1]), det_kind, starts
+
+
+_ENDS = operator.attrgetter("first", "last")
+_chain = itertools.chain.from_iterable
 
 
 def _measured(detections: Detections) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
