@@ -22,9 +22,10 @@ the pipeline's time per scan):
   confirmed (static or moving) and which are deleted;
 * :func:`predict_and_gate`, :func:`update_and_manage` -- two of them in one call (a call from
   Python costs a few microseconds, more than the work on a few tracks; so does every array a
-  kernel returns, hence the outputs the caller gives them); the first also counts the scan in
-  every track's age and lists the births (detections that start a track and lie outside every
-  gate), two small numpy calls fewer.
+  kernel returns, hence the outputs the caller gives them); the first also moves the detections
+  into the map (:func:`in_frame`), counts the scan in every track's age and lists the births
+  (detections that start a track and lie outside every gate): a kernel call and four small numpy
+  calls fewer.
 
 The readable code in :mod:`labkit.tracking` is the reference, and what ``trace=True`` runs; the
 kernels compute the same formulas in another order of floating-point operations (loops instead of
@@ -105,7 +106,8 @@ def gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_som
     is inside some gate. Returns how many pairs, and whether some track or detection is inside
     two gates (an assignment problem to solve; else the pairs are the assignment). A static
     track's position covariance is scaled so that its largest eigenvalue is at most ``cap``
-    (``min_travel_m^2 / threshold``)."""
+    (``min_travel_m^2 / threshold``). ``cost``, ``pairs`` and ``in_some`` may be larger (the
+    tracker's work arrays): only the first T rows and D columns are written."""
     n_t = x.shape[0]
     n_d = z.shape[0]
     in_some[:] = False
@@ -245,17 +247,23 @@ def manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, conf
 
 
 @jit
-def predict_and_gate(x, P, dt, q, scans, kind, status, z, R, det_kind, starts, threshold, cap, cost, pairs, in_some,
-                     new):
-    """One more scan for every track (``scans``), :func:`predict` (when ``dt > 0``) then
-    :func:`gate`, in one call; also, into ``new``, the detections that start a track (``starts``)
-    and lie outside every gate (the births). Returns the pairs, the conflict and the births'
-    count."""
+def predict_and_gate(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm, Rm, det_kind, starts,
+                     threshold, cap, cost, pairs, in_some, new):
+    """One scan's first half in one call: the detections ``z``, ``R`` moved by the pose ``(px, py,
+    ptheta)`` into ``zm``, ``Rm`` (:func:`in_frame`, when ``in_map``; else ``zm``, ``Rm`` are not
+    read), one more scan for every track (``scans``), :func:`predict` (when ``dt > 0``) and
+    :func:`gate` (of ``zm``, ``Rm`` in the map, of ``z``, ``R`` else); also, into ``new``, the
+    detections that start a track (``starts``) and lie outside every gate (the births). Returns the
+    pairs, the conflict and the births' count."""
     for i in range(scans.shape[0]):
         scans[i] += 1
     if dt > 0.0:
         predict(x, P, dt, q)
-    n_pairs, conflict = gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some)
+    if in_map:
+        in_frame(z, R, px, py, ptheta, zm, Rm)
+        n_pairs, conflict = gate(x, P, kind, status, zm, Rm, det_kind, threshold, cap, cost, pairs, in_some)
+    else:
+        n_pairs, conflict = gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some)
     n_new = 0
     for j in range(z.shape[0]):
         if starts[j] and not in_some[j]:

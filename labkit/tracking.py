@@ -761,6 +761,7 @@ class Tracker:
         self._scans = np.zeros(0, dtype=np.int64)
         self._born = np.zeros(0, dtype=np.int64)
         self._seen = np.zeros(0, dtype=np.int64)
+        self._work: tuple | None = None  # the compiled path's work arrays (_work_arrays)
 
     def __repr__(self) -> str:
         return f"Tracker({len(self._ids)} tracks, frame={self.frame!r})"
@@ -799,39 +800,45 @@ class Tracker:
         return (table, steps) if trace else table
 
     def _compiled_step(self, observed: Features | Detections, pose, t_start: float) -> TrackTable:
-        """:meth:`step` without a trace: the detections taken in bulk (:meth:`_fast_detections`),
+        """:meth:`step` without a trace: the detections taken in bulk (:func:`_bulk_detections`),
         steps 1-7 as :mod:`labkit._tracking_engine`'s kernels."""
         p, engine = self.params, _ENGINE
-        detections, det_kind, starts, pose = self._fast_detections(observed, pose)
-        if self._stamp is not None and detections.stamp_ns < self._stamp:
-            return self._late(detections, pose, None, t_start)
-        dt = 0.0 if self._stamp is None else (detections.stamp_ns - self._stamp) * 1e-9  # _advance_clock's
-        self._stamp = detections.stamp_ns
-        covariances = detections.covariances
-        n_tracks, n_dets = len(self._ids), len(detections)
-        cost, pairs, gated, new = np.empty((n_tracks, n_dets)), np.empty((2, n_tracks * n_dets), np.intp), \
-            np.empty(n_dets, dtype=bool), np.empty(n_dets, np.intp)
-        n_pairs, conflict, n_new = engine.predict_and_gate(                               # 1, 2 (and 5's births)
-            self._x, self._P, dt, p.acceleration_noise_m2_s3, self._scans, self._kind, self._status,
-            detections.positions, covariances, det_kind, starts, self._gate, p.min_travel_m**2 / self._gate, cost,
+        stamp, kinds, z, R, first, last, det_kind, starts, pose = self._fast_detections(observed, pose)
+        if self._stamp is not None and stamp < self._stamp:
+            detections = Detections._trusted(stamp, kinds, z, R, first, last)
+            return self._late(detections if pose is None else detections.in_frame(pose), pose, None, t_start)
+        dt = 0.0 if self._stamp is None else (stamp - self._stamp) * 1e-9  # _advance_clock (the kernel counts the scan)
+        self._stamp = stamp
+        n_tracks, n_dets = len(self._ids), len(kinds)
+        cost, pairs, gated, new = self._work_arrays(n_tracks, n_dets)
+        if pose is None:
+            zm, Rm, in_map, pose_x, pose_y, pose_theta = _NOWHERE_Z, _NOWHERE_R, False, 0.0, 0.0, 0.0
+        else:
+            zm, Rm, in_map, (pose_x, pose_y, pose_theta) = np.empty_like(z), np.empty_like(R), True, pose
+        n_pairs, conflict, n_new = engine.predict_and_gate(                  # (the frame), 1, 2 (and 5's births)
+            self._x, self._P, dt, p.acceleration_noise_m2_s3, self._scans, self._kind, self._status, z, R, in_map,
+            pose_x, pose_y, pose_theta, zm, Rm, det_kind, starts, self._gate, p.min_travel_m**2 / self._gate, cost,
             pairs, gated, new)
-        tracks, dets = assign(cost) if conflict else (pairs[0, :n_pairs], pairs[1, :n_pairs])  # 3
-        state = (self._x, self._P, tracks, dets, detections.positions, covariances, self._hits, self._seen,
-                 self._anchor, self._far, self._moved)
+        if not in_map:
+            zm, Rm = z, R
+        detections = Detections._trusted(stamp, kinds, zm, Rm, first, last)
+        tracks, dets = (assign(cost[:n_tracks, :n_dets]) if conflict                          # 3
+                        else (pairs[0, :n_pairs], pairs[1, :n_pairs]))
+        state = (self._x, self._P, tracks, dets, zm, Rm, self._hits, self._seen, self._anchor, self._far, self._moved)
         if n_new:
-            engine.update(*state, detections.stamp_ns, p.confirm_hits, p.min_travel_m)     # 4
-            events = self._add_tracks(new[:n_new].tolist(), detections, None)              # 5
+            engine.update(*state, stamp, p.confirm_hits, p.min_travel_m)                       # 4
+            events = self._add_tracks(new[:n_new].tolist(), detections, None)                  # 5
             confirmed, listed = np.empty(len(self._ids), np.int64), np.empty(len(self._ids), np.int64)
-            n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
-                self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen,
-                detections.stamp_ns, p.confirm_hits, p.confirm_scans, self._max_coast_ns, confirmed, listed)
+            n_confirmed, n_deleted = engine.manage(                                            # 4, 6, 7
+                self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen, stamp,
+                p.confirm_hits, p.confirm_scans, self._max_coast_ns, confirmed, listed)
             detection = np.full(len(self._ids), -1, dtype=np.int64)
             detection[tracks] = dets
         else:
             events = []
             confirmed, listed, detection = (np.empty(n_tracks, np.int64) for _ in range(3))
-            n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
-                *state, self._kind, self._status, self._scans, detections.stamp_ns, p.confirm_hits, p.confirm_scans,
+            n_confirmed, n_deleted = engine.update_and_manage(                                 # 4, 6, 7
+                *state, self._kind, self._status, self._scans, stamp, p.confirm_hits, p.confirm_scans,
                 p.min_travel_m, self._max_coast_ns, confirmed, listed, detection)
         if n_confirmed:
             events += [("confirm" if c == 2 else "static", tid)
@@ -841,7 +848,7 @@ class Tracker:
             events += [("delete", tid) for tid in self._ids[deleted].tolist()]
         table = object.__new__(TrackTable)  # (the values are the tracker's own: no checks to run)
         table.__dict__.update(
-            stamp_ns=detections.stamp_ns, frame=self.frame, pose=pose, ids=self._ids.copy(), kinds=_KINDS[self._kind],
+            stamp_ns=stamp, frame=self.frame, pose=pose, ids=self._ids.copy(), kinds=_KINDS[self._kind],
             status=_STATUS_NAMES[listed], states=self._x.copy(), covariances=self._P.copy(), hits=self._hits.copy(),
             born_ns=self._born.copy(), last_seen_ns=self._seen.copy(), detection=detection, detections=detections,
             events=tuple(events), late=False)
@@ -849,6 +856,17 @@ class Tracker:
             self._keep(~deleted)
         table.__dict__["seconds"] = perf_counter() - t_start
         return table
+
+    def _work_arrays(self, n_tracks: int, n_dets: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The gate kernel's outputs (cost, pairs, in some gate, births), kept from scan to scan and
+        grown by doubling: at least ``n_tracks`` x ``n_dets``."""
+        work = self._work
+        if work is None or work[0].shape[0] < n_tracks or work[0].shape[1] < n_dets:
+            rows, cols = (max(8, 2 * n_tracks), max(8, 2 * n_dets)) if work is None else \
+                (max(work[0].shape[0], 2 * n_tracks), max(work[0].shape[1], 2 * n_dets))
+            work = self._work = (np.empty((rows, cols)), np.empty((2, rows * cols), np.intp),
+                                 np.empty(cols, dtype=bool), np.empty(cols, np.intp))
+        return work
 
     def _detections(self, observed, pose) -> tuple[Detections, tuple | None]:
         """The scan's detections in the tracking frame, and the pose used (None if none)."""
@@ -881,29 +899,28 @@ class Tracker:
             self.frame = "map" if pose is not None else "sensor"
         return pose
 
-    def _fast_detections(self, observed, pose) -> tuple[Detections, np.ndarray, np.ndarray, tuple | None]:
-        """:meth:`_detections` for the compiled path: a scan's features taken in bulk
-        (:func:`_bulk_detections`), moved into the map by the engine's kernel; also the kind of
-        track each detection measures (0 person, 1 circle) and whether it may start one."""
+    def _fast_detections(self, observed, pose) -> tuple:
+        """:meth:`_detections` for the compiled path, as arrays, in the sensor frame (the kernel moves
+        them): a scan's features taken in bulk (:func:`_bulk_detections`); the stamp, kinds,
+        positions, covariances, beams, the kind of track each detection measures (0 person, 1 circle)
+        and whether it may start one, and the pose to move them by (None: none)."""
         p = self.params
         if isinstance(observed, Features):
-            observed, det_kind, starts = _bulk_detections(observed, p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m,
-                                                          p.single_legs)
+            found = _bulk_detections(observed, p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m, p.single_legs)
         elif isinstance(observed, Detections):
             observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
-            det_kind, starts = _track_kinds_of(observed.kinds)
+            found = (observed.stamp_ns, observed.kinds, observed.positions, observed.covariances, observed.first,
+                     observed.last, *_track_kinds_of(observed.kinds))
         else:
             raise _not_observed(observed)
         pose = self._pose(pose)
         if self.frame == "sensor":
-            return observed, det_kind, starts, None
-        if pose is None:
-            det_kind, starts = _track_kinds_of(())
-            return _no_detections(observed.stamp_ns), det_kind, starts, None
-        z, R = np.empty_like(observed.positions), np.empty_like(observed.covariances)
-        _ENGINE.in_frame(observed.positions, observed.covariances, *pose, z, R)
-        return Detections._trusted(observed.stamp_ns, observed.kinds, z, R, observed.first, observed.last), det_kind, \
-            starts, pose
+            return (*found, None)
+        if pose is None:  # the map frame without a pose: nothing can be placed
+            none = _no_detections(found[0])
+            return (none.stamp_ns, none.kinds, none.positions, none.covariances, none.first, none.last,
+                    *_track_kinds_of(()), None)
+        return (*found, pose)
 
     def _late(self, detections: Detections, pose, steps, t_start: float):
         """A scan older than the last one tracked (a recording whose stamps go back): not tracked.
@@ -1170,11 +1187,12 @@ def _layout(n_people: int, n_legs: int, n_circles: int, person_var: float, leg_v
 
 
 def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float,
-                     single_legs: bool) -> tuple[Detections, np.ndarray, np.ndarray]:
-    """:func:`detections_from` (the same arrays; ``tests/test_tracking_engine.py`` checks) in a few
-    calls: the positions in one ``concatenate``, the beams in one ``fromiter``, and what depends only
-    on the counts (kinds, covariances) remembered (:func:`_layout`). Also the kind of track each
-    detection measures and whether it starts one."""
+                     single_legs: bool) -> tuple:
+    """:func:`detections_from`'s arrays (the same; ``tests/test_tracking_engine.py`` checks) in a
+    few calls: the positions in one ``concatenate``, the beams in one ``fromiter``, and what depends
+    only on the counts (kinds, covariances) remembered (:func:`_layout`): the stamp, kinds,
+    positions, covariances, first and last beams, the kind of track each detection measures and
+    whether it starts one."""
     people = features.people
     legs = features.legs if single_legs else ()
     if people and legs:
@@ -1186,20 +1204,21 @@ def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: flo
     layout = _layout(len(people), len(legs), len(circles), person_sigma_m**2, leg_sigma_m**2, circle_sigma_m**2)
     kinds, covariances, det_kind, starts = layout
     if not n:
-        return _no_detections(int(features.stamp_ns)), det_kind, starts
+        none = _no_detections(int(features.stamp_ns))
+        return none.stamp_ns, kinds, none.positions, covariances, none.first, none.last, det_kind, starts
     positions = np.concatenate([f.center for f in (*people, *others)])
     if positions.dtype != np.float64 or positions.shape != (2 * n,):  # centres built by hand: as the reference
-        observed = detections_from(features, person_sigma_m=person_sigma_m, leg_sigma_m=leg_sigma_m,
-                                   circle_sigma_m=circle_sigma_m, single_legs=single_legs)
-        return observed, det_kind, starts
+        d = detections_from(features, person_sigma_m=person_sigma_m, leg_sigma_m=leg_sigma_m,
+                            circle_sigma_m=circle_sigma_m, single_legs=single_legs)
+        return d.stamp_ns, d.kinds, d.positions, d.covariances, d.first, d.last, det_kind, starts
     ends = [(min(a.first, b.first), max(a.last, b.last)) for a, b in (person.legs for person in people)]
     ends += map(_ENDS, others)
     beams = np.fromiter(_chain(ends), np.int64, 2 * n).reshape(n, 2).T
-    return Detections._trusted(int(features.stamp_ns), kinds, positions.reshape(n, 2), covariances, beams[0],
-                               beams[1]), det_kind, starts
+    return int(features.stamp_ns), kinds, positions.reshape(n, 2), covariances, beams[0], beams[1], det_kind, starts
 
 
 _ENDS = operator.attrgetter("first", "last")
+_NOWHERE_Z, _NOWHERE_R = np.empty((0, 2)), np.empty((0, 2, 2))  # predict_and_gate's zm, Rm in the sensor frame
 _chain = itertools.chain.from_iterable
 
 
