@@ -25,7 +25,11 @@ the pipeline's time per scan):
   kernel returns, hence the outputs the caller gives them); the first also moves the detections
   into the map (:func:`in_frame`), counts the scan in every track's age and lists the births
   (detections that start a track and lie outside every gate): a kernel call and four small numpy
-  calls fewer.
+  calls fewer;
+* :func:`scan_step` -- the usual scan in one call: :func:`predict_and_gate`, then, when no
+  detection starts a track and the pairs inside the gates are the assignment,
+  :func:`update_and_manage` (otherwise the caller solves the assignment, adds the tracks and
+  calls the others).
 
 The readable code in :mod:`labkit.tracking` is the reference, and what ``trace=True`` runs; the
 kernels compute the same formulas in another order of floating-point operations (loops instead of
@@ -42,7 +46,7 @@ import numpy as np
 
 from ._kernels import jit
 
-__all__ = ["in_frame", "predict", "gate", "update", "manage", "predict_and_gate", "update_and_manage"]
+__all__ = ["in_frame", "predict", "gate", "update", "manage", "predict_and_gate", "update_and_manage", "scan_step"]
 
 TENTATIVE, STATIC, CONFIRMED, DELETED = 0, 1, 2, 3  # = labkit.tracking's status codes
 CIRCLE = 1  # and its code of circle tracks (tests/test_tracking_engine.py)
@@ -284,3 +288,29 @@ def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, 
     return manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns,
                   confirmed, listed)
 
+
+
+@jit
+def scan_step(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm, Rm, det_kind, starts, threshold,
+              cap, cost, pairs, in_some, new, hits, seen, anchor, far, moved, now_ns, confirm_hits, confirm_scans,
+              min_travel, max_coast_ns, out):
+    """:func:`predict_and_gate`, then, when no detection starts a track and there is no conflict
+    (the pairs inside the gates are the assignment), :func:`update_and_manage` with ``out`` (3, T)
+    as its ``confirmed``, ``listed`` and ``detection``: a scan in one call. Returns the pairs, the
+    conflict, the births' count, how many tracks were confirmed and deleted, and whether the scan
+    is done (False: the caller goes on from the gate's outputs)."""
+    n_pairs, conflict, n_new = predict_and_gate(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm,
+                                                Rm, det_kind, starts, threshold, cap, cost, pairs, in_some, new)
+    if conflict or n_new > 0:
+        return n_pairs, conflict, n_new, 0, 0, False
+    tracks = pairs[0, :n_pairs]
+    dets = pairs[1, :n_pairs]
+    if in_map:
+        n_confirmed, n_deleted = update_and_manage(x, P, tracks, dets, zm, Rm, hits, seen, anchor, far, moved, kind,
+                                                   status, scans, now_ns, confirm_hits, confirm_scans, min_travel,
+                                                   max_coast_ns, out[0], out[1], out[2])
+    else:
+        n_confirmed, n_deleted = update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, kind,
+                                                   status, scans, now_ns, confirm_hits, confirm_scans, min_travel,
+                                                   max_coast_ns, out[0], out[1], out[2])
+    return n_pairs, False, 0, n_confirmed, n_deleted, True

@@ -815,31 +815,35 @@ class Tracker:
             zm, Rm, in_map, pose_x, pose_y, pose_theta = _NOWHERE_Z, _NOWHERE_R, False, 0.0, 0.0, 0.0
         else:
             zm, Rm, in_map, (pose_x, pose_y, pose_theta) = np.empty_like(z), np.empty_like(R), True, pose
-        n_pairs, conflict, n_new = engine.predict_and_gate(                  # (the frame), 1, 2 (and 5's births)
+        out = np.empty((3, n_tracks), np.int64)  # confirmed, listed (the status in the table), detection
+        n_pairs, conflict, n_new, n_confirmed, n_deleted, done = engine.scan_step(  # (the frame), 1, 2, (5's births)
             self._x, self._P, dt, p.acceleration_noise_m2_s3, self._scans, self._kind, self._status, z, R, in_map,
             pose_x, pose_y, pose_theta, zm, Rm, det_kind, starts, self._gate, p.min_travel_m**2 / self._gate, cost,
-            pairs, gated, new)
+            pairs, gated, new, self._hits, self._seen, self._anchor, self._far, self._moved, stamp, p.confirm_hits,
+            p.confirm_scans, p.min_travel_m, self._max_coast_ns, out)                    # and, done: 3, 4, 6, 7
         if not in_map:
             zm, Rm = z, R
         detections = Detections._trusted(stamp, kinds, zm, Rm, first, last)
-        tracks, dets = (assign(cost[:n_tracks, :n_dets]) if conflict                          # 3
-                        else (pairs[0, :n_pairs], pairs[1, :n_pairs]))
-        state = (self._x, self._P, tracks, dets, zm, Rm, self._hits, self._seen, self._anchor, self._far, self._moved)
-        if n_new:
-            engine.update(*state, stamp, p.confirm_hits, p.min_travel_m)                       # 4
-            events = self._add_tracks(new[:n_new].tolist(), detections, None)                  # 5
-            confirmed, listed = np.empty(len(self._ids), np.int64), np.empty(len(self._ids), np.int64)
-            n_confirmed, n_deleted = engine.manage(                                            # 4, 6, 7
-                self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen, stamp,
-                p.confirm_hits, p.confirm_scans, self._max_coast_ns, confirmed, listed)
-            detection = np.full(len(self._ids), -1, dtype=np.int64)
-            detection[tracks] = dets
-        else:
-            events = []
-            confirmed, listed, detection = (np.empty(n_tracks, np.int64) for _ in range(3))
-            n_confirmed, n_deleted = engine.update_and_manage(                                 # 4, 6, 7
-                *state, self._kind, self._status, self._scans, stamp, p.confirm_hits, p.confirm_scans,
-                p.min_travel_m, self._max_coast_ns, confirmed, listed, detection)
+        events: list = []
+        if not done:  # an assignment to solve, or births
+            tracks, dets = (assign(cost[:n_tracks, :n_dets]) if conflict                      # 3
+                            else (pairs[0, :n_pairs], pairs[1, :n_pairs]))
+            state = (self._x, self._P, tracks, dets, zm, Rm, self._hits, self._seen, self._anchor, self._far,
+                     self._moved)
+            if n_new:
+                engine.update(*state, stamp, p.confirm_hits, p.min_travel_m)                   # 4
+                events = self._add_tracks(new[:n_new].tolist(), detections, None)              # 5
+                out = np.empty((3, len(self._ids)), np.int64)
+                n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
+                    self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen, stamp,
+                    p.confirm_hits, p.confirm_scans, self._max_coast_ns, out[0], out[1])
+                out[2] = -1
+                out[2, tracks] = dets
+            else:
+                n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
+                    *state, self._kind, self._status, self._scans, stamp, p.confirm_hits, p.confirm_scans,
+                    p.min_travel_m, self._max_coast_ns, out[0], out[1], out[2])
+        confirmed, listed, detection = out
         if n_confirmed:
             events += [("confirm" if c == 2 else "static", tid)
                        for tid, c in zip(self._ids.tolist(), confirmed.tolist(), strict=True) if c]
@@ -1143,10 +1147,10 @@ def _engine():
         if _JIT:
             from types import SimpleNamespace
 
-            from ._tracking_engine import in_frame, manage, predict_and_gate, update, update_and_manage
+            from ._tracking_engine import in_frame, manage, predict_and_gate, scan_step, update, update_and_manage
 
             _ENGINE = SimpleNamespace(in_frame=in_frame, predict_and_gate=predict_and_gate, update=update,
-                                      manage=manage, update_and_manage=update_and_manage)
+                                      manage=manage, update_and_manage=update_and_manage, scan_step=scan_step)
     return _ENGINE
 
 
@@ -1345,9 +1349,25 @@ def _compile_engine() -> None:
     """Compile (or load from numba's cache) the kernels of :mod:`labkit._tracking_engine`, on a few
     made-up scans; the Makefile's set-up runs it beside the other engines', so that no notebook, test
     or command pays the compilation on its first tracked scan."""
+    from .features import Circle, Leg, Person
+
+    def leg(x: float, y: float, first: int) -> Leg:
+        return Leg(np.array([x, y]), 0.12, np.array([x, y]), first, first + 4, 5, 2.0, 0.1)
+
+    kinds = ("person", "leg", "circle", "circle")
     for with_pose in (False, True):
-        tracker = Tracker()
-        for k in range(8):
-            z = np.array([[1.0 + 0.05 * k, 0.5], [2.0, -1.0 + 0.02 * k], [3.0, 0.0], [3.3, 0.1 * k]])
-            pose = (0.01 * k, 0.0, 0.002 * k) if with_pose else None
-            tracker.step(Detections(k * 100_000_000, ("person", "leg", "circle", "circle"), z), pose=pose)
+        for given in ("positions", "covariances", "features"):  # the array types the kernels meet
+            tracker = Tracker()
+            for k in range(8):
+                z = np.array([[1.0 + 0.05 * k, 0.5], [2.0, -1.0 + 0.02 * k], [3.0, 0.0], [3.3, 0.1 * k]])
+                pose = (0.01 * k, 0.0, 0.002 * k) if with_pose else None
+                if given == "features":
+                    pair = (leg(z[0, 0], 0.35, 10), leg(z[0, 0], 0.65, 20))
+                    circles = tuple(Circle(z[j].copy(), 0.1, 2.0, 0.1, 0.9, 10 * j, 10 * j + 5, 6) for j in (2, 3))
+                    observed: Features | Detections = Features(
+                        k * 100_000_000, 100, np.zeros(100, dtype=np.int64), circles=circles,
+                        legs=(*pair, leg(*z[1], 30)), people=(Person(z[0].copy(), pair),))
+                else:
+                    cov = np.tile(0.01 * np.eye(2), (4, 1, 1)) if given == "covariances" else None
+                    observed = Detections(k * 100_000_000, kinds, z, cov)
+                tracker.step(observed, pose=pose)

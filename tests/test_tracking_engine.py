@@ -56,7 +56,7 @@ def _side_by_side(stream, params=None) -> dict:
 class _Counting:
     """The engine, its kernels wrapped to count their calls (and those of the assignment solver)."""
 
-    KERNELS = ("in_frame", "predict_and_gate", "update", "manage", "update_and_manage")
+    KERNELS = ("in_frame", "predict_and_gate", "update", "manage", "update_and_manage", "scan_step")
 
     def __init__(self, monkeypatch):
         self.calls = dict.fromkeys((*self.KERNELS, "assign", "into the map"), 0)
@@ -67,7 +67,7 @@ class _Counting:
     def _counted(self, name, fn):
         def wrapper(*args, **kwargs):
             self.calls[name] += 1
-            if name == "predict_and_gate" and args[9]:  # its in_map: the detections moved by the pose
+            if name == "scan_step" and args[9]:  # its in_map: the detections moved by the pose
                 self.calls["into the map"] += 1
             return fn(*args, **kwargs)
         return wrapper
@@ -94,8 +94,7 @@ def test_the_default_path_runs_the_kernels_and_not_the_reference(monkeypatch):
                           [[0.1 * k, 0.0], [5.0, 0.1 * k], [3.0, 3.0]])
         table = tracker.step(seen)
     assert table.status.tolist() == ["confirmed", "confirmed", "static"]
-    assert all(counting.calls[n] for n in ("predict_and_gate", "update", "manage", "update_and_manage")), \
-        counting.calls
+    assert all(counting.calls[n] for n in ("scan_step", "update", "manage")), counting.calls  # (births: update, manage)
     assert counting.calls["assign"] == 0, "no conflict in any gate: the assignment problem is not solved"
 
 
@@ -122,7 +121,7 @@ def test_the_engine_gives_the_references_tracks_on_the_simulated_worlds(monkeypa
     scans, features = _scans(name, 160, trajectory)
     seen = _side_by_side(((f, s.pose) for s, f in zip(scans, features, strict=True)), {"frame": frame})
     assert seen["confirmed"] > 100 and seen["updates"] > 300 and seen["events"] > 5, seen
-    assert counting.calls["predict_and_gate"] > 100, counting.calls
+    assert counting.calls["scan_step"] > 100, counting.calls
     assert (counting.calls["into the map"] > 100) == (frame != "sensor"), counting.calls
 
 
@@ -185,6 +184,7 @@ def test_the_engine_gives_the_references_tracks_on_random_cases(monkeypatch):
         total = {k: total[k] + seen[k] for k in total}
     assert total["confirmed"] > 200 and total["static"] > 50 and total["updates"] > 500, total
     assert counting.calls["assign"] > 10, ("conflicts in the gates must have been solved", counting.calls)
+    assert counting.calls["update_and_manage"] > 10, ("scan_step left conflicts to the caller", counting.calls)
 
 
 def test_with_no_jit_the_reference_runs(monkeypatch):
