@@ -843,10 +843,10 @@ class Tracker:
                 n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
                     *state, self._kind, self._status, self._scans, stamp, p.confirm_hits, p.confirm_scans,
                     p.min_travel_m, self._max_coast_ns, out[0], out[1], out[2])
-        confirmed, listed, detection = out
+        listed, detection = out[1], out[2]
         if n_confirmed:
             events += [("confirm" if c == 2 else "static", tid)
-                       for tid, c in zip(self._ids.tolist(), confirmed.tolist(), strict=True) if c]
+                       for tid, c in zip(self._ids.tolist(), out[0].tolist(), strict=True) if c]
         if n_deleted:
             deleted = listed == _DELETED
             events += [("delete", tid) for tid in self._ids[deleted].tolist()]
@@ -894,10 +894,11 @@ class Tracker:
         frame when it is ``"auto"``."""
         if pose is not None:
             try:
-                pose = tuple(map(float, pose))
+                x, y, theta = pose
+                pose = (float(x), float(y), float(theta))
             except (TypeError, ValueError):
-                raise ValueError(f"pose must be (x, y, theta) or None, got {pose!r}") from None
-            if len(pose) != 3 or not all(map(math.isfinite, pose)):
+                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}") from None
+            if not (math.isfinite(pose[0]) and math.isfinite(pose[1]) and math.isfinite(pose[2])):
                 raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}")
         if self.frame is None:
             self.frame = "map" if pose is not None else "sensor"
