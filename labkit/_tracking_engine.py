@@ -293,12 +293,13 @@ def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, 
 @jit
 def scan_step(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm, Rm, det_kind, starts, threshold,
               cap, cost, pairs, in_some, new, hits, seen, anchor, far, moved, now_ns, confirm_hits, confirm_scans,
-              min_travel, max_coast_ns, out):
+              min_travel, max_coast_ns, ids, born, out):
     """:func:`predict_and_gate`, then, when no detection starts a track and there is no conflict
-    (the pairs inside the gates are the assignment), :func:`update_and_manage` with ``out`` (3, T)
-    as its ``confirmed``, ``listed`` and ``detection``: a scan in one call. Returns the pairs, the
-    conflict, the births' count, how many tracks were confirmed and deleted, and whether the scan
-    is done (False: the caller goes on from the gate's outputs)."""
+    (the pairs inside the gates are the assignment), :func:`update_and_manage` with rows 0-2 of
+    ``out`` (7, T) as its ``confirmed``, ``listed`` and ``detection``, and ``ids``, ``hits``,
+    ``born`` and ``seen`` copied into rows 3-6 (the scan's table): a scan in one call. Returns the
+    pairs, the conflict, the births' count, how many tracks were confirmed and deleted, and whether
+    the scan is done (False: the caller goes on from the gate's outputs)."""
     n_pairs, conflict, n_new = predict_and_gate(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm,
                                                 Rm, det_kind, starts, threshold, cap, cost, pairs, in_some, new)
     if conflict or n_new > 0:
@@ -313,4 +314,9 @@ def scan_step(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm
         n_confirmed, n_deleted = update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, kind,
                                                    status, scans, now_ns, confirm_hits, confirm_scans, min_travel,
                                                    max_coast_ns, out[0], out[1], out[2])
+    for i in range(ids.shape[0]):
+        out[3, i] = ids[i]
+        out[4, i] = hits[i]
+        out[5, i] = born[i]
+        out[6, i] = seen[i]
     return n_pairs, False, 0, n_confirmed, n_deleted, True

@@ -815,12 +815,13 @@ class Tracker:
             zm, Rm, in_map, pose_x, pose_y, pose_theta = _NOWHERE_Z, _NOWHERE_R, False, 0.0, 0.0, 0.0
         else:
             zm, Rm, in_map, (pose_x, pose_y, pose_theta) = np.empty_like(z), np.empty_like(R), True, pose
-        out = np.empty((3, n_tracks), np.int64)  # confirmed, listed (the status in the table), detection
+        out = np.empty((7, n_tracks), np.int64)  # confirmed, listed (the table's status), the table's detection, ids,
+        #                                          hits, born_ns, last_seen_ns
         n_pairs, conflict, n_new, n_confirmed, n_deleted, done = engine.scan_step(  # (the frame), 1, 2, (5's births)
             self._x, self._P, dt, p.acceleration_noise_m2_s3, self._scans, self._kind, self._status, z, R, in_map,
             pose_x, pose_y, pose_theta, zm, Rm, det_kind, starts, self._gate, p.min_travel_m**2 / self._gate, cost,
             pairs, gated, new, self._hits, self._seen, self._anchor, self._far, self._moved, stamp, p.confirm_hits,
-            p.confirm_scans, p.min_travel_m, self._max_coast_ns, out)                    # and, done: 3, 4, 6, 7
+            p.confirm_scans, p.min_travel_m, self._max_coast_ns, self._ids, self._born, out)  # and, done: 3, 4, 6, 7
         if not in_map:
             zm, Rm = z, R
         detections = Detections._trusted(stamp, kinds, zm, Rm, first, last)
@@ -833,7 +834,7 @@ class Tracker:
             if n_new:
                 engine.update(*state, stamp, p.confirm_hits, p.min_travel_m)                   # 4
                 events = self._add_tracks(new[:n_new].tolist(), detections, None)              # 5
-                out = np.empty((3, len(self._ids)), np.int64)
+                out = np.empty((7, len(self._ids)), np.int64)
                 n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
                     self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen, stamp,
                     p.confirm_hits, p.confirm_scans, self._max_coast_ns, out[0], out[1])
@@ -843,6 +844,7 @@ class Tracker:
                 n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
                     *state, self._kind, self._status, self._scans, stamp, p.confirm_hits, p.confirm_scans,
                     p.min_travel_m, self._max_coast_ns, out[0], out[1], out[2])
+            out[3], out[4], out[5], out[6] = self._ids, self._hits, self._born, self._seen
         listed, detection = out[1], out[2]
         if n_confirmed:
             events += [("confirm" if c == 2 else "static", tid)
@@ -852,10 +854,10 @@ class Tracker:
             events += [("delete", tid) for tid in self._ids[deleted].tolist()]
         table = object.__new__(TrackTable)  # (the values are the tracker's own: no checks to run)
         table.__dict__.update(
-            stamp_ns=stamp, frame=self.frame, pose=pose, ids=self._ids.copy(), kinds=_KINDS[self._kind],
-            status=_STATUS_NAMES[listed], states=self._x.copy(), covariances=self._P.copy(), hits=self._hits.copy(),
-            born_ns=self._born.copy(), last_seen_ns=self._seen.copy(), detection=detection, detections=detections,
-            events=tuple(events), late=False)
+            stamp_ns=stamp, frame=self.frame, pose=pose, ids=out[3], kinds=_KINDS[self._kind],
+            status=_STATUS_NAMES[listed], states=self._x.copy(), covariances=self._P.copy(), hits=out[4],
+            born_ns=out[5], last_seen_ns=out[6], detection=detection, detections=detections, events=tuple(events),
+            late=False)
         if n_deleted:
             self._keep(~deleted)
         table.__dict__["seconds"] = perf_counter() - t_start
