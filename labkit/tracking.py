@@ -1201,7 +1201,7 @@ def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: flo
     positions, covariances, first and last beams, the kind of track each detection measures and
     whether it starts one."""
     people = features.people
-    legs = features.legs if single_legs else ()
+    legs: tuple | list = features.legs if single_legs else ()
     if people and legs:
         paired = {id(leg) for person in people for leg in person.legs}
         legs = [leg for leg in legs if id(leg) not in paired]
@@ -1369,7 +1369,7 @@ def _compile_engine() -> None:
                     circles = tuple(Circle(z[j].copy(), 0.1, 2.0, 0.1, 0.9, 10 * j, 10 * j + 5, 6) for j in (2, 3))
                     observed: Features | Detections = Features(
                         k * 100_000_000, 100, np.zeros(100, dtype=np.int64), circles=circles,
-                        legs=(*pair, leg(*z[1], 30)), people=(Person(z[0].copy(), pair),))
+                        legs=(*pair, leg(z[1, 0], z[1, 1], 30)), people=(Person(z[0].copy(), pair),))
                 else:
                     cov = np.tile(0.01 * np.eye(2), (4, 1, 1)) if given == "covariances" else None
                     observed = Detections(k * 100_000_000, kinds, z, cov)
