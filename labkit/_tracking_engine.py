@@ -289,7 +289,6 @@ def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, 
                   confirmed, listed)
 
 
-
 @jit
 def scan_step(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm, Rm, det_kind, starts, threshold,
               cap, cost, pairs, in_some, new, hits, seen, anchor, far, moved, now_ns, confirm_hits, confirm_scans,

@@ -65,9 +65,10 @@ filter a least-squares fit of a straight line at constant speed.
 
 The code below is the reference, and what ``trace=True`` runs. Without a trace the same steps run
 as compiled kernels over all tracks at once (:mod:`labkit._tracking_engine`; the assignment is only
-solved when some gate holds two detections or some detection lies in two gates): the same tracks,
-identities, statuses and events, states and covariances equal to rounding. ``LABKIT_NO_JIT=1``
-runs the reference always.
+solved when some gate holds two detections or some detection lies in two gates; a scan's features
+become detections in a few array calls, the same arrays as :func:`detections_from`'s): the same
+tracks, identities, statuses and events, states and covariances equal to rounding.
+``LABKIT_NO_JIT=1`` runs the reference always.
 
 References
 ----------
