@@ -26,7 +26,8 @@ targets; in the map frame (the scans' poses) they stay static.
 Part 3 -- real recordings (``../shared/datasets``, skipped when absent): ``bags/Mapping1.bag`` and
 the Intel Research Lab CARMEN log; what the tracker finds (tracks born, confirmed as moving,
 static; how long and how far the moving ones went). ``--plot DIR`` draws each recording's map
-with the tracks' paths (PNG, matplotlib).
+with the robot's path, the moving tracks' paths, the static tracks and where the tracks that were
+never confirmed were born (PNG, matplotlib).
 
 Goal (issue 36), printed under the table: in the hall with 4 walkers at 2 cm noise, MOTA >= 0.9,
 MOTP <= 5 cm, at most 1 identity switch per walker per 1000 scans, no static column confirmed as a
@@ -228,11 +229,15 @@ def real(n_scans: int, plot: Path | None) -> None:
             scans.append(s)
         tables = [t for _, t in track_scans(scans)]
         born = sum(e[0] == "birth" for t in tables for e in t.events)
-        moving, static = {}, set()
+        moving, static, births = {}, {}, {}
         for t in tables:
             for i in np.flatnonzero(t.confirmed()).tolist():
                 moving.setdefault(int(t.ids[i]), []).append((t.stamp_ns, *t.states[i, :2].tolist(), str(t.kinds[i])))
-            static.update(t.ids[t.status == "static"].tolist())
+            for i in np.flatnonzero(t.status == "static").tolist():
+                static[int(t.ids[i])] = (*t.states[i, :2].tolist(), str(t.kinds[i]))
+            new = {tid for kind, tid in t.events if kind == "birth"}
+            for i in np.flatnonzero(np.isin(t.ids, list(new))).tolist():
+                births[int(t.ids[i])] = (*t.states[i, :2].tolist(), str(t.kinds[i]))
         kinds = {}
         for rows in moving.values():
             kinds[rows[0][3]] = kinds.get(rows[0][3], 0) + 1
@@ -240,19 +245,22 @@ def real(n_scans: int, plot: Path | None) -> None:
                                                                        .sum()) if len(rows) > 1 else 0.0)
                        for rows in moving.values())
         late = sum(t.late for t in tables)
+        static_kinds = {k: sum(v[2] == k for v in static.values()) for k in tracking.TRACK_KINDS}
+        born_kinds = {k: sum(v[2] == k for v in births.values()) for k in tracking.TRACK_KINDS}
         print(f"{name}: {len(tables)} scans ({late} stamped before the scan before them, not tracked), frame "
-              f"{tables[0].frame if tables else '-'}; {born} tracks born, "
+              f"{tables[0].frame if tables else '-'}; {born} tracks born "
+              f"({', '.join(f'{v} {k}' for k, v in born_kinds.items())}), "
               f"{len(moving)} confirmed as moving ({', '.join(f'{v} {k}' for k, v in kinds.items()) or 'none'}), "
-              f"{len(static)} confirmed static")
+              f"{len(static)} confirmed static ({', '.join(f'{v} {k}' for k, v in static_kinds.items())})")
         if lives:
             longest = sorted(lives, key=lambda x: -x[0])[:5]
             print("  longest moving tracks (seconds confirmed, metres travelled): "
                   + ", ".join(f"{s:.1f} s / {m:.1f} m" for s, m in longest))
         if plot is not None:
-            _plot(plot, name, scans, tables, moving)
+            _plot(plot, name, scans, tables, moving, static, births)
 
 
-def _plot(folder: Path, name: str, scans, tables, moving) -> None:
+def _plot(folder: Path, name: str, scans, tables, moving, static, births) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -268,13 +276,24 @@ def _plot(folder: Path, name: str, scans, tables, moving) -> None:
         if frame == "map" and scan.pose is not None:
             xy = transform_points(xy, scan.pose)
         ax.plot(xy[:, 0], xy[:, 1], ",", color="0.6")
+    path = np.array([scan.pose[:2] for scan in scans if scan.pose is not None]).reshape(-1, 2)
+    if frame == "map" and len(path):
+        ax.plot(path[:, 0], path[:, 1], "-", lw=0.6, color="tab:blue", alpha=0.5, label="robot path")
+    for kind, colour in zip(tracking.TRACK_KINDS, ("tab:red", "tab:green"), strict=True):
+        b = np.array([v[:2] for tid, v in births.items() if v[2] == kind and tid not in static and tid not in moving])
+        if len(b):
+            ax.plot(b[:, 0], b[:, 1], "x", ms=4, color=colour, alpha=0.6, label=f"{kind} track born, never confirmed")
+        q = np.array([v[:2] for v in static.values() if v[2] == kind])
+        if len(q):
+            ax.plot(q[:, 0], q[:, 1], "s", ms=7, mfc="none", color=colour, label=f"{kind} track confirmed static")
     for tid, rows in moving.items():
         p = np.array([r[1:3] for r in rows])
         ax.plot(p[:, 0], p[:, 1], "-", lw=1.5, label=f"{rows[0][3]} {tid}")
     ax.set_aspect("equal")
-    ax.set_title(f"{name}: {len(moving)} moving tracks ({frame} frame, grey: every 10th scan)")
-    if moving and len(moving) <= 12:
-        ax.legend(fontsize=7)
+    ax.set_title(f"{name}: {len(moving)} moving, {len(static)} static tracks, {len(births)} born\n"
+                 f"({frame} frame; grey: every 10th scan)")
+    if len(moving) <= 12:
+        ax.legend(fontsize=7, loc="upper right")
     out = folder / (name.split()[0].replace(".", "_") + "_tracks.png")
     tmp = out.with_name(out.name + ".tmp.png")
     fig.savefig(tmp, dpi=110)

@@ -22,7 +22,14 @@ the pipeline's time per scan):
   confirmed (static or moving) and which are deleted;
 * :func:`predict_and_gate`, :func:`update_and_manage` -- two of them in one call (a call from
   Python costs a few microseconds, more than the work on a few tracks; so does every array a
-  kernel returns, hence the outputs the caller gives them).
+  kernel returns, hence the outputs the caller gives them); the first also moves the detections
+  into the map (:func:`in_frame`), counts the scan in every track's age and lists the births
+  (detections that start a track and lie outside every gate): a kernel call and four small numpy
+  calls fewer;
+* :func:`scan_step` -- the usual scan in one call: :func:`predict_and_gate`, then, when no
+  detection starts a track and the pairs inside the gates are the assignment,
+  :func:`update_and_manage` (otherwise the caller solves the assignment, adds the tracks and
+  calls the others).
 
 The readable code in :mod:`labkit.tracking` is the reference, and what ``trace=True`` runs; the
 kernels compute the same formulas in another order of floating-point operations (loops instead of
@@ -39,7 +46,7 @@ import numpy as np
 
 from ._kernels import jit
 
-__all__ = ["in_frame", "predict", "gate", "update", "manage", "predict_and_gate", "update_and_manage"]
+__all__ = ["in_frame", "predict", "gate", "update", "manage", "predict_and_gate", "update_and_manage", "scan_step"]
 
 TENTATIVE, STATIC, CONFIRMED, DELETED = 0, 1, 2, 3  # = labkit.tracking's status codes
 CIRCLE = 1  # and its code of circle tracks (tests/test_tracking_engine.py)
@@ -103,7 +110,8 @@ def gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_som
     is inside some gate. Returns how many pairs, and whether some track or detection is inside
     two gates (an assignment problem to solve; else the pairs are the assignment). A static
     track's position covariance is scaled so that its largest eigenvalue is at most ``cap``
-    (``min_travel_m^2 / threshold``)."""
+    (``min_travel_m^2 / threshold``). ``cost``, ``pairs`` and ``in_some`` may be larger (the
+    tracker's work arrays): only the first T rows and D columns are written."""
     n_t = x.shape[0]
     n_d = z.shape[0]
     in_some[:] = False
@@ -243,11 +251,29 @@ def manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, conf
 
 
 @jit
-def predict_and_gate(x, P, dt, q, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some):
-    """:func:`predict` (when ``dt > 0``) then :func:`gate`, in one call."""
+def predict_and_gate(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm, Rm, det_kind, starts,
+                     threshold, cap, cost, pairs, in_some, new):
+    """One scan's first half in one call: the detections ``z``, ``R`` moved by the pose ``(px, py,
+    ptheta)`` into ``zm``, ``Rm`` (:func:`in_frame`, when ``in_map``; else ``zm``, ``Rm`` are not
+    read), one more scan for every track (``scans``), :func:`predict` (when ``dt > 0``) and
+    :func:`gate` (of ``zm``, ``Rm`` in the map, of ``z``, ``R`` else); also, into ``new``, the
+    detections that start a track (``starts``) and lie outside every gate (the births). Returns the
+    pairs, the conflict and the births' count."""
+    for i in range(scans.shape[0]):
+        scans[i] += 1
     if dt > 0.0:
         predict(x, P, dt, q)
-    return gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some)
+    if in_map:
+        in_frame(z, R, px, py, ptheta, zm, Rm)
+        n_pairs, conflict = gate(x, P, kind, status, zm, Rm, det_kind, threshold, cap, cost, pairs, in_some)
+    else:
+        n_pairs, conflict = gate(x, P, kind, status, z, R, det_kind, threshold, cap, cost, pairs, in_some)
+    n_new = 0
+    for j in range(z.shape[0]):
+        if starts[j] and not in_some[j]:
+            new[n_new] = j
+            n_new += 1
+    return n_pairs, conflict, n_new
 
 
 @jit
@@ -262,3 +288,34 @@ def update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, 
     return manage(x, kind, status, hits, scans, moved, seen, now_ns, confirm_hits, confirm_scans, max_coast_ns,
                   confirmed, listed)
 
+
+@jit
+def scan_step(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm, Rm, det_kind, starts, threshold,
+              cap, cost, pairs, in_some, new, hits, seen, anchor, far, moved, now_ns, confirm_hits, confirm_scans,
+              min_travel, max_coast_ns, ids, born, out):
+    """:func:`predict_and_gate`, then, when no detection starts a track and there is no conflict
+    (the pairs inside the gates are the assignment), :func:`update_and_manage` with rows 0-2 of
+    ``out`` (7, T) as its ``confirmed``, ``listed`` and ``detection``, and ``ids``, ``hits``,
+    ``born`` and ``seen`` copied into rows 3-6 (the scan's table): a scan in one call. Returns the
+    pairs, the conflict, the births' count, how many tracks were confirmed and deleted, and whether
+    the scan is done (False: the caller goes on from the gate's outputs)."""
+    n_pairs, conflict, n_new = predict_and_gate(x, P, dt, q, scans, kind, status, z, R, in_map, px, py, ptheta, zm,
+                                                Rm, det_kind, starts, threshold, cap, cost, pairs, in_some, new)
+    if conflict or n_new > 0:
+        return n_pairs, conflict, n_new, 0, 0, False
+    tracks = pairs[0, :n_pairs]
+    dets = pairs[1, :n_pairs]
+    if in_map:
+        n_confirmed, n_deleted = update_and_manage(x, P, tracks, dets, zm, Rm, hits, seen, anchor, far, moved, kind,
+                                                   status, scans, now_ns, confirm_hits, confirm_scans, min_travel,
+                                                   max_coast_ns, out[0], out[1], out[2])
+    else:
+        n_confirmed, n_deleted = update_and_manage(x, P, tracks, dets, z, R, hits, seen, anchor, far, moved, kind,
+                                                   status, scans, now_ns, confirm_hits, confirm_scans, min_travel,
+                                                   max_coast_ns, out[0], out[1], out[2])
+    for i in range(ids.shape[0]):
+        out[3, i] = ids[i]
+        out[4, i] = hits[i]
+        out[5, i] = born[i]
+        out[6, i] = seen[i]
+    return n_pairs, False, 0, n_confirmed, n_deleted, True

@@ -65,9 +65,10 @@ filter a least-squares fit of a straight line at constant speed.
 
 The code below is the reference, and what ``trace=True`` runs. Without a trace the same steps run
 as compiled kernels over all tracks at once (:mod:`labkit._tracking_engine`; the assignment is only
-solved when some gate holds two detections or some detection lies in two gates): the same tracks,
-identities, statuses and events, states and covariances equal to rounding. ``LABKIT_NO_JIT=1``
-runs the reference always.
+solved when some gate holds two detections or some detection lies in two gates; a scan's features
+become detections in a few array calls, the same arrays as :func:`detections_from`'s): the same
+tracks, identities, statuses and events, states and covariances equal to rounding.
+``LABKIT_NO_JIT=1`` runs the reference always.
 
 References
 ----------
@@ -96,7 +97,9 @@ One person walking at 1 m/s along x, seen every 0.1 s:
 from __future__ import annotations
 
 import functools
+import itertools
 import math
+import operator
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from time import perf_counter
@@ -759,6 +762,7 @@ class Tracker:
         self._scans = np.zeros(0, dtype=np.int64)
         self._born = np.zeros(0, dtype=np.int64)
         self._seen = np.zeros(0, dtype=np.int64)
+        self._work: tuple | None = None  # the compiled path's work arrays (_work_arrays)
 
     def __repr__(self) -> str:
         return f"Tracker({len(self._ids)} tracks, frame={self.frame!r})"
@@ -772,14 +776,13 @@ class Tracker:
         Scans must come in time order: one stamped before the last one tracked is not tracked
         (its table has ``late=True``, the tracks as they were; :attr:`late_scans` counts them)."""
         t_start = perf_counter()
+        if not trace and _engine() is not None:  # the same steps, compiled (labkit._tracking_engine)
+            return self._compiled_step(observed, pose, t_start)
         steps: list[Step] | None = [] if trace else None
-        compiled = steps is None and _engine() is not None  # the same steps, compiled (labkit._tracking_engine)
-        detections, pose = self._detections(observed, pose, compiled)
+        detections, pose = self._detections(observed, pose)
         if self._stamp is not None and detections.stamp_ns < self._stamp:
             return self._late(detections, pose, steps, t_start)
         dt = self._advance_clock(detections.stamp_ns)
-        if compiled:
-            return self._compiled_step(detections, pose, dt, t_start)
         self._predict(dt, steps)                                      # 1
         cost = self._gate_all(detections, steps)                      # 2
         tracks, dets = assign(cost)                                   # 3
@@ -797,57 +800,83 @@ class Tracker:
         table = _with_seconds(table, perf_counter() - t_start)
         return (table, steps) if trace else table
 
-    def _compiled_step(self, detections: Detections, pose, dt: float, t_start: float) -> TrackTable:
-        """:meth:`step`'s steps 1-7 without a trace, as :mod:`labkit._tracking_engine`'s kernels."""
+    def _compiled_step(self, observed: Features | Detections, pose, t_start: float) -> TrackTable:
+        """:meth:`step` without a trace: the detections taken in bulk (:func:`_bulk_detections`),
+        steps 1-7 as :mod:`labkit._tracking_engine`'s kernels."""
         p, engine = self.params, _ENGINE
-        covariances, _, _ = _measured(detections)
-        n_tracks, n_dets = len(self._ids), len(detections)
-        det_kind = _track_kinds_of(detections.kinds)
-        cost, pairs, gated = np.empty((n_tracks, n_dets)), np.empty((2, n_tracks * n_dets), np.intp), \
-            np.empty(n_dets, dtype=bool)
-        n_pairs, conflict = engine.predict_and_gate(                                      # 1, 2
-            self._x, self._P, dt, p.acceleration_noise_m2_s3, self._kind, self._status, detections.positions,
-            covariances, det_kind, self._gate, p.min_travel_m**2 / self._gate, cost, pairs, gated)
-        tracks, dets = assign(cost) if conflict else (pairs[0, :n_pairs], pairs[1, :n_pairs])  # 3
-        inside = gated.tolist()
-        new = [j for j, kind in enumerate(detections.kinds) if not inside[j] and _STARTS_TRACKS[kind]]
-        state = (self._x, self._P, tracks, dets, detections.positions, covariances, self._hits, self._seen,
-                 self._anchor, self._far, self._moved)
-        if new:
-            engine.update(*state, detections.stamp_ns, p.confirm_hits, p.min_travel_m)     # 4
-            events = self._add_tracks(new, detections, None)                               # 5
-            confirmed, listed = np.empty(len(self._ids), np.int64), np.empty(len(self._ids), np.int64)
-            n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
-                self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen,
-                detections.stamp_ns, p.confirm_hits, p.confirm_scans, self._max_coast_ns, confirmed, listed)
-            detection = np.full(len(self._ids), -1, dtype=np.int64)
-            detection[tracks] = dets
+        stamp, kinds, z, R, first, last, det_kind, starts, pose = self._fast_detections(observed, pose)
+        if self._stamp is not None and stamp < self._stamp:
+            detections = Detections._trusted(stamp, kinds, z, R, first, last)
+            return self._late(detections if pose is None else detections.in_frame(pose), pose, None, t_start)
+        dt = 0.0 if self._stamp is None else (stamp - self._stamp) * 1e-9  # _advance_clock (the kernel counts the scan)
+        self._stamp = stamp
+        n_tracks, n_dets = len(self._ids), len(kinds)
+        cost, pairs, gated, new = self._work_arrays(n_tracks, n_dets)
+        if pose is None:
+            zm, Rm, in_map, pose_x, pose_y, pose_theta = _NOWHERE_Z, _NOWHERE_R, False, 0.0, 0.0, 0.0
         else:
-            events = []
-            confirmed, listed, detection = (np.empty(n_tracks, np.int64) for _ in range(3))
-            n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
-                *state, self._kind, self._status, self._scans, detections.stamp_ns, p.confirm_hits, p.confirm_scans,
-                p.min_travel_m, self._max_coast_ns, confirmed, listed, detection)
+            zm, Rm, in_map, (pose_x, pose_y, pose_theta) = np.empty_like(z), np.empty_like(R), True, pose
+        out = np.empty((7, n_tracks), np.int64)  # confirmed, listed (the table's status), the table's detection, ids,
+        #                                          hits, born_ns, last_seen_ns
+        n_pairs, conflict, n_new, n_confirmed, n_deleted, done = engine.scan_step(  # (the frame), 1, 2, (5's births)
+            self._x, self._P, dt, p.acceleration_noise_m2_s3, self._scans, self._kind, self._status, z, R, in_map,
+            pose_x, pose_y, pose_theta, zm, Rm, det_kind, starts, self._gate, p.min_travel_m**2 / self._gate, cost,
+            pairs, gated, new, self._hits, self._seen, self._anchor, self._far, self._moved, stamp, p.confirm_hits,
+            p.confirm_scans, p.min_travel_m, self._max_coast_ns, self._ids, self._born, out)  # and, done: 3, 4, 6, 7
+        if not in_map:
+            zm, Rm = z, R
+        detections = Detections._trusted(stamp, kinds, zm, Rm, first, last)
+        events: list = []
+        if not done:  # an assignment to solve, or births
+            tracks, dets = (assign(cost[:n_tracks, :n_dets]) if conflict                      # 3
+                            else (pairs[0, :n_pairs], pairs[1, :n_pairs]))
+            state = (self._x, self._P, tracks, dets, zm, Rm, self._hits, self._seen, self._anchor, self._far,
+                     self._moved)
+            if n_new:
+                engine.update(*state, stamp, p.confirm_hits, p.min_travel_m)                   # 4
+                events = self._add_tracks(new[:n_new].tolist(), detections, None)              # 5
+                out = np.empty((7, len(self._ids)), np.int64)
+                n_confirmed, n_deleted = engine.manage(                                        # 4, 6, 7
+                    self._x, self._kind, self._status, self._hits, self._scans, self._moved, self._seen, stamp,
+                    p.confirm_hits, p.confirm_scans, self._max_coast_ns, out[0], out[1])
+                out[2] = -1
+                out[2, tracks] = dets
+            else:
+                n_confirmed, n_deleted = engine.update_and_manage(                             # 4, 6, 7
+                    *state, self._kind, self._status, self._scans, stamp, p.confirm_hits, p.confirm_scans,
+                    p.min_travel_m, self._max_coast_ns, out[0], out[1], out[2])
+            out[3], out[4], out[5], out[6] = self._ids, self._hits, self._born, self._seen
+        listed, detection = out[1], out[2]
         if n_confirmed:
             events += [("confirm" if c == 2 else "static", tid)
-                       for tid, c in zip(self._ids.tolist(), confirmed.tolist(), strict=True) if c]
+                       for tid, c in zip(self._ids.tolist(), out[0].tolist(), strict=True) if c]
         if n_deleted:
             deleted = listed == _DELETED
             events += [("delete", tid) for tid in self._ids[deleted].tolist()]
         table = object.__new__(TrackTable)  # (the values are the tracker's own: no checks to run)
         table.__dict__.update(
-            stamp_ns=detections.stamp_ns, frame=self.frame, pose=pose, ids=self._ids.copy(), kinds=_KINDS[self._kind],
-            status=_STATUS_NAMES[listed], states=self._x.copy(), covariances=self._P.copy(), hits=self._hits.copy(),
-            born_ns=self._born.copy(), last_seen_ns=self._seen.copy(), detection=detection, detections=detections,
-            events=tuple(events), late=False)
+            stamp_ns=stamp, frame=self.frame, pose=pose, ids=out[3], kinds=_KINDS[self._kind],
+            status=_STATUS_NAMES[listed], states=self._x.copy(), covariances=self._P.copy(), hits=out[4],
+            born_ns=out[5], last_seen_ns=out[6], detection=detection, detections=detections, events=tuple(events),
+            late=False)
         if n_deleted:
             self._keep(~deleted)
         table.__dict__["seconds"] = perf_counter() - t_start
         return table
 
-    def _detections(self, observed, pose, compiled: bool = False) -> tuple[Detections, tuple | None]:
-        """The scan's detections in the tracking frame, and the pose used (None if none);
-        ``compiled``: moved into the map by the engine's kernel (:meth:`Detections.in_frame`'s)."""
+    def _work_arrays(self, n_tracks: int, n_dets: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The gate kernel's outputs (cost, pairs, in some gate, births), kept from scan to scan and
+        grown by doubling: at least ``n_tracks`` x ``n_dets``."""
+        work = self._work
+        if work is None or work[0].shape[0] < n_tracks or work[0].shape[1] < n_dets:
+            rows, cols = (max(8, 2 * n_tracks), max(8, 2 * n_dets)) if work is None else \
+                (max(work[0].shape[0], 2 * n_tracks), max(work[0].shape[1], 2 * n_dets))
+            work = self._work = (np.empty((rows, cols)), np.empty((2, rows * cols), np.intp),
+                                 np.empty(cols, dtype=bool), np.empty(cols, np.intp))
+        return work
+
+    def _detections(self, observed, pose) -> tuple[Detections, tuple | None]:
+        """The scan's detections in the tracking frame, and the pose used (None if none)."""
         p = self.params
         if isinstance(observed, Features):
             observed = detections_from(observed, person_sigma_m=p.person_sigma_m, leg_sigma_m=p.leg_sigma_m,
@@ -855,27 +884,51 @@ class Tracker:
         elif isinstance(observed, Detections):
             observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
         else:
-            raise ValueError(f"observed must be labkit.Features or labkit.tracking.Detections, got "
-                             f"{type(observed).__name__}")
-        if pose is not None:
-            try:
-                pose = tuple(float(v) for v in pose)
-            except (TypeError, ValueError):
-                raise ValueError(f"pose must be (x, y, theta) or None, got {pose!r}") from None
-            if len(pose) != 3 or not all(math.isfinite(v) for v in pose):
-                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}")
-        if self.frame is None:
-            self.frame = "map" if pose is not None else "sensor"
+            raise _not_observed(observed)
+        pose = self._pose(pose)
         if self.frame == "sensor":
             return observed, None
         if pose is None:  # the map frame without a pose: nothing can be placed
-            return Detections._trusted(observed.stamp_ns, (), np.zeros((0, 2)), np.zeros((0, 2, 2)),
-                                       np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)), None
-        if compiled:
-            z, R = np.empty_like(observed.positions), np.empty_like(observed.covariances)
-            _ENGINE.in_frame(observed.positions, observed.covariances, *pose, z, R)
-            return Detections._trusted(observed.stamp_ns, observed.kinds, z, R, observed.first, observed.last), pose
+            return _no_detections(observed.stamp_ns), None
         return observed.in_frame(pose), pose
+
+    def _pose(self, pose) -> tuple | None:
+        """The scan's pose checked, as a tuple of floats (or None); the first scan's decides the
+        frame when it is ``"auto"``."""
+        if pose is not None:
+            try:
+                x, y, theta = pose
+                pose = (float(x), float(y), float(theta))
+            except (TypeError, ValueError):
+                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}") from None
+            if not (math.isfinite(pose[0]) and math.isfinite(pose[1]) and math.isfinite(pose[2])):
+                raise ValueError(f"pose must be three finite numbers (x, y, theta), got {pose!r}")
+        if self.frame is None:
+            self.frame = "map" if pose is not None else "sensor"
+        return pose
+
+    def _fast_detections(self, observed, pose) -> tuple:
+        """:meth:`_detections` for the compiled path, as arrays, in the sensor frame (the kernel moves
+        them): a scan's features taken in bulk (:func:`_bulk_detections`); the stamp, kinds,
+        positions, covariances, beams, the kind of track each detection measures (0 person, 1 circle)
+        and whether it may start one, and the pose to move them by (None: none)."""
+        p = self.params
+        if isinstance(observed, Features):
+            found = _bulk_detections(observed, p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m, p.single_legs)
+        elif isinstance(observed, Detections):
+            observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
+            found = (observed.stamp_ns, observed.kinds, observed.positions, observed.covariances, observed.first,
+                     observed.last, *_track_kinds_of(observed.kinds))
+        else:
+            raise _not_observed(observed)
+        pose = self._pose(pose)
+        if self.frame == "sensor":
+            return (*found, None)
+        if pose is None:  # the map frame without a pose: nothing can be placed
+            none = _no_detections(found[0])
+            return (none.stamp_ns, none.kinds, none.positions, none.covariances, none.first, none.last,
+                    *_track_kinds_of(()), None)
+        return (*found, pose)
 
     def _late(self, detections: Detections, pose, steps, t_start: float):
         """A scan older than the last one tracked (a recording whose stamps go back): not tracked.
@@ -1098,20 +1151,83 @@ def _engine():
         if _JIT:
             from types import SimpleNamespace
 
-            from ._tracking_engine import in_frame, manage, predict_and_gate, update, update_and_manage
+            from ._tracking_engine import in_frame, manage, predict_and_gate, scan_step, update, update_and_manage
 
             _ENGINE = SimpleNamespace(in_frame=in_frame, predict_and_gate=predict_and_gate, update=update,
-                                      manage=manage, update_and_manage=update_and_manage)
+                                      manage=manage, update_and_manage=update_and_manage, scan_step=scan_step)
     return _ENGINE
 
 
+def _not_observed(observed) -> ValueError:
+    return ValueError(f"observed must be labkit.Features or labkit.tracking.Detections, got "
+                      f"{type(observed).__name__}")
+
+
+def _no_detections(stamp_ns: int) -> Detections:
+    return Detections._trusted(stamp_ns, (), np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64),
+                               np.zeros(0, dtype=np.int64))
+
+
+# ---------------------------------------------------------------- the compiled path's glue
 @functools.lru_cache(maxsize=256)
-def _track_kinds_of(kinds: tuple) -> np.ndarray:
-    """The kind of track (0 person, 1 circle) each detection kind measures, read-only (remembered:
-    scans repeat a few lists of kinds)."""
+def _track_kinds_of(kinds: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The kind of track (0 person, 1 circle) each detection kind measures, and whether it starts
+    tracks; read-only (remembered: scans repeat a few lists of kinds)."""
     out = np.array([_TRACK_KIND_OF[k] for k in kinds], dtype=np.int64)
+    starts = np.array([_STARTS_TRACKS[k] for k in kinds], dtype=bool)
     out.setflags(write=False)
-    return out
+    starts.setflags(write=False)
+    return out, starts
+
+
+@functools.lru_cache(maxsize=512)
+def _layout(n_people: int, n_legs: int, n_circles: int, person_var: float, leg_var: float,
+            circle_var: float) -> tuple[tuple, np.ndarray, np.ndarray, np.ndarray]:
+    """What :func:`detections_from` gives a scan of so many people, single legs and circles
+    besides their positions and beams: the kinds, the covariances (``sigma^2 I``, read-only), the
+    kind of track each detection measures and whether it starts one (remembered: scans repeat a
+    few counts)."""
+    kinds = ("person",) * n_people + ("leg",) * n_legs + ("circle",) * n_circles
+    var = np.array([person_var] * n_people + [leg_var] * n_legs + [circle_var] * n_circles, dtype=np.float64)
+    covariances = var[:, None, None] * _I2
+    covariances.setflags(write=False)
+    return (kinds, covariances, *_track_kinds_of(kinds))
+
+
+def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float,
+                     single_legs: bool) -> tuple:
+    """:func:`detections_from`'s arrays (the same; ``tests/test_tracking_engine.py`` checks) in a
+    few calls: the positions in one ``concatenate``, the beams in one ``fromiter``, and what depends
+    only on the counts (kinds, covariances) remembered (:func:`_layout`): the stamp, kinds,
+    positions, covariances, first and last beams, the kind of track each detection measures and
+    whether it starts one."""
+    people = features.people
+    legs: tuple | list = features.legs if single_legs else ()
+    if people and legs:
+        paired = {id(leg) for person in people for leg in person.legs}
+        legs = [leg for leg in legs if id(leg) not in paired]
+    circles = [circle for circle in features.circles if circle.kind == "circle"]
+    others = (*legs, *circles)
+    n = len(people) + len(others)
+    layout = _layout(len(people), len(legs), len(circles), person_sigma_m**2, leg_sigma_m**2, circle_sigma_m**2)
+    kinds, covariances, det_kind, starts = layout
+    if not n:
+        none = _no_detections(int(features.stamp_ns))
+        return none.stamp_ns, kinds, none.positions, covariances, none.first, none.last, det_kind, starts
+    positions = np.concatenate([f.center for f in (*people, *others)])
+    if positions.dtype != np.float64 or positions.shape != (2 * n,):  # centres built by hand: as the reference
+        d = detections_from(features, person_sigma_m=person_sigma_m, leg_sigma_m=leg_sigma_m,
+                            circle_sigma_m=circle_sigma_m, single_legs=single_legs)
+        return d.stamp_ns, d.kinds, d.positions, d.covariances, d.first, d.last, det_kind, starts
+    ends = [(min(a.first, b.first), max(a.last, b.last)) for a, b in (person.legs for person in people)]
+    ends += map(_ENDS, others)
+    beams = np.fromiter(_chain(ends), np.int64, 2 * n).reshape(n, 2).T
+    return int(features.stamp_ns), kinds, positions.reshape(n, 2), covariances, beams[0], beams[1], det_kind, starts
+
+
+_ENDS = operator.attrgetter("first", "last")
+_NOWHERE_Z, _NOWHERE_R = np.empty((0, 2)), np.empty((0, 2, 2))  # predict_and_gate's zm, Rm in the sensor frame
+_chain = itertools.chain.from_iterable
 
 
 def _measured(detections: Detections) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -1237,9 +1353,25 @@ def _compile_engine() -> None:
     """Compile (or load from numba's cache) the kernels of :mod:`labkit._tracking_engine`, on a few
     made-up scans; the Makefile's set-up runs it beside the other engines', so that no notebook, test
     or command pays the compilation on its first tracked scan."""
+    from .features import Circle, Leg, Person
+
+    def leg(x: float, y: float, first: int) -> Leg:
+        return Leg(np.array([x, y]), 0.12, np.array([x, y]), first, first + 4, 5, 2.0, 0.1)
+
+    kinds = ("person", "leg", "circle", "circle")
     for with_pose in (False, True):
-        tracker = Tracker()
-        for k in range(8):
-            z = np.array([[1.0 + 0.05 * k, 0.5], [2.0, -1.0 + 0.02 * k], [3.0, 0.0], [3.3, 0.1 * k]])
-            pose = (0.01 * k, 0.0, 0.002 * k) if with_pose else None
-            tracker.step(Detections(k * 100_000_000, ("person", "leg", "circle", "circle"), z), pose=pose)
+        for given in ("positions", "covariances", "features"):  # the array types the kernels meet
+            tracker = Tracker()
+            for k in range(8):
+                z = np.array([[1.0 + 0.05 * k, 0.5], [2.0, -1.0 + 0.02 * k], [3.0, 0.0], [3.3, 0.1 * k]])
+                pose = (0.01 * k, 0.0, 0.002 * k) if with_pose else None
+                if given == "features":
+                    pair = (leg(z[0, 0], 0.35, 10), leg(z[0, 0], 0.65, 20))
+                    circles = tuple(Circle(z[j].copy(), 0.1, 2.0, 0.1, 0.9, 10 * j, 10 * j + 5, 6) for j in (2, 3))
+                    observed: Features | Detections = Features(
+                        k * 100_000_000, 100, np.zeros(100, dtype=np.int64), circles=circles,
+                        legs=(*pair, leg(z[1, 0], z[1, 1], 30)), people=(Person(z[0].copy(), pair),))
+                else:
+                    cov = np.tile(0.01 * np.eye(2), (4, 1, 1)) if given == "covariances" else None
+                    observed = Detections(k * 100_000_000, kinds, z, cov)
+                tracker.step(observed, pose=pose)

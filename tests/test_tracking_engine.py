@@ -56,10 +56,10 @@ def _side_by_side(stream, params=None) -> dict:
 class _Counting:
     """The engine, its kernels wrapped to count their calls (and those of the assignment solver)."""
 
-    KERNELS = ("in_frame", "predict_and_gate", "update", "manage", "update_and_manage")
+    KERNELS = ("in_frame", "predict_and_gate", "update", "manage", "update_and_manage", "scan_step")
 
     def __init__(self, monkeypatch):
-        self.calls = dict.fromkeys((*self.KERNELS, "assign"), 0)
+        self.calls = dict.fromkeys((*self.KERNELS, "assign", "into the map"), 0)
         proxy = types.SimpleNamespace(**{name: self._counted(name, getattr(engine, name)) for name in self.KERNELS})
         monkeypatch.setattr(tracking, "_ENGINE", proxy)
         monkeypatch.setattr(tracking, "assign", self._counted("assign", tracking.assign))
@@ -67,6 +67,8 @@ class _Counting:
     def _counted(self, name, fn):
         def wrapper(*args, **kwargs):
             self.calls[name] += 1
+            if name == "scan_step" and args[9]:  # its in_map: the detections moved by the pose
+                self.calls["into the map"] += 1
             return fn(*args, **kwargs)
         return wrapper
 
@@ -92,8 +94,7 @@ def test_the_default_path_runs_the_kernels_and_not_the_reference(monkeypatch):
                           [[0.1 * k, 0.0], [5.0, 0.1 * k], [3.0, 3.0]])
         table = tracker.step(seen)
     assert table.status.tolist() == ["confirmed", "confirmed", "static"]
-    assert all(counting.calls[n] for n in ("predict_and_gate", "update", "manage", "update_and_manage")), \
-        counting.calls
+    assert all(counting.calls[n] for n in ("scan_step", "update", "manage")), counting.calls  # (births: update, manage)
     assert counting.calls["assign"] == 0, "no conflict in any gate: the assignment problem is not solved"
 
 
@@ -120,8 +121,8 @@ def test_the_engine_gives_the_references_tracks_on_the_simulated_worlds(monkeypa
     scans, features = _scans(name, 160, trajectory)
     seen = _side_by_side(((f, s.pose) for s, f in zip(scans, features, strict=True)), {"frame": frame})
     assert seen["confirmed"] > 100 and seen["updates"] > 300 and seen["events"] > 5, seen
-    assert counting.calls["predict_and_gate"] > 100, counting.calls
-    assert (counting.calls["in_frame"] > 100) == (frame != "sensor"), counting.calls
+    assert counting.calls["scan_step"] > 100, counting.calls
+    assert (counting.calls["into the map"] > 100) == (frame != "sensor"), counting.calls
 
 
 def _random_case(rng):
@@ -183,6 +184,7 @@ def test_the_engine_gives_the_references_tracks_on_random_cases(monkeypatch):
         total = {k: total[k] + seen[k] for k in total}
     assert total["confirmed"] > 200 and total["static"] > 50 and total["updates"] > 500, total
     assert counting.calls["assign"] > 10, ("conflicts in the gates must have been solved", counting.calls)
+    assert counting.calls["update_and_manage"] > 10, ("scan_step left conflicts to the caller", counting.calls)
 
 
 def test_with_no_jit_the_reference_runs(monkeypatch):
@@ -192,3 +194,58 @@ def test_with_no_jit_the_reference_runs(monkeypatch):
     for k in range(3):
         table = tracker.step(Detections(k * 100_000_000, ("person",), [[0.5 * k, 0.0]]))
     assert table.status.tolist() == ["static"] and table.events == (("static", 1),)
+
+
+# ---------------------------------------------------------------------------- the bulk conversion
+def _equal(found: tuple, ref: Detections, where) -> None:
+    """The bulk conversion's arrays are the reference's: same values, types and shapes."""
+    stamp, kinds, positions, covariances, first, last, det_kind, starts = found
+    assert stamp == ref.stamp_ns and kinds == ref.kinds, where
+    for name, a in (("positions", positions), ("covariances", covariances), ("first", first), ("last", last)):
+        b = getattr(ref, name)
+        assert a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b), (where, name)
+    assert det_kind.tolist() == [int(tracking.DETECTION_KINDS[k] == "circle") for k in kinds], where
+    assert starts.tolist() == [k != "leg" for k in kinds], where
+
+
+@pytest.mark.parametrize("name, trajectory", [("crossing_6", None), ("crossing_2", ROBOT)])
+def test_the_bulk_detections_are_detections_from_on_the_simulated_worlds(name, trajectory):
+    """The compiled path's conversion of a scan's features (tracking._bulk_detections) gives the
+    arrays of the readable detections_from, bit for bit, with the default sigmas and others, with
+    and without single legs; the scans hold people, single legs and circles."""
+    scans, features = _scans(name, 50, trajectory, noise=0.03)
+    counts = {"person": 0, "leg": 0, "circle": 0, "legs in people": 0}
+    for k, f in enumerate(features):
+        for sigmas, single in (((0.08, 0.2, 0.05), True), ((0.1, 0.3, 0.07), False)):
+            ref = tracking.detections_from(f, person_sigma_m=sigmas[0], leg_sigma_m=sigmas[1],
+                                           circle_sigma_m=sigmas[2], single_legs=single)
+            _equal(tracking._bulk_detections(f, *sigmas, single), ref, (k, single))
+            if single:
+                for kind in ref.kinds:
+                    counts[kind] += 1
+        counts["legs in people"] += 2 * len(f.people)
+    assert min(counts["person"], counts["leg"], counts["circle"], counts["legs in people"]) > 20, counts
+
+
+def test_the_bulk_detections_of_features_built_by_hand():
+    """Centres of another type or shape (a record built by hand) take the reference's conversion;
+    a person whose legs are not in scan order still spans both; no feature gives no detection."""
+    from labkit.features import Circle, Features, Leg, Person
+
+    def leg(x, y, first, last):
+        return Leg(np.array([x, y]), 0.12, np.array([x, y]), first, last, 5, 2.0, 0.1)
+
+    a, b, c = leg(1.0, 0.0, 30, 34), leg(1.2, 0.2, 10, 14), leg(3.0, 1.0, 50, 52)
+    person = Person(np.array([1.1, 0.1]), (a, b))
+    circle = Circle(np.array([2, 2]), 0.1, 2.0, 0.1, 0.9, 60, 66, 7)  # integer centre
+    arc = Circle(np.array([5.0, 5.0]), 0.1, 2.0, 0.1, 0.9, 70, 76, 7, kind="arc-like")
+    labels = np.zeros(100, dtype=np.int64)
+    for f in (Features(7, 100, labels, circles=(circle, arc), legs=(a, b, c), people=(person,)),
+              Features(8, 100, labels, circles=(arc,), legs=(a, b, c), people=(person,)),
+              Features(9, 100, labels), Features(10, 100, labels, circles=(arc,)),
+              Features(11, 100, labels, circles=(circle, arc))):
+        for single in (True, False):
+            ref = tracking.detections_from(f, single_legs=single)
+            _equal(tracking._bulk_detections(f, 0.08, 0.2, 0.05, single), ref, (f.stamp_ns, single))
+    assert tracking._bulk_detections(Features(8, 100, labels, legs=(a, b, c), people=(person,)), 0.08, 0.2, 0.05,
+                                     True)[4].tolist() == [10, 50]
