@@ -26,8 +26,10 @@ only by the notebooks that show inline viewers, and only after their first Run A
 main's 08 did (statically and over time, as columns), which must fail, and the same scene logged as
 ellipses, which must not.
 
-Each test runs its own notebook in its own browser; under pytest-xdist each worker has its own server
-(module-scoped), so the notebooks spread over both workers, one browser per worker at a time.
+Under pytest-xdist each worker has its own server and one browser (module-scoped) with the lab loaded once:
+each notebook is opened in it, run twice, then closed with its kernel shut down (``SharedLab``), so the
+notebooks spread over both workers. The probe of the viewer reports and the exercise path have browsers of
+their own.
 
 The server is started with `labkit lab`'s own command and environment (:func:`labkit.grading.lab.lab_command`,
 :func:`~labkit.grading.lab.lab_environment`: the instructor tools hidden, Validate = ``labkit grade --check``,
@@ -185,8 +187,6 @@ def test_validate_refuses_a_lesson(lab):
 
 
 # ---------------------------------------------------------------------------- Run All in the browser
-# Every notebook of the selected tests runs at once, each in its own browser on the one server (a
-# kernel each): the waits overlap, which is most of a notebook's time in the browser.
 PROBE = "probe_viewer_reports.ipynb"
 PROBE_CELLS = {
     "imports": "import numpy as np  # noqa: I001 (labkit.viz.rr before rerun, as in the course)\n"
@@ -229,6 +229,14 @@ _IDLE = """() => {
   const kernel = w && w.sessionContext && w.sessionContext.session && w.sessionContext.session.kernel;
   return !!kernel && kernel.status === 'idle';
 }"""
+_STARTED = "() => !!(window.jupyterapp && window.jupyterapp.commands.hasCommand('docmanager:open'))"
+# A notebook opened in the running lab, the viewers of the one before forgotten; then closed, its kernel shut down
+_OPEN = """async (path) => { globalThis.__labkitRerunViewers = []; await window.jupyterapp.restored;
+  const w = await window.jupyterapp.commands.execute('docmanager:open', { path, factory: 'Notebook' });
+  window.jupyterapp.shell.activateById(w.id);
+  await w.context.ready; await w.sessionContext.ready; }"""
+_CLOSE = """async () => { const w = window.jupyterapp.shell.currentWidget;
+  if (w && w.sessionContext) { await w.sessionContext.shutdown(); w.dispose(); } }"""
 # NotebookActions.runAll resolves once every cell has run (or was aborted after an error)
 _START = """() => { window.__labkitRunAll = null;
   window.jupyterapp.commands.execute('notebook:run-all-cells').then(
@@ -346,6 +354,14 @@ def _open(driver, base: str, path: str, sink: list[BrowserRun], *, viewers: bool
     """A browser of its own (its page is the front one) showing ``path`` in the lab; (browser, page). The console
     goes to ``sink[0]`` (the run under way)."""
     browser = driver.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+    page = _lab_page(browser, sink, viewers=viewers)
+    page.goto(f"{base}/lab/workspaces/test-{Path(path).stem}/tree/{path}?token={TOKEN}&reset")
+    page.wait_for_function(_IDLE)
+    return browser, page
+
+
+def _lab_page(browser, sink: list[BrowserRun], *, viewers: bool = True):
+    """A page in a new context of ``browser``, its console going to ``sink[0]``, rerun's widget.js instrumented."""
     context = browser.new_context(viewport={"width": 1400, "height": 1000})
     if viewers:
         context.route("**/widget.js", _instrument)
@@ -353,9 +369,53 @@ def _open(driver, base: str, path: str, sink: list[BrowserRun], *, viewers: bool
     page.set_default_timeout(180_000)
     page.on("console", lambda message: sink[0].console.append(f"{message.type}: {message.text}"))
     page.on("pageerror", lambda error: sink[0].console.append(f"pageerror: {error}"))
-    page.goto(f"{base}/lab/workspaces/test-{Path(path).stem}/tree/{path}?token={TOKEN}&reset")
-    page.wait_for_function(_IDLE)
-    return browser, page
+    return page
+
+
+class SharedLab:
+    """One browser per xdist worker with the lab loaded once: each notebook is opened in it, run, closed with
+    its kernel shut down. JupyterLab's start (10-14 s of a notebook's time in the browser when each had a
+    browser of its own) and rerun's viewer code (the 67 MB wasm compiled once per page) are paid once per
+    worker. A page that crashed is replaced before the next notebook."""
+
+    def __init__(self, driver, base: str):
+        self.driver, self.base = driver, base
+        self.sink = [BrowserRun("lab")]
+        self.browser = self.page = None
+
+    def open(self, path: str, run: BrowserRun):
+        self.sink[0] = run
+        if self.page is None or self.page.is_closed():
+            self.close_browser()
+            self.browser = self.driver.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+            self.page = _lab_page(self.browser, self.sink)
+            self.page.goto(f"{self.base}/lab/workspaces/test-shared?token={TOKEN}&reset")
+            self.page.wait_for_function(_STARTED)
+        self.page.evaluate(_OPEN, path)
+        self.page.wait_for_function(_IDLE)
+        return self.page
+
+    def close_notebook(self) -> None:
+        if self.page is not None and not self.page.is_closed():
+            try:
+                self.page.evaluate(_CLOSE)
+            except Exception:  # noqa: BLE001 (a page that failed to close is replaced by the next open)
+                self.close_browser()
+
+    def close_browser(self) -> None:
+        if self.browser is not None:
+            self.browser.close()
+        self.browser = self.page = None
+
+
+@pytest.fixture(scope="module")
+def shared_lab(lab, playwright_driver):
+    """The worker's one browser on the students' lab (see SharedLab)."""
+    shared = SharedLab(playwright_driver, lab[0])
+    try:
+        yield shared
+    finally:
+        shared.close_browser()
 
 
 def _run_all(page, run: BrowserRun) -> None:
@@ -372,12 +432,11 @@ def _run_all(page, run: BrowserRun) -> None:
     run.notebook, run.unrendered = page.evaluate(_MODEL), page.evaluate(_UNRENDERED)
 
 
-def run_twice(driver, base: str, name: str, shots: Path) -> tuple[BrowserRun, BrowserRun]:
-    """Run All of ``name`` twice in a row in one browser and kernel; the viewers probed after the first."""
+def run_twice(shared: SharedLab, name: str, shots: Path) -> tuple[BrowserRun, BrowserRun]:
+    """Run All of ``name`` twice in a row in one kernel; the viewers probed after the first."""
     first, second = BrowserRun(name), BrowserRun(name)
-    sink = [first]
     clock = [("start", time.monotonic())]
-    browser, page = _open(driver, base, name, sink)
+    page = shared.open(name, first)
     try:
         clock.append(("open", time.monotonic()))
         _run_all(page, first)
@@ -385,7 +444,7 @@ def run_twice(driver, base: str, name: str, shots: Path) -> tuple[BrowserRun, Br
         if not first.failure and _has_viewers(REPO / "notebooks" / name):
             _settle_viewers(page, first)
             clock.append(("viewers", time.monotonic()))
-        sink[0] = second
+        shared.sink[0] = second
         if not first.failure:
             _run_all(page, second)
             clock.append(("second Run All", time.monotonic()))
@@ -394,7 +453,7 @@ def run_twice(driver, base: str, name: str, shots: Path) -> tuple[BrowserRun, Br
         try:
             page.screenshot(path=str(first.screenshot))
         finally:
-            browser.close()
+            shared.close_notebook()
     (shots / f"{name}.console.log").write_text("\n".join(first.console + ["-- second Run All --"] + second.console))
     (shots / f"{name}.viewers.json").write_text(json.dumps(first.viewers, indent=1))
     (shots / f"{name}.seconds.json").write_text(json.dumps(
@@ -449,10 +508,9 @@ def shots(tmp_path_factory) -> Path:
 
 
 @pytest.mark.parametrize("name", NOTEBOOKS)
-def test_run_all_twice_in_the_browser(lab, playwright_driver, shots, name):
+def test_run_all_twice_in_the_browser(shared_lab, shots, name):
     """Run All, then Run All again (as a student who runs the notebook once more): no error either time."""
-    base, _ = lab
-    first, second = run_twice(playwright_driver, base, name, shots)
+    first, second = run_twice(shared_lab, name, shots)
     problems = [f"first Run All: {p}" for p in _problems(first)] + [
         f"second Run All: {p}" for p in _problems(second) if first.notebook]
     assert not problems, f"{name} in the browser (screenshot {first.screenshot}):\n" + "\n".join(problems)
