@@ -787,7 +787,7 @@ class Session:
     is interrupted (a KeyboardInterrupt in the cell, as Jupyter's interrupt) and the cells after it still run;
     one that ignores the interrupt, or crashes the worker, is left out and the notebook runs again without it
     (at most ``MAX_STOPPED_CELLS`` times); cells still waiting when the budget is used up are not run. The
-    functions the cells that ran defined are graded either way; :attr:`cell_errors` says what happened.
+    functions the cells that ran defined are graded either way; its ``cell_errors`` say what happened.
 
     Calls go through :meth:`call`, each within ``call_timeout_s``, the current test's calls together within
     its budget (:meth:`begin_test`), and all the submission's calls, with the notebook run again after a
