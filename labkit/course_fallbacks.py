@@ -27,9 +27,10 @@ from .segmentation import segment_labels
 from .tracking import assign, cv_model
 
 __all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "config_for", "mean_per_scan",
-           "fewer_lines_share", "rates", "pose_at", "cut_points", "jacobian", "chord_distances", "similar_lines", "is_border", "triplet_direction",
-           "normal_form_match", "three_beam_residual", "ray_axis_error", "compose_poses", "bounds_from_table",
-           "expand_upwards", "radius_and_height", "pair_two_legs", "process_noise", "best_assignment"]
+           "fewer_lines_share", "rates", "pose_at", "cut_points", "jacobian", "chord_distances", "similar_lines",
+           "is_border", "triplet_direction", "normal_form_match", "three_beam_residual", "ray_axis_error",
+           "compose_poses", "bounds_from_table", "expand_upwards", "radius_and_height", "pair_two_legs",
+           "process_noise", "best_assignment"]
 
 
 def closed_form_alpha(rho, theta, w):
