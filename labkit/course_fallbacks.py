@@ -26,10 +26,11 @@ from .scan import Scan
 from .segmentation import segment_labels
 from .tracking import assign, cv_model
 
-__all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "config_for", "mean_per_scan", "rates",
-           "pose_at", "cut_points", "jacobian", "chord_distances", "similar_lines", "is_border", "triplet_direction",
-           "normal_form_match", "three_beam_residual", "ray_axis_error", "compose_poses", "bounds_from_table",
-           "expand_upwards", "radius_and_height", "pair_two_legs", "process_noise", "best_assignment"]
+__all__ = ["closed_form_alpha", "ideal_weights", "is_core", "wall_offsets", "config_for", "mean_per_scan",
+           "fewer_lines_share", "rates", "pose_at", "cut_points", "jacobian", "chord_distances", "similar_lines",
+           "is_border", "triplet_direction", "normal_form_match", "three_beam_residual", "ray_axis_error",
+           "compose_poses", "bounds_from_table", "expand_upwards", "radius_and_height", "pair_two_legs",
+           "process_noise", "best_assignment"]
 
 
 def closed_form_alpha(rho, theta, w):
@@ -144,6 +145,28 @@ def mean_per_scan(feats, kind):
         The mean number per scan.
     """
     return float(np.mean([len(getattr(f, kind)) for f in feats]))
+
+
+def fewer_lines_share(a, b):
+    """Notebook 09b: the share of the scans in which run ``b`` found strictly fewer lines than run ``a``.
+
+    Parameters
+    ----------
+    a, b : sequence of Features
+        Two runs' features of the same scans, in the same order.
+
+    Returns
+    -------
+    float
+        The share, from 0 to 1.
+
+    Raises
+    ------
+    ValueError
+        If the two runs do not have as many scans.
+    """
+    fewer = [len(y.lines) < len(x.lines) for x, y in zip(a, b, strict=True)]
+    return float(np.mean(fewer))
 
 
 def rates(n_truth, n_matched, n_scored):

@@ -129,6 +129,11 @@ HINTS: dict[str, tuple[str, ...]] = {
         "Count the features of that kind in every scan, then average.",
         "Each record of feats has one list per kind: getattr by name, len, then the mean.",
     ),
+    "fewer_lines_share": (
+        "Walk the two runs together, one scan at a time, and ask one yes-or-no question per scan.",
+        "Pair each scan of a with the same scan of b; the answer is yes when b's list of lines is shorter than "
+        "a's (equally long counts as no). The share is the mean of those answers, the yeses counting as one.",
+    ),
     "normal_form_match": (
         "Both differences must be within their limits, limits included.",
         "Take the absolute range difference and the absolute wrapped angle difference and compare both.",

@@ -1,4 +1,6 @@
-"""Fill-ins for notebooks/09_bag_playback_in_rerun.ipynb: a Config for a task, features per scan."""
+"""Fill-ins for notebooks/09_bag_playback_in_rerun.ipynb (a Config for a task, features per scan) and
+notebooks/09b_configurations_and_cli.ipynb (where the line extractors disagree): both notebooks start with "09",
+so both read this file (see tests/your_turn/__init__.py)."""
 
 from tests.your_turn import Fill
 
@@ -21,3 +23,15 @@ FILLS = {
         hint="scans with no legs count too",
     ),
 }
+
+_FEWER = """
+def fewer_lines_share(a, b):
+    fewer = [len(y.lines) {op} len(x.lines) for x, y in zip(a, b)]
+    return sum(fewer) / len(fewer)
+"""
+
+FILLS["5e1a31a5"] = Fill(
+    correct=_FEWER.format(op="<"),
+    mistake=_FEWER.format(op="<="),  # a scan where both runs find as many lines counted as "fewer"
+    hint="strictly fewer",
+)
