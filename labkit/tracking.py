@@ -1087,8 +1087,7 @@ class Tracker:
         """Tentative tracks from detections ``new`` (indices): at the detection, at rest, with the
         detection's covariance and ``initial_speed_sigma_mps`` in each velocity."""
         p = self.params
-        covariances, first, last = (_measured(detections) if steps is not None  # (the beams for the trace only)
-                                    else (detections.covariances, None, None))
+        covariances = _measured(detections, beams=False)[0]  # (the beams for the trace only)
         ids = np.arange(self._next_id, self._next_id + len(new), dtype=np.int64)
         self._next_id += len(new)
         z = detections.positions[new]
@@ -1111,6 +1110,7 @@ class Tracker:
         self._born = np.concatenate([self._born, stamp])
         self._seen = np.concatenate([self._seen, stamp])
         if steps is not None:
+            _, first, last = _measured(detections)
             for tid, j in zip(ids.tolist(), new, strict=True):
                 steps.append(Step("tracking", "birth", int(first[j]), int(last[j]),
                                   center=tuple(detections.positions[j].tolist()), track=tid, detection=j,
@@ -1296,12 +1296,21 @@ _NOWHERE_Z, _NOWHERE_R = np.empty((0, 2)), np.empty((0, 2, 2))  # predict_and_ga
 _chain = itertools.chain.from_iterable
 
 
-def _measured(detections: Detections) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _measured(detections: Detections, beams: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The covariances and beams (first, last) of detections the tracker took: arrays once
-    :meth:`Detections.with_sigmas` gave each detection its covariance (and ``__post_init__`` its beams)."""
+    :meth:`Detections.with_sigmas` gave each detection its covariance (and ``__post_init__`` its beams);
+    ``beams=False``: the covariances alone, the beams not read (not made, see :class:`_Beams`) but
+    given as empty arrays."""
+    if not beams:
+        if detections.covariances is None:
+            raise RuntimeError("the tracker takes detections with covariances (Detections.with_sigmas)")
+        return detections.covariances, _UNREAD, _UNREAD
     if detections.covariances is None or detections.first is None or detections.last is None:
         raise RuntimeError("the tracker takes detections with covariances and beams (Detections.with_sigmas)")
     return detections.covariances, detections.first, detections.last
+
+
+_UNREAD = np.zeros(0, dtype=np.int64)
 
 
 def _with_seconds(table: TrackTable, seconds: float) -> TrackTable:
