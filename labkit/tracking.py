@@ -445,6 +445,28 @@ def assign(cost) -> tuple[np.ndarray, np.ndarray]:
 
 
 # ============================================================================ detections
+class _Beams:
+    """A :class:`Detections`' ``first`` or ``last`` beams, made on first reading when the tracker
+    built the record from a scan's features (:func:`_bulk_arrays`; the tracker itself never reads
+    them); otherwise they are in the record as given."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, record, owner=None):
+        if record is None:
+            return None  # the field's default
+        made = record.__dict__.get("_beams")
+        if made is None:
+            raise AttributeError(self.name)
+        first, last = made()
+        first.setflags(write=False)
+        last.setflags(write=False)
+        record.__dict__.update(first=first, last=last)
+        record.__dict__.pop("_beams", None)
+        return record.__dict__[self.name]
+
+
 @dataclass(frozen=True, eq=False)
 class Detections:
     """One scan's detections, as the tracker takes them.
@@ -461,15 +483,17 @@ class Detections:
         Their measurement covariances; None: ``sigma^2 I`` with the tracker's sigma of each kind
         (``person_sigma_m``, ``leg_sigma_m``, ``circle_sigma_m``, see :meth:`with_sigmas`).
     first, last : ndarray of shape (K,), int
-        The beams each detection came from (-1 when unknown), to draw it on its scan.
+        The beams each detection came from (-1 when unknown), to draw it on its scan. In a
+        :class:`TrackTable`'s ``detections`` they are made when first read (the tracker does not
+        read them); such a record prints, pickles, copies and takes ``dataclasses.replace`` as any other.
     """
 
     stamp_ns: int
     kinds: tuple
     positions: np.ndarray
     covariances: np.ndarray | None = None
-    first: np.ndarray | None = None
-    last: np.ndarray | None = None
+    first: np.ndarray | None = _Beams()  # type: ignore[assignment]  # (default None; see _Beams)
+    last: np.ndarray | None = _Beams()  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         kinds = tuple(self.kinds)
@@ -512,6 +536,11 @@ class Detections:
     def __len__(self) -> int:
         return len(self.kinds)
 
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__, first=self.first, last=self.last)  # (the beams made, if they were not)
+        state.pop("_beams", None)
+        return state
+
     @classmethod
     def _trusted(cls, stamp_ns: int, kinds: tuple, positions, covariances, first, last) -> Detections:
         """A record of values already checked (the tracker's own), built without the checks."""
@@ -520,6 +549,23 @@ class Detections:
                           first=first, last=last)
         return d
 
+    @classmethod
+    def _of(cls, stamp_ns: int, kinds: tuple, positions, covariances, beams) -> Detections:
+        """:meth:`_trusted` with the beams as ``(first, last)``, or as a function that makes them
+        (called on first reading, see :class:`_Beams`)."""
+        d = object.__new__(cls)
+        d.__dict__.update(stamp_ns=stamp_ns, kinds=kinds, positions=positions, covariances=covariances)
+        if callable(beams):
+            d.__dict__["_beams"] = beams
+        else:
+            d.__dict__["first"], d.__dict__["last"] = beams
+        return d
+
+    def _beams_as_given(self):
+        """The beams as :meth:`_of` takes them, not made if they were not."""
+        made = self.__dict__.get("_beams")
+        return made if made is not None else (self.first, self.last)
+
     def with_sigmas(self, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float) -> Detections:
         """These detections with ``sigma^2 I`` of its kind as each one's covariance, where they
         have none (``covariances`` None); as they are otherwise."""
@@ -527,8 +573,8 @@ class Detections:
             return self
         sigma = {"person": person_sigma_m, "leg": leg_sigma_m, "circle": circle_sigma_m}
         var = np.array([sigma[k] ** 2 for k in self.kinds], dtype=np.float64)
-        return Detections._trusted(self.stamp_ns, self.kinds, self.positions, var[:, None, None] * _I2, self.first,
-                                   self.last)
+        return Detections._of(self.stamp_ns, self.kinds, self.positions, var[:, None, None] * _I2,
+                              self._beams_as_given())
 
     def in_frame(self, pose) -> Detections:
         """The detections moved from the sensor frame by ``pose = (x, y, theta)`` (the sensor's
@@ -536,8 +582,8 @@ class Detections:
         x, y, theta = pose
         c, s = math.cos(theta), math.sin(theta)
         rot = np.array([[c, -s], [s, c]])
-        return Detections._trusted(self.stamp_ns, self.kinds, self.positions @ rot.T + np.array([x, y]),
-                                   rot @ self.covariances @ rot.T, self.first, self.last)
+        return Detections._of(self.stamp_ns, self.kinds, self.positions @ rot.T + np.array([x, y]),
+                              rot @ self.covariances @ rot.T, self._beams_as_given())
 
 
 def detections_from(
@@ -804,9 +850,9 @@ class Tracker:
         """:meth:`step` without a trace: the detections taken in bulk (:func:`_bulk_detections`),
         steps 1-7 as :mod:`labkit._tracking_engine`'s kernels."""
         p, engine = self.params, _ENGINE
-        stamp, kinds, z, R, first, last, det_kind, starts, pose = self._fast_detections(observed, pose)
+        stamp, kinds, z, R, beams, det_kind, starts, pose = self._fast_detections(observed, pose)
         if self._stamp is not None and stamp < self._stamp:
-            detections = Detections._trusted(stamp, kinds, z, R, first, last)
+            detections = Detections._of(stamp, kinds, z, R, beams)
             return self._late(detections if pose is None else detections.in_frame(pose), pose, None, t_start)
         dt = 0.0 if self._stamp is None else (stamp - self._stamp) * 1e-9  # _advance_clock (the kernel counts the scan)
         self._stamp = stamp
@@ -825,7 +871,7 @@ class Tracker:
             p.confirm_scans, p.min_travel_m, self._max_coast_ns, self._ids, self._born, out)  # and, done: 3, 4, 6, 7
         if not in_map:
             zm, Rm = z, R
-        detections = Detections._trusted(stamp, kinds, zm, Rm, first, last)
+        detections = Detections._of(stamp, kinds, zm, Rm, beams)  # (the beams made when read)
         events: list = []
         if not done:  # an assignment to solve, or births
             tracks, dets = (assign(cost[:n_tracks, :n_dets]) if conflict                      # 3
@@ -909,16 +955,17 @@ class Tracker:
 
     def _fast_detections(self, observed, pose) -> tuple:
         """:meth:`_detections` for the compiled path, as arrays, in the sensor frame (the kernel moves
-        them): a scan's features taken in bulk (:func:`_bulk_detections`); the stamp, kinds,
-        positions, covariances, beams, the kind of track each detection measures (0 person, 1 circle)
-        and whether it may start one, and the pose to move them by (None: none)."""
+        them): a scan's features taken in bulk (:func:`_bulk_arrays`); the stamp, kinds,
+        positions, covariances, beams (as :meth:`Detections._of` takes them), the kind of track each
+        detection measures (0 person, 1 circle) and whether it may start one, and the pose to move
+        them by (None: none)."""
         p = self.params
         if isinstance(observed, Features):
-            found = _bulk_detections(observed, p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m, p.single_legs)
+            found = _bulk_arrays(observed, p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m, p.single_legs)
         elif isinstance(observed, Detections):
             observed = observed.with_sigmas(p.person_sigma_m, p.leg_sigma_m, p.circle_sigma_m)
-            found = (observed.stamp_ns, observed.kinds, observed.positions, observed.covariances, observed.first,
-                     observed.last, *_track_kinds_of(observed.kinds))
+            found = (observed.stamp_ns, observed.kinds, observed.positions, observed.covariances,
+                     observed._beams_as_given(), *_track_kinds_of(observed.kinds))
         else:
             raise _not_observed(observed)
         pose = self._pose(pose)
@@ -926,7 +973,7 @@ class Tracker:
             return (*found, None)
         if pose is None:  # the map frame without a pose: nothing can be placed
             none = _no_detections(found[0])
-            return (none.stamp_ns, none.kinds, none.positions, none.covariances, none.first, none.last,
+            return (none.stamp_ns, none.kinds, none.positions, none.covariances, (none.first, none.last),
                     *_track_kinds_of(()), None)
         return (*found, pose)
 
@@ -1040,7 +1087,7 @@ class Tracker:
         """Tentative tracks from detections ``new`` (indices): at the detection, at rest, with the
         detection's covariance and ``initial_speed_sigma_mps`` in each velocity."""
         p = self.params
-        covariances, first, last = _measured(detections)
+        covariances = _measured(detections, beams=False)[0]  # (the beams for the trace only)
         ids = np.arange(self._next_id, self._next_id + len(new), dtype=np.int64)
         self._next_id += len(new)
         z = detections.positions[new]
@@ -1063,6 +1110,7 @@ class Tracker:
         self._born = np.concatenate([self._born, stamp])
         self._seen = np.concatenate([self._seen, stamp])
         if steps is not None:
+            _, first, last = _measured(detections)
             for tid, j in zip(ids.tolist(), new, strict=True):
                 steps.append(Step("tracking", "birth", int(first[j]), int(last[j]),
                                   center=tuple(detections.positions[j].tolist()), track=tid, detection=j,
@@ -1197,10 +1245,21 @@ def _layout(n_people: int, n_legs: int, n_circles: int, person_var: float, leg_v
 def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float,
                      single_legs: bool) -> tuple:
     """:func:`detections_from`'s arrays (the same; ``tests/test_tracking_engine.py`` checks) in a
-    few calls: the positions in one ``concatenate``, the beams in one ``fromiter``, and what depends
-    only on the counts (kinds, covariances) remembered (:func:`_layout`): the stamp, kinds,
-    positions, covariances, first and last beams, the kind of track each detection measures and
-    whether it starts one."""
+    few calls (:func:`_bulk_arrays`, its beams made): the stamp, kinds, positions, covariances,
+    first and last beams, the kind of track each detection measures and whether it starts one."""
+    stamp, kinds, positions, covariances, beams, det_kind, starts = _bulk_arrays(
+        features, person_sigma_m, leg_sigma_m, circle_sigma_m, single_legs)
+    first, last = beams() if callable(beams) else beams
+    return stamp, kinds, positions, covariances, first, last, det_kind, starts
+
+
+def _bulk_arrays(features: Features, person_sigma_m: float, leg_sigma_m: float, circle_sigma_m: float,
+                 single_legs: bool) -> tuple:
+    """:func:`detections_from`'s arrays in a few calls: the positions in one ``concatenate``, and
+    what depends only on the counts (kinds, covariances) remembered (:func:`_layout`): the stamp,
+    kinds, positions, covariances, the beams (``(first, last)``, or the function that makes them in
+    one ``fromiter``, :func:`_beams_of`: the tracker never reads them), the kind of track each
+    detection measures and whether it starts one."""
     people = features.people
     legs: tuple | list = features.legs if single_legs else ()
     if people and legs:
@@ -1213,16 +1272,23 @@ def _bulk_detections(features: Features, person_sigma_m: float, leg_sigma_m: flo
     kinds, covariances, det_kind, starts = layout
     if not n:
         none = _no_detections(int(features.stamp_ns))
-        return none.stamp_ns, kinds, none.positions, covariances, none.first, none.last, det_kind, starts
+        return none.stamp_ns, kinds, none.positions, covariances, (none.first, none.last), det_kind, starts
     positions = np.concatenate([f.center for f in (*people, *others)])
     if positions.dtype != np.float64 or positions.shape != (2 * n,):  # centres built by hand: as the reference
         d = detections_from(features, person_sigma_m=person_sigma_m, leg_sigma_m=leg_sigma_m,
                             circle_sigma_m=circle_sigma_m, single_legs=single_legs)
-        return d.stamp_ns, d.kinds, d.positions, d.covariances, d.first, d.last, det_kind, starts
+        return d.stamp_ns, d.kinds, d.positions, d.covariances, (d.first, d.last), det_kind, starts
+    return (int(features.stamp_ns), kinds, positions.reshape(n, 2), covariances,
+            functools.partial(_beams_of, people, others), det_kind, starts)
+
+
+def _beams_of(people: tuple, others: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The first and last beams of the people (both legs spanned), then of the other features."""
+    n = len(people) + len(others)
     ends = [(min(a.first, b.first), max(a.last, b.last)) for a, b in (person.legs for person in people)]
     ends += map(_ENDS, others)
     beams = np.fromiter(_chain(ends), np.int64, 2 * n).reshape(n, 2).T
-    return int(features.stamp_ns), kinds, positions.reshape(n, 2), covariances, beams[0], beams[1], det_kind, starts
+    return beams[0], beams[1]
 
 
 _ENDS = operator.attrgetter("first", "last")
@@ -1230,12 +1296,21 @@ _NOWHERE_Z, _NOWHERE_R = np.empty((0, 2)), np.empty((0, 2, 2))  # predict_and_ga
 _chain = itertools.chain.from_iterable
 
 
-def _measured(detections: Detections) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _measured(detections: Detections, beams: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The covariances and beams (first, last) of detections the tracker took: arrays once
-    :meth:`Detections.with_sigmas` gave each detection its covariance (and ``__post_init__`` its beams)."""
+    :meth:`Detections.with_sigmas` gave each detection its covariance (and ``__post_init__`` its beams);
+    ``beams=False``: the covariances alone, the beams not read (not made, see :class:`_Beams`) but
+    given as empty arrays."""
+    if not beams:
+        if detections.covariances is None:
+            raise RuntimeError("the tracker takes detections with covariances (Detections.with_sigmas)")
+        return detections.covariances, _UNREAD, _UNREAD
     if detections.covariances is None or detections.first is None or detections.last is None:
         raise RuntimeError("the tracker takes detections with covariances and beams (Detections.with_sigmas)")
     return detections.covariances, detections.first, detections.last
+
+
+_UNREAD = np.zeros(0, dtype=np.int64)
 
 
 def _with_seconds(table: TrackTable, seconds: float) -> TrackTable:

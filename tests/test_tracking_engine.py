@@ -249,3 +249,47 @@ def test_the_bulk_detections_of_features_built_by_hand():
             _equal(tracking._bulk_detections(f, 0.08, 0.2, 0.05, single), ref, (f.stamp_ns, single))
     assert tracking._bulk_detections(Features(8, 100, labels, legs=(a, b, c), people=(person,)), 0.08, 0.2, 0.05,
                                      True)[4].tolist() == [10, 50]
+
+
+@pytest.mark.parametrize("frame", ["map", "sensor"])
+def test_the_tables_detections_make_their_beams_when_read_and_stay_a_record(frame):
+    """The compiled path leaves a table's beams (first, last) unmade until read (the tracker never
+    reads them); read, pickled, copied, replaced or printed, they are detections_from's and the
+    reference's, and the record behaves as one built with its beams given."""
+    import copy
+    import pickle
+
+    uses = {"read": lambda d: d, "pickle": lambda d: pickle.loads(pickle.dumps(d)), "deepcopy": copy.deepcopy,
+            "copy": copy.copy, "replace": lambda d: dataclasses.replace(d, stamp_ns=d.stamp_ns + 1),
+            "in_frame": lambda d: d.in_frame((1.0, 2.0, 0.3))}
+    scans, features = _scans("crossing_2", 12, ROBOT, noise=0.03)
+    features = list(features)
+    fast = {use: Tracker(frame=frame) for use in (*uses, "repr")}  # a record of its own for each use
+    ref = Tracker(frame=frame)
+    lazy = 0
+    for k, (scan, f) in enumerate(zip(scans, features, strict=True)):
+        r = ref.step(f, pose=scan.pose, trace=True)[0].detections  # the reference's record, beams given
+        truth = tracking.detections_from(f)
+        assert len(truth), k
+        records = {use: tracker.step(f, pose=scan.pose).detections for use, tracker in fast.items()}
+        lazy += sum("_beams" in vars(d) for d in records.values())  # not made yet
+        for use, made in uses.items():
+            d = made(records[use])
+            for name in ("first", "last"):
+                a, b = getattr(d, name), getattr(truth, name)
+                assert a.dtype == b.dtype == np.int64 and np.array_equal(a, b), (k, use, name)
+                assert np.array_equal(a, getattr(r, name)), (k, use, name)
+                assert not a.flags.writeable or use in ("pickle", "deepcopy"), (k, use, name)  # (as positions)
+            assert "_beams" not in vars(d), (k, use)
+            if use != "in_frame":
+                np.testing.assert_allclose(d.positions, r.positions, rtol=0, atol=ATOL)
+                np.testing.assert_allclose(d.covariances, r.covariances, rtol=0, atol=ATOL)
+                assert d.kinds == r.kinds, (k, use)
+        d = records["repr"]
+        given = Detections(d.stamp_ns, d.kinds, d.positions, d.covariances, truth.first, truth.last)
+        assert repr(d) == repr(given), k
+        assert d == d and d != given and d != copy.copy(d), k  # (eq=False: a record equals itself alone)
+    assert lazy == len(scans) * len(fast), "the compiled path made the beams before they were read"
+    late = fast["read"].step(features[0], pose=scans[0].pose)  # a scan that goes back: its record too
+    assert late.late and np.array_equal(late.detections.first, tracking.detections_from(features[0]).first)
+    assert Detections(5, ("leg",), [[1.0, 2.0]]).first.tolist() == [-1] and Detections.first is None
