@@ -12,6 +12,7 @@ import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import rerun as rr
@@ -24,6 +25,7 @@ from ...scan import Scan
 from .blueprint import SEQUENCE, TIME, blueprint
 from .entities import (
     _batched,
+    _Chunked,
     _forever,
     _hide_truth_labels,
     _segment,
@@ -355,7 +357,9 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
                   timeline: str | None = None, tracks: bool = False) -> RecordSummary:
     from ...tracking import Tracker
 
-    rec = new_recording(name)
+    # each entity's columns gathered into chunks of a few thousand scans: the file's footer, which rerun
+    # keeps in memory until the file is closed, lists every chunk (see _Chunked)
+    rec = cast(rr.RecordingStream, _Chunked(new_recording(name)))
     with_features = features is not None or config is not None
     rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features,
                                               timeline=timeline, with_tracks=tracks))
