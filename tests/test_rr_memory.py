@@ -50,7 +50,7 @@ def test_a_long_recording_writes_few_chunks_and_every_scan(tmp_path):
     entity per batch of 128 scans, some 0.3 chunks per scan). The goal, <= 300 MB at 100,000 scans, leaves
     the footer a few tens of MB: at most 0.05 more chunks per scan, beyond each entity's first (25 MiB at
     100,000 scans). Before the chunks were gathered, this recording had 0.29."""
-    n = 1000
+    n = 600
     scans, truths = _long_recording(n)
     out = tmp_path / "long.rrd"
     truth = GroundTruth({}, {t.stamp_ns: t for t in truths})
