@@ -88,8 +88,8 @@ class _Chunked:
 
     Why: an ``.rrd`` file's footer lists every chunk, and rerun (0.41) keeps that list in memory until
     the file is closed, some kilobytes per chunk. Sent a batch of scans at a time, a labkit recording
-    makes a chunk per entity (some forty) per batch, and its memory grows by about 1.5-2 KiB per scan
-    (200 MB at 100,000 scans). Gathered, the small entities (counts, stage times, features, the
+    makes a chunk per entity (some forty) per batch, and its memory grows by about 1.4-1.9 KiB per scan
+    (150-190 MiB at 100,000 scans). Gathered, the small entities (counts, stage times, features, the
     sensor's pose, truth) make a chunk per few thousand scans; the heavy ones (the scan's points, about
     1.5 MB a batch) still go out a batch at a time, so what waits stays small.
 
