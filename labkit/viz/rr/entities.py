@@ -97,7 +97,7 @@ class _Chunked:
     first. Call it (or :meth:`send_pending`) before the file is closed.
     """
 
-    CHUNK_BYTES = 1 << 20
+    CHUNK_BYTES = 1 << 18  # what waits: at most some forty entities of 256 KiB
     CHUNK_ROWS = 4096
 
     def __init__(self, rec: rr.RecordingStream) -> None:
