@@ -14,8 +14,8 @@ all 100,000 scans of one simulated recording (the corridor, 541 beams), each in 
 beside two floors: a process that has only imported what ``view`` imports, and one that has also
 extracted one scan's features (labkit's numba engines loaded: some 160 MiB, 100 of them llvmlite's
 library mapped from disk). The goal (issue 30): <= 300 MB at 100,000 scans and flat in the number of
-scans; the last line says whether it is met. What grew with the recording was the ``.rrd`` footer,
-which rerun keeps in memory until the file is closed (see ``labkit.viz.rr.entities._Chunked``).
+scans; the last line says whether it is met. One thing that grows with the recording is the ``.rrd``
+footer, which rerun keeps in memory until the file is closed (see ``labkit.viz.rr.entities._Chunked``).
 ``--memory-scans 0`` skips it (the 100,000-scan recording takes minutes to simulate and to view on
 idle cores, hours on a loaded machine: ``--memory-scans 1000 4000`` prints the growth per scan
 between the two and what it gives at 100,000 scans).
