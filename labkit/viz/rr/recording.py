@@ -12,6 +12,7 @@ import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import rerun as rr
@@ -24,6 +25,7 @@ from ...scan import Scan
 from .blueprint import SEQUENCE, TIME, blueprint
 from .entities import (
     _batched,
+    _Chunked,
     _forever,
     _hide_truth_labels,
     _segment,
@@ -179,7 +181,9 @@ def record_scans(
     """Write scans to an ``.rrd`` file with the default blueprint, as they come.
 
     The file is written while the scans are read (``RecordingStream.save`` before anything is
-    logged, then ``send_columns`` in batches), so memory stays flat however long the recording.
+    logged, then ``send_columns`` in batches, each entity's columns gathered into chunks of up to
+    4096 scans or 256 KiB: rerun keeps the file's footer, a list of every chunk, in memory until the
+    file is closed), so memory stays flat however long the recording.
     If iterating ``scans`` raises :class:`labkit.CorruptFileError` (a damaged file), the ``.rrd``
     holds every scan that could be read, the error is logged to ``log`` and returned in the
     summary (not raised).
@@ -355,7 +359,9 @@ def _record_scans(scans, tmp: Path, out: Path, *, name, truth, labels, features,
                   timeline: str | None = None, tracks: bool = False) -> RecordSummary:
     from ...tracking import Tracker
 
-    rec = new_recording(name)
+    # each entity's columns gathered into chunks of a few thousand scans: the file's footer, which rerun
+    # keeps in memory until the file is closed, lists every chunk (see _Chunked)
+    rec = cast(rr.RecordingStream, _Chunked(new_recording(name)))
     with_features = features is not None or config is not None
     rec.save(tmp, default_blueprint=blueprint(with_map=world_map is not None, with_times=with_features,
                                               timeline=timeline, with_tracks=tracks))
