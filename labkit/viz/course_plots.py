@@ -331,8 +331,9 @@ def plot_counts_and_timings(counts: dict, times_ms: dict, kinds, *, skip=(), tit
 
 def plot_map(points, segments, path, *, points_label: str = "points", lines_label: str = "lines", title: str = "",
              ax=None):
-    """A map in the world frame: points in grey, line segments in faint red (they darken where they pile up),
-    and the sensor's path in blue.
+    """A map in the world frame: points in grey, line segments in faint red, the sensor's path in blue.
+
+    The segments are drawn faint, so that they darken where many scans saw the same wall.
 
     Parameters
     ----------
