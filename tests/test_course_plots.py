@@ -71,3 +71,32 @@ def test_extraction_controls_call_show_with_the_values():
                          "min_points": 5, "merge": "thresholds"}
     merge.value = "none"
     assert calls[-1]["merge"] == "none"
+
+
+def test_counts_and_timings_one_panel_per_kind_and_the_stages_but_the_skipped():
+    counts = {"lines": np.array([2, 4, 3]), "legs": np.array([0, 1, 0]), "segments": np.array([9, 9, 9])}
+    times_ms = {"lines": np.array([1.0, 3.0, 2.0]), "arcs": np.array([0.1, 0.1, 0.1]),
+                "total": np.array([2.0, 4.0, 3.0])}
+    fig = cp.plot_counts_and_timings(counts, times_ms, ["lines", "legs"], skip=["arcs"], title="t")
+    lines_ax, legs_ax, time_ax = fig.axes
+    np.testing.assert_allclose(lines_ax.lines[0].get_xydata(), [(0, 2), (1, 4), (2, 3)])
+    assert lines_ax.get_title(loc="right") == "mean 3.00 per scan" and lines_ax.get_ylim() == (-0.5, 4.5)
+    assert legs_ax.get_title(loc="right") == "mean 0.33 per scan" and legs_ax.get_ylim() == (-0.5, 1.5)
+    assert [ln.get_label() for ln in time_ax.lines] == ["lines (median 2.00 ms)", "total (median 3.00 ms)"]
+    # the 99.5th percentile of the totals 2, 3, 4 is 3 + 0.99 * 1 = 3.99 ms; the axis reaches 1.2 times it
+    assert time_ax.get_ylim() == pytest.approx((0.0, 1.2 * 3.99))
+    assert fig.get_suptitle() == "t"
+
+
+def test_map_draws_points_segments_and_path_where_they_are():
+    points = [(0.0, 0.0), (1.0, 2.0), (3.0, -1.0)]
+    segments = [[(0.0, 0.0), (1.0, 0.0)], [(1.0, 0.0), (1.0, 1.0)]]
+    path = [(0.5, 0.5), (0.6, 0.7), (0.8, 0.9)]
+    ax = cp.plot_map(points, segments, path, points_label="p", lines_label="lines (every scan)", title="t")
+    (cloud, drawn) = ax.collections
+    np.testing.assert_allclose(cloud.get_offsets(), points)
+    np.testing.assert_allclose(np.array(drawn.get_segments()), segments)
+    (sensor_path,) = ax.lines
+    np.testing.assert_allclose(sensor_path.get_xydata(), path)
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["p", "2 lines (every scan)", "sensor path"]
+    assert ax.get_title() == "t" and ax.get_aspect() == 1.0

@@ -72,3 +72,16 @@ def test_rate_bars_are_the_rows_values():
     assert widths == [[0.6, 0.7, 0.8, 0.9], [0.1, 0.2, 0.3, 0.4], [90.0, 100.0, 900.0, 1000.0]]
     (published,) = fig.axes[1].collections
     assert published.get_offsets()[0][0] == 0.25
+
+
+def test_plot_match_titles_a_new_figure_and_puts_the_legend_outside(monkeypatch):
+    monkeypatch.setattr(ev.lkplot, "plot_scan", lambda s, a, **kw: a)
+    lines = [_line((0.0, 0.0), (1.0, 0.0)), _line((0.0, 1.0), (1.0, 1.0))]
+    truth = SimpleNamespace(walls=[SimpleNamespace(start=(0.0, 0.0), end=(1.0, 0.0))])
+    match = SimpleNamespace(pairs=[(0, 0)], scored=[0, 1], truth=[0], missed=[], dr=[0.0], dalpha=[0.0])
+    ax = ev.plot_match(SimpleNamespace(), truth, lines, match, title="t", figsize=(6, 4))
+    assert tuple(ax.figure.get_size_inches()) == (6, 4) and ax.get_title() == "t"
+    legend = ax.get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["found wall", "matched (1)", "false positive (1)"]
+    # anchored at the axes' right edge, 1 % beyond it
+    assert tuple(legend.get_bbox_to_anchor().transformed(ax.transAxes.inverted()).p0) == pytest.approx((1.01, 1.0))

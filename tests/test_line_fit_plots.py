@@ -67,3 +67,37 @@ def test_fits_label_each_error_and_frame_points_and_sensor():
     # the points and the sensor span x 0..2, y -1..1: a square of half-width 1 + 0.4 around (1, 0)
     assert ax.get_xlim() == pytest.approx((-0.4, 2.4)) and ax.get_ylim() == pytest.approx((-1.4, 1.4))
     assert ax.get_title() == "t"
+
+
+def test_error_ellipse_of_a_diagonal_covariance_has_its_semi_axes():
+    # C = diag(4, 1): the 95% ellipse has semi-axes sqrt(5.99 * 4) along x and sqrt(5.99) along y
+    ex, ey = lp.error_ellipse(np.diag([4.0, 1.0]), n=5)          # angles 0, 90, 180, 270, 360 deg
+    a, b = math.sqrt(5.99 * 4), math.sqrt(5.99)
+    np.testing.assert_allclose(ex, [a, 0, -a, 0, a], atol=1e-12)
+    np.testing.assert_allclose(ey, [0, b, 0, -b, 0], atol=1e-12)
+
+
+def test_error_ellipse_plot_in_mm_and_degrees():
+    errors = [(0.001, math.radians(2.0)), (-0.003, 0.0)]
+    C = np.diag([1e-6, math.radians(1.0) ** 2])                    # sigma_r 1 mm, sigma_alpha 1 deg
+    ax = lp.plot_error_ellipse(errors, C, title="x" * 61, label="refits", size=4)
+    (cloud,) = ax.collections
+    np.testing.assert_allclose(cloud.get_offsets(), [(1.0, 2.0), (-3.0, 0.0)])
+    assert cloud.get_sizes()[0] == 4 and cloud.get_label() == "refits"
+    (ellipse,) = ax.lines
+    # in mm and degrees the ellipse is a circle of radius sqrt(5.99)
+    np.testing.assert_allclose(np.hypot(*ellipse.get_xydata().T), math.sqrt(5.99), rtol=1e-9)
+    assert ax.title.get_fontsize() == 9 and ax.get_xlabel() == "r error (mm)"
+
+
+def test_uncertainty_band_draws_the_first_fits_the_band_and_the_points_span():
+    s = np.array([0.0, 1.0, 2.0])
+    offsets = np.array([[0.001, 0.0, -0.001], [0.0, 0.0, 0.0], [0.002, 0.002, 0.002]])
+    ax = lp.plot_uncertainty_band(s, [0.003, 0.001, 0.003], offsets, [0.5, 1.5, 1.0], 0.9, n_lines=2)
+    fit0, fit1, upper, lower, star = ax.lines                       # only the first 2 fits drawn
+    np.testing.assert_allclose(fit0.get_xydata(), [(0, 1), (1, 0), (2, -1)])
+    np.testing.assert_allclose(upper.get_ydata(), [3, 1, 3])
+    np.testing.assert_allclose(lower.get_ydata(), [-3, -1, -3])
+    assert star.get_xdata()[0] == pytest.approx(0.9)
+    (span,) = ax.patches
+    assert (span.get_x(), span.get_x() + span.get_width()) == pytest.approx((0.5, 1.5))    # a Rectangle

@@ -57,3 +57,24 @@ def test_threshold_curves_are_the_given_thresholds_in_mm():
                                [17.453, 34.907, 69.813], atol=1e-3)
     assert tuple(by_label["fixed, 80 mm"].get_ydata()) == (80.0, 80.0)
     assert ax.get_title() == "t"
+
+
+def test_first_split_dashes_the_first_line_between_the_runs_end_points_and_crosses_its_worst_point():
+    from types import SimpleNamespace
+
+    from labkit import Scan
+
+    # beams at 45, 90, 135 and 150 deg: points (1, 1), (0, 1), (-1, 1) and one beam without a return
+    scan = Scan(ranges=[math.sqrt(2), 1.0, math.sqrt(2), np.nan], angles=np.radians([45, 90, 135, 150]))
+    truth = SimpleNamespace(walls=[], circles=[], arcs=[], legs=[])
+    # the line y = 0.5 (r = 0.5, alpha = 90 deg), worst point beam 1, 0.5 m off
+    first_fit = SimpleNamespace(first=0, last=3, r=0.5, alpha=math.pi / 2, at=1, value=0.5)
+    final = [SimpleNamespace(start=(1.0, 1.0), end=(-1.0, 1.0))]
+    ax = sp.plot_first_split(scan, truth, first_fit, final, title="t", xlim=(-2, 2), ylim=(0, 2))
+    by_label = {ln.get_label(): ln.get_xydata() for ln in ax.lines}
+    # the first and last finite points of beams 0..3, (1, 1) and (-1, 1), projected onto y = 0.5
+    np.testing.assert_allclose(by_label["first line measured against"], [(1.0, 0.5), (-1.0, 0.5)], atol=1e-12)
+    np.testing.assert_allclose(by_label["its worst point (0.50 m)"], [(0.0, 1.0)], atol=1e-12)
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "first line measured against", "its worst point (0.50 m)", "final line segments"]
+    assert ax.get_xlim() == (-2, 2) and ax.get_ylim() == (0, 2) and ax.get_title() == "t"

@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.collections import LineCollection
 
 from labkit.viz import plot as lkplot
 from labkit.viz.plot import axes_or_new
 
 __all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners",
-           "plot_lines_and_corners_grid", "extraction_controls"]
+           "plot_lines_and_corners_grid", "extraction_controls", "plot_counts_and_timings",
+           "plot_map"]
 
 
 def chord_frame(points) -> np.ndarray:
@@ -280,3 +282,92 @@ def extraction_controls(show, scenes, n_scans: int = 20, scene: str | None = Non
     return widgets.VBox([widgets.HBox([controls["scene"], controls["k"]]), controls["method"],
                          widgets.HBox([controls["split_threshold_m"], controls["min_points"], controls["merge"]]),
                          plot_area])
+
+
+def plot_counts_and_timings(counts: dict, times_ms: dict, kinds, *, skip=(), title: str = ""):
+    """Features per scan, one small panel per kind, over the milliseconds of each stage per scan.
+
+    Parameters
+    ----------
+    counts : dict
+        ``{kind: array of shape (N,)}``: how many features of each kind every scan produced.
+    times_ms : dict
+        ``{stage: array of shape (N,)}``: the milliseconds each stage took on every scan; must hold
+        ``"total"``, whose 99.5th percentile (times 1.2) tops the time axis.
+    kinds : sequence of str
+        The kinds to draw, one panel each, from the top; each panel's title gives its mean per scan.
+    skip : sequence of str, optional
+        Stages of ``times_ms`` not to draw.
+    title : str, optional
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure: ``len(kinds)`` count panels, then the time panel, against the scan index.
+    """
+    kinds = list(kinds)
+    fig, axes = plt.subplots(len(kinds) + 1, 1, figsize=(12, 10), sharex=True,
+                             gridspec_kw={"height_ratios": [1] * len(kinds) + [3]})
+    for n, (ax, k) in enumerate(zip(axes, kinds, strict=False)):
+        c = np.asarray(counts[k])
+        ax.plot(np.arange(len(c)), c, drawstyle="steps-mid", lw=0.8, color=f"C{n}")
+        ax.set_ylabel(k, rotation=0, ha="right", va="center")
+        ax.set_ylim(-0.5, c.max() + 0.5)
+        ax.set_title(f"mean {c.mean():.2f} per scan", fontsize=8, loc="right", pad=2)
+    ax_t = axes[-1]
+    for k, v in times_ms.items():
+        if k not in skip:
+            ax_t.plot(np.arange(len(v)), v, lw=0.8, label=f"{k} (median {np.median(v):.2f} ms)")
+    ax_t.set_ylabel("ms per scan")
+    ax_t.set_xlabel("scan index (10 per second)")
+    ax_t.set_ylim(0, np.percentile(times_ms["total"], 99.5) * 1.2)
+    ax_t.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def plot_map(points, segments, path, *, points_label: str = "points", lines_label: str = "lines", title: str = "",
+             ax=None):
+    """A map in the world frame: points in grey, line segments in faint red, the sensor's path in blue.
+
+    The segments are drawn faint, so that they darken where many scans saw the same wall.
+
+    Parameters
+    ----------
+    points : array_like of shape (N, 2)
+        Map points, in metres.
+    segments : array_like of shape (M, 2, 2)
+        Line segments, each its two end points, in metres.
+    path : array_like of shape (K, 2)
+        The sensor's positions in order, in metres.
+    points_label : str, default "points"
+        The points' legend entry.
+    lines_label : str, default "lines"
+        The segments' legend entry, after their number.
+    title : str, optional
+        The axes' title.
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones (9 x 9 inches) when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into, at equal scales.
+    """
+    ax = axes_or_new(ax, (9, 9))
+    points, path = np.asarray(points, dtype=float), np.asarray(path, dtype=float)
+    segments = np.asarray(segments, dtype=float).reshape(-1, 2, 2)
+    ax.scatter(points[:, 0], points[:, 1], s=1, color="0.55", label=points_label)
+    ax.add_collection(LineCollection(segments, colors="tab:red", linewidths=0.4, alpha=0.25,
+                                     label=f"{len(segments):,} {lines_label}"))
+    ax.plot(path[:, 0], path[:, 1], color="tab:blue", lw=1, label="sensor path")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m, world)")
+    ax.set_ylabel("y (m, world)")
+    ax.legend(loc="upper right")
+    if title:
+        ax.set_title(title)
+    return ax

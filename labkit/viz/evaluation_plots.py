@@ -22,6 +22,7 @@ __all__ = [
     "STATUS_COLORS",
     "line_status",
     "draw_match",
+    "plot_match",
     "plot_every_extractor",
     "plot_rate_bars",
     "plot_threshold_sweep",
@@ -114,6 +115,41 @@ def draw_match(ax, scan, truth, lines, match, *, annotate: bool = True, point_si
                         xytext=(4, 4), textcoords="offset points", fontsize=7, color="tab:green", zorder=6,
                         bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.7))
     ax.autoscale_view()
+    return ax
+
+
+def plot_match(scan, truth, lines, match, *, title: str = "", figsize=(10, 7), ax=None):
+    """:func:`draw_match` in a figure of its own, titled, with the legend outside on the right.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    truth : labkit.sim.ScanTruth
+        Its ground truth.
+    lines : list of labkit.LineSegment
+        The extracted lines.
+    match : labkit.LineMatch
+        ``labkit.match_lines(lines, truth)``.
+    title : str, optional
+        The axes' title.
+    figsize : (float, float), default (10, 7)
+        The new figure's size in inches, when ``ax`` is None.
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=figsize)
+    draw_match(ax, scan, truth, lines, match)
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    ax.figure.tight_layout()
     return ax
 
 

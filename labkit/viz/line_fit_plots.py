@@ -12,7 +12,11 @@ from labkit.geometry import angle_difference
 from labkit.viz.plot import axes_or_new
 from labkit.viz.style import mpl
 
-__all__ = ["FIT_STYLE", "draw_line", "plot_normal_form", "plot_objective", "plot_sum_timings", "plot_fits"]
+__all__ = ["FIT_STYLE", "draw_line", "plot_normal_form", "plot_objective", "plot_sum_timings", "plot_fits",
+           "error_ellipse", "plot_error_ellipse", "plot_uncertainty_band"]
+
+#: The 95% quantile of the chi-square distribution with 2 degrees of freedom.
+CHI2_95_2D = 5.99
 
 #: The line style and colour of each of the three fits.
 FIT_STYLE = {"OLS": ("-", mpl("corners")), "TLS": ("--", mpl("circles")), "weighted polar": (":", mpl("lines"))}
@@ -199,4 +203,102 @@ def plot_fits(r: float, alpha: float, points, fits: dict, *, title: str = "", ax
     ax.legend(loc="lower left", fontsize=8)
     if title:
         ax.set_title(title)
+    return ax
+
+
+def error_ellipse(covariance, chi2: float = CHI2_95_2D, n: int = 200):
+    """Points on the ellipse ``d^T C^-1 d = chi2`` of a 2x2 covariance ``C``, centred on zero.
+
+    Parameters
+    ----------
+    covariance : array_like of shape (2, 2)
+        The covariance C (symmetric, positive definite).
+    chi2 : float, default 5.99
+        The level: 5.99 holds 95% of a 2-D Gaussian.
+    n : int, default 200
+        How many points (the first and the last coincide).
+
+    Returns
+    -------
+    numpy.ndarray of shape (2, n)
+        The ellipse's points, one column each.
+    """
+    angle = np.linspace(0, 2 * np.pi, n)
+    return np.linalg.cholesky(np.asarray(covariance, dtype=float)) @ np.vstack([np.cos(angle), np.sin(angle)]) \
+        * np.sqrt(chi2)
+
+
+def plot_error_ellipse(errors, covariance, *, title: str = "", label: str = "Monte Carlo fits", size: float = 2,
+                       ax=None):
+    """Errors (r, alpha) of many fits as points, with the 95% ellipse of their covariance; in mm and degrees.
+
+    Parameters
+    ----------
+    errors : array_like of shape (K, 2)
+        Each fit's error in r (m) and in alpha (rad).
+    covariance : array_like of shape (2, 2)
+        The propagated covariance of (r, alpha), in m and rad.
+    title : str, optional
+        The axes' title; one longer than 60 characters is drawn at 9 points so that it fits.
+    label : str, default "Monte Carlo fits"
+        The points' legend entry.
+    size : float, default 2
+        The points' marker size.
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
+    """
+    ax = axes_or_new(ax, (7, 5))
+    d = np.asarray(errors, dtype=float)
+    ellipse = error_ellipse(covariance)
+    ax.scatter(1000 * d[:, 0], np.degrees(d[:, 1]), s=size, color="0.6", label=label)
+    ax.plot(1000 * ellipse[0], np.degrees(ellipse[1]), color=mpl("lines"), lw=2, label="95% ellipse of C")
+    ax.set_xlabel("r error (mm)")
+    ax.set_ylabel("alpha error (deg)")
+    if title:
+        ax.set_title(title, **({"fontsize": 9} if len(title) > 60 else {}))
+    ax.legend(fontsize=8)
+    return ax
+
+
+def plot_uncertainty_band(s, band, offsets, s_points, s_star: float, *, n_lines: int = 100, ax=None):
+    """A line fit's uncertainty band in the wall's frame: Monte Carlo fits as grey lines, +-band in red.
+
+    Parameters
+    ----------
+    s : array_like of shape (M,)
+        Positions along the true wall, in metres.
+    band : array_like of shape (M,)
+        The band's half-width at each position (e.g. 2 sigma(s)), in metres.
+    offsets : array_like of shape (K, M)
+        Each Monte Carlo fit's offset from the true wall at each position, in metres.
+    s_points : array_like
+        Where the points lie along the wall, in metres; their span is shaded.
+    s_star : float
+        The band's narrowest position, in metres.
+    n_lines : int, default 100
+        How many of the fits to draw (the first ones).
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into, offsets in millimetres.
+    """
+    ax = axes_or_new(ax, (8, 4.8))
+    band = np.asarray(band, dtype=float)
+    ax.plot(s, 1000 * np.asarray(offsets, dtype=float)[:n_lines].T, color="0.6", lw=0.5)
+    ax.plot(s, 1000 * band, color=mpl("lines"), lw=2, label="+-2 sigma(s) from the covariance")
+    ax.plot(s, -1000 * band, color=mpl("lines"), lw=2)
+    ax.axvspan(np.min(s_points), np.max(s_points), color=mpl("points"), alpha=0.1, label="where the points are")
+    ax.axvline(s_star, color="0.3", ls=":", label="narrowest point s*")
+    ax.set_xlabel("position along the wall, s (m)")
+    ax.set_ylabel("offset from the true wall (mm)")
+    ax.set_title("Monte Carlo fits (grey) and the propagated band")
+    ax.legend(loc="upper center", fontsize=8)
     return ax

@@ -1,4 +1,5 @@
-"""Figures of notebook 01 (scans and range segmentation), kept here so that a notebook's code cell stays short.
+"""Figures of notebooks 01 (scans and range segmentation) and 04 (split and merge), kept here so that a notebook's
+code cell stays short.
 
 The notebook computes every gap, range, incidence and threshold; these functions only draw what they are
 given. Each returns the ``Axes`` it drew into (made for you when ``ax`` is None), as in
@@ -9,10 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from labkit.viz.plot import axes_or_new
+from labkit.geometry import project_onto_line
+from labkit.viz.plot import axes_or_new, plot_lines, plot_scan, plot_truth
 from labkit.viz.style import mpl
 
-__all__ = ["wall_spacing", "plot_neighbour_gaps", "plot_threshold_curves"]
+__all__ = ["wall_spacing", "plot_neighbour_gaps", "plot_threshold_curves", "plot_first_split"]
 
 
 def wall_spacing(rho, dphi: float, incidence_deg: float) -> np.ndarray:
@@ -123,4 +125,52 @@ def plot_threshold_curves(rho, thresholds: dict, dphi: float, *, incidences=(0, 
     ax.set_title(title)
     ax.set_ylim(0, 1300)
     ax.legend(fontsize=8)
+    return ax
+
+
+def plot_first_split(scan, truth, first_fit, lines, *, title: str = "", xlim=(-1.6, 0.9), ylim=(0.95, 1.85),
+                     ax=None):
+    """A split-and-merge run's first line and its worst point over the scan, with the lines it ended with.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    truth : labkit.sim.ScanTruth
+        Its ground truth, drawn under the lines.
+    first_fit : labkit.Step
+        The first ``"fit"`` step of the segment: the line ``r``, ``alpha`` measured against, drawn dashed
+        between the projections of the first and last finite point of beams ``first..last``, and its worst
+        point, beam ``at``, ``value`` metres from the line, drawn as a cross.
+    lines : sequence of labkit.LineSegment
+        The lines the run ended with.
+    title : str, optional
+        The axes' title.
+    xlim, ylim : (float, float)
+        The window, in metres (default: notebook 04's corridor corner).
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw into; new ones when None.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into; the legend leaves out the scan's and the sensor's entries.
+    """
+    ax = axes_or_new(ax, (6.5, 5.5))
+    run = scan.points[first_fit.first:first_fit.last + 1]           # beams in order: no seam inside a segment
+    run = run[np.isfinite(run).all(axis=1)]
+    plot_scan(scan, ax, point_size=6, adjustable="box")
+    plot_truth(truth, ax)
+    ends = project_onto_line(run[[0, -1]], first_fit.r, first_fit.alpha)
+    ax.plot(*ends.T, "k--", lw=1.2, label="first line measured against")
+    ax.plot(*scan.points[first_fit.at], "x", color=mpl("sensor"), ms=12, mew=2.5,
+            label=f"its worst point ({first_fit.value:.2f} m)")
+    plot_lines(lines, ax, label="final line segments")
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
+    if title:
+        ax.set_title(title)
+    handles, labels = ax.get_legend_handles_labels()
+    chosen = [k for k, text in enumerate(labels) if not text.startswith(("invalid", "valid", "sensor"))]
+    ax.legend([handles[k] for k in chosen], [labels[k] for k in chosen], loc="lower right", fontsize=8)
     return ax
