@@ -66,7 +66,7 @@ chromium:
 # chromium), from the notebook outputs the first run kept: the course is executed once, not twice
 test: $(VENV)/.installed-dev sandbox chromium
 	$(ENGINES)
-	$(BIN)/python -m pytest -n $(JOBS) --ignore=tests/test_docs_site.py
+	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --ignore=tests/test_docs_site.py
 	$(BIN)/python -m pytest -n 0 -p no:cacheprovider tests/test_docs_site.py
 
 # The students' JupyterLab: `labkit lab` (labkit/grading/lab.py) hides nbgrader's instructor tools, makes Validate

@@ -387,28 +387,29 @@ class SharedLab:
     def open(self, path: str, run: BrowserRun):
         """The page showing ``path`` with its kernel idle. Once (make test, the 16th notebook of a worker) the
         shared page never saw the new kernel idle though the server had started it: then the notebook is opened
-        again in a new browser, which the run's console notes."""
+        again in a new browser, which the run's console notes; a second failure fails the test."""
         from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
         self.sink[0] = run
-        for attempt in (1, 2):
-            if self.page is None or self.page.is_closed():
-                self.close_browser()
-                self.browser = self.driver.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
-                self.page = _lab_page(self.browser, self.sink)
-                self.page.goto(f"{self.base}/lab/workspaces/test-shared?token={TOKEN}&reset")
-                self.page.wait_for_function(_STARTED)
-            self.page.evaluate(_OPEN, path)
-            try:
-                self.page.wait_for_function(_IDLE, timeout=OPEN_LIMIT_S * 1000)
-                return self.page
-            except PlaywrightTimeout:
-                if attempt == 2:
-                    raise
-                run.console.append(f"note: {path}: no idle kernel in the shared page in {OPEN_LIMIT_S} s, "
-                                   "opened again in a new browser")
-                self.close_browser()
-        raise AssertionError("unreachable")
+        try:
+            return self._show(path)
+        except PlaywrightTimeout:
+            run.console.append(f"note: {path}: no idle kernel in the shared page in {OPEN_LIMIT_S} s, "
+                               "opened again in a new browser")
+            self.close_browser()
+        return self._show(path)
+
+    def _show(self, path: str):
+        """Open ``path`` in the page (a new browser first if there is none) and wait for its idle kernel."""
+        if self.page is None or self.page.is_closed():
+            self.close_browser()
+            self.browser = self.driver.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+            self.page = _lab_page(self.browser, self.sink)
+            self.page.goto(f"{self.base}/lab/workspaces/test-shared?token={TOKEN}&reset")
+            self.page.wait_for_function(_STARTED)
+        self.page.evaluate(_OPEN, path)
+        self.page.wait_for_function(_IDLE, timeout=OPEN_LIMIT_S * 1000)
+        return self.page
 
     def close_notebook(self) -> None:
         if self.page is not None and not self.page.is_closed():
@@ -524,7 +525,18 @@ def shots(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("screenshots")
 
 
-@pytest.mark.parametrize("name", NOTEBOOKS)
+def _in_two_groups(names: list[str]) -> list:
+    """The notebooks as parameters in two xdist groups (``make test`` runs ``--dist loadgroup``), so that each
+    worker's one browser runs half of them: those with inline viewers (30-60 s more each) alternate between
+    the groups, and so do the others. Without the groups xdist once gave all 16 to one worker (17 minutes in a
+    row, the tail of make test)."""
+    viewers = [n for n in names if _has_viewers(REPO / "notebooks" / n)]
+    others = [n for n in names if n not in viewers]
+    group = {n: f"browser-{k % 2}" for kind in (viewers, others) for k, n in enumerate(kind)}
+    return [pytest.param(n, marks=pytest.mark.xdist_group(group[n])) for n in names]
+
+
+@pytest.mark.parametrize("name", _in_two_groups(NOTEBOOKS))
 def test_run_all_twice_in_the_browser(shared_lab, shots, name):
     """Run All, then Run All again (as a student who runs the notebook once more): no error either time."""
     first, second = run_twice(shared_lab, name, shots)
