@@ -238,6 +238,20 @@ def test_records_hold_every_feature_and_round_trip_through_json_lines(tmp_path, 
         write_features(feats, tmp_path / "f.jsonl")
 
 
+def test_a_json_line_is_the_strict_copy_of_its_record():
+    """Written as they are or through json_safe (a record with NaN, infinity or a numpy scalar), a line is
+    the record with its non-finite floats as null, every other value as json_safe gives it."""
+    from labkit.io.feature_files import _json_line
+
+    plain = {"scan": 3, "r": 0.1 + 0.2, "xs": (1.5, -2.0), "n": 7, "ok": True, "name": "line"}
+    odd = {"scan": 4, "a": float("nan"), "b": [float("inf"), -float("inf"), 2.5], "c": np.float64(0.3),
+           "d": np.int64(-5), "e": np.bool_(True), "f": {"g": (np.float32(1.25), float("nan"))}}
+    assert json.loads(_json_line(plain)) == {**plain, "xs": [1.5, -2.0]}
+    assert _json_line(plain) == json.dumps(plain, separators=(",", ":"))
+    assert json.loads(_json_line(odd)) == {"scan": 4, "a": None, "b": [None, None, 2.5], "c": 0.3, "d": -5,
+                                           "e": True, "f": {"g": [1.25, None]}}
+
+
 def test_a_corrupt_features_file_gives_what_it_can_then_an_error(tmp_path):
     feats = list(extract_all([s for s, _ in sim.simulate("hall", 0, n_scans=5)]))
     write_features(feats, tmp_path / "f.jsonl")

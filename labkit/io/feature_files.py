@@ -99,12 +99,23 @@ def write_features(features: Iterable[Features], out, *, overwrite: bool = False
     return _write_records(features, sys.stdout if str(out) == "-" else out, first_scan)
 
 
+def _json_line(record: dict) -> str:
+    """``record`` as one line of strict JSON, non-finite floats as null (:func:`json_safe`).
+
+    Most records hold only finite Python numbers: the encoder takes them as they are (it refuses NaN,
+    infinity and numpy's non-float scalars), and only a record it refuses is copied through
+    :func:`json_safe` (a third of ``labkit extract``'s writing time when every record was)."""
+    try:
+        return json.dumps(record, separators=(",", ":"), allow_nan=False)
+    except (ValueError, TypeError):
+        return json.dumps(json_safe(record), separators=(",", ":"), allow_nan=False)
+
+
 def _write_records(features: Iterable[Features], fh, first_scan: int = 0) -> int:
     n = 0
     try:
         for f in features:
-            record = {"scan": first_scan + n, **f.as_record()}
-            fh.write(json.dumps(json_safe(record), separators=(",", ":"), allow_nan=False) + "\n")
+            fh.write(_json_line({"scan": first_scan + n, **f.as_record()}) + "\n")
             n += 1
     finally:
         fh.flush()
