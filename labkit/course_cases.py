@@ -9,9 +9,106 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .course import Case
 
-__all__ = ["ray_axis_error", "three_beam_residual"]
+__all__ = ["is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "three_beam_residual"]
+
+
+def _same_verdict(got, want) -> bool:
+    return isinstance(got, (bool, np.bool_)) and bool(got) == want
+
+
+def is_v_shaped(clean_corner, stride: int) -> list[Case]:
+    """Notebook 08: cases of ``is_v_shaped(angles, n_neighbours=4, stride=1)``.
+
+    Parameters
+    ----------
+    clean_corner : ndarray
+        The inscribed angles of a noise-free V-shaped corner (radians): a V at ``stride``.
+    stride : int
+        The stride to try ``clean_corner`` with.
+
+    Returns
+    -------
+    list of Case
+        A clean V, an arc's wobbling angles, a flat apex (two equal smallest angles), a minimum too near
+        an end for two neighbours (and with one), a dense V whose neighbours swap next to the apex (at
+        stride 1 and 2), and the clean corner. The answer must be a bool.
+    """
+    v_dense = np.radians([150, 140, 130, 121, 112, 112, 100, 103, 111, 120, 131, 140, 150])  # noise beside the apex
+    return [
+        Case((np.radians([170, 150, 120, 90, 120, 150, 170]),), True, "the smallest angle's neighbours grow on both "
+             "sides: a V", compare=_same_verdict),
+        Case((np.radians([120, 118, 121, 117, 122, 119, 120]),), False, "an arc's angles wobble around one value: "
+             "the neighbours must grow strictly away from the minimum on both sides", compare=_same_verdict),
+        Case((np.radians([150, 120, 90, 90, 120, 150]),), False, "strictly: two equal angles at the apex are no V",
+             compare=_same_verdict),
+        Case((np.radians([130, 100, 120, 150, 170]),), False, "the minimum has only one angle on its left: "
+             "n_neighbours // 2 = 2 are needed on each side, else False", compare=_same_verdict),
+        Case((np.radians([130, 100, 120, 150, 170]),), True, "n_neighbours=2: one neighbour on each side",
+             kwargs={"n_neighbours": 2}, compare=_same_verdict),
+        Case((v_dense,), False, "stride 1: the neighbours next to the apex (112, 112) do not grow",
+             compare=_same_verdict),
+        Case((v_dense,), True, "take the neighbours stride angles apart, not next to each other",
+             kwargs={"stride": 2}, compare=_same_verdict),
+        Case((np.asarray(clean_corner),), True, "the corner above: its angles grow away from the apex",
+             kwargs={"stride": stride}, compare=_same_verdict),
+    ]
+
+
+def middle_ratio() -> list[Case]:
+    """Notebook 08: cases of ``middle_ratio(points, viewpoint)``.
+
+    Returns
+    -------
+    list of Case
+        A half circle of the unit circle bulging towards +y (0.5, or -0.5 seen from below), 120 degrees of
+        it (``tan(30 deg) / 2``, 0.2887), the half circle moved and scaled, and a straight segment (0).
+    """
+    t = np.radians([0.0, 45.0, 90.0, 135.0, 180.0])
+    half_circle = np.c_[np.cos(t), np.sin(t)]                     # bulges towards +y: offset 0.5 d
+    t120 = np.radians(np.linspace(30.0, 150.0, 7))
+    column_120 = np.c_[np.cos(t120), np.sin(t120)]                # 120 deg: (1/2) tan(30 deg) = 0.2887
+    return [
+        Case((half_circle, (0.0, 10.0)), 0.5, "offset over the chord length d: a half circle gives 0.5"),
+        Case((column_120, (0.0, 10.0)), 0.5 * np.tan(np.radians(30.0)), "divide the offset by the chord length d"),
+        Case((half_circle, (0.0, -10.0)), -0.5, "the sign: negative when the middle point is on the far side "
+             "of the chord from the viewpoint"),
+        Case((2.0 * half_circle + 5.0, (5.0, 20.0)), 0.5,
+             "moved and scaled: measure from P_1, divide by |P_n - P_1|"),
+        Case(([[1.0, 0.0], [1.0, 1.0], [1.0, 2.0]], (0.0, 0.0)), 0.0, "a straight segment gives 0"),
+    ]
+
+
+def _same_pair(got, want) -> bool:
+    return len(got) == 2 and bool(np.allclose(np.asarray(got, dtype=float), want, atol=1e-9))
+
+
+def radius_and_height() -> list[Case]:
+    """Notebook 08: cases of ``radius_and_height(chord, mean_angle)``.
+
+    Each case is an arc of ``span`` degrees of a circle of radius ``R``: its chord is ``2 R sin(span / 2)``,
+    its points see the chord under ``180 deg - span / 2``, and the centre lies ``R cos(span / 2)`` from the
+    chord's midpoint, away from the points.
+
+    Returns
+    -------
+    list of Case
+        Arcs of 120, 90, 180 and 240 degrees; the answer is a pair ``(R, height)``.
+    """
+    cases = []
+    for radius, span, hint_text in [
+            (0.25, 120.0, "the centre's height above the chord is (d/2) tan(theta): half the chord"),
+            (1.0, 90.0, "theta = mean_angle - 90 deg; radius (d/2) / cos(theta)"),
+            (0.5, 180.0, "a half circle: the centre is the chord's midpoint, height 0"),
+            (2.0, 240.0, "more than half a circle: tan(theta) < 0 puts the centre on the points' side"),
+    ]:
+        half = np.radians(span) / 2
+        cases.append(Case((2 * radius * np.sin(half), np.pi - half), (radius, radius * np.cos(half)), hint_text,
+                          compare=_same_pair, label=f"arc of {span:.0f} deg of R = {radius} m"))
+    return cases
 
 
 def ray_axis_error() -> list[Case]:

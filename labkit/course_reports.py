@@ -1,4 +1,4 @@
-"""Bookkeeping of the course notebooks (10b): sums, checks and printed summaries.
+"""Bookkeeping of the course notebooks (08, 10b): sums, checks, loops over trials and printed summaries.
 
 A notebook's code cell keeps its experiment (what is run, on which data, with which settings); the
 loops that only add up, compare with labkit or format a printout live here, so that the cell stays
@@ -23,7 +23,8 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_error_summary", "print_fixed_threshold_drift", "scaled_residuals", "on_one_wall",
            "print_noise_estimates", "print_best_fixed_against_auto", "print_one_threshold_for_all",
            "print_place_confidence_effect", "print_changes", "fixed_and_auto_on_log", "print_auto_on_logs",
-           "print_more_circles"]
+           "print_more_circles", "print_beams_on", "print_iav_verdicts", "print_v_corners", "print_circles",
+           "circle_fit_errors", "print_fit_error_summary"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -412,3 +413,206 @@ def print_more_circles(rows: Sequence[dict], before: str = "FIXED_CONFIG", after
              if more else ""))
     return more
 
+
+# ---------------------------------------------------------------------------- notebook 08: IAV circles
+def print_beams_on(shapes: Mapping[str, np.ndarray], beam_deg: float) -> dict[str, int]:
+    """Print how many beams a scanner at the origin, ``beam_deg`` apart, would put on each shape.
+
+    Parameters
+    ----------
+    shapes : mapping of str to ndarray
+        ``{name: points (M, 2)}``, metres, all in front of the sensor (|bearing| < 90 degrees).
+    beam_deg : float
+        The scanner's angular step, degrees.
+
+    Returns
+    -------
+    dict
+        ``{name: beams}``: the bearings' range over the step, plus one.
+    """
+    beams = {}
+    for name, p in shapes.items():
+        bearings = np.degrees(np.arctan2(p[:, 1], p[:, 0]))
+        beams[name] = int(np.ptp(bearings) / beam_deg) + 1
+        print(f"a {beam_deg} deg scanner would put {beams[name]} beams on the {name}, we use {len(p)} points")
+    print()
+    return beams
+
+
+def print_iav_verdicts(shapes: Mapping[str, np.ndarray], stats: Mapping) -> dict[str, tuple[bool, bool]]:
+    """Print each shape's mean and spread of inscribed angles, the circle test and the V-corner test.
+
+    The circle test is Xavier et al.'s: a mean between 90 and 135 degrees and a spread below
+    :data:`labkit.iav.CIRCLE_STD_MAX`; the V-corner test is :func:`labkit.iav.is_v_corner` with a stride of
+    an eighth of the angles.
+
+    Parameters
+    ----------
+    shapes : mapping of str to ndarray
+        ``{name: points (M, 2)}``.
+    stats : mapping
+        ``{name: labkit.iav.iav_stats(points)}``.
+
+    Returns
+    -------
+    dict
+        ``{name: (circle?, V-corner?)}``.
+    """
+    from . import iav
+
+    verdicts = {}
+    print(f"{'shape':9} {'mean (deg)':>10} {'std (deg)':>10}  circle?  v-corner test")
+    for name, p in shapes.items():
+        mean, std, _ = stats[name]
+        is_circle = bool(np.radians(90) <= mean <= np.radians(135) and std < iav.CIRCLE_STD_MAX)
+        v = iav.is_v_corner(iav.inscribed_angles(p), stride=max(1, (len(p) - 2) // 8))
+        verdicts[name] = (is_circle, v)
+        print(f"{name:9} {np.degrees(mean):10.1f} {np.degrees(std):10.1f}  {str(is_circle):7}  {v}")
+    return verdicts
+
+
+def print_v_corners(rows: Sequence[dict], arc_like_std: float) -> dict[str, list]:
+    """Print the table of V-shaped corners against the circle tests, then which corners pass which.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        One per corner: ``opening`` (degrees), ``apex`` (the noise-free apex angle), ``mean`` and ``std`` of
+        its noisy inscribed angles (radians), ``v`` (the V test's verdict).
+    arc_like_std : float
+        The "arc-like" spread limit, radians.
+
+    Returns
+    -------
+    dict
+        Lists of openings: ``circle_like`` (mean in 90-135 degrees), ``circles`` (that and a spread below
+        the circle's), ``arc_like`` (a spread below ``arc_like_std``), ``caught`` (arc-like and a V).
+    """
+    from .iav import CIRCLE_STD_MAX
+
+    def in_band(mean):
+        return bool(np.radians(90) <= mean <= np.radians(135))
+
+    print(f"{'opening':>7} {'apex angle':>10} {'mean':>6} {'std':>6}  mean in 90-135  std < 8.6  std < 23  your V test")
+    for r in rows:
+        print(f"{r['opening']:6d}° {np.degrees(r['apex']):9.1f}° {np.degrees(r['mean']):5.0f}° "
+              f"{np.degrees(r['std']):5.1f}°  {str(in_band(r['mean'])):14} {str(r['std'] < CIRCLE_STD_MAX):9}  "
+              f"{str(r['std'] < arc_like_std):8}  {r['v']}")
+    out = {"circle_like": [r["opening"] for r in rows if in_band(r["mean"])],
+           "circles": [r["opening"] for r in rows if in_band(r["mean"]) and r["std"] < CIRCLE_STD_MAX],
+           "arc_like": [r["opening"] for r in rows if r["std"] < arc_like_std],
+           "caught": [r["opening"] for r in rows if r["std"] < arc_like_std and r["v"]]}
+    print(f"\nthe corners of {out['circle_like']} deg have a circle-like mean; {len(out['circles'])} of them pass the "
+          f"circle's 8.6 deg spread; {out['arc_like'] or 'none'} would pass the arc-like 23 deg spread, and your V "
+          f"test rejects {out['caught'] or 'none'} of those")
+    return out
+
+
+def print_circles(circles: Mapping[str, tuple]) -> None:
+    """Print a table of circles: name, centre and radius, metres to four decimals.
+
+    Parameters
+    ----------
+    circles : mapping
+        ``{name: (centre, radius, ...)}``; anything after the radius is ignored.
+    """
+    print(f"{'':10} {'centre (m)':>18} {'radius (m)':>11}")
+    for name, (center, radius, *_) in circles.items():
+        print(f"{name:10} {str(np.round(np.asarray(center, dtype=float), 4)):>18} {radius:11.4f}")
+
+
+def circle_fit_errors(fits: Mapping[str, Callable], arcs: Callable, spans, trials: int, truth: tuple,
+                      rng: np.random.Generator) -> tuple[dict, dict]:
+    """Median centre and radius errors of circle fits on noisy arcs, span by span.
+
+    For every span, ``trials`` arcs ``arcs(span, rng)`` are drawn and every fit is tried on each; a fit
+    that raises ``ValueError`` (collinear points) counts as a failure and adds no error. Prints the points
+    per span and the failures.
+
+    Parameters
+    ----------
+    fits : mapping of str to callable
+        ``{name: fit(points)}`` returning ``(centre, radius)`` or an object with ``center`` and ``radius``.
+    arcs : callable
+        ``arcs(span, rng)``: the points of one noisy arc.
+    spans : sequence of float
+        The spans, degrees.
+    trials : int
+        Arcs per span.
+    truth : (centre, radius)
+        The true circle.
+    rng : numpy.random.Generator
+        Passed to ``arcs``.
+
+    Returns
+    -------
+    center_err, radius_err : dict
+        ``{name: ndarray (len(spans),)}``: the median distance of the centres from the true one, and the
+        median ``|radius - true radius|``, metres.
+    """
+    true_center, true_radius = np.asarray(truth[0], dtype=float), float(truth[1])
+    center_err = {m: np.zeros(len(spans)) for m in fits}
+    radius_err = {m: np.zeros(len(spans)) for m in fits}
+    failures = {m: 0 for m in fits}
+    n_points = {}
+    for k, span in enumerate(spans):
+        errs: dict[str, tuple[list, list]] = {m: ([], []) for m in fits}
+        for _ in range(trials):
+            points = arcs(span, rng)
+            n_points[int(span)] = len(points)
+            for m, fit in fits.items():
+                try:
+                    out = fit(points)
+                except ValueError:
+                    failures[m] += 1
+                    continue
+                c, r = (out.center, out.radius) if hasattr(out, "center") else out
+                errs[m][0].append(np.hypot(*(np.asarray(c) - true_center)))
+                errs[m][1].append(r - true_radius)
+        for m in fits:
+            center_err[m][k] = np.median(errs[m][0])
+            radius_err[m][k] = np.median(np.abs(errs[m][1]))
+    print("points per span:", n_points)
+    print("fits that failed (collinear points):", failures)
+    return center_err, radius_err
+
+
+def print_fit_error_summary(spans, center_err: Mapping[str, np.ndarray], *, short_deg: float = 30,
+                            middle_deg: tuple[float, float] = (45, 120)) -> dict[str, float]:
+    """Print each method's centre error per span, then three summaries of them.
+
+    Parameters
+    ----------
+    spans : ndarray
+        The spans, degrees, 180 among them.
+    center_err : mapping of str to ndarray
+        ``{method: median centre error per span}``, metres, with an ``"iav"`` and a ``"geometric"`` method.
+    short_deg : float, default 30
+        Spans up to this are short.
+    middle_deg : (float, float), default (45, 120)
+        The middle range of spans.
+
+    Returns
+    -------
+    dict
+        ``worst_short`` (the smallest error of any method on a short span, m), ``excess_min`` and
+        ``excess_max`` (IAV's error over the geometric fit's, minus 1, in the middle range), ``spread_half``
+        (the largest error at 180 degrees, m).
+    """
+    spans = np.asarray(spans)
+    half = list(spans).index(180)
+    middle = (spans >= middle_deg[0]) & (spans <= middle_deg[1])
+    short = spans <= short_deg
+    for m, errors in center_err.items():
+        text = ", ".join(f"{s} deg {100 * e:.2f} cm" for s, e in zip(spans, errors, strict=True))
+        print(f"{m:9} centre error: {text}")
+    worst_short = min(errors[short].min() for errors in center_err.values())
+    excess = center_err["iav"][middle] / center_err["geometric"][middle] - 1
+    spread_half = max(errors[half] for errors in center_err.values())
+    print(f"\nat {spans[short].min()} to {spans[short].max()} deg every method is off by at least "
+          f"{100 * worst_short:.1f} cm")
+    print(f"between {middle_deg[0]:g} and {middle_deg[1]:g} deg IAV's centre error is {excess.min():+.0%} to "
+          f"{excess.max():+.0%} of the geometric fit's")
+    print(f"with half of the column visible every method is within {1000 * spread_half:.1f} mm")
+    return {"worst_short": float(worst_short), "excess_min": float(excess.min()), "excess_max": float(excess.max()),
+            "spread_half": float(spread_half)}

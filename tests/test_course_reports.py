@@ -13,7 +13,17 @@ import labkit
 from labkit import course_cases as cases
 from labkit import course_fallbacks as fallbacks
 from labkit import course_reports as reports
+from labkit import course_shapes as shapes
+from labkit import iav
 from labkit.course import YourTurnError, check
+
+
+def _no_stride(angles, n_neighbours=4, stride=1):       # neighbours next to each other, whatever the stride
+    i = int(np.argmin(angles))
+    k = n_neighbours // 2
+    if i < k or i + k >= len(angles):
+        return False
+    return bool(np.all(np.diff(angles[i - k:i + 1]) < 0) and np.all(np.diff(angles[i:i + k + 1]) > 0))
 
 
 @pytest.mark.parametrize("name, wrong", [
@@ -27,6 +37,22 @@ def test_the_cases_pass_labkits_answer_and_fail_a_wrong_one(name, wrong, capsys)
     assert "well done" in capsys.readouterr().out
     with pytest.raises(YourTurnError, match="Hint"):
         check(wrong, getattr(cases, name)(), fallback=None, name=name)
+
+
+def test_the_notebook_08_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    corner = iav.inscribed_angles(shapes.v_corner_points(90.0))
+    v_cases = cases.is_v_shaped(corner, stride=2)
+    assert check(iav.is_v_corner, v_cases, fallback=None) is iav.is_v_corner
+    assert check(iav.middle_point_offset, cases.middle_ratio(), fallback=None) is iav.middle_point_offset
+    assert check(fallbacks.radius_and_height, cases.radius_and_height(), fallback=None) is fallbacks.radius_and_height
+    assert capsys.readouterr().out.count("well done") == 3
+    with pytest.raises(YourTurnError, match="stride angles apart"):
+        check(_no_stride, v_cases, fallback=None, name="is_v_shaped")
+    with pytest.raises(YourTurnError, match="the sign"):               # the offset's size without its sign
+        check(lambda p, v: abs(iav.middle_point_offset(p, v)), cases.middle_ratio(), fallback=None)
+    with pytest.raises(YourTurnError, match="half the chord"):         # the printed slip: the whole chord
+        check(lambda d, a: (d / 2 / math.cos(a - math.pi / 2), d * math.tan(a - math.pi / 2)),
+              cases.radius_and_height(), fallback=None)
 
 
 def test_ray_axis_cases_by_hand():
@@ -185,3 +211,102 @@ def test_fixed_and_auto_on_a_bag_are_its_pooled_ray_errors():
     assert row["log"] == "hall.bag" and row["step"] == f"{math.degrees(scans[0].angle_increment):.2f}"
     assert set(row) == set(reports.FIXED_AND_AUTO_COLUMNS)
 
+
+# ---------------------------------------------------------------------------- notebook 08
+def test_add_range_noise_moves_points_along_their_beams():
+    rng, again = np.random.default_rng(3), np.random.default_rng(3)
+    points = np.array([[3.0, 4.0], [0.0, 2.0]])
+    moved = shapes.add_range_noise(points, 0.1, rng)
+    e = again.normal(0, 0.1, 2)
+    np.testing.assert_allclose(moved, [[3.0 * (5 + e[0]) / 5, 4.0 * (5 + e[0]) / 5], [0.0, 2.0 + e[1]]])
+
+
+def test_the_shapes_by_hand():
+    s = shapes.iav_test_shapes(5)
+    np.testing.assert_allclose(np.hypot(*(s["arc"] - (3.0, 0.0)).T), 0.25)          # on the column
+    np.testing.assert_allclose(s["arc"][[0, 2, 4]], [[2.875, 0.25 * math.sin(math.radians(120))], [2.75, 0.0],
+                                                      [2.875, -0.25 * math.sin(math.radians(120))]], atol=1e-12)
+    np.testing.assert_allclose(s["line"], np.c_[np.full(5, 3.0), [-0.4, -0.2, 0.0, 0.2, 0.4]])
+    arm = 0.4 / math.sqrt(2)                                      # the corner: apex at (3 - arm, 0), arms at 45 deg
+    np.testing.assert_allclose(s["V-corner"][[0, 2, 4]], [[3.0, -arm], [3.0 - arm, 0.0], [3.0, arm]])
+    v = shapes.v_corner_points(60.0, arm_m=1.0, n=3, apex=(2.0, 0.0))
+    np.testing.assert_allclose(v, [[2.0 + math.cos(math.radians(30)), -0.5], [2.0, 0.0],
+                                   [2.0 + math.cos(math.radians(30)), 0.5]])
+
+
+def test_noisy_arc_has_a_point_per_beam_and_faces_the_sensor():
+    # 100 deg of R = 0.25 m is 0.4363 m of arc; beams 3 m * 0.5 deg = 0.02618 m apart: int(16.67) + 1 = 17 points
+    step = 3.0 * math.radians(0.5)
+    pts = shapes.noisy_arc((3.0, 0.0), 0.25, 100.0, np.random.default_rng(0), beam_step_m=step, sigma_m=0.0,
+                           turn_deg=0.0)
+    assert len(pts) == 17
+    np.testing.assert_allclose(np.hypot(*(pts - (3.0, 0.0)).T), 0.25)
+    c, s = 0.25 * math.cos(math.radians(50)), 0.25 * math.sin(math.radians(50))   # from 130 deg to 230 deg
+    np.testing.assert_allclose(pts[[0, -1]], [[3.0 - c, s], [3.0 - c, -s]])
+    assert len(shapes.noisy_arc((3.0, 0.0), 0.25, 5.0, np.random.default_rng(0), beam_step_m=step, sigma_m=0.0)) == 4
+
+
+def test_beams_on_and_iav_verdicts_by_hand(capsys):
+    # a wall from (3, -3) to (3, 3) spans bearings -45..45 deg: 90 / 0.5 + 1 = 181 beams
+    wall = np.c_[np.full(7, 3.0), np.linspace(-3, 3, 7)]
+    assert reports.print_beams_on({"wall": wall}, beam_deg=0.5) == {"wall": 181}
+    half = np.c_[3.0 - np.sin(np.linspace(0, np.pi, 9)), np.cos(np.linspace(0, np.pi, 9))]  # half circle: 90 deg
+    pts = {"half circle": half, "wall": wall}
+    verdicts = reports.print_iav_verdicts(pts, {k: iav.iav_stats(p) for k, p in pts.items()})
+    assert verdicts == {"half circle": (True, False), "wall": (False, False)}
+    out = capsys.readouterr().out
+    assert "a 0.5 deg scanner would put 181 beams on the wall, we use 7 points" in out
+    assert "half circle       90.0        0.0  True     False" in out
+
+
+def test_v_corners_sorts_openings_into_the_tests(capsys):
+    deg = math.radians
+    rows = [{"opening": 60, "apex": deg(60), "mean": deg(120), "std": deg(20), "v": True},    # circle-like, arc-like
+            {"opening": 90, "apex": deg(90), "mean": deg(130), "std": deg(5), "v": False},    # passes as a circle
+            {"opening": 150, "apex": deg(150), "mean": deg(165), "std": deg(10), "v": False}]  # arc-like only
+    out = reports.print_v_corners(rows, deg(23))
+    assert out == {"circle_like": [60, 90], "circles": [90], "arc_like": [60, 90, 150], "caught": [60]}
+    text = capsys.readouterr().out
+    assert "    60°      60.0°   120°  20.0°  True           False      True      True" in text
+    assert "the corners of [60, 90] deg have a circle-like mean; 1 of them pass" in text
+
+
+def test_circles_table(capsys):
+    reports.print_circles({"truth": (np.array([3.0, 0.0]), 0.25, "0.6"), "fit": ((3.00004, -0.1), 0.3)})
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1].split() == ["truth", "[3.", "0.]", "0.2500"] and lines[2].split()[-1] == "0.3000"
+
+
+def test_circle_fit_errors_are_medians_by_hand(capsys):
+    # three "trials" per span; a fit that is off by the trial number in x, another that fails on the second
+    draws = iter(range(100))
+
+    def arcs(span, rng):
+        return np.array([[next(draws), 0.0]] * 3)
+
+    def off_by(points):
+        return (points[0, 0] % 3, 0.0), 1.0 + points[0, 0] % 3      # trial k: centre off by k m, radius by k m
+
+    def fails_on_1(points):
+        if points[0, 0] % 3 == 1:
+            raise ValueError("collinear")
+        return np.zeros(2), 1.0
+
+    center, radius = reports.circle_fit_errors({"a": off_by, "b": fails_on_1}, arcs, [30, 180], 3,
+                                               (np.zeros(2), 1.0), np.random.default_rng(0))
+    np.testing.assert_allclose(center["a"], [1.0, 1.0])          # the median of 0, 1, 2
+    np.testing.assert_allclose(radius["a"], [1.0, 1.0])
+    np.testing.assert_allclose(center["b"], [0.0, 0.0])
+    out = capsys.readouterr().out
+    assert "points per span: {30: 3, 180: 3}" in out and "{'a': 0, 'b': 2}" in out
+
+
+def test_fit_error_summary_by_hand(capsys):
+    spans = np.array([20, 30, 45, 90, 180])
+    err = {"iav": np.array([0.2, 0.1, 0.03, 0.02, 0.004]), "geometric": np.array([0.3, 0.05, 0.02, 0.01, 0.002])}
+    out = reports.print_fit_error_summary(spans, err, short_deg=30, middle_deg=(45, 120))
+    assert out == pytest.approx({"worst_short": 0.05, "excess_min": 0.5, "excess_max": 1.0, "spread_half": 0.004})
+    text = capsys.readouterr().out
+    assert "at 20 to 30 deg every method is off by at least 5.0 cm" in text
+    assert "between 45 and 120 deg IAV's centre error is +50% to +100% of the geometric fit's" in text
+    assert "within 4.0 mm" in text
