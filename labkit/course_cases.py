@@ -13,7 +13,80 @@ import numpy as np
 
 from .course import Case
 
-__all__ = ["is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "three_beam_residual"]
+__all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
+           "three_beam_residual"]
+
+
+def _line(r: float, degrees: float):
+    """A line (r, alpha) to test with: labkit's LineSegment record, its other fields unused."""
+    from .features import LineSegment
+
+    return LineSegment(r=r, alpha=math.radians(degrees), covariance=np.full((2, 2), np.nan), start=np.zeros(2),
+                       end=np.zeros(2), first=0, last=1, n_points=2, error=0.0, indices=np.arange(2))
+
+
+def similar_lines(piece_a, piece_b) -> list[Case]:
+    """Notebook 05: cases of ``similar_lines(a, b, dr_max_m, dalpha_max)``, with 5 cm and 5 degrees.
+
+    Parameters
+    ----------
+    piece_a, piece_b : labkit.LineSegment
+        Two pieces of one wall whose normals lie near +180 and -180 degrees; labkit's own test
+        (:func:`labkit.course_fallbacks.similar_lines`) gives their expected answer.
+
+    Returns
+    -------
+    list of Case
+        Lines 3 cm and 2 degrees apart (similar), 10 cm apart (not), 178 and -179 degrees (similar:
+        3 degrees apart), one line through near the sensor with opposite normals (similar), walls 2 m
+        ahead and behind (not), and the two pieces.
+    """
+    from .course_fallbacks import similar_lines as labkits
+
+    strict = {"dr_max_m": 0.05, "dalpha_max": math.radians(5.0)}
+    return [
+        Case((_line(2.0, 10.0), _line(2.03, 12.0)), True, kwargs=strict, hint="3 cm and 2 degrees apart: similar"),
+        Case((_line(2.0, 10.0), _line(2.1, 10.0)), False, kwargs=strict, hint="|r2 - r1| = 0.1 m is not < dr_max_m"),
+        Case((_line(3.0, 178.0), _line(3.01, -179.0)), True, kwargs=strict,
+             hint="angles wrap: 178 and -179 degrees are 3 degrees apart, not 357"),
+        Case((_line(0.02, 10.0), _line(0.01, -170.0)), True, kwargs=strict,
+             hint="one line with opposite normals: compare with (-r2, alpha2 + pi)"),
+        Case((_line(2.0, 0.0), _line(2.0, 180.0)), False, kwargs=strict, hint="walls 2 m ahead and 2 m behind"),
+        Case((piece_a, piece_b), labkits(piece_a, piece_b), label="the office's two pieces behind the robot",
+             hint="angles wrap: the two pieces' normals are close to +180 and -180 degrees"),
+    ]
+
+
+def _is_none(got, expected) -> bool:
+    return got is None
+
+
+def intersection(first, second, corner_point) -> list[Case]:
+    """Notebook 05: cases of ``intersection(r1, alpha1, r2, alpha2)``.
+
+    Parameters
+    ----------
+    first, second : labkit.LineSegment
+        The two lines of a corner labkit found.
+    corner_point : array_like
+        That corner's point, which the intersection of ``first`` and ``second`` must give.
+
+    Returns
+    -------
+    list of Case
+        ``x = 2`` and ``y = 1`` meet at (2, 1); ``x + y = 2`` and ``x = 0.5`` at (0.5, 1.5); ``x = 1`` and
+        ``x = 2`` never (None), nor ``x = 1`` and ``x = -1`` (opposite normals); and the corner.
+    """
+    return [
+        Case((2.0, 0.0, 1.0, math.pi / 2), [2.0, 1.0], hint="x = 2 and y = 1 meet at (2, 1): check y"),
+        Case((math.sqrt(2.0), math.pi / 4, 0.5, 0.0), [0.5, 1.5], hint="x + y = 2 and x = 0.5 meet at (0.5, 1.5)"),
+        Case((1.0, 0.0, 2.0, 0.0), None, compare=_is_none,
+             hint="parallel lines (x = 1, x = 2) never meet: return None"),
+        Case((1.0, 0.0, 1.0, math.pi), None, compare=_is_none,
+             hint="x = 1 and x = -1 (normals opposite) are parallel too: return None"),
+        Case((first.r, first.alpha, second.r, second.alpha), np.asarray(corner_point), atol=1e-9,
+             label="the room's first corner", hint="the corner labkit found between these two lines"),
+    ]
 
 
 def _same_verdict(got, want) -> bool:

@@ -1,4 +1,4 @@
-"""Bookkeeping of the course notebooks (08, 10b): sums, checks, loops over trials and printed summaries.
+"""Bookkeeping of the course notebooks (05, 08, 10b): sums, checks, loops over trials and printed summaries.
 
 A notebook's code cell keeps its experiment (what is run, on which data, with which settings); the
 loops that only add up, compare with labkit or format a printout live here, so that the cell stays
@@ -24,7 +24,8 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_noise_estimates", "print_best_fixed_against_auto", "print_one_threshold_for_all",
            "print_place_confidence_effect", "print_changes", "fixed_and_auto_on_log", "print_auto_on_logs",
            "print_more_circles", "print_beams_on", "print_iav_verdicts", "print_v_corners", "print_circles",
-           "circle_fit_errors", "print_fit_error_summary"]
+           "circle_fit_errors", "print_fit_error_summary", "wall_score", "print_merges", "check_extrapolation",
+           "print_parameter_sweeps"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -616,3 +617,152 @@ def print_fit_error_summary(spans, center_err: Mapping[str, np.ndarray], *, shor
     print(f"with half of the column visible every method is within {1000 * spread_half:.1f} mm")
     return {"worst_short": float(worst_short), "excess_min": float(excess.min()), "excess_max": float(excess.max()),
             "spread_half": float(spread_half)}
+
+
+# ---------------------------------------------------------------------------- notebook 05: merge and corners
+def wall_score(lines, truth, dr_m: float = 0.05, dalpha: float = math.radians(3)) -> np.ndarray:
+    """Notebook 04's score of one scan's lines against its true walls: found, eligible, wrong, lines.
+
+    A wall piece of at least 10 beams and 0.3 m is eligible; it is found when a line lies mostly (over
+    half of its beams) on it within ``dr_m`` in r and ``dalpha`` in alpha. A line is wrong when it lies
+    mostly on a wall (its beams' most common hit) and matches none of that wall's pieces.
+
+    Parameters
+    ----------
+    lines : list of labkit.LineSegment
+        The scan's lines.
+    truth : labkit.sim.ScanTruth
+        Its ground truth: ``walls`` (pieces with ``wall_id``, ``r``, ``alpha``, ``n_beams``, ``length``)
+        and ``hits`` (what each beam hit).
+    dr_m : float, default 0.05
+        The tolerance in r, metres.
+    dalpha : float, default 3 degrees
+        The tolerance in alpha, radians.
+
+    Returns
+    -------
+    ndarray of int
+        ``[found, eligible, wrong, lines]``: arrays of several scans add up.
+    """
+    from .geometry import angle_difference
+
+    def matches(line, wall):
+        return abs(line.r - wall.r) < dr_m and abs(angle_difference(line.alpha, wall.alpha)) < dalpha
+
+    hits = np.asarray(truth.hits)
+    eligible = [w for w in truth.walls if w.n_beams >= 10 and w.length >= 0.3]
+    found = sum(any(np.mean(hits[line.indices] == w.wall_id) > 0.5 and matches(line, w) for line in lines)
+                for w in eligible)
+    wrong = 0
+    for line in lines:
+        ids, counts = np.unique(hits[line.indices], return_counts=True)
+        owner = ids[np.argmax(counts)]
+        pieces = [w for w in truth.walls if w.wall_id == owner]
+        wrong += bool(pieces) and not any(matches(line, w) for w in pieces)
+    return np.array([found, len(eligible), wrong, len(lines)])
+
+
+def print_merges(before, naive, wrapped) -> int:
+    """Print the line counts of two merges, their first and last lines, and the naive merge's pieces.
+
+    Parameters
+    ----------
+    before : list of labkit.LineSegment
+        The lines before merging.
+    naive, wrapped : list of labkit.LineSegment
+        Merged with the naive angle difference and with the wrapped one; ``wrapped[0]`` is the wall
+        across the seam.
+
+    Returns
+    -------
+    int
+        How many of the naive merge's lines lie within the beams of ``wrapped[0]``.
+    """
+    print(f"{len(before)} lines before merging; naive angles: {len(naive)} after, wrapped: {len(wrapped)} after")
+    print("naive, first and last:", naive[0], naive[-1], sep="\n  ")
+    print("wrapped, first:", wrapped[0], sep="\n  ")
+    wall_behind = set(wrapped[0].indices.tolist())
+    behind = [line for line in naive if set(line.indices.tolist()) <= wall_behind]
+    print(f"with the naive difference the wall behind the robot stays in {len(behind)} pieces; wrapped, "
+          f"it is one line across the seam: {wrapped[0].first > wrapped[0].last}")
+    return len(behind)
+
+
+def check_extrapolation(corners, lines, extrapolation: Callable, max_extension_m: float = 0.1) -> None:
+    """Check a corner rule against labkit's ``extrapolated`` flags, then explain the farthest corner.
+
+    Parameters
+    ----------
+    corners : list of labkit.Corner
+        The corners :func:`labkit.find_corners` found in ``lines``.
+    lines : list of labkit.LineSegment
+        The lines.
+    extrapolation : callable
+        ``extrapolation(corner)`` returning ``(extension, allowance, neighbours, gap)``: metres, metres,
+        whether the two lines end on neighbouring beams, metres.
+    max_extension_m : float, default 0.1
+        ``find_corners``' allowance away from neighbouring beams.
+
+    Raises
+    ------
+    AssertionError
+        When ``extension > allowance`` differs from a corner's ``extrapolated``.
+    """
+    from .geometry import angle_difference
+
+    for corner in corners:
+        extension, allowance, _, _ = extrapolation(corner)
+        assert (extension > allowance) == corner.extrapolated, f"the rule disagrees with labkit at {corner}"
+    print("check: your intersection gives labkit's corner points, and the rule gives labkit's `extrapolated`")
+    far = max(corners, key=lambda c: np.hypot(*c.point))
+    extension, allowance, neighbours, gap = extrapolation(far)
+    graze = max(abs(np.degrees(angle_difference(math.atan2(far.point[1], far.point[0]), lines[i].alpha)))
+                for i in far.lines)
+    print(f"The farthest corner, {far.kind} at ({far.point[0]:.2f}, {far.point[1]:.2f}) m, is "
+          f"{np.hypot(*far.point):.1f} m away; the beams there meet one of its walls {graze:.0f} degrees from its "
+          f"normal. Its lines must be extended by {100 * extension:.1f} cm to meet, "
+          f"{'more' if extension > max_extension_m else 'no more'} than max_extension_m = "
+          f"{100 * max_extension_m:.0f} cm; they end on "
+          f"{'neighbouring beams' if neighbours else 'beams that are not neighbours'}, "
+          f"{100 * gap:.1f} cm apart, so the allowance is {100 * allowance:.1f} cm, and the corner is "
+          f"{'' if far.extrapolated else 'not '}marked extrapolated.")
+
+
+def print_parameter_sweeps(by_threshold: Mapping[float, tuple], by_min_points: Mapping[int, tuple]) -> float:
+    """Print the split-threshold and min-points tables, and check and print what they show.
+
+    Parameters
+    ----------
+    by_threshold : mapping
+        ``{split threshold (m): (lines, share of walls found, share of wrong lines)}``, with 0.01, 0.05 and 0.5.
+    by_min_points : mapping
+        ``{min_points: (lines, found, wrong)}``, with 2, 5 and 20.
+
+    Returns
+    -------
+    float
+        How far the fixed setting (0.05 m, 5 points) is below the best share of walls found.
+
+    Raises
+    ------
+    AssertionError
+        When the tables no longer show that 1 cm gives more lines and 50 cm finds fewer walls than 5 cm,
+        or that 2 points give more wrong lines and 20 find fewer walls than 5 (the notebook says so).
+    """
+    for name, rows, fmt in [("split threshold (m)", by_threshold, "{:20.2f}"), ("min points", by_min_points, "{:20d}")]:
+        print(f"{name:>20} {'lines':>6} {'walls found':>12} {'wrong lines':>12}")
+        for value, (n_lines, found, wrong) in rows.items():
+            print(f"{fmt.format(value)} {n_lines:6d} {found:12.1%} {wrong:12.1%}")
+        if name != "min points":
+            print()
+    t, m = by_threshold, by_min_points
+    print(f"\nsplit threshold 0.01 m: {t[0.01][0]} lines, {t[0.01][0] - t[0.05][0]} more than at 0.05 m; "
+          f"0.5 m: {t[0.5][1]:.1%} of the walls found against {t[0.05][1]:.1%} at 0.05 m")
+    print(f"min_points 2: {m[2][2]:.1%} wrong lines against {m[5][2]:.1%} at 5; "
+          f"min_points 20: {m[20][1]:.1%} of the walls found against {m[5][1]:.1%} at 5")
+    assert t[0.01][0] > t[0.05][0] and t[0.5][1] < t[0.05][1], "the split threshold no longer does what the text says"
+    assert m[2][2] > m[5][2] and m[20][1] < m[5][1], "min_points no longer does what the text says"
+    best = max(found for _, found, _ in [*t.values(), *m.values()])
+    print(f"the fixed setting (0.05 m, 5 points) finds {t[0.05][1]:.1%} of the walls, {best - t[0.05][1]:.1%} below "
+          f"the best setting of the sweep")
+    return float(best - t[0.05][1])

@@ -310,3 +310,90 @@ def test_fit_error_summary_by_hand(capsys):
     assert "at 20 to 30 deg every method is off by at least 5.0 cm" in text
     assert "between 45 and 120 deg IAV's centre error is +50% to +100% of the geometric fit's" in text
     assert "within 4.0 mm" in text
+
+
+# ---------------------------------------------------------------------------- notebook 05
+def _wall(wall_id, r, alpha, n_beams, length):
+    return SimpleNamespace(wall_id=wall_id, r=r, alpha=alpha, n_beams=n_beams, length=length)
+
+
+def test_wall_score_by_hand():
+    walls = [_wall(1, 2.0, 0.0, 20, 1.0), _wall(2, 3.0, math.pi / 2, 5, 1.0),   # wall 2: too few beams to count
+             _wall(3, 4.0, math.pi, 12, 0.5)]
+    truth = SimpleNamespace(walls=walls, hits=np.r_[np.full(20, 1), np.full(5, 2), np.full(12, 3)])
+
+    def line(r, alpha, beams):
+        return SimpleNamespace(r=r, alpha=alpha, indices=np.arange(*beams))
+
+    lines = [line(2.01, 0.01, (0, 20)),                  # finds wall 1
+             line(3.2, math.pi / 2, (20, 25)),          # on wall 2, 20 cm off: wrong
+             line(4.0, -math.pi + 0.01, (25, 37))]      # finds wall 3: its alpha wraps to 0.57 deg off
+    assert reports.wall_score(lines, truth).tolist() == [2, 2, 1, 3]
+    lines[2].alpha = -math.pi + 0.1                    # 5.7 deg off: wall 3 missed, the line wrong
+    assert reports.wall_score(lines, truth).tolist() == [1, 2, 2, 3]
+
+
+def test_the_notebook_05_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    a, b = cases._line(3.0, 179.0), cases._line(3.01, -179.5)      # 1.5 deg apart across +-180
+    assert check(fallbacks.similar_lines, cases.similar_lines(a, b), fallback=None) is fallbacks.similar_lines
+    first, second = SimpleNamespace(r=2.0, alpha=0.0), SimpleNamespace(r=1.0, alpha=math.pi / 2)   # x = 2, y = 1
+    meet = labkit.geometry.intersect_lines
+    assert check(meet, cases.intersection(first, second, (2.0, 1.0)), fallback=None) is meet
+    assert capsys.readouterr().out.count("well done") == 2
+
+    def naive(a, b, dr_max_m=0.2, dalpha_max=0.17):             # no wrap
+        return bool(abs(a.r - b.r) < dr_max_m and abs(a.alpha - b.alpha) < dalpha_max)
+
+    with pytest.raises(YourTurnError, match="angles wrap"):
+        check(naive, cases.similar_lines(a, b), fallback=None, name="similar_lines")
+
+    def no_parallel_test(r1, a1, r2, a2):
+        det = math.cos(a1) * math.sin(a2) - math.sin(a1) * math.cos(a2)
+        return np.array([r1 * math.sin(a2) - r2 * math.sin(a1), r2 * math.cos(a1) - r1 * math.cos(a2)]) / det
+
+    with pytest.raises(YourTurnError, match="parallel"):
+        check(no_parallel_test, cases.intersection(first, second, (2.0, 1.0)), fallback=None, name="intersection")
+
+
+def _seg(indices, first, last):
+    return SimpleNamespace(indices=np.array(indices), first=first, last=last)
+
+
+def test_print_merges_counts_the_pieces_left_behind(capsys):
+    naive = [_seg([0, 1], 0, 1), _seg([5, 6], 5, 6), _seg([358, 359], 358, 359)]
+    wrapped = [_seg([358, 359, 0, 1], 358, 1), _seg([5, 6], 5, 6)]
+    assert reports.print_merges([None] * 5, naive, wrapped) == 2          # [0, 1] and [358, 359] lie in the wall
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "5 lines before merging; naive angles: 3 after, wrapped: 2 after"
+    assert out[-1] == ("with the naive difference the wall behind the robot stays in 2 pieces; wrapped, "
+                       "it is one line across the seam: True")
+
+
+def test_check_extrapolation_by_hand(capsys):
+    lines = [SimpleNamespace(alpha=0.0), SimpleNamespace(alpha=math.pi / 2)]
+    far = SimpleNamespace(point=np.array([3.0, 4.0]), lines=(0, 1), kind="concave", extrapolated=True)
+    near = SimpleNamespace(point=np.array([1.0, 0.0]), lines=(0, 1), kind="convex", extrapolated=False)
+    rule = {id(far): (0.15, 0.12, True, 0.12), id(near): (0.05, 0.1, False, 0.3)}
+    reports.check_extrapolation([near, far], lines, lambda c: rule[id(c)])
+    out = capsys.readouterr().out
+    # the beam to (3, 4) is at 53.13 deg: 53 deg from the normal alpha = 0, 37 deg from alpha = 90 deg
+    assert ("The farthest corner, concave at (3.00, 4.00) m, is 5.0 m away; the beams there meet one of its walls "
+            "53 degrees from its normal. Its lines must be extended by 15.0 cm to meet, more than max_extension_m = "
+            "10 cm; they end on neighbouring beams, 12.0 cm apart, so the allowance is 12.0 cm, and the corner is "
+            "marked extrapolated.") in out
+    near.extrapolated = True
+    with pytest.raises(AssertionError, match="disagrees"):
+        reports.check_extrapolation([near, far], lines, lambda c: rule[id(c)])
+
+
+def test_parameter_sweeps_print_and_check_the_sentences(capsys):
+    t = {0.01: (50, 0.8, 0.2), 0.05: (30, 0.9, 0.1), 0.5: (10, 0.5, 0.05)}
+    m = {2: (60, 0.85, 0.3), 5: (30, 0.9, 0.1), 20: (20, 0.6, 0.05)}
+    assert reports.print_parameter_sweeps(t, m) == 0.0                    # the fixed setting is the best
+    out = capsys.readouterr().out
+    assert "                0.01     50        80.0%        20.0%" in out
+    assert "split threshold 0.01 m: 50 lines, 20 more than at 0.05 m; 0.5 m: 50.0% of the walls found" in out
+    assert "min_points 2: 30.0% wrong lines against 10.0% at 5" in out
+    t[0.5] = (10, 0.95, 0.05)
+    with pytest.raises(AssertionError, match="split threshold"):
+        reports.print_parameter_sweeps(t, m)
