@@ -14,7 +14,7 @@ import numpy as np
 from .course import Case
 
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
-           "three_beam_residual"]
+           "three_beam_residual", "triplet_direction", "wall_offsets"]
 
 
 def _line(r: float, degrees: float):
@@ -232,4 +232,75 @@ def three_beam_residual() -> list[Case]:
              "a 1 cm error on the middle range gives about -1 cm: multiply the inverse-range residual by r_mid**2"),
         Case((3.0, 3.0, 3.0, math.radians(1)), 3.0 * (1 - 1 / math.cos(math.radians(1))),
              "equal ranges lie on a circle, which bends away from the chord: s = r (1 - 1 / cos(dtheta))"),
+    ]
+
+
+def _on_line(direction_deg: float, offset=(1.0, 2.0)) -> tuple:
+    """Three points on the line through ``offset`` with the given direction (closed form)."""
+    u = np.array([np.cos(np.radians(direction_deg)), np.sin(np.radians(direction_deg))])
+    return tuple(np.asarray(offset) + t * u for t in (-0.3, 0.1, 0.5))
+
+
+def _same_direction(got, want) -> bool:
+    """Equal modulo pi, and ``got`` in [0, pi)."""
+    return bool(abs(np.cos(2 * got) - np.cos(2 * want)) < 1e-9 and abs(np.sin(2 * got) - np.sin(2 * want)) < 1e-9
+                and 0 <= got < np.pi)
+
+
+def triplet_direction(scan, phi, i: int) -> list[Case]:
+    """Notebook 07: cases of ``triplet_direction(p0, p1, p2)``, compared modulo pi, the answer in [0, pi).
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        A scan.
+    phi : ndarray
+        labkit's local direction of every beam of ``scan`` (:func:`labkit.local_directions`).
+    i : int
+        A beam with a local direction: the triplet of beams ``i - 1 .. i + 1`` must give ``phi[i]``.
+
+    Returns
+    -------
+    list of Case
+        Three points on lines at 30, 135 and 90 degrees, and the scan's triplet.
+    """
+    return [
+        Case(_on_line(30.0), np.radians(30.0), label="3 points on a line at 30 deg",
+             hint="the direction of largest spread: half the angle atan2 gives", compare=_same_direction),
+        Case(_on_line(135.0), np.radians(135.0), label="3 points on the line y = -x (135 deg)",
+             hint="directions are taken modulo pi, in [0, pi): 135 deg, not -45 deg", compare=_same_direction),
+        Case(_on_line(90.0), np.radians(90.0), label="3 points on a vertical line", hint="atan2, not arctan of a ratio",
+             compare=_same_direction),
+        Case(tuple(scan.points[i - 1:i + 2]), phi[i], label=f"beams {i - 1}..{i + 1} of the corridor scan",
+             hint="centre the points on their mean before you sum the squares", compare=_same_direction),
+    ]
+
+
+def wall_offsets(points, direction: float, offsets) -> list[Case]:
+    """Notebook 07: cases of ``wall_offsets(points, direction)``.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, 2)
+        The points of an angular cluster.
+    direction : float
+        The cluster's mean direction, radians.
+    offsets : ndarray, shape (N,)
+        labkit's offsets of those points (``angular_arrays(scan).distances``).
+
+    Returns
+    -------
+    list of Case
+        Points on ``y = -0.8`` at direction 0 (offsets -0.8), on ``x = 2`` at 90 degrees (-2), and the
+        cluster.
+    """
+    xs = np.linspace(-1.0, 5.0, 7)
+    return [
+        Case((np.column_stack([xs, np.full(7, -0.8)]), 0.0), np.full(7, -0.8), label="points on y = -0.8, direction 0",
+             hint="the offset is measured across the line, along its normal (-sin, cos), not along it"),
+        Case((np.column_stack([np.full(7, 2.0), xs]), np.pi / 2), np.full(7, -2.0),
+             label="points on x = 2, direction 90 deg", hint="normal of direction phi: (-sin phi, cos phi)"),
+        Case((np.asarray(points), direction), np.asarray(offsets), atol=1e-9,
+             label="the corridor walls' points, their cluster's mean direction",
+             hint="d = -x sin(direction) + y cos(direction)"),
     ]

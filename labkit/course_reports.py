@@ -1,4 +1,4 @@
-"""Bookkeeping of the course notebooks (05, 08, 10b): sums, checks, loops over trials and printed summaries.
+"""Bookkeeping of the course notebooks (05, 07, 08, 10b): sums, checks, loops over trials and printed summaries.
 
 A notebook's code cell keeps its experiment (what is run, on which data, with which settings); the
 loops that only add up, compare with labkit or format a printout live here, so that the cell stays
@@ -25,7 +25,8 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_place_confidence_effect", "print_changes", "fixed_and_auto_on_log", "print_auto_on_logs",
            "print_more_circles", "print_beams_on", "print_iav_verdicts", "print_v_corners", "print_circles",
            "circle_fit_errors", "print_fit_error_summary", "wall_score", "print_merges", "check_extrapolation",
-           "print_parameter_sweeps"]
+           "print_parameter_sweeps", "majority_label", "walls_found", "print_eps_answers", "extractor_row",
+           "print_extractor_table", "lines_on"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -766,3 +767,148 @@ def print_parameter_sweeps(by_threshold: Mapping[float, tuple], by_min_points: M
     print(f"the fixed setting (0.05 m, 5 points) finds {t[0.05][1]:.1%} of the walls, {best - t[0.05][1]:.1%} below "
           f"the best setting of the sweep")
     return float(best - t[0.05][1])
+
+
+# ---------------------------------------------------------------------------- notebook 07: angular segmentation
+def majority_label(labels) -> int:
+    """The most common label of ``labels``, noise (negative labels) left out.
+
+    Parameters
+    ----------
+    labels : ndarray of int
+        Cluster labels, -1 for noise.
+
+    Returns
+    -------
+    int
+        The label; the smallest of the most common ones on a tie.
+
+    Raises
+    ------
+    ValueError
+        When every label is noise.
+    """
+    labels = np.asarray(labels)
+    values, counts = np.unique(labels[labels >= 0], return_counts=True)
+    if len(values) == 0:
+        raise ValueError("every label is noise")
+    return int(values[np.argmax(counts)])
+
+
+def walls_found(lines, walls, dr: float = 0.10, dalpha: float = math.radians(5)) -> int:
+    """How many walls some line matches: offset within ``dr`` and normal within ``dalpha`` (infinite lines).
+
+    Parameters
+    ----------
+    lines : list
+        Lines with ``r`` (m) and ``alpha`` (rad).
+    walls : list
+        True walls with ``r`` and ``alpha``.
+    dr : float, default 0.10
+        Metres.
+    dalpha : float, default 5 degrees
+        Radians; the difference is wrapped.
+
+    Returns
+    -------
+    int
+        The number of walls matched.
+    """
+    from .geometry import angle_difference
+
+    return sum(any(abs(ln.r - w.r) < dr and abs(angle_difference(ln.alpha, w.alpha)) < dalpha for ln in lines)
+               for w in walls)
+
+
+def print_eps_answers(scan, base, wide_dist, narrow_theta) -> None:
+    """Print the three slider settings' summaries, then what moving each radius changed.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    base, wide_dist, narrow_theta : tuple
+        ``(lines, arrays, text)`` at (3 deg, 0.03 m), (3 deg, 0.35 m) and (1 deg, 0.03 m): the lines,
+        the :func:`labkit.angular_arrays` record and its one-line summary.
+    """
+    for _, _, text in (base, wide_dist, narrow_theta):
+        print(text)
+    n_base, n_wide = len(base[0]), len(wide_dist[0])
+    print(f"eps_dist 0.35 m instead of 0.03 m: {n_wide} segments instead of {n_base}"
+          + (": parallel pieces less than 0.35 m apart, such as a recess and its wall, now share a segment"
+             if n_wide < n_base else
+             ": not fewer, so the recesses do not simply merge into their walls on this scan. Segment sizes "
+             f"(points): {sorted(ln.n_points for ln in base[0])} at 0.03 m, "
+             f"{sorted(ln.n_points for ln in wide_dist[0])} at 0.35 m: move the slider to see where the new, short "
+             "segments lie"))
+    share_base, share_narrow = (np.mean(r[1].labels[scan.valid] >= 0) for r in (base, narrow_theta))
+    print(f"eps_theta 1 deg instead of 3 deg: {share_narrow:.0%} of the valid beams in a segment instead of "
+          f"{share_base:.0%}" + (": noisy directions no longer chain" if share_narrow < share_base else ""))
+
+
+def extractor_row(world: str, k: int, walls, *line_sets, min_beams: int = 10) -> tuple:
+    """One row of the extractor table: world, scan, walls, then (lines, walls found) per set of lines.
+
+    Parameters
+    ----------
+    world : str
+        The world's name.
+    k : int
+        The scan's index.
+    walls : list
+        The scan's true walls (with ``n_beams``); those seen by at least ``min_beams`` beams count.
+    *line_sets : list
+        Each extractor's lines on the scan.
+    min_beams : int, default 10
+        The fewest beams a wall that counts is seen by.
+
+    Returns
+    -------
+    tuple
+        ``(world, k, walls that count, n_1, found_1, n_2, found_2, ...)`` with :func:`walls_found`.
+    """
+    seen = [w for w in walls if w.n_beams >= min_beams]
+    return (world, k, len(seen), *[v for lines in line_sets for v in (len(lines), walls_found(lines, seen))])
+
+
+def print_extractor_table(rows) -> np.ndarray:
+    """Print the rows of :func:`extractor_row` of three extractors (angular, angular with gaps, split-and-merge).
+
+    Parameters
+    ----------
+    rows : list of tuple
+        ``(world, k, walls, n_ang, found_ang, n_gap, found_gap, n_sm, found_sm)``.
+
+    Returns
+    -------
+    ndarray
+        The column totals from ``walls`` on.
+    """
+    print(f"{'world':9} {'scan':>4} {'walls':>5} | {'angular, inf':>12} | {'gap 0.3 m':>12} | {'split&merge':>12}")
+    print(f"{'':9} {'':>4} {'':>5} | {'lines found':>12} | {'lines found':>12} | {'lines found':>12}")
+    for world, k, nw, na, fa, ng, fg, ns, fs in rows:
+        print(f"{world:9} {k:4} {nw:5} | {na:5} {fa:6} | {ng:5} {fg:6} | {ns:5} {fs:6}")
+    tot = np.array([r[2:] for r in rows]).sum(axis=0)
+    print(f"{'total':9} {'':4} {tot[0]:5} | {tot[1]:5} {tot[2]:6} | {tot[3]:5} {tot[4]:6} | {tot[5]:5} {tot[6]:6}")
+    print(f"\nsplit_gap_m = 0.3 m: {tot[3]} lines instead of {tot[1]}, {tot[4]} walls found instead of {tot[2]}; "
+          f"it changes the lines of {sum(r[3] != r[5] for r in rows)} of the {len(rows)} scans")
+    return tot
+
+
+def lines_on(lines, mask) -> list:
+    """The lines most of whose beams (over half) are in ``mask``.
+
+    Parameters
+    ----------
+    lines : list
+        Lines with ``indices`` (their beams).
+    mask : ndarray of bool
+        One entry per beam.
+
+    Returns
+    -------
+    list
+        Those lines, in order.
+    """
+    beams = set(np.flatnonzero(mask))
+    return [ln for ln in lines if np.mean([b in beams for b in ln.indices]) > 0.5]

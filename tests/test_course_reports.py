@@ -397,3 +397,70 @@ def test_parameter_sweeps_print_and_check_the_sentences(capsys):
     t[0.5] = (10, 0.95, 0.05)
     with pytest.raises(AssertionError, match="split threshold"):
         reports.print_parameter_sweeps(t, m)
+
+
+# ---------------------------------------------------------------------------- notebook 07
+def _half_atan2(p0, p1, p2):
+    q = np.array([p0, p1, p2]) - np.mean([p0, p1, p2], axis=0)
+    return 0.5 * math.atan2(2 * np.sum(q[:, 0] * q[:, 1]), np.sum(q[:, 0] ** 2) - np.sum(q[:, 1] ** 2))
+
+
+def test_the_notebook_07_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    angles = np.radians(np.arange(-30.0, 30.5, 1.0))
+    scan = labkit.Scan(ranges=2.0 / np.cos(angles), angles=angles)      # the wall x = 2: direction 90 deg
+    phi = labkit.local_directions(scan)
+
+    def by_tls(p0, p1, p2):      # an oracle: labkit's TLS line fit, its normal turned by 90 degrees
+        return float(np.mod(labkit.fit_line_tls(np.array([p0, p1, p2])).alpha + np.pi / 2, np.pi))
+
+    assert check(by_tls, cases.triplet_direction(scan, phi, 10), fallback=None) is by_tls
+    points = np.c_[np.linspace(0, 4, 5), np.full(5, 1.5)]                # y = 1.5 at direction 0: offsets 1.5
+    assert check(fallbacks.wall_offsets, cases.wall_offsets(points, 0.0, np.full(5, 1.5)), fallback=None)
+    assert capsys.readouterr().out.count("well done") == 2
+    with pytest.raises(YourTurnError, match="modulo pi"):               # atan2 halved, left in (-pi/2, pi/2]
+        check(_half_atan2, cases.triplet_direction(scan, phi, 10), fallback=None)
+    with pytest.raises(YourTurnError, match="across the line"):         # along the line, not across it
+        check(lambda pts, d: pts @ np.array([math.cos(d), math.sin(d)]), cases.wall_offsets(points, 0.0, 1.5),
+              fallback=None)
+
+
+def test_majority_label_and_lines_on_by_hand():
+    assert reports.majority_label(np.array([-1, -1, -1, 2, 2, 0])) == 2      # noise left out
+    assert reports.majority_label(np.array([3, 1, 3, 1])) == 1               # a tie: the smaller
+    with pytest.raises(ValueError, match="noise"):
+        reports.majority_label(np.array([-1, -1]))
+    mask = np.zeros(10, bool)
+    mask[2:6] = True
+    lines = [SimpleNamespace(indices=np.arange(0, 4)), SimpleNamespace(indices=np.arange(2, 9)),
+             SimpleNamespace(indices=np.arange(1, 6))]       # 2 of 4 (a half is not over half), 4 of 7, 4 of 5
+    assert reports.lines_on(lines, mask) == [lines[1], lines[2]]
+
+
+def test_walls_found_and_the_extractor_table_by_hand(capsys):
+    walls = [SimpleNamespace(r=2.0, alpha=0.0, n_beams=40), SimpleNamespace(r=1.0, alpha=math.pi, n_beams=30),
+             SimpleNamespace(r=5.0, alpha=1.0, n_beams=5)]                       # seen by 5 beams: does not count
+    lines = [SimpleNamespace(r=2.05, alpha=0.05), SimpleNamespace(r=1.0, alpha=-math.pi + 0.02),   # both found
+             SimpleNamespace(r=5.0, alpha=1.0)]
+    assert reports.walls_found(lines, walls) == 3 and reports.walls_found(lines[:1], walls) == 1
+    assert reports.walls_found([SimpleNamespace(r=2.15, alpha=0.0)], walls) == 0      # 15 cm off
+    rows = [reports.extractor_row("hall", 0, walls, lines, lines[:1], lines[1:]),
+            reports.extractor_row("hall", 30, walls, lines, lines, [])]
+    assert rows[0] == ("hall", 0, 2, 3, 2, 1, 1, 2, 1)
+    assert reports.print_extractor_table(rows).tolist() == [4, 6, 4, 4, 3, 2, 1]
+    assert capsys.readouterr().out.endswith("split_gap_m = 0.3 m: 4 lines instead of 6, 3 walls found instead of 4; "
+                                            "it changes the lines of 1 of the 2 scans\n")
+
+
+def test_eps_answers_read_the_three_settings(capsys):
+    scan = SimpleNamespace(valid=np.array([True, True, True, True, False]))
+    st = SimpleNamespace                                                    # only .labels is read
+    base = ([SimpleNamespace(n_points=5)] * 3, st(labels=np.array([0, 0, 1, -1, -1])), "base")
+    wide = ([SimpleNamespace(n_points=9)] * 2, st(labels=np.array([0, 0, 0, 0, -1])), "wide")
+    narrow = ([], st(labels=np.array([-1, 0, -1, -1, -1])), "narrow")
+    reports.print_eps_answers(scan, base, wide, narrow)
+    out = capsys.readouterr().out.splitlines()
+    assert out[:3] == ["base", "wide", "narrow"]
+    assert out[3] == ("eps_dist 0.35 m instead of 0.03 m: 2 segments instead of 3: parallel pieces less than 0.35 m "
+                      "apart, such as a recess and its wall, now share a segment")
+    assert out[4] == ("eps_theta 1 deg instead of 3 deg: 25% of the valid beams in a segment instead of 75%: noisy "
+                      "directions no longer chain")
