@@ -14,7 +14,7 @@ import numpy as np
 from .course import Case
 
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
-           "three_beam_residual", "triplet_direction", "wall_offsets"]
+           "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs"]
 
 
 def _line(r: float, degrees: float):
@@ -304,3 +304,42 @@ def wall_offsets(points, direction: float, offsets) -> list[Case]:
              label="the corridor walls' points, their cluster's mean direction",
              hint="d = -x sin(direction) + y cos(direction)"),
     ]
+
+
+def _same_person(got, want) -> bool:
+    return (got is None) == (want is None) and (want is None or bool(np.allclose(got, want, atol=1e-9)))
+
+
+def pair_two_legs(two_legs) -> list[Case]:
+    """Notebook 08b: cases of ``pair_two_legs(centre_a, centre_b, max_distance_m=0.6)``.
+
+    Parameters
+    ----------
+    two_legs : list of list of labkit.Leg
+        Scans' detections of exactly two legs each: :func:`labkit.circles.legs.pair_legs` on each gives
+        the expected person (or None).
+
+    Returns
+    -------
+    list of Case
+        Legs 0.3 m apart (the midpoint), 0.9 m (None), exactly 0.6 m (pairs: the limit is included),
+        0.71 m though 0.5 m apart in x and in y (None), 0.3 m with a 0.2 m limit (None), then the scans.
+    """
+    from .circles.legs import pair_legs
+
+    def case(*args, **kwargs):
+        return Case(*args, compare=_same_person, **kwargs)
+
+    cases = [case(((0.0, 0.0), (0.3, 0.0)), (0.15, 0.0), "the person stands half-way between the legs"),
+             case(((1.0, 2.0), (1.0, 2.9)), None, "legs 0.9 m apart are not one person's: return None"),
+             case(((0.0, 0.0), (0.6, 0.0)), (0.3, 0.0),
+                  "exactly max_distance_m apart still pairs: the limit is included"),
+             case(((0.0, 0.0), (0.5, 0.5)), None, "0.71 m apart: compare the distance between the centres, not x "
+                  "and y separately"),
+             case(((2.0, 1.0), (2.3, 1.0)), None, "use max_distance_m", kwargs={"max_distance_m": 0.2})]
+    for f in two_legs:
+        paired = pair_legs(f)
+        cases.append(case((f[0].center, f[1].center), paired[0].center if paired else None,
+                          "as labkit's pair_legs on this scan",
+                          label=f"the legs of a hall scan, {np.hypot(*(f[0].center - f[1].center)):.2f} m apart"))
+    return cases

@@ -1,4 +1,4 @@
-"""Bookkeeping of the course notebooks (05, 07, 08, 10b): sums, checks, loops over trials and printed summaries.
+"""Bookkeeping of the course notebooks (05, 07, 08, 08b, 10b): sums, checks, loops over trials and printed summaries.
 
 A notebook's code cell keeps its experiment (what is run, on which data, with which settings); the
 loops that only add up, compare with labkit or format a printout live here, so that the cell stays
@@ -26,7 +26,7 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_more_circles", "print_beams_on", "print_iav_verdicts", "print_v_corners", "print_circles",
            "circle_fit_errors", "print_fit_error_summary", "wall_score", "print_merges", "check_extrapolation",
            "print_parameter_sweeps", "majority_label", "walls_found", "print_eps_answers", "extractor_row",
-           "print_extractor_table", "lines_on"]
+           "print_extractor_table", "lines_on", "score_legs"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -912,3 +912,53 @@ def lines_on(lines, mask) -> list:
     """
     beams = set(np.flatnonzero(mask))
     return [ln for ln in lines if np.mean([b in beams for b in ln.indices]) > 0.5]
+
+
+# ---------------------------------------------------------------------------- notebook 08b: legs
+def score_legs(scans, detections, truth, match_m: float, is_occluded: Callable) -> dict:
+    """Score a leg detector's detections against the truth: recall, precision and the misses.
+
+    A true leg is detectable when at least 3 beams hit it and ``is_occluded(scan, first, last)`` is
+    False; it is found when a detection of its scan lies within ``match_m`` of its centre. A detection
+    is a true positive when it lies within ``match_m`` of some true leg of its scan (detectable or not).
+
+    Parameters
+    ----------
+    scans : sequence of labkit.Scan
+        The scans.
+    detections : sequence of list of labkit.Leg
+        Per scan, the legs found.
+    truth : mapping
+        ``truth[scan.stamp_ns].legs``: the true legs (``center``, ``n_beams``, ``first``, ``last``).
+    match_m : float
+        The largest distance of a match, metres.
+    is_occluded : callable
+        ``is_occluded(scan, first, last)``: whether a closer return beside the beams hides the leg.
+
+    Returns
+    -------
+    dict
+        ``recall``, ``precision``, ``n_detected``, ``n_true_positive``, ``rows`` (one
+        ``(time since the first scan, true centre, found?)`` per detectable true leg) and ``missed``
+        (``(scan number, true centre)`` of each detectable leg not found).
+    """
+    rows, missed = [], []
+    n_true_positive = n_detected = 0
+    t0 = scans[0].stamp_s
+    for k, (scan, found) in enumerate(zip(scans, detections, strict=True)):
+        centres = np.array([leg.center for leg in found]).reshape(-1, 2)
+        n_detected += len(found)
+        true_legs = truth[scan.stamp_ns].legs
+        true_centres = np.array([g.center for g in true_legs]).reshape(-1, 2)
+        if len(found) and len(true_legs):
+            dist = np.linalg.norm(centres[:, None, :] - true_centres[None, :, :], axis=2)   # detections x truths
+            n_true_positive += int(np.sum(dist.min(axis=1) <= match_m))
+        for g in true_legs:
+            if g.n_beams >= 3 and not is_occluded(scan, g.first, g.last):
+                hit = len(found) > 0 and bool(np.min(np.hypot(*(centres - np.asarray(g.center)).T)) <= match_m)
+                rows.append((scan.stamp_s - t0, g.center, hit))
+                if not hit:
+                    missed.append((k, g.center))
+    return {"recall": float(np.mean([hit for *_, hit in rows])) if rows else math.nan,
+            "precision": n_true_positive / n_detected if n_detected else math.nan,
+            "n_detected": n_detected, "n_true_positive": n_true_positive, "rows": rows, "missed": missed}

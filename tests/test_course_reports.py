@@ -464,3 +464,40 @@ def test_eps_answers_read_the_three_settings(capsys):
                       "apart, such as a recess and its wall, now share a segment")
     assert out[4] == ("eps_theta 1 deg instead of 3 deg: 25% of the valid beams in a segment instead of 75%: noisy "
                       "directions no longer chain")
+
+
+# ---------------------------------------------------------------------------- notebook 08b
+def _leg(x, y, n_beams=5, first=0, last=4):
+    return SimpleNamespace(center=np.array([x, y]), n_beams=n_beams, first=first, last=last)
+
+
+def test_score_legs_by_hand():
+    scans = [SimpleNamespace(stamp_s=10.0, stamp_ns=1), SimpleNamespace(stamp_s=10.1, stamp_ns=2)]
+    truth = {1: SimpleNamespace(legs=[_leg(1.0, 0.0), _leg(2.0, 0.0), _leg(3.0, 0.0, n_beams=2)]),   # 3rd: 2 beams
+             2: SimpleNamespace(legs=[_leg(1.0, 1.0, first=7)])}                                      # 2nd: occluded
+    detections = [[_leg(1.05, 0.0), _leg(3.0, 0.05), _leg(5.0, 5.0)],   # finds leg 1, and the 2-beam one; one wrong
+                  [_leg(1.0, 1.0)]]                                     # finds the occluded leg
+    score = reports.score_legs(scans, detections, truth, 0.10, is_occluded=lambda scan, first, last: first == 7)
+    # detectable: the first two legs of scan 0 (scan 1's is occluded); found: the first
+    assert score["recall"] == 0.5 and [hit for *_, hit in score["rows"]] == [True, False]
+    assert score["rows"][0][0] == 0.0 and score["missed"][0][0] == 0 and list(score["missed"][0][1]) == [2.0, 0.0]
+    # true positives: 3 of the 4 detections lie within 10 cm of some true leg, detectable or not
+    assert (score["n_detected"], score["n_true_positive"], score["precision"]) == (4, 3, 0.75)
+
+
+def test_the_notebook_08b_cases_pass_labkits_answer_and_fail_a_wrong_one(capsys):
+    from labkit.circles.legs import pair_legs
+    from labkit.features import Leg
+
+    def leg(y):
+        return Leg(center=np.array([1.0, y]), diameter=0.12, middle=np.array([0.95, y]), first=0, last=3, n_points=4,
+                   iav_mean=2.0, iav_std=0.1)
+
+    legs = [leg(0.0), leg(0.4)]
+    assert len(pair_legs(legs)) == 1                                     # 0.4 m apart: one person
+    two_legs = [legs, [leg(0.0), leg(1.0)]]                              # 1 m apart: none
+    assert check(fallbacks.pair_two_legs, cases.pair_two_legs(two_legs), fallback=None) is fallbacks.pair_two_legs
+    assert "passes all 7 checks" in capsys.readouterr().out
+    with pytest.raises(YourTurnError, match="the limit is included"):   # strictly closer than the limit
+        check(lambda a, b, max_distance_m=0.6: (np.add(a, b) / 2 if math.dist(a, b) < max_distance_m else None),
+              cases.pair_two_legs(two_legs), fallback=None, name="pair_two_legs")
