@@ -14,7 +14,8 @@ import numpy as np
 from .course import Case
 
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
-           "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs"]
+           "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
+           "normal_form_match", "jacobian", "ideal_weights", "simulated_weights"]
 
 
 def _line(r: float, degrees: float):
@@ -343,3 +344,112 @@ def pair_two_legs(two_legs) -> list[Case]:
                           "as labkit's pair_legs on this scan",
                           label=f"the legs of a hall scan, {np.hypot(*(f[0].center - f[1].center)):.2f} m apart"))
     return cases
+
+
+def normal_form_match() -> list[Case]:
+    """Notebook 10: cases of ``normal_form_match(line_r, line_alpha, wall_r, wall_alpha, max_dr_m, max_dalpha)``.
+
+    Returns
+    -------
+    list of Case
+        3 cm and 1 degree apart (True), 7 cm (False), 4 degrees (False), 179.5 and -179.5 degrees (True:
+        1 degree apart), -2 and 358 degrees (True: the same angle), and 1 cm with a 5 mm limit (False).
+    """
+    deg = math.radians
+    return [
+        Case((2.0, deg(30), 2.03, deg(31)), True, "3 cm and 1 deg are inside both limits"),
+        Case((2.0, deg(30), 2.07, deg(30)), False, "|dr| = 7 cm is more than 5 cm"),
+        Case((2.0, deg(30), 2.0, deg(34)), False, "|dalpha| = 4 deg is more than 3 deg"),
+        Case((2.0, deg(179.5), 2.0, deg(-179.5)), True,
+             "179.5 deg and -179.5 deg are 1 deg apart: wrap the angle difference"),
+        Case((1.0, deg(-2), 1.0, deg(358)), True, "-2 deg and 358 deg are the same angle: wrap the angle difference"),
+        Case((2.0, 0.0, 2.01, 0.0), False, "a stricter limit applies when it is given", kwargs={"max_dr_m": 0.005}),
+    ]
+
+
+def jacobian(rho, theta, sigma: float) -> list[Case]:
+    """Notebook 03: cases of ``jacobian(rho, theta, w, h=1e-6)``, checked through the covariance it gives.
+
+    A Jacobian ``J`` passes when ``sigma**2 J J^T`` equals labkit's covariance of the same fit
+    (:func:`labkit.fit_line_polar` with ``range_sigma=sigma``) to 1e-4.
+
+    Parameters
+    ----------
+    rho, theta : ndarray
+        A wall's ranges (m) and bearings (rad).
+    sigma : float
+        The constant range noise, metres.
+
+    Returns
+    -------
+    list of Case
+        The wall with ``w = 1 / rho``, with uniform weights, and a noise-free wall behind the sensor
+        (alpha = pi, where alpha jumps between pi and -pi).
+    """
+    from .fitting import fit_line_polar
+
+    def propagates_to(J, C):
+        J = np.asarray(J, dtype=float)
+        return J.ndim == 2 and J.shape[0] == 2 and bool(np.allclose(sigma**2 * J @ J.T, C, rtol=1e-4, atol=1e-12))
+
+    behind = np.radians(np.arange(150, 210.1, 2.0))        # a noise-free wall behind the sensor: alpha = pi
+    rho_behind = 3.0 / np.cos(behind - np.pi)
+    return [
+        Case((rho, theta, 1 / rho), fit_line_polar(rho, theta, 1 / rho, range_sigma=sigma).covariance,
+             compare=propagates_to, label="the wall, w = 1/rho",
+             hint="hold the weights fixed: pass the same w to every refit (the default 1/rho would change with "
+                  "the nudged range)"),
+        Case((rho, theta, np.ones_like(rho)), fit_line_polar(rho, theta, "uniform", range_sigma=sigma).covariance,
+             compare=propagates_to, label="the wall, uniform weights", hint="use the weights w you are given"),
+        Case((rho_behind, behind, 1 / rho_behind),
+             fit_line_polar(rho_behind, behind, 1 / rho_behind, range_sigma=sigma).covariance,
+             compare=propagates_to, label="a wall behind the sensor, alpha = pi",
+             hint="alpha jumps between pi and -pi: take its difference with labkit.angle_difference"),
+    ]
+
+
+def simulated_weights(sigma, theta, alpha: float, r: float = 1.0, n: int = 200_000, seed: int = 7) -> np.ndarray:
+    """``1 / Var(d_i)`` measured: noisy ranges to the line (r, alpha), their orthogonal distances, the variance.
+
+    Parameters
+    ----------
+    sigma : float or ndarray
+        The range noise, one or one per beam, metres.
+    theta : ndarray
+        The beams, radians.
+    alpha : float
+        The line's normal angle, radians.
+    r : float, default 1.0
+        The line's distance, metres.
+    n : int, default 200000
+        Noisy copies.
+    seed : int, default 7
+        The generator's seed.
+
+    Returns
+    -------
+    ndarray
+        One weight per beam.
+    """
+    sigma = np.broadcast_to(sigma, np.shape(theta))
+    noisy = r / np.cos(theta - alpha) + sigma * np.random.default_rng(seed).standard_normal((n, len(theta)))
+    return 1 / np.var(noisy * np.cos(theta - alpha) - r, axis=0)
+
+
+def ideal_weights() -> list[Case]:
+    """Notebook 03: cases of ``ideal_weights(sigma, theta, alpha)``, against :func:`simulated_weights` (2 %).
+
+    Returns
+    -------
+    list of Case
+        Beams at 0, 40 and 60 degrees with 2 cm of noise and alpha = 0, and with 1, 2 and 4 cm and alpha = 20 deg.
+    """
+    three = np.radians([0.0, 40.0, 60.0])
+    sigmas = np.array([0.01, 0.02, 0.04])
+    return [
+        Case((0.02, three, 0.0), simulated_weights(0.02, three, 0.0), rtol=0.02, label="sigma 2 cm, beams 0/40/60 deg",
+             hint="a range error e moves the point across the line by e cos(theta - alpha): Var(d) = "
+                  "sigma^2 cos^2(theta - alpha), and the weight is its inverse"),
+        Case((sigmas, three, np.radians(20.0)), simulated_weights(sigmas, three, np.radians(20.0)), rtol=0.02,
+             label="one sigma per beam, alpha = 20 deg", hint="use each point's own sigma_i"),
+    ]

@@ -1,4 +1,4 @@
-"""Bookkeeping of the course notebooks (05, 07, 08, 08b, 10b): sums, checks, loops over trials and printed summaries.
+"""Bookkeeping of the course notebooks (03 to 10b): sums, checks, loops over trials, printouts.
 
 A notebook's code cell keeps its experiment (what is run, on which data, with which settings); the
 loops that only add up, compare with labkit or format a printout live here, so that the cell stays
@@ -26,7 +26,9 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_more_circles", "print_beams_on", "print_iav_verdicts", "print_v_corners", "print_circles",
            "circle_fit_errors", "print_fit_error_summary", "wall_score", "print_merges", "check_extrapolation",
            "print_parameter_sweeps", "majority_label", "walls_found", "print_eps_answers", "extractor_row",
-           "print_extractor_table", "lines_on", "score_legs"]
+           "print_extractor_table", "lines_on", "score_legs", "print_data_set", "pick_example", "print_match",
+           "round_object_notes", "print_level_summaries", "print_speed_and_noise", "print_ranking_against_paper",
+           "weighting_row", "print_weighting_verdicts"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -962,3 +964,336 @@ def score_legs(scans, detections, truth, match_m: float, is_occluded: Callable) 
     return {"recall": float(np.mean([hit for *_, hit in rows])) if rows else math.nan,
             "precision": n_true_positive / n_detected if n_detected else math.nan,
             "n_detected": n_detected, "n_true_positive": n_true_positive, "rows": rows, "missed": missed}
+
+
+# ---------------------------------------------------------------------------- notebook 10: evaluation
+def print_data_set(data) -> None:
+    """Print how many scans of each world a simulated set has at each noise level, and the scans' beams.
+
+    Parameters
+    ----------
+    data : list
+        Items of :func:`labkit.app.experiments.nguyen_set`: ``world``, ``noise_std_m``, ``scan``.
+    """
+    for noise in sorted({item.noise_std_m for item in data}):
+        worlds = [item.world for item in data if item.noise_std_m == noise]
+        print(f"range noise {1000 * noise:4.0f} mm: "
+              + ", ".join(f"{worlds.count(w)} {w}" for w in dict.fromkeys(worlds)))
+    scan0 = data[0].scan
+    print(f"every scan: {scan0.n_beams} beams from {np.degrees(scan0.angle_min):.0f} to "
+          f"{np.degrees(scan0.angle_max):.0f} deg, one every {np.degrees(scan0.angle_increment):.3f} deg")
+
+
+def pick_example(data, noise: float, extract: Callable | None = None, skip_world: str = "corridor") -> int:
+    """The index of a scan for the matching picture: all three kinds of line, and a missed wall if any.
+
+    Among the scans at ``noise`` (not of ``skip_world``) where ``extract`` yields matched, false-positive
+    and unscored lines, the first that also misses a wall, else the first; 0 when there is none.
+
+    Parameters
+    ----------
+    data : list
+        Items with ``scan``, ``truth``, ``world``, ``noise_std_m``.
+    noise : float
+        The noise level to pick from, metres.
+    extract : callable, optional
+        ``extract(scan)``: the lines; :func:`labkit.split_and_merge` by default.
+    skip_world : str, default "corridor"
+        A world left out (the corridor's scans are too long and thin for a readable picture).
+
+    Returns
+    -------
+    int
+        The index in ``data``.
+    """
+    from .evaluation import match_lines
+    from .lines.split_merge import split_and_merge
+    from .viz.evaluation_plots import line_status
+
+    extract = extract or split_and_merge
+    candidates = []
+    for k, item in enumerate(data):
+        if item.noise_std_m != noise or item.world == skip_world:
+            continue
+        lines = extract(item.scan)
+        match = match_lines(lines, item.truth)
+        if len(set(line_status(len(lines), match))) == 3:
+            candidates.append((k, len(match.missed) > 0))
+    return max(candidates, key=lambda c: c[1])[0] if candidates else 0
+
+
+def print_match(lines, match) -> None:
+    """Print each line's fate under the matching rule (and its wall's errors when matched), then the missed walls.
+
+    Parameters
+    ----------
+    lines : list of labkit.LineSegment
+        The lines.
+    match : labkit.LineMatch
+        ``labkit.match_lines(lines, truth)``.
+    """
+    from .viz.evaluation_plots import line_status
+
+    errors = {i: (dr, da) for (i, _), dr, da in zip(match.pairs, match.dr, match.dalpha, strict=True)}
+    wall_of = dict(match.pairs)
+    for i, (line, status) in enumerate(zip(lines, line_status(len(lines), match), strict=True)):
+        text = f"line {i:2d}  beams {line.first:3d}..{line.last:3d}  {line.length:5.2f} m  {status:14}"
+        if i in errors:
+            text += (f"  wall {wall_of[i]:2d}: dr {1000 * errors[i][0]:+6.1f} mm, "
+                     f"dalpha {np.degrees(errors[i][1]):+5.2f} deg")
+        print(text)
+    print("walls in the truth but missed:", list(match.missed))
+
+
+def _round_verdict(obj, j: int, m, min_beams: int) -> str:
+    if j not in m.truth:
+        return f"not in the truth ({'too few beams' if obj.n_beams < min_beams else 'partly hidden'})"
+    found = [err for (_, jj), err in zip(m.pairs, m.center_errors, strict=True) if jj == j]
+    return f"found, centre {1000 * found[0]:.0f} mm off" if found else "missed"
+
+
+def round_object_notes(truth, circle_match, leg_match, min_beams=(4, 3)) -> list[tuple]:
+    """Print why each true circle and leg of a scan is or is not found, and return the notes for a figure.
+
+    Parameters
+    ----------
+    truth : labkit.sim.ScanTruth
+        The scan's truth: ``circles`` (with ``name``) and ``legs`` (with ``person``), each with ``n_beams``.
+    circle_match, leg_match : labkit.RoundMatch
+        The matches of the scan's circles and legs (``truth``, ``pairs``, ``center_errors``).
+    min_beams : (int, int), default (4, 3)
+        The fewest beams a true circle and a true leg need to be in the truth.
+
+    Returns
+    -------
+    list of (ndarray, str)
+        ``(centre, "name: verdict")`` per true object: found (and how far off), missed, or not in the truth
+        (too few beams, or partly hidden).
+    """
+    notes = []
+    for kind, objects, m, least in [("circle", truth.circles, circle_match, min_beams[0]),
+                                    ("leg", truth.legs, leg_match, min_beams[1])]:
+        for j, obj in enumerate(objects):
+            name = obj.name if kind == "circle" else f"{obj.person}'s leg"
+            print(f"true {kind} {j} ({name}, {obj.n_beams} beams): {_round_verdict(obj, j, m, least)}")
+            notes.append((obj.center, f"{name}: {_round_verdict(obj, j, m, least)}"))
+    return notes
+
+
+def print_level_summaries(rows, sweep, best: Mapping, fixed_m: float, round_scores: Mapping) -> None:
+    """Print, per noise level, the methods that find most walls, make fewest wrong lines and run fastest; then
+    split-and-merge's best threshold against the fixed one; then the round objects' scores.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`labkit.app.experiments.compare_lines` (``truth`` is the level's count of true walls).
+    sweep : list of dict
+        Rows of :func:`labkit.app.experiments.sweep_split_and_merge`.
+    best : mapping
+        ``{noise: the sweep's best row}``.
+    fixed_m : float
+        The papers' fixed split threshold, metres (one of the sweep's).
+    round_scores : mapping
+        ``{kind: row}`` with ``precision``, ``recall``, ``center_err_median_m``.
+    """
+    levels = sorted({r["noise_std_m"] for r in rows})
+    for noise in levels:
+        level = [r for r in rows if r["noise_std_m"] == noise]
+        top_tp = max(level, key=lambda r: r["tp_rate"])
+        low_fp = min(level, key=lambda r: r["fp_rate"])
+        fastest = max(level, key=lambda r: r["scans_per_s"])
+        print(f"range noise {1000 * noise:.0f} mm ({level[0]['truth']} true walls, so one wall is "
+              f"{1 / level[0]['truth']:.3f} of TruePos):")
+        print(f"  most walls found:   {top_tp['method']} "
+              f"(TruePos {top_tp['tp_rate']:.3f}, FalsePos {top_tp['fp_rate']:.3f})")
+        print(f"  fewest wrong lines: {low_fp['method']} "
+              f"(FalsePos {low_fp['fp_rate']:.3f}, TruePos {low_fp['tp_rate']:.3f})")
+        good = [r for r in level if r["tp_rate"] >= 0.9]
+        if good and min(good, key=lambda r: r["fp_rate"]) is not low_fp:
+            pick = min(good, key=lambda r: r["fp_rate"])
+            print(f"  fewest wrong lines among those that find 90 % of the walls: {pick['method']} "
+                  f"(FalsePos {pick['fp_rate']:.3f}, TruePos {pick['tp_rate']:.3f})")
+        print(f"  fastest:            {fastest['method']} ({fastest['scans_per_s']:,.0f} scans/s)")
+    for noise in levels:
+        t = best[noise]["split_threshold_m"]
+        fixed = next(r for r in sweep if r["noise_std_m"] == noise and math.isclose(r["split_threshold_m"], fixed_m))
+        print(f"split-and-merge at {1000 * noise:.0f} mm: best threshold {100 * t:g} cm ({t / noise:.1f} sigma), "
+              f"TruePos - FalsePos {best[noise]['tp_rate'] - best[noise]['fp_rate']:.3f} against "
+              f"{fixed['tp_rate'] - fixed['fp_rate']:.3f} at the papers' fixed {100 * fixed_m:g} cm")
+    for kind, row in round_scores.items():
+        print(f"{kind} in the hall: precision {row['precision']:.3f}, recall {row['recall']:.3f}, "
+              f"median centre error {1000 * row['center_err_median_m']:.0f} mm")
+
+
+def _row_of(rows, method: str, noise: float) -> dict:
+    return next(r for r in rows if r["method"] == method and r["noise_std_m"] == noise)
+
+
+def print_speed_and_noise(rows, method: str = "split-and-merge (IEPF)", against: str = "RANSAC") -> tuple[str, str]:
+    """Print how many times as many scans per second ``method`` ran as ``against``, level by level, then which
+    method's TruePos fell most and which least from the lowest noise level to the highest.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`labkit.app.experiments.compare_lines`.
+    method, against : str
+        The two methods whose speeds are compared.
+
+    Returns
+    -------
+    (str, str)
+        The method whose TruePos fell most, and the one that kept it best.
+    """
+    levels = sorted({r["noise_std_m"] for r in rows})
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    for noise in levels:
+        ratio = _row_of(rows, method, noise)["scans_per_s"] / _row_of(rows, against, noise)["scans_per_s"]
+        print(f"noise {1000 * noise:.0f} mm: {method} ran {ratio:.1f} times as many scans per second as {against}")
+    low, high = levels[0], levels[-1]
+    change = {m: _row_of(rows, m, high)["tp_rate"] - _row_of(rows, m, low)["tp_rate"] for m in methods}
+    worst_hit, best_kept = min(change, key=change.get), max(change, key=change.get)
+    print(f"\nTruePos from {1000 * low:.0f} to {1000 * high:.0f} mm of noise: largest fall {worst_hit} "
+          f"({change[worst_hit]:+.3f}), best kept {best_kept} ({change[best_kept]:+.3f})")
+    return worst_hit, best_kept
+
+
+def print_ranking_against_paper(rows, published: Mapping[str, float], method: str = "split-and-merge (IEPF)") -> dict:
+    """Compare our FalsePos ranking of the methods with the published one, level by level.
+
+    For every pair of methods the paper ranks apart, count how many we rank the same way (a random order
+    would get half on average); name our lowest FalsePos and the paper's, ``method``'s rank, and the pairs
+    we rank the other way.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`labkit.app.experiments.compare_lines`.
+    published : mapping
+        ``{method: published FalsePos}``; only the methods also in ``rows`` count.
+    method : str, default "split-and-merge (IEPF)"
+        The method whose rank is printed.
+
+    Returns
+    -------
+    dict
+        ``{noise: number of pairs ranked the same way}``.
+    """
+    levels = sorted({r["noise_std_m"] for r in rows})
+    shared = [m for m in dict.fromkeys(r["method"] for r in rows) if m in published]
+    strict_pairs = [(a, b) for a in shared for b in shared if published[a] < published[b]]
+    print("\nFalsePos, published (Nguyen et al.): "
+          + ", ".join(f"{m} {published[m]:.2f}" for m in sorted(shared, key=published.get)))
+    agreed = {}
+    for noise in levels:
+        ours = {m: _row_of(rows, m, noise)["fp_rate"] for m in shared}
+        agree = agreed[noise] = sum(ours[a] < ours[b] for a, b in strict_pairs)
+        print(f"FalsePos, ours at {1000 * noise:.0f} mm:            "
+              + ", ".join(f"{m} {ours[m]:.2f}" for m in sorted(shared, key=ours.get)))
+        verdict = "more than" if agree > len(strict_pairs) / 2 else "no more than"
+        print(f"  of the {len(strict_pairs)} pairs of methods the paper ranks apart, we rank {agree} the same way: "
+              f"{verdict} a random order would on average ({len(strict_pairs) / 2:g})")
+        ours_best = min(ours, key=ours.get)
+        paper_best = min(shared, key=published.get)
+        rank = sorted(shared, key=ours.get).index(method) + 1
+        same = "as in the paper" if ours_best == paper_best else f"the paper's lowest is {paper_best}"
+        print(f"  lowest FalsePos here: {ours_best} ({ours[ours_best]:.2f}; {same}); "
+              f"{method} is {rank} of {len(shared)}")
+        disagree = [(a, b) for a, b in strict_pairs if not ours[a] < ours[b]]
+        print("  pairs we rank the other way (paper: first < second): "
+              + "; ".join(f"{a} < {b}" for a, b in disagree))
+    return agreed
+
+
+# ---------------------------------------------------------------------------- notebook 03: weights
+def weighting_row(name: str, label: str, rho, theta, weights, sigma, alpha: float, samples) -> tuple:
+    """One row of the weighting table: propagated sigma_r and sigma_alpha beside their Monte Carlo spread.
+
+    Parameters
+    ----------
+    name, label : str
+        The noise model's and the weighting's names, printed first.
+    rho, theta : ndarray
+        The noise-free wall's ranges (m) and bearings (rad).
+    weights : str, ndarray or None
+        The weights, as :func:`labkit.fit_line_polar` takes them.
+    sigma : ndarray
+        The range noise of each beam, metres.
+    alpha : float
+        The wall's true normal angle, radians.
+    samples : ndarray, shape (N, len(rho))
+        Noisy copies of ``rho``.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        The propagated ``(sigma_r, sigma_alpha)`` of the noise-free fit, and the standard deviations of r
+        and of alpha (wrapped, against ``alpha``) over the samples' fits.
+    """
+    from .fitting import fit_line_polar
+    from .geometry import angle_difference
+
+    C = fit_line_polar(rho, theta, weights, range_sigma=sigma).covariance
+    fits = [fit_line_polar(s, theta, weights, range_sigma=sigma) for s in samples]
+    r_k, a_k = np.array([f.r for f in fits]), np.array([f.alpha for f in fits])
+    sd = np.sqrt(np.diag(C))
+    mc = np.array([r_k.std(), angle_difference(a_k, alpha).std()])
+    print(f"{name:27} {label:17} {1000 * sd[0]:12.2f} {1000 * mc[0]:9.2f} {np.degrees(sd[1]):18.4f} "
+          f"{np.degrees(mc[1]):7.4f}")
+    return sd, mc
+
+
+def print_weighting_verdicts(propagated: Mapping, spread: Mapping, models, labels, ideal: str = "ideal") -> list:
+    """Read the weighting table: per noise model the weights of smallest sigma_r and what the others lose;
+    check that the ideal weights are never beaten and that the Monte Carlo spread agrees; then say where
+    ``inverse_variance`` loses, where weights tie with the ideal ones, and where 1/rho helps.
+
+    Parameters
+    ----------
+    propagated, spread : mapping
+        ``{(model, weighting): (sigma_r, sigma_alpha)}``: propagated, and measured by Monte Carlo.
+    models : iterable of str
+        The noise models.
+    labels : sequence of str
+        The weightings, the ideal one last; ``"uniform"``, ``"1/rho"`` and ``"inverse_variance"`` among them.
+    ideal : str, default "ideal"
+        The ideal weighting's label.
+
+    Returns
+    -------
+    list of str
+        The models under which ``inverse_variance`` loses more than 5 % in sigma_r.
+
+    Raises
+    ------
+    AssertionError
+        When another weighting beats the ideal one (Gauss-Markov says none can), or the Monte Carlo spread
+        is more than 12 % off the propagated sigma.
+    """
+    models = list(models)
+    for name in models:
+        ranking = sorted(labels, key=lambda k: propagated[name, k][0])
+        best = ranking[0]
+        losses = ", ".join(f"{k} +{100 * (propagated[name, k][0] / propagated[name, best][0] - 1):.0f}%"
+                           for k in ranking[1:])
+        print(f"{name}: smallest sigma_r with {best} weights ({1000 * propagated[name, best][0]:.2f} mm); {losses}")
+        # Gauss-Markov: inverse-variance weights of the distances are the best linear choice, for r and alpha
+        assert all(propagated[name, ideal][j] <= propagated[name, k][j] * (1 + 1e-9) for k in labels for j in (0, 1)), \
+            f"a weighting beats the ideal one under {name}"
+        assert all(np.allclose(spread[name, k], propagated[name, k], rtol=0.12) for k in labels), \
+            f"the Monte Carlo spread disagrees with the propagated sigmas under {name}"
+    worse = [name for name in models if propagated[name, "inverse_variance"][0] > 1.05 * propagated[name, ideal][0]]
+    print("\nThe ideal weights 1/(sigma^2 cos^2(theta - alpha)) are never beaten, under any noise model (asserted "
+          "above). 'inverse_variance' (1/sigma^2 alone) loses more than 5% in sigma_r under: "
+          f"{', '.join(worse) or 'none'}.")
+    for name in models:
+        tied = [k for k in labels if k != ideal and np.isclose(propagated[name, k][0], propagated[name, ideal][0],
+                                                                 rtol=1e-6)]
+        if tied:
+            print(f"under {name} noise, {' and '.join(tied)} give exactly the ideal sigma_r: there those weights are "
+                  "the ideal ones times a constant, and a constant factor does not change a weighted fit")
+    for name in models:
+        side = "helps" if propagated[name, "1/rho"][0] < propagated[name, "uniform"][0] else "hurts"
+        print(f"against uniform weights, 1/rho {side} under {name} noise")
+    return worse

@@ -501,3 +501,106 @@ def test_the_notebook_08b_cases_pass_labkits_answer_and_fail_a_wrong_one(capsys)
     with pytest.raises(YourTurnError, match="the limit is included"):   # strictly closer than the limit
         check(lambda a, b, max_distance_m=0.6: (np.add(a, b) / 2 if math.dist(a, b) < max_distance_m else None),
               cases.pair_two_legs(two_legs), fallback=None, name="pair_two_legs")
+
+
+# ---------------------------------------------------------------------------- notebook 10
+def test_the_notebook_10_cases_pass_labkits_answer_and_fail_a_wrong_one(capsys):
+    assert check(fallbacks.normal_form_match, cases.normal_form_match(), fallback=None) is fallbacks.normal_form_match
+    assert "passes all 6 checks" in capsys.readouterr().out
+    with pytest.raises(YourTurnError, match="wrap the angle difference"):
+        check(lambda lr, la, wr, wa, max_dr_m=0.05, max_dalpha=0.0524:
+              abs(lr - wr) <= max_dr_m and abs(la - wa) <= max_dalpha, cases.normal_form_match(), fallback=None)
+
+
+def test_print_data_set_by_hand(capsys):
+    scan = SimpleNamespace(n_beams=361, angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 360)
+    data = [SimpleNamespace(world=w, noise_std_m=n, scan=scan)
+            for n, w in [(0.005, "office"), (0.005, "office"), (0.005, "corridor"), (0.02, "office")]]
+    reports.print_data_set(data)
+    assert capsys.readouterr().out.splitlines() == [
+        "range noise    5 mm: 2 office, 1 corridor", "range noise   20 mm: 1 office",
+        "every scan: 361 beams from -90 to 90 deg, one every 0.500 deg"]
+
+
+def _match(pairs, scored, missed=(), dr=(), dalpha=()):
+    return SimpleNamespace(pairs=list(pairs), scored=list(scored), missed=list(missed), dr=list(dr),
+                           dalpha=list(dalpha))
+
+
+def test_pick_example_prefers_all_kinds_and_a_miss(monkeypatch):
+    import labkit.evaluation
+
+    items = [SimpleNamespace(world=w, noise_std_m=n, scan=k, truth=None)
+             for k, (w, n) in enumerate([("office", 0.005), ("corridor", 0.005), ("office", 0.005), ("office", 0.02),
+                                         ("office", 0.005)])]
+    # scan 0: every kind, no miss; 1: the corridor; 2: no unscored line; 3: another level; 4: every kind and a miss
+    kinds = {0: _match([(0, 0)], [0, 1]), 1: _match([(0, 0)], [0, 1], [1]), 2: _match([(0, 0)], [0, 1, 2], [1]),
+             3: _match([(0, 0)], [0, 1], [1]), 4: _match([(0, 0)], [0, 1], [1])}
+    monkeypatch.setattr(labkit.evaluation, "match_lines", lambda lines, truth: kinds[lines[0]])
+    assert reports.pick_example(items, 0.005, extract=lambda scan: [scan, scan, scan]) == 4
+    kinds[4] = _match([(0, 0)], [0, 1])                                      # no miss anywhere: the first
+    assert reports.pick_example(items, 0.005, extract=lambda scan: [scan, scan, scan]) == 0
+    assert reports.pick_example(items, 0.05, extract=lambda scan: [scan, scan, scan]) == 0   # none at all
+
+
+def test_print_match_by_hand(capsys):
+    lines = [SimpleNamespace(first=0, last=20, length=1.5), SimpleNamespace(first=21, last=30, length=0.4)]
+    reports.print_match(lines, _match([(0, 3)], [0, 1], missed=[5], dr=[0.0042], dalpha=[math.radians(-0.5)]))
+    assert capsys.readouterr().out.splitlines() == [
+        "line  0  beams   0.. 20   1.50 m  matched         wall  3: dr   +4.2 mm, dalpha -0.50 deg",
+        "line  1  beams  21.. 30   0.40 m  false positive",
+        "walls in the truth but missed: [5]"]
+
+
+def test_round_object_notes_by_hand(capsys):
+    truth = SimpleNamespace(circles=[SimpleNamespace(name="column", n_beams=9, center=(1.0, 2.0)),
+                                     SimpleNamespace(name="bin", n_beams=3, center=(3.0, 0.0))],
+                            legs=[SimpleNamespace(person="ann", n_beams=5, center=(2.0, -1.0))])
+    circles = SimpleNamespace(truth=[0], pairs=[(0, 0)], center_errors=[0.012])
+    legs = SimpleNamespace(truth=[0], pairs=[], center_errors=[])
+    notes = reports.round_object_notes(truth, circles, legs)
+    assert notes == [((1.0, 2.0), "column: found, centre 12 mm off"), ((3.0, 0.0), "bin: not in the truth (too few "
+                     "beams)"), ((2.0, -1.0), "ann's leg: missed")]
+    assert capsys.readouterr().out.splitlines()[0] == "true circle 0 (column, 9 beams): found, centre 12 mm off"
+
+
+def _rows():
+    return [{"noise_std_m": n, "method": m, "tp_rate": tp, "fp_rate": fp, "scans_per_s": sp, "truth": 50}
+            for n, m, tp, fp, sp in [(0.005, "split-and-merge (IEPF)", 0.95, 0.10, 3000.0),
+                                     (0.005, "RANSAC", 0.92, 0.05, 300.0), (0.005, "Hough", 0.80, 0.30, 100.0),
+                                     (0.02, "split-and-merge (IEPF)", 0.85, 0.40, 2000.0),
+                                     (0.02, "RANSAC", 0.80, 0.20, 250.0), (0.02, "Hough", 0.78, 0.25, 90.0)]]
+
+
+def test_level_summaries_by_hand(capsys):
+    sweep = [{"noise_std_m": n, "split_threshold_m": t, "tp_rate": tp, "fp_rate": fp}
+             for n, t, tp, fp in [(0.005, 0.05, 0.9, 0.1), (0.005, 0.02, 0.95, 0.05), (0.02, 0.05, 0.8, 0.3),
+                                  (0.02, 0.1, 0.85, 0.2)]]
+    best = {0.005: sweep[1], 0.02: sweep[3]}
+    reports.print_level_summaries(_rows(), sweep, best, 0.05, {"legs": {"precision": 0.9, "recall": 0.8,
+                                                                        "center_err_median_m": 0.021}})
+    out = capsys.readouterr().out.splitlines()
+    assert out[:4] == ["range noise 5 mm (50 true walls, so one wall is 0.020 of TruePos):",
+                       "  most walls found:   split-and-merge (IEPF) (TruePos 0.950, FalsePos 0.100)",
+                       "  fewest wrong lines: RANSAC (FalsePos 0.050, TruePos 0.920)",
+                       "  fastest:            split-and-merge (IEPF) (3,000 scans/s)"]
+    # at 20 mm no method finds 90 % of the walls: no extra line
+    assert out[7] == "  fastest:            split-and-merge (IEPF) (2,000 scans/s)"
+    assert out[8] == ("split-and-merge at 5 mm: best threshold 2 cm (4.0 sigma), TruePos - FalsePos 0.900 against "
+                      "0.800 at the papers' fixed 5 cm")
+    assert out[-1] == "legs in the hall: precision 0.900, recall 0.800, median centre error 21 mm"
+
+
+def test_speed_noise_and_ranking_by_hand(capsys):
+    assert reports.print_speed_and_noise(_rows()) == ("RANSAC", "Hough")   # TruePos -0.12 and -0.02 (IEPF -0.10)
+    published = {"split-and-merge (IEPF)": 0.10, "RANSAC": 0.30, "Hough": 0.30, "EM": 0.5}
+    # the paper ranks IEPF < RANSAC and IEPF < Hough (RANSAC = Hough: no order); ours at 5 mm: 0.10, 0.05, 0.30
+    # (IEPF < Hough only), at 20 mm: 0.40, 0.20, 0.25 (neither)
+    assert reports.print_ranking_against_paper(_rows(), published) == {0.005: 1, 0.02: 0}
+    out = capsys.readouterr().out
+    assert "noise 5 mm: split-and-merge (IEPF) ran 10.0 times as many scans per second as RANSAC" in out
+    assert "largest fall RANSAC (-0.120), best kept Hough (-0.020)" in out
+    assert "we rank 1 the same way: no more than a random order would on average (1)" in out
+    assert "pairs we rank the other way (paper: first < second): split-and-merge (IEPF) < RANSAC\n" in out
+    assert "lowest FalsePos here: RANSAC (0.05; the paper's lowest is split-and-merge (IEPF)); " \
+           "split-and-merge (IEPF) is 2 of 3" in out
