@@ -15,7 +15,8 @@ from .course import Case
 
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
            "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
-           "normal_form_match", "jacobian", "ideal_weights", "simulated_weights"]
+           "normal_form_match", "jacobian", "ideal_weights", "simulated_weights",
+           "fewer_lines_share"]
 
 
 def _line(r: float, degrees: float):
@@ -452,4 +453,38 @@ def ideal_weights() -> list[Case]:
                   "sigma^2 cos^2(theta - alpha), and the weight is its inverse"),
         Case((sigmas, three, np.radians(20.0)), simulated_weights(sigmas, three, np.radians(20.0)), rtol=0.02,
              label="one sigma per beam, alpha = 20 deg", hint="use each point's own sigma_i"),
+    ]
+
+
+def fewer_lines_share(iepf, angular) -> list[Case]:
+    """Notebook 09b: cases of ``fewer_lines_share(a, b)``, the share of scans where run ``b`` found fewer lines.
+
+    Parameters
+    ----------
+    iepf, angular : list of labkit.Features
+        Two runs over the same scans; some scans must have as many lines in both (else the strictness
+        of "fewer" goes untested).
+
+    Returns
+    -------
+    list of Case
+        Both orders of the two runs (counted here from ``counts()["lines"]``), and the first 50 scans of
+        ``iepf`` against themselves (0).
+
+    Raises
+    ------
+    ValueError
+        When no scan has as many lines in both runs.
+    """
+    lines_iepf = np.array([f.counts()["lines"] for f in iepf])
+    lines_angular = np.array([f.counts()["lines"] for f in angular])
+    if not (lines_iepf == lines_angular).any():
+        raise ValueError("the check needs scans where both find as many lines")
+    return [
+        Case((iepf, angular), float(np.mean(lines_angular < lines_iepf)),
+             "strictly fewer: a scan where both find as many lines does not count", label="iepf, angular"),
+        Case((angular, iepf), float(np.mean(lines_iepf < lines_angular)), "b is the run that finds fewer",
+             label="angular, iepf"),
+        Case((iepf[:50], iepf[:50]), 0.0, "strictly fewer: a run never finds fewer lines than itself",
+             label="feats[:50], feats[:50]"),
     ]

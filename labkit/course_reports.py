@@ -28,7 +28,7 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_parameter_sweeps", "majority_label", "walls_found", "print_eps_answers", "extractor_row",
            "print_extractor_table", "lines_on", "score_legs", "print_data_set", "pick_example", "print_match",
            "round_object_notes", "print_level_summaries", "print_speed_and_noise", "print_ranking_against_paper",
-           "weighting_row", "print_weighting_verdicts"]
+           "weighting_row", "print_weighting_verdicts", "print_count_table"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -1297,3 +1297,26 @@ def print_weighting_verdicts(propagated: Mapping, spread: Mapping, models, label
         side = "helps" if propagated[name, "1/rho"][0] < propagated[name, "uniform"][0] else "hurts"
         print(f"against uniform weights, 1/rho {side} under {name} noise")
     return worse
+
+
+# ---------------------------------------------------------------------------- notebook 09b: configurations
+def print_count_table(runs: Mapping, kinds=("segments", "lines", "corners", "circles", "legs"),
+                      stages=("lines", "corners", "total")) -> None:
+    """Print a table with one column per run: the mean count per scan of each kind, the mean milliseconds of
+    each stage.
+
+    Parameters
+    ----------
+    runs : mapping of str to list of labkit.Features
+        ``{name: one Features per scan}``.
+    kinds : sequence of str
+        Keys of ``Features.counts()``.
+    stages : sequence of str
+        Keys of ``Features.timings`` (seconds, printed as milliseconds).
+    """
+    print(f"{'per scan (mean)':22}" + "".join(f"{name:>10}" for name in runs))
+    for kind in kinds:
+        print(f"{kind:22}" + "".join(f"{np.mean([f.counts()[kind] for f in fs]):10.2f}" for fs in runs.values()))
+    for stage in stages:
+        print(f"{'ms ' + stage:22}" + "".join(f"{1e3 * np.mean([f.timings[stage] for f in fs]):10.3f}"
+                                             for fs in runs.values()))

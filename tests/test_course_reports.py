@@ -604,3 +604,78 @@ def test_speed_noise_and_ranking_by_hand(capsys):
     assert "pairs we rank the other way (paper: first < second): split-and-merge (IEPF) < RANSAC\n" in out
     assert "lowest FalsePos here: RANSAC (0.05; the paper's lowest is split-and-merge (IEPF)); " \
            "split-and-merge (IEPF) is 2 of 3" in out
+
+
+# ---------------------------------------------------------------------------- notebook 03
+def test_the_notebook_03_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    theta = np.radians(np.arange(-45, 0.1, 3.0))
+    rho = 1.5 / np.cos(theta - np.radians(-60))                       # the wall r = 1.5 m, alpha = -60 deg
+    assert check(fallbacks.jacobian, cases.jacobian(rho, theta, 0.01), fallback=None) is fallbacks.jacobian
+    assert check(fallbacks.ideal_weights, cases.ideal_weights(), fallback=None) is fallbacks.ideal_weights
+    assert capsys.readouterr().out.count("well done") == 2
+
+    def refit_with_default_weights(rho, theta, w, h=1e-6):           # ignores the weights it is given
+        return fallbacks.jacobian(rho, theta, None, h)
+
+    with pytest.raises(YourTurnError, match="use the weights w you are given"):
+        check(refit_with_default_weights, cases.jacobian(rho, theta, 0.01), fallback=None, name="jacobian")
+    with pytest.raises(YourTurnError, match="cos"):                   # 1 / sigma^2 alone
+        check(lambda sigma, theta, alpha: 1 / np.broadcast_to(sigma, np.shape(theta)) ** 2, cases.ideal_weights(),
+              fallback=None, name="ideal_weights")
+
+
+def test_simulated_weights_match_the_closed_form():
+    theta = np.radians([0.0, 60.0])                                   # cos 0 = 1, cos 60 = 1/2
+    np.testing.assert_allclose(cases.simulated_weights(0.02, theta, 0.0), [1 / 0.02**2, 4 / 0.02**2], rtol=0.02)
+
+
+def test_weighting_row_and_verdicts_by_hand(capsys):
+    theta = np.radians(np.arange(10, 80.1, 5.0))
+    rho = 1.0 / np.cos(theta - np.radians(30))
+    sigma = np.full(rho.size, 0.02)
+    samples = rho + sigma * np.random.default_rng(0).standard_normal((400, rho.size))
+    sd, mc = reports.weighting_row("constant", "uniform", rho, theta, "uniform", sigma, np.radians(30), samples)
+    C = labkit.fit_line_polar(rho, theta, "uniform", range_sigma=sigma).covariance
+    np.testing.assert_allclose(sd, np.sqrt(np.diag(C)))
+    np.testing.assert_allclose(mc, sd, rtol=0.12)                     # 400 draws: the spread within 12 %
+    assert capsys.readouterr().out.startswith("constant                    uniform")
+    labels = ["uniform", "1/rho", "inverse_variance", "ideal"]
+    prop = {("m", "uniform"): (2.0, 1.0), ("m", "1/rho"): (3.0, 1.0), ("m", "inverse_variance"): (2.0, 1.0),
+            ("m", "ideal"): (1.0, 0.5)}
+    assert reports.print_weighting_verdicts(prop, prop, ["m"], labels) == ["m"]
+    out = capsys.readouterr().out
+    assert ("m: smallest sigma_r with ideal weights (1000.00 mm); uniform +100%, inverse_variance +100%, "
+            "1/rho +200%") in out
+    assert "against uniform weights, 1/rho hurts under m noise" in out
+    prop["m", "uniform"] = (0.9, 1.0)                                 # beats the ideal weights: impossible
+    with pytest.raises(AssertionError, match="beats the ideal"):
+        reports.print_weighting_verdicts(prop, prop, ["m"], labels)
+
+
+# ---------------------------------------------------------------------------- notebook 09b
+def _features(lines, **timings):
+    counts = {"segments": 3, "lines": lines, "corners": 1, "circles": 0, "legs": 2}
+    return SimpleNamespace(counts=lambda: counts, lines=[None] * lines,
+                           timings={"lines": 0.002, "corners": 0.001, "total": 0.004, **timings})
+
+
+def test_the_notebook_09b_cases_by_hand(capsys):
+    a = [_features(n) for n in (3, 2, 5, 4)]
+    b = [_features(n) for n in (1, 2, 6, 4)]     # fewer than a in scan 0 only; more in scan 2
+    got = cases.fewer_lines_share(a, b)
+    assert [c.expected for c in got] == [0.25, 0.25, 0.0]
+    assert check(fallbacks.fewer_lines_share, got, fallback=None) is fallbacks.fewer_lines_share
+    assert "well done" in capsys.readouterr().out
+    with pytest.raises(YourTurnError, match="strictly fewer"):                # "fewer or as many"
+        check(lambda a, b: float(np.mean([len(y.lines) <= len(x.lines) for x, y in zip(a, b, strict=True)])), got,
+              fallback=None, name="fewer_lines_share")
+    with pytest.raises(ValueError, match="as many lines"):
+        cases.fewer_lines_share(a[:1], b[:1])
+
+
+def test_count_table_by_hand(capsys):
+    reports.print_count_table({"iepf": [_features(4), _features(6)], "angular": [_features(3), _features(3)]},
+                              kinds=("lines",), stages=("total",))
+    assert capsys.readouterr().out.splitlines() == [
+        "per scan (mean)             iepf   angular", "lines                       5.00      3.00",
+        "ms total                   4.000     4.000"]
