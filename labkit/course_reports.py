@@ -242,7 +242,7 @@ def print_best_fixed_against_auto(sweep: Sequence[dict], auto: Mapping[tuple, di
     dict
         ``{noise_std_m: {method: [thresholds better on both]}}``, metres.
     """
-    beaten = {}
+    beaten: dict[float, dict[str, list]] = {}
     for noise in sorted({r["noise_std_m"] for r in sweep}):
         curve = [r for r in sweep if r["noise_std_m"] == noise]
         top = max(curve, key=score)
@@ -752,7 +752,9 @@ def print_parameter_sweeps(by_threshold: Mapping[float, tuple], by_min_points: M
         When the tables no longer show that 1 cm gives more lines and 50 cm finds fewer walls than 5 cm,
         or that 2 points give more wrong lines and 20 find fewer walls than 5 (the notebook says so).
     """
-    for name, rows, fmt in [("split threshold (m)", by_threshold, "{:20.2f}"), ("min points", by_min_points, "{:20d}")]:
+    tables: list[tuple[str, Mapping, str]] = [("split threshold (m)", by_threshold, "{:20.2f}"),
+                                              ("min points", by_min_points, "{:20d}")]
+    for name, rows, fmt in tables:
         print(f"{name:>20} {'lines':>6} {'walls found':>12} {'wrong lines':>12}")
         for value, (n_lines, found, wrong) in rows.items():
             print(f"{fmt.format(value)} {n_lines:6d} {found:12.1%} {wrong:12.1%}")
@@ -1153,7 +1155,7 @@ def print_speed_and_noise(rows, method: str = "split-and-merge (IEPF)", against:
         print(f"noise {1000 * noise:.0f} mm: {method} ran {ratio:.1f} times as many scans per second as {against}")
     low, high = levels[0], levels[-1]
     change = {m: _row_of(rows, m, high)["tp_rate"] - _row_of(rows, m, low)["tp_rate"] for m in methods}
-    worst_hit, best_kept = min(change, key=change.get), max(change, key=change.get)
+    worst_hit, best_kept = min(change, key=lambda m: change[m]), max(change, key=lambda m: change[m])
     print(f"\nTruePos from {1000 * low:.0f} to {1000 * high:.0f} mm of noise: largest fall {worst_hit} "
           f"({change[worst_hit]:+.3f}), best kept {best_kept} ({change[best_kept]:+.3f})")
     return worst_hit, best_kept
@@ -1184,19 +1186,19 @@ def print_ranking_against_paper(rows, published: Mapping[str, float], method: st
     shared = [m for m in dict.fromkeys(r["method"] for r in rows) if m in published]
     strict_pairs = [(a, b) for a in shared for b in shared if published[a] < published[b]]
     print("\nFalsePos, published (Nguyen et al.): "
-          + ", ".join(f"{m} {published[m]:.2f}" for m in sorted(shared, key=published.get)))
+          + ", ".join(f"{m} {published[m]:.2f}" for m in sorted(shared, key=lambda m: published[m])))
     agreed = {}
     for noise in levels:
         ours = {m: _row_of(rows, m, noise)["fp_rate"] for m in shared}
         agree = agreed[noise] = sum(ours[a] < ours[b] for a, b in strict_pairs)
         print(f"FalsePos, ours at {1000 * noise:.0f} mm:            "
-              + ", ".join(f"{m} {ours[m]:.2f}" for m in sorted(shared, key=ours.get)))
+              + ", ".join(f"{m} {ours[m]:.2f}" for m in sorted(shared, key=lambda m: ours[m])))
         verdict = "more than" if agree > len(strict_pairs) / 2 else "no more than"
         print(f"  of the {len(strict_pairs)} pairs of methods the paper ranks apart, we rank {agree} the same way: "
               f"{verdict} a random order would on average ({len(strict_pairs) / 2:g})")
-        ours_best = min(ours, key=ours.get)
-        paper_best = min(shared, key=published.get)
-        rank = sorted(shared, key=ours.get).index(method) + 1
+        ours_best = min(ours, key=lambda m: ours[m])
+        paper_best = min(shared, key=lambda m: published[m])
+        rank = sorted(shared, key=lambda m: ours[m]).index(method) + 1
         same = "as in the paper" if ours_best == paper_best else f"the paper's lowest is {paper_best}"
         print(f"  lowest FalsePos here: {ours_best} ({ours[ours_best]:.2f}; {same}); "
               f"{method} is {rank} of {len(shared)}")
