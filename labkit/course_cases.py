@@ -16,7 +16,7 @@ from .course import Case
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
            "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
            "normal_form_match", "jacobian", "ideal_weights", "simulated_weights",
-           "fewer_lines_share"]
+           "fewer_lines_share", "compose_poses", "pose_at"]
 
 
 def _line(r: float, degrees: float):
@@ -257,7 +257,7 @@ def triplet_direction(scan, phi, i: int) -> list[Case]:
     scan : labkit.Scan
         A scan.
     phi : ndarray
-        labkit's local direction of every beam of ``scan`` (:func:`labkit.local_directions`).
+        The local direction of every beam of ``scan``, from :func:`labkit.local_directions`.
     i : int
         A beam with a local direction: the triplet of beams ``i - 1 .. i + 1`` must give ``phi[i]``.
 
@@ -288,7 +288,7 @@ def wall_offsets(points, direction: float, offsets) -> list[Case]:
     direction : float
         The cluster's mean direction, radians.
     offsets : ndarray, shape (N,)
-        labkit's offsets of those points (``angular_arrays(scan).distances``).
+        The offsets labkit gives those points (``angular_arrays(scan).distances``).
 
     Returns
     -------
@@ -487,4 +487,43 @@ def fewer_lines_share(iepf, angular) -> list[Case]:
              label="angular, iepf"),
         Case((iepf[:50], iepf[:50]), 0.0, "strictly fewer: a run never finds fewer lines than itself",
              label="feats[:50], feats[:50]"),
+    ]
+
+
+def compose_poses() -> list[Case]:
+    """Notebook 11: cases of ``compose_poses(a, b)``, poses ``(x, y, theta)``.
+
+    Returns
+    -------
+    list of Case
+        Facing +y, 1 m ahead is +y: (1, 1, pi/2); facing -x, b = (0.5, -0.3, 0.4) lands at (1.5, 1.3) with
+        heading pi + 0.4 wrapped to 0.4 - pi; headings 3 + 1 rad wrap to 4 - 2 pi.
+    """
+    return [
+        Case(((1.0, 0.0, np.pi / 2), (1.0, 0.0, 0.0)), (1.0, 1.0, np.pi / 2),
+             "facing +y, 1 m ahead is +y: rotate b's translation by a's heading"),
+        Case(((2.0, 1.0, np.pi), (0.5, -0.3, 0.4)), (1.5, 1.3, 0.4 - np.pi),
+             "facing -x, b's +x is -x and b's -y is +y; pi + 0.4 wraps to 0.4 - pi"),
+        Case(((0.0, 0.0, 3.0), (0.0, 0.0, 1.0)), (0.0, 0.0, 4.0 - 2 * np.pi),
+             "3 + 1 rad is past pi: wrap the angle to (-pi, pi]"),
+    ]
+
+
+def pose_at() -> list[Case]:
+    """Notebook 11: cases of ``pose_at(t0, p0, t1, p1, t)``, linear between two stamped poses.
+
+    Returns
+    -------
+    list of Case
+        Halfway between (0, 0, 0) and (1, 2, 0.5): (0.5, 1, 0.25); from 170 to -170 degrees (+20 the short
+        way round), a quarter: 175 degrees, three quarters: -175; at ``t0``: ``p0``.
+    """
+    a, b = (0.0, 0.0, np.radians(170)), (1.0, 2.0, np.radians(-170))
+    return [
+        Case((0, (0.0, 0.0, 0.0), 10, (1.0, 2.0, 0.5), 5), (0.5, 1.0, 0.25), "halfway: half of each change"),
+        Case((0, a, 100, b, 25), (0.25, 0.5, np.radians(175)),
+             "170 deg to -170 deg is +20 deg the short way round: a quarter of it is 175 deg"),
+        Case((0, a, 100, b, 75), (0.75, 1.5, np.radians(-175)),
+             "three quarters of +20 deg from 170 deg is 185 deg, wrapped: -175 deg"),
+        Case((100, b, 300, a, 100), b, "at t0 the pose is p0"),
     ]

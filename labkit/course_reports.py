@@ -1083,7 +1083,9 @@ def round_object_notes(truth, circle_match, leg_match, min_beams=(4, 3)) -> list
 
 
 def print_level_summaries(rows, sweep, best: Mapping, fixed_m: float, round_scores: Mapping) -> None:
-    """Print, per noise level, the methods that find most walls, make fewest wrong lines and run fastest; then
+    """Print the conclusions of the line and round-object scores, level by level.
+
+    Per noise level, the methods that find most walls, make fewest wrong lines and run fastest; then
     split-and-merge's best threshold against the fixed one; then the round objects' scores.
 
     Parameters
@@ -1133,7 +1135,9 @@ def _row_of(rows, method: str, noise: float) -> dict:
 
 
 def print_speed_and_noise(rows, method: str = "split-and-merge (IEPF)", against: str = "RANSAC") -> tuple[str, str]:
-    """Print how many times as many scans per second ``method`` ran as ``against``, level by level, then which
+    """Print ``method``'s speed against ``against``'s, and which TruePos noise hurt most and least.
+
+    How many times as many scans per second ``method`` ran as ``against``, level by level, then which
     method's TruePos fell most and which least from the lowest noise level to the highest.
 
     Parameters
@@ -1247,9 +1251,11 @@ def weighting_row(name: str, label: str, rho, theta, weights, sigma, alpha: floa
 
 
 def print_weighting_verdicts(propagated: Mapping, spread: Mapping, models, labels, ideal: str = "ideal") -> list:
-    """Read the weighting table: per noise model the weights of smallest sigma_r and what the others lose;
-    check that the ideal weights are never beaten and that the Monte Carlo spread agrees; then say where
-    ``inverse_variance`` loses, where weights tie with the ideal ones, and where 1/rho helps.
+    """Print what the weighting table shows, checking that no weighting beats the ideal one.
+
+    Per noise model the weights of smallest sigma_r and what the others lose; checks that the ideal
+    weights are never beaten and that the Monte Carlo spread agrees; then where ``inverse_variance``
+    loses, where weights tie with the ideal ones, and where 1/rho helps.
 
     Parameters
     ----------
@@ -1304,8 +1310,7 @@ def print_weighting_verdicts(propagated: Mapping, spread: Mapping, models, label
 # ---------------------------------------------------------------------------- notebook 09b: configurations
 def print_count_table(runs: Mapping, kinds=("segments", "lines", "corners", "circles", "legs"),
                       stages=("lines", "corners", "total")) -> None:
-    """Print a table with one column per run: the mean count per scan of each kind, the mean milliseconds of
-    each stage.
+    """Print a table with one column per run: mean counts per scan, mean milliseconds per stage.
 
     Parameters
     ----------

@@ -679,3 +679,23 @@ def test_count_table_by_hand(capsys):
     assert capsys.readouterr().out.splitlines() == [
         "per scan (mean)             iepf   angular", "lines                       5.00      3.00",
         "ms total                   4.000     4.000"]
+
+
+# ---------------------------------------------------------------------------- notebook 11
+def test_the_notebook_11_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    assert check(labkit.poses.compose, cases.compose_poses(), fallback=None) is labkit.poses.compose
+    assert check(fallbacks.pose_at, cases.pose_at(), fallback=None) is fallbacks.pose_at
+    assert capsys.readouterr().out.count("well done") == 2
+
+    def added(a, b):                                                  # b's translation not rotated
+        return (a[0] + b[0], a[1] + b[1], labkit.geometry.wrap_angle(a[2] + b[2]))
+
+    with pytest.raises(YourTurnError, match="rotate b's translation"):
+        check(added, cases.compose_poses(), fallback=None, name="compose_poses")
+
+    def the_long_way(t0, p0, t1, p1, t):                              # theta interpolated without wrapping
+        u = (t - t0) / (t1 - t0)
+        return tuple(a + u * (b - a) for a, b in zip(p0, p1, strict=True))
+
+    with pytest.raises(YourTurnError, match="short way round"):
+        check(the_long_way, cases.pose_at(), fallback=None, name="pose_at")
