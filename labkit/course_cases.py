@@ -16,7 +16,7 @@ from .course import Case
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
            "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
            "normal_form_match", "jacobian", "ideal_weights", "simulated_weights",
-           "fewer_lines_share", "compose_poses", "pose_at"]
+           "fewer_lines_share", "compose_poses", "pose_at", "config_for"]
 
 
 def _line(r: float, degrees: float):
@@ -526,4 +526,38 @@ def pose_at() -> list[Case]:
         Case((0, a, 100, b, 75), (0.75, 1.5, np.radians(-175)),
              "three quarters of +20 deg from 170 deg is 185 deg, wrapped: -175 deg"),
         Case((100, b, 300, a, 100), b, "at t0 the pose is p0"),
+    ]
+
+
+def config_for(config) -> list[Case]:
+    """Notebook 09: cases of ``config_for(method, split_threshold_cm)``.
+
+    The first expected config is written without ``Config.updated``: ``config``'s own TOML with the
+    method and the threshold replaced, read back.
+
+    Parameters
+    ----------
+    config : labkit.Config
+        The default config (its TOML is edited for the first case).
+
+    Returns
+    -------
+    list of Case
+        ``("split_and_merge", 3)``: 0.03 m; ``("angular", 8)``: 0.08 m; ``("iepf", 5)``: every other key at
+        its default.
+    """
+    from .pipeline import Config
+
+    expected_sm = Config.from_toml(config.to_toml().replace(
+        f'method = "{config.lines.method}"', 'method = "split_and_merge"').replace(
+        f"split_threshold_m = {config.lines.split_threshold_m!r}".replace("'", '"'), "split_threshold_m = 0.03"))
+    if not (expected_sm.lines.split_threshold_m == 0.03 and expected_sm.lines.method == "split_and_merge"):
+        raise ValueError("the config's TOML did not take the edit")
+    return [
+        Case(("split_and_merge", 3), expected_sm,
+             "the Config wants metres: 3 cm is lines.split_threshold_m = 0.03", label="'split_and_merge', 3"),
+        Case(("angular", 8), Config().updated({"lines.method": "angular", "lines.split_threshold_m": 0.08}),
+             "lines.method is the method's name, the threshold 8 cm = 0.08 m", label="'angular', 8"),
+        Case(("iepf", 5), Config().updated({"lines.split_threshold_m": 0.05}),
+             "every other key keeps its default", label="'iepf', 5"),
     ]

@@ -28,7 +28,7 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_parameter_sweeps", "majority_label", "walls_found", "print_eps_answers", "extractor_row",
            "print_extractor_table", "lines_on", "score_legs", "print_data_set", "pick_example", "print_match",
            "round_object_notes", "print_level_summaries", "print_speed_and_noise", "print_ranking_against_paper",
-           "weighting_row", "print_weighting_verdicts", "print_count_table"]
+           "weighting_row", "print_weighting_verdicts", "print_count_table", "print_recording_summary"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -1327,3 +1327,32 @@ def print_count_table(runs: Mapping, kinds=("segments", "lines", "corners", "cir
     for stage in stages:
         print(f"{'ms ' + stage:22}" + "".join(f"{1e3 * np.mean([f.timings[stage] for f in fs]):10.3f}"
                                              for fs in runs.values()))
+
+
+# ---------------------------------------------------------------------------- notebook 09: playback
+def print_recording_summary(scans, features, kinds) -> dict:
+    """Print a recording's beams, rate, share of invalid beams and features per scan.
+
+    Parameters
+    ----------
+    scans : list of labkit.Scan
+        The scans, in order (at least two).
+    features : list of labkit.Features
+        One per scan.
+    kinds : sequence of str
+        Keys of ``Features.counts()`` to average.
+
+    Returns
+    -------
+    dict
+        ``{kind: mean count per scan}``.
+    """
+    first = scans[0]
+    span_s = (scans[-1].stamp_ns - first.stamp_ns) / 1e9
+    print(f"{first.n_beams} beams, one every {np.degrees(first.angle_increment):.2f} deg, "
+          f"range_max {first.range_max:.2f} m")
+    print(f"{len(scans)} scans over {span_s:.0f} s ({len(scans) / span_s:.2f} scans per second)")
+    print(f"invalid beams: {np.mean([1 - s.valid.mean() for s in scans]):.1%} on average")
+    mean_counts = {k: float(np.mean([f.counts()[k] for f in features])) for k in kinds}
+    print("features per scan:", ", ".join(f"{k} {v:.2f}" for k, v in mean_counts.items()))
+    return mean_counts

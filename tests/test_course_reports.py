@@ -699,3 +699,28 @@ def test_the_notebook_11_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
 
     with pytest.raises(YourTurnError, match="short way round"):
         check(the_long_way, cases.pose_at(), fallback=None, name="pose_at")
+
+
+# ---------------------------------------------------------------------------- notebook 09
+def test_the_notebook_09_cases_pass_labkits_answer_and_fail_wrong_ones(capsys):
+    config = labkit.Config()
+    got = cases.config_for(config)
+    assert got[0].expected.lines.split_threshold_m == 0.03 and got[0].expected.lines.method == "split_and_merge"
+    assert check(fallbacks.config_for, got, fallback=None) is fallbacks.config_for
+    assert "well done" in capsys.readouterr().out
+    with pytest.raises(YourTurnError, match="wants metres"):             # centimetres left as they are
+        check(lambda method, cm: labkit.Config().updated({"lines.method": method, "lines.split_threshold_m": cm}),
+              got, fallback=None, name="config_for")
+
+
+def test_recording_summary_by_hand(capsys):
+    def scan(k, valid):
+        return SimpleNamespace(stamp_ns=k * 200_000_000, n_beams=4, angle_increment=math.radians(1.0), range_max=8.0,
+                               valid=np.array(valid))
+
+    scans = [scan(0, [1, 1, 1, 1]), scan(1, [1, 1, 0, 1]), scan(5, [0, 0, 1, 1])]   # 1 s, 3 scans
+    feats = [SimpleNamespace(counts=lambda n=n: {"lines": n}) for n in (1, 2, 6)]
+    assert reports.print_recording_summary(scans, feats, kinds=["lines"]) == {"lines": 3.0}
+    assert capsys.readouterr().out.splitlines() == [
+        "4 beams, one every 1.00 deg, range_max 8.00 m", "3 scans over 1 s (3.00 scans per second)",
+        "invalid beams: 25.0% on average", "features per scan: lines 3.00"]
