@@ -16,7 +16,7 @@ from .course import Case
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
            "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
            "normal_form_match", "jacobian", "ideal_weights", "simulated_weights",
-           "fewer_lines_share", "compose_poses", "pose_at", "config_for"]
+           "fewer_lines_share", "compose_poses", "pose_at", "config_for", "closed_form_alpha"]
 
 
 def _line(r: float, degrees: float):
@@ -560,4 +560,42 @@ def config_for(config) -> list[Case]:
              "lines.method is the method's name, the threshold 8 cm = 0.08 m", label="'angular', 8"),
         Case(("iepf", 5), Config().updated({"lines.split_threshold_m": 0.05}),
              "every other key keeps its default", label="'iepf', 5"),
+    ]
+
+
+def _same_normal(got, expected) -> bool:
+    """The same line: alpha equal up to a multiple of pi (the normal may point either way)."""
+    return bool(np.ndim(got) == 0 and abs(np.sin(got - expected)) < 1e-9)
+
+
+def closed_form_alpha(rho, theta, r_true: float, alpha_true: float) -> list[Case]:
+    """Notebook 02: cases of ``closed_form_alpha(rho, theta, w)``, alpha compared modulo pi.
+
+    Parameters
+    ----------
+    rho, theta : ndarray
+        A noisy wall's ranges (m) and bearings (rad); labkit's weighted fit with ``w = 1/rho`` gives the
+        expected alpha.
+    r_true, alpha_true : float
+        The true wall (m, rad): its noise-free ranges on ``theta`` must give ``alpha_true``.
+
+    Returns
+    -------
+    list of Case
+        The noise-free wall, a noise-free wall straight ahead (x = 2, alpha 0: atan loses the quadrant
+        there), and the noisy wall with ``w = 1/rho``.
+    """
+    from .fitting import fit_line_polar
+
+    ahead = np.radians(np.arange(-40, 40.1, 5.0))       # a wall straight ahead, x = 2
+    w_noisy = 1 / np.asarray(rho)
+    return [
+        Case((r_true / np.cos(theta - alpha_true), theta, np.ones_like(theta)), alpha_true, compare=_same_normal,
+             label="noise-free wall at alpha = -60 deg", hint="alpha = atan2(2 S_uv, S_uu - S_vv) / 2 + pi / 2"),
+        Case((2.0 / np.cos(ahead), ahead, np.ones_like(ahead)), 0.0, compare=_same_normal,
+             label="noise-free wall straight ahead",
+             hint="atan2(2 S_uv, S_uu - S_vv), not atan(2 S_uv / (S_uu - S_vv)): atan loses the quadrant"),
+        Case((rho, theta, w_noisy), fit_line_polar(rho, theta, w_noisy).alpha, compare=_same_normal,
+             label="the noisy wall, w = 1/rho",
+             hint="weights w_i in every sum, and W = sum of w in the products of sums"),
     ]

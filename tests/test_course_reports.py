@@ -724,3 +724,21 @@ def test_recording_summary_by_hand(capsys):
     assert capsys.readouterr().out.splitlines() == [
         "4 beams, one every 1.00 deg, range_max 8.00 m", "3 scans over 1 s (3.00 scans per second)",
         "invalid beams: 25.0% on average", "features per scan: lines 3.00"]
+
+
+# ---------------------------------------------------------------------------- notebook 02
+def test_the_notebook_02_cases_pass_labkits_answer_and_fail_a_wrong_one(capsys):
+    theta = np.radians(np.arange(-45, 0.1, 1.0))
+    rho = 1.5 / np.cos(theta - np.radians(-60)) + np.random.default_rng(0).normal(0, 0.01, theta.size)
+    got = cases.closed_form_alpha(rho, theta, 1.5, np.radians(-60))
+    assert check(fallbacks.closed_form_alpha, got, fallback=None) is fallbacks.closed_form_alpha
+    assert "well done" in capsys.readouterr().out
+
+    def with_atan(rho, theta, w):                                        # atan of the ratio: loses the quadrant
+        x, y = rho * np.cos(theta), rho * np.sin(theta)
+        xm, ym = np.average(x, weights=w), np.average(y, weights=w)
+        suu, svv = np.sum(w * (x - xm) ** 2), np.sum(w * (y - ym) ** 2)
+        return float(np.arctan(2 * np.sum(w * (x - xm) * (y - ym)) / (suu - svv)) / 2 + np.pi / 2)
+
+    with pytest.raises(YourTurnError, match="atan loses the quadrant"):
+        check(with_atan, got, fallback=None, name="closed_form_alpha")
