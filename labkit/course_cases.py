@@ -16,7 +16,8 @@ from .course import Case
 __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "ray_axis_error", "similar_lines",
            "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
            "normal_form_match", "jacobian", "ideal_weights", "simulated_weights",
-           "fewer_lines_share", "compose_poses", "pose_at", "config_for", "closed_form_alpha"]
+           "fewer_lines_share", "compose_poses", "pose_at", "config_for", "closed_form_alpha",
+           "chord_distances", "iepf"]
 
 
 def _line(r: float, degrees: float):
@@ -598,4 +599,58 @@ def closed_form_alpha(rho, theta, r_true: float, alpha_true: float) -> list[Case
         Case((rho, theta, w_noisy), fit_line_polar(rho, theta, w_noisy).alpha, compare=_same_normal,
              label="the noisy wall, w = 1/rho",
              hint="weights w_i in every sum, and W = sum of w in the products of sums"),
+    ]
+
+
+def chord_distances() -> list[Case]:
+    """Notebook 04: cases of ``chord_distances(points)``.
+
+    Returns
+    -------
+    list of Case
+        A roof on the chord y = 0 (the distances are the y values); an upright run on the 4 m chord x = 1
+        (0, 0.0625, 0.25, 0, 0); and 8 random points against labkit's distances.
+    """
+    from .course_fallbacks import chord_distances as labkits
+
+    roof = np.array([[0.0, 0.0], [0.5, 0.5], [1.0, 0.0]])          # chord y = 0: the distances are the y values
+    upright = np.array([[1.0, -1.0], [0.9375, -0.5], [1.25, 0.0], [1.0, 1.0], [1.0, 3.0]])   # chord x = 1, 4 m long
+    wiggly = np.random.default_rng(4).normal(size=(8, 2))
+    return [
+        Case((roof,), [0.0, 0.5, 0.0], hint="the roof's chord is y = 0: each distance is the point's y value"),
+        Case((upright,), [0.0, 0.0625, 0.25, 0.0, 0.0], hint="divide the cross product by the chord's length |b - a|?"),
+        Case((wiggly,), labkits(wiggly), label="8 random points",
+             hint="the chord goes through the FIRST and the LAST point; distances are >= 0 (abs)"),
+    ]
+
+
+def iepf(room_segment) -> list[Case]:
+    """Notebook 04: cases of ``iepf(points, threshold_m=0.05, min_points=5)``, lines as index ranges [a, b).
+
+    Parameters
+    ----------
+    room_segment : ndarray, shape (N, 2)
+        A real range segment: :func:`labkit.lines.iepf` on it gives the expected lines.
+
+    Returns
+    -------
+    list of Case
+        A straight run of 6 points (one line), of 4 (none: fewer than ``min_points``), an L of 12 with its
+        corner at index 5 (two lines, in scan order), a run whose worst point sits where no split is
+        allowed (one line), and the segment.
+    """
+    from .lines import iepf as labkits
+
+    corner_run = np.array([[x, 0.0] for x in range(6)] + [[5.0, y] for y in range(1, 7)])   # an L: corner at index 5
+    protected = np.array([[0.0, 0.0], [1.0, 0.9], [2.0, 0.05], [3.0, 0.0], [4.0, 0.0]])    # worst point at index 1
+    return [
+        Case((corner_run[:6], 0.05, 5), [(0, 6)], hint="a straight run is accepted whole"),
+        Case((corner_run[:4], 0.05, 5), [], hint="a run of fewer than min_points points makes no line"),
+        Case((corner_run, 0.05, 5), [(0, 6), (6, 12)],
+             hint="runs in scan order: push the right half first, so that the left half is popped first?"),
+        Case((protected, 0.1, 4), [(0, 5)],
+             hint="with min_points = 4 the first and last 2 points may not be the worst point; "
+                  "the one allowed is 0.05 m off"),
+        Case((room_segment, 0.05, 5), labkits(room_segment, 0.05, 5), label="the room's first range segment",
+             hint="labkit's runs on a real segment: compare the split rule step by step"),
     ]

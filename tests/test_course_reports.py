@@ -742,3 +742,22 @@ def test_the_notebook_02_cases_pass_labkits_answer_and_fail_a_wrong_one(capsys):
 
     with pytest.raises(YourTurnError, match="atan loses the quadrant"):
         check(with_atan, got, fallback=None, name="closed_form_alpha")
+
+
+# ---------------------------------------------------------------------------- notebook 04
+def test_the_notebook_04_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    assert check(fallbacks.chord_distances, cases.chord_distances(), fallback=None) is fallbacks.chord_distances
+    scan, _ = next(iter(labkit.sim.simulate("random_polygons_4", seed=0, n_scans=1)))
+    segment = labkit.range_segments(scan, threshold_m=0.08, min_points=5, adaptive=True, range_sigma_m=0.01)[0].points
+    assert check(labkit.lines.iepf, cases.iepf(segment), fallback=None) is labkit.lines.iepf
+    assert capsys.readouterr().out.count("well done") == 2
+
+    def unsigned_cross(points):                                       # the cross product, not divided by |b - a|
+        a, b = points[0], points[-1]
+        return np.abs((b[0] - a[0]) * (points[:, 1] - a[1]) - (b[1] - a[1]) * (points[:, 0] - a[0]))
+
+    with pytest.raises(YourTurnError, match="chord's length"):
+        check(unsigned_cross, cases.chord_distances(), fallback=None, name="chord_distances")
+    with pytest.raises(YourTurnError, match="fewer than min_points"):  # every run is one line
+        check(lambda points, threshold_m=0.05, min_points=5: [(0, len(points))], cases.iepf(segment),
+              fallback=None, name="iepf")
