@@ -17,7 +17,7 @@ __all__ = ["intersection", "is_v_shaped", "middle_ratio", "radius_and_height", "
            "three_beam_residual", "triplet_direction", "wall_offsets", "pair_two_legs",
            "normal_form_match", "jacobian", "ideal_weights", "simulated_weights",
            "fewer_lines_share", "compose_poses", "pose_at", "config_for", "closed_form_alpha",
-           "chord_distances", "iepf"]
+           "chord_distances", "iepf", "is_core", "is_border", "cut_points", "adaptive_threshold"]
 
 
 def _line(r: float, degrees: float):
@@ -653,4 +653,137 @@ def iepf(room_segment) -> list[Case]:
                   "the one allowed is 0.05 m off"),
         Case((room_segment, 0.05, 5), labkits(room_segment, 0.05, 5), label="the room's first range segment",
              hint="labkit's runs on a real segment: compare the split rule step by step"),
+    ]
+
+
+def _second_data_set():
+    """Notebook 06's second data set: three close points, a gap, two points; eps = 1, brute-force table."""
+    from .course_fallbacks import bounds_from_table
+
+    x2 = np.array([0.0, 0.5, 1.0, 5.0, 5.5])
+    near2 = np.abs(x2[:, None] - x2[None, :]) <= 1.0
+    lower, upper = bounds_from_table(near2)
+    return near2, lower, upper
+
+
+def is_core(L, U, min_pts: int, core) -> list[Case]:
+    """Notebook 06: cases of ``is_core(L, U, min_pts)``.
+
+    Parameters
+    ----------
+    L, U : ndarray of int
+        The neighbourhood bounds of section 1's data.
+    min_pts : int
+        Section 1's ``min_pts``.
+    core : ndarray of bool
+        Section 1's core points, counted by brute force.
+
+    Returns
+    -------
+    list of Case
+        Section 1's data; a second data set (three close points, a gap, two points, eps = 1) with
+        min_pts 3 (core points from its brute-force table) and 1 (every point).
+    """
+    near2, lower, upper = _second_data_set()
+    hint = "a neighbourhood L[i]..U[i] holds U - L + 1 points, the point itself included"
+    return [
+        Case((L, U, min_pts), core, label="L, U of section 1, min_pts=4", hint=hint),
+        Case((lower, upper, 3), near2.sum(axis=1) >= 3, label="L2, U2, min_pts=3", hint=hint),
+        Case((lower, upper, 1), np.ones(5, bool), label="L2, U2, min_pts=1",
+             hint="with min_pts = 1 every point is a core point: its neighbourhood holds at least itself"),
+    ]
+
+
+def is_border(L, U, core, border) -> list[Case]:
+    """Notebook 06: cases of ``is_border(L, U, core)``.
+
+    Parameters
+    ----------
+    L, U : ndarray of int
+        The neighbourhood bounds of section 1's data.
+    core, border : ndarray of bool
+        Section 1's core and border points, by brute force.
+
+    Returns
+    -------
+    list of Case
+        Section 1's data, and the second data set of :func:`is_core` with min_pts 3 (border points by
+        brute force: not core, and a core point within eps).
+    """
+    near2, lower, upper = _second_data_set()
+    core2 = near2.sum(axis=1) >= 3
+    border2 = ~core2 & (near2 & core2[None, :]).any(axis=1)
+    return [
+        Case((L, U, core), border, label="L, U, core of section 1",
+             hint="a core point is never a border point, even with core points around it"),
+        Case((lower, upper, core2), border2, label="L2, U2, core2",
+             hint="look for a core point anywhere in L[i]..U[i], both ends included"),
+    ]
+
+
+def cut_points(scan) -> list[Case]:
+    """Notebook 01: cases of ``cut_points(scan, threshold_m)``.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        A whole scan: labkit's cuts (:func:`labkit.course_fallbacks.cut_points`) at 8 cm are expected.
+
+    Returns
+    -------
+    list of Case
+        Seven beams one degree apart at 1, 1, 1, 3, 3 m, NaN, 2 m (gaps 1.7 cm, 1.7 cm, 2 m, 5.2 cm, then
+        NaN on both sides of the invalid beam) at 8 and 4 cm, and the scan at 8 cm.
+    """
+    from .course_fallbacks import cut_points as labkits
+    from .scan import Scan
+
+    tiny = Scan(ranges=np.array([1.0, 1.0, 1.0, 3.0, 3.0, np.nan, 2.0]), angles=np.radians(np.arange(7.0)))
+    return [
+        Case((tiny, 0.08), np.array([False, False, True, False, True, True]),
+             hint="cut where the gap is at least threshold_m, and next to every invalid beam (its point is NaN, "
+                  "and NaN >= threshold_m is False)"),
+        Case((tiny, 0.04), np.array([False, False, True, True, True, True]),
+             hint="the 5.2 cm gap at 3 m is not below a 4 cm threshold: cut"),
+        Case((scan, 0.08), labkits(scan, 0.08), label="corridor scan, 0.08",
+             hint="the whole corridor scan: compare with labkit.segment_labels(scan, threshold_m=0.08, "
+                  "min_points=1, adaptive=False)"),
+    ]
+
+
+def _triangle_gap(r: float, dphi: float, incidence_deg: float) -> float:
+    """|P_{n-1} P_n| from geometry, a surface leaving P_{n-1} = (r, 0) at ``incidence_deg`` to the beam.
+
+    It meets the next beam, direction (cos dphi, sin dphi), at P_n.
+    """
+    lam = np.radians(incidence_deg)
+    # P + t (cos lam, sin lam) = s (cos dphi, sin dphi): solve for (t, s)
+    t, _ = np.linalg.solve([[np.cos(lam), -np.cos(dphi)], [np.sin(lam), -np.sin(dphi)]], [-r, 0.0])
+    return float(t)
+
+
+def adaptive_threshold() -> list[Case]:
+    """Notebook 01: cases of ``adaptive_threshold(r_a, r_b, dphi, threshold_m, incidence_deg, range_sigma_m)``.
+
+    Returns
+    -------
+    list of Case
+        At 1, 5 and 10 m with 0.5 degree beams: the gap a surface at 10 degrees leaves between two beams,
+        solved as a triangle, plus 3 sigma, at least 8 cm; then two pairs of ranges against
+        :func:`labkit.breakpoint_thresholds` (the smaller range counts; the arguments are used).
+    """
+    from .segmentation import breakpoint_thresholds
+
+    step = np.radians(0.5)
+    by_geometry = np.array([max(_triangle_gap(r, step, 10.0) + 0.03, 0.08) for r in [1.0, 5.0, 10.0]])
+    near, far = np.array([2.0, 6.0, 9.5]), np.array([2.4, 6.1, 12.0])
+    return [
+        Case((np.array([1.0, 5.0, 10.0]), np.array([1.0, 5.0, 10.0]), step), by_geometry,
+             hint="D_max = r sin(dphi) / sin(lambda - dphi) + 3 sigma_r with lambda in radians, then the 80 mm floor"),
+        Case((near, far, step), breakpoint_thresholds(near, far, step),
+             hint="use the smaller of the two ranges, r = min(r_a, r_b)"),
+        Case((near, far, np.radians(1.0)), breakpoint_thresholds(near, far, np.radians(1.0), 0.05,
+                                                                 incidence_deg=15.0, range_sigma_m=0.02),
+             kwargs={"threshold_m": 0.05, "incidence_deg": 15.0, "range_sigma_m": 0.02},
+             hint="use the arguments threshold_m, incidence_deg and range_sigma_m, not the defaults"),
     ]

@@ -761,3 +761,37 @@ def test_the_notebook_04_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
     with pytest.raises(YourTurnError, match="fewer than min_points"):  # every run is one line
         check(lambda points, threshold_m=0.05, min_points=5: [(0, len(points))], cases.iepf(segment),
               fallback=None, name="iepf")
+
+
+# ---------------------------------------------------------------------------- notebooks 06 and 01
+def test_the_notebook_06_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    x = np.array([0.0, 0.4, 0.7, 0.9, 1.2, 1.6, 2.5, 3.9, 4.2, 4.4, 4.5, 4.8, 5.3, 6.9])
+    near = np.abs(x[:, None] - x[None, :]) <= 0.5
+    L, U = fallbacks.bounds_from_table(near)
+    core = near.sum(axis=1) >= 4                                       # brute force, as the notebook does
+    border = ~core & (near & core[None, :]).any(axis=1)
+    assert check(fallbacks.is_core, cases.is_core(L, U, 4, core), fallback=None) is fallbacks.is_core
+    assert check(fallbacks.is_border, cases.is_border(L, U, core, border), fallback=None) is fallbacks.is_border
+    assert capsys.readouterr().out.count("well done") == 2
+    with pytest.raises(YourTurnError, match="the point itself included"):   # U - L, one short
+        check(lambda L, U, min_pts: (np.asarray(U) - np.asarray(L)) >= min_pts, cases.is_core(L, U, 4, core),
+              fallback=None, name="is_core")
+
+
+def test_the_notebook_01_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
+    scan, _ = next(iter(labkit.sim.simulate("corridor", seed=0, n_scans=1)))
+    assert check(fallbacks.cut_points, cases.cut_points(scan), fallback=None) is fallbacks.cut_points
+    thresholds = labkit.breakpoint_thresholds
+    assert check(thresholds, cases.adaptive_threshold(), fallback=None) is thresholds
+    assert capsys.readouterr().out.count("well done") == 2
+    # the triangle by hand at 10 m, 0.5 deg beams, 10 deg incidence: the law of sines gives
+    # 10 sin(0.5 deg) / sin(9.5 deg) = 0.5288 m, + 3 cm
+    assert cases.adaptive_threshold()[0].expected[2] == pytest.approx(10 * math.sin(math.radians(0.5))
+                                                                      / math.sin(math.radians(9.5)) + 0.03)
+
+    def gaps_only(scan, threshold_m=0.08):                              # NaN gaps never cut
+        gaps = np.hypot(*np.diff(scan.points, axis=0).T)
+        return np.nan_to_num(gaps, nan=0.0) >= threshold_m
+
+    with pytest.raises(YourTurnError, match="next to every invalid beam"):
+        check(gaps_only, cases.cut_points(scan), fallback=None, name="cut_points")
