@@ -79,3 +79,16 @@ def test_eps_sliders_call_redraw_with_the_values():
     assert (dist.description, dist.value, dist.min, dist.max) == ("eps_dist (m)", 0.03, 0.005, 0.5)
     dist.value = 0.35
     assert calls[-1] == (3.0, 0.35)
+
+
+def test_column_up_close_two_panels_at_the_columns_limits(monkeypatch):
+    drawn = []
+    monkeypatch.setattr(ap.lkplot, "plot_truth", lambda truth, ax: drawn.append(truth))
+    scan = _three_beams()
+    a = labkit.line_segment(np.array([(1.0, 0.0), (0.0, 2.0)]), np.arange(2))
+    truth = object()
+    fig = ap.plot_column_up_close(scan, [a], [], truth=truth)
+    left, right = fig.axes[:2]
+    assert left.get_title() == "a column seen up close: angular segmentation"
+    assert right.get_title() == "a column seen up close: split-and-merge"
+    assert left.get_xlim() == (0.0, 1.4) and left.get_ylim() == (-0.45, 0.45) and drawn == [truth, truth]

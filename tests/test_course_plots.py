@@ -100,3 +100,30 @@ def test_map_draws_points_segments_and_path_where_they_are():
     np.testing.assert_allclose(sensor_path.get_xydata(), path)
     assert [t.get_text() for t in ax.get_legend().get_texts()] == ["p", "2 lines (every scan)", "sensor path"]
     assert ax.get_title() == "t" and ax.get_aspect() == 1.0
+
+
+def test_seam_merges_draw_the_lines_at_the_seam_wide(monkeypatch):
+    from types import SimpleNamespace
+
+    def line(first, last, alpha_deg):
+        return SimpleNamespace(first=first, last=last, alpha=np.radians(alpha_deg), start=np.zeros(2), end=np.ones(2))
+
+    naive = [line(0, 9, -179.0), line(10, 50, 90.0), line(340, 359, 178.0)]     # both ends face backwards
+    wrapped = [line(340, 9, 179.5), line(10, 50, 90.0)]                          # the first crosses the seam
+    titles, wide = [], []
+    monkeypatch.setattr(cp.lkplot, "plot_scan", lambda scan, ax, **kw: titles.append(kw["title"]))
+    plot_lines = cp.lkplot.plot_lines
+
+    def recording(lines, ax, **kw):
+        if "lw" in kw:
+            wide.append((kw["label"], kw["lw"]))
+        return plot_lines(lines, ax, **kw)
+
+    monkeypatch.setattr(cp.lkplot, "plot_lines", recording)
+    fig = cp.plot_seam_merges(object(), {"naive": naive, "wrapped": wrapped})
+    assert len(fig.axes) == 2
+    assert titles == ["office, scan 0, merged with the naive angle difference",
+                      "office, scan 0, merged with the wrapped angle difference"]
+    # the wrapped merge's last line (alpha 90) is neither across the seam nor backwards: not drawn wide
+    assert wide == [("beams 0..9, alpha -179.0 deg", 4), ("beams 340..359, alpha 178.0 deg", 4),
+                    ("beams 340..9, alpha 179.5 deg", 4)]

@@ -85,3 +85,48 @@ def test_plot_match_titles_a_new_figure_and_puts_the_legend_outside(monkeypatch)
     assert [t.get_text() for t in legend.get_texts()] == ["found wall", "matched (1)", "false positive (1)"]
     # anchored at the axes' right edge, 1 % beyond it
     assert tuple(legend.get_bbox_to_anchor().transformed(ax.transAxes.inverted()).p0) == pytest.approx((1.01, 1.0))
+
+
+def test_split_match_titles_its_rates_and_prints_its_counts(monkeypatch, capsys):
+    # 3 lines: line 0 matched to wall 0, line 1 scored and unmatched, line 2 not scored; wall 1 missed
+    lines = [_line((0.0, 0.0), (1.0, 0.0)), _line((0.0, 1.0), (1.0, 1.0)), _line((2.0, 0.0), (2.0, 1.0))]
+    walls = [SimpleNamespace(start=(0.0, 0.0), end=(1.0, 0.0)), SimpleNamespace(start=(5.0, 0.0), end=(5.0, 2.0))]
+    match = SimpleNamespace(pairs=[(0, 0)], scored=[0, 1], truth=[0, 1], missed=[1], dr=[0.004], dalpha=[0.01],
+                            n_matched=1, false_positives=[1])
+    score = SimpleNamespace(tp_rate=0.5, fp_rate=0.5)
+    monkeypatch.setattr(ev.lkplot, "plot_scan", lambda s, a, **kw: None)
+    titles = []
+    monkeypatch.setattr(ev.plt, "show", lambda: titles.append(plt.gcf().axes[0].get_title()))
+    counts = ev.plot_split_match(SimpleNamespace(), SimpleNamespace(walls=walls), lines, match, score, 0.025, 0.005)
+    assert titles == ["noise 5 mm, split threshold 2.5 cm: TruePos 0.50, FalsePos 0.50"]
+    assert counts == "3 lines: 1 matched, 1 false positives, 1 not scored; missed walls [1]"
+    assert capsys.readouterr().out == counts + "\n"
+
+
+def test_threshold_controls_call_show_with_each_setting():
+    calls = []
+    box = ev.threshold_controls(lambda split_threshold_m, noise: calls.append((split_threshold_m, noise)),
+                                (0.005, 0.02), noise=0.005)
+    slider, picker = box.children[0].children
+    assert [label for label, _ in picker.options] == ["5 mm", "20 mm"]
+    assert (slider.min, slider.max, slider.step, slider.continuous_update) == (0.005, 0.3, 0.005, False)
+    assert calls == [(0.05, 0.005)]
+    slider.value = 0.1
+    picker.value = 0.02
+    assert calls == [(0.05, 0.005), (0.1, 0.005), (0.1, 0.02)]
+    with pytest.raises(ValueError, match="not one of"):
+        ev.threshold_controls(print, (0.005, 0.02), noise=0.01)
+
+
+def test_auto_against_fixed_marks_both_auto_methods_on_every_level():
+    levels = (0.005, 0.02)
+    sweep = [{"noise_std_m": n, "split_threshold_m": t, "tp_rate": 0.9 - t, "fp_rate": t + n}
+             for n in levels for t in (0.02, 0.05)]
+    auto_rows = [{"method": m, "noise_std_m": n, "tp_rate": tp + n, "fp_rate": fp} for n in levels
+                 for m, tp, fp in [("auto threshold, every line", 0.8, 0.2), ("AUTO_LINES", 0.7, 0.05)]]
+    fig = ev.plot_auto_against_fixed(sweep, auto_rows, 0.05, n_per_level=30)
+    assert fig._suptitle.get_text().startswith("split-and-merge (IEPF) on 30 scans per level")
+    for ax, noise in zip(fig.axes, levels, strict=True):
+        marked = {ln.get_label(): (ln.get_xdata()[0], ln.get_ydata()[0]) for ln in ax.lines}
+        assert marked["auto threshold, every line reported"] == (0.2, 0.8 + noise)
+        assert marked["AUTO_LINES, the default (also drops lines it cannot place)"] == (0.05, 0.7 + noise)

@@ -10,7 +10,8 @@ import numpy as np
 from labkit.viz import plot as lkplot
 from labkit.viz.plot import axes_or_new
 
-__all__ = ["plot_local_directions", "plot_segments", "plot_offsets_and_segments", "plot_side_by_side", "eps_sliders"]
+__all__ = ["plot_local_directions", "plot_segments", "plot_offsets_and_segments", "plot_side_by_side", "eps_sliders",
+           "plot_column_up_close"]
 
 _CORRIDOR_XLIM, _CORRIDOR_YLIM = (-1.5, 19.0), (-2.0, 2.5)
 
@@ -221,3 +222,26 @@ def eps_sliders(redraw, eps_theta_deg: float = 3.0, eps_dist_m: float = 0.03):
         eps_dist_m=widgets.FloatSlider(value=eps_dist_m, min=0.005, max=0.5, step=0.005, readout_format=".3f",
                                        description="eps_dist (m)", continuous_update=False, style=style),
     )
+
+
+def plot_column_up_close(scan, angular_lines, split_merge_lines, truth=None):
+    """A column seen from under a metre: angular segmentation's lines beside split-and-merge's.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan, the column about 1 m ahead (x from 0 to 1.4 m, y within 0.45 m are shown).
+    angular_lines, split_merge_lines : list of labkit.LineSegment
+        The two extractors' lines.
+    truth : labkit.sim.ScanTruth, optional
+        The ground truth, drawn in both panels.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        :func:`plot_side_by_side` of the two, in blue and orange.
+    """
+    return plot_side_by_side(scan, {"a column seen up close: angular segmentation": (angular_lines, "tab:blue"),
+                                    "a column seen up close: split-and-merge": (split_merge_lines, "tab:orange")},
+                             truth=truth, xlim=(0.0, 1.4), ylim=(-0.45, 0.45), point_size=6, legend_loc="upper left",
+                             figsize=(13, 5))

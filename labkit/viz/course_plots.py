@@ -12,10 +12,11 @@ from matplotlib.collections import LineCollection
 
 from labkit.viz import plot as lkplot
 from labkit.viz.plot import axes_or_new
+from labkit.viz.style import mpl
 
 __all__ = ["chord_frame", "plot_middle_band", "plot_circle_fits", "plot_angular_clusters", "plot_lines_and_corners",
            "plot_lines_and_corners_grid", "extraction_controls", "plot_counts_and_timings",
-           "plot_map"]
+           "plot_map", "plot_seam_merges"]
 
 
 def chord_frame(points) -> np.ndarray:
@@ -371,3 +372,37 @@ def plot_map(points, segments, path, *, points_label: str = "points", lines_labe
     if title:
         ax.set_title(title)
     return ax
+
+
+def plot_seam_merges(scan, merges: dict, *, title: str = "office, scan 0"):
+    """One panel per merge of a full-circle scan's lines, the lines at the seam drawn wide.
+
+    In each panel the first line (in the colour of circles) and the last one (in the colour of legs)
+    are drawn wide when they cross the seam (first beam after the last) or face backwards (their normal
+    within 10 degrees of +-180), each labelled with its beams and alpha.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    merges : dict
+        ``{name: lines}``, e.g. ``{"naive": ..., "wrapped": ...}``: the merged lines, in scan order.
+    title : str, default "office, scan 0"
+        The start of each panel's title; ", merged with the NAME angle difference" follows.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure, one panel per merge side by side.
+    """
+    fig, axes = plt.subplots(1, len(merges), figsize=(6.5 * len(merges), 7), squeeze=False)
+    for ax, (name, lines) in zip(axes[0], merges.items(), strict=True):
+        lkplot.plot_scan(scan, ax, point_size=5, title=f"{title}, merged with the {name} angle difference")
+        lkplot.plot_lines(lines, ax, label=f"{len(lines)} line segments")
+        for line, color in [(lines[0], mpl("circles")), (lines[-1], mpl("legs"))]:
+            if line.first > line.last or np.degrees(abs(line.alpha)) > 170:
+                lkplot.plot_lines([line], ax, color=color, lw=4, label=f"beams {line.first}..{line.last}, "
+                                                               f"alpha {np.degrees(line.alpha):.1f} deg")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=8)
+    fig.tight_layout()
+    return fig

@@ -23,9 +23,12 @@ __all__ = [
     "line_status",
     "draw_match",
     "plot_match",
+    "plot_split_match",
+    "threshold_controls",
     "plot_every_extractor",
     "plot_rate_bars",
     "plot_threshold_sweep",
+    "plot_auto_against_fixed",
     "plot_round_objects",
     "plot_ray_errors",
     "plot_rmse_coverage",
@@ -151,6 +154,74 @@ def plot_match(scan, truth, lines, match, *, title: str = "", figsize=(10, 7), a
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax.figure.tight_layout()
     return ax
+
+
+def plot_split_match(scan, truth, lines, match, score, split_threshold_m: float, noise_std_m: float):
+    """:func:`plot_match` of one split threshold, its rates in the title and its counts printed below.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    truth : labkit.sim.ScanTruth
+        Its ground truth.
+    lines : list of labkit.LineSegment
+        The lines split-and-merge found with ``split_threshold_m``.
+    match : labkit.LineMatch
+        ``labkit.match_lines(lines, truth)``.
+    score : labkit.LineScore
+        ``labkit.score_lines([(lines, truth)])``; its ``tp_rate`` and ``fp_rate`` go in the title.
+    split_threshold_m : float
+        The split threshold the lines were found with, metres.
+    noise_std_m : float
+        The scan's range noise, metres.
+
+    Returns
+    -------
+    str
+        The line printed: how many lines, matched, false positives, not scored, and the missed walls.
+    """
+    plot_match(scan, truth, lines, match, title=f"noise {1000 * noise_std_m:.0f} mm, split threshold "
+               f"{100 * split_threshold_m:.1f} cm: TruePos {score.tp_rate:.2f}, FalsePos {score.fp_rate:.2f}")
+    plt.show()
+    counts = (f"{len(lines)} lines: {match.n_matched} matched, {len(match.false_positives)} false positives, "
+              f"{len(lines) - len(match.scored)} not scored; missed walls {list(match.missed)}")
+    print(counts)
+    return counts
+
+
+def threshold_controls(show, noise_levels, *, noise: float, value: float = 0.05):
+    """A split-threshold slider and a noise drop-down that redraw ``show(split_threshold_m, noise)``.
+
+    The slider runs from 0.5 cm to 30 cm in steps of 0.5 cm and updates on release
+    (``continuous_update=False``); the drop-down lists the noise levels in millimetres.
+
+    Parameters
+    ----------
+    show : callable
+        ``show(split_threshold_m, noise)`` draws one setting; called once at once, then on every change.
+    noise_levels : sequence of float
+        The noise levels to choose from, metres.
+    noise : float
+        The noise level chosen first, one of ``noise_levels``.
+    value : float, default 0.05
+        The split threshold chosen first, metres.
+
+    Returns
+    -------
+    ipywidgets.VBox
+        The two controls in a row above the figure's output.
+    """
+    import ipywidgets as widgets  # only the notebooks need ipywidgets
+
+    if noise not in noise_levels:
+        raise ValueError(f"noise {noise!r} is not one of noise_levels {list(noise_levels)}")
+    slider = widgets.FloatSlider(value=value, min=0.005, max=0.3, step=0.005, readout_format=".3f",
+                                 description="split (m)", continuous_update=False)
+    picker = widgets.Dropdown(options=[(f"{1000 * n:.0f} mm", n) for n in noise_levels], value=noise,
+                              description="noise")
+    out = widgets.interactive_output(show, {"split_threshold_m": slider, "noise": picker})
+    return widgets.VBox([widgets.HBox([slider, picker]), out])
 
 
 def _legend_handles() -> list:
@@ -309,6 +380,42 @@ def plot_threshold_sweep(sweep, fixed_m: float, marks=(), title: str = ""):
     fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def plot_auto_against_fixed(sweep, auto_rows, fixed_m: float, n_per_level: int,
+                            every_line: str = "auto threshold, every line", default: str = "AUTO_LINES"):
+    """:func:`plot_threshold_sweep` of the fixed thresholds with two auto methods marked on every panel.
+
+    The auto threshold with every line reported is a white diamond, the default (which also drops the
+    lines it cannot place) a star in the level's colour.
+
+    Parameters
+    ----------
+    sweep : list of dict
+        Rows of the fixed thresholds, as :func:`plot_threshold_sweep` takes them.
+    auto_rows : list of dict
+        Rows of :func:`labkit.app.experiments.compare_lines`, one per method and noise level of ``sweep``:
+        ``method``, ``noise_std_m``, ``tp_rate``, ``fp_rate``.
+    fixed_m : float
+        The papers' fixed threshold, ringed, metres.
+    n_per_level : int
+        How many scans each level has, for the title.
+    every_line, default : str
+        The two methods' names in ``auto``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure of :func:`plot_threshold_sweep`.
+    """
+    levels = sorted({r["noise_std_m"] for r in sweep})
+    auto = {(row["method"], row["noise_std_m"]): row for row in auto_rows}
+    marks = [({n: auto[every_line, n] for n in levels}, "auto threshold, every line reported",
+              dict(marker="D", ms=11, color="white", mew=1.5)),
+             ({n: auto[default, n] for n in levels}, f"{default}, the default (also drops lines it cannot place)",
+              dict(marker="*", ms=22))]
+    return plot_threshold_sweep(sweep, fixed_m, marks, f"split-and-merge (IEPF) on {n_per_level} scans per level: "
+                                "fixed thresholds against \"auto\" (top left is better)")
 
 
 def plot_round_objects(scan, features, truth, notes, zoom_m: float = 0.6, title: str = ""):
