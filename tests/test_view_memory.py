@@ -1,13 +1,20 @@
 """What ``labkit view`` keeps in memory for a long recording (issue 30): the poses read before the scans
-cost a few bytes each, not a Python object each. The peak itself is measured in ``benchmarks/io.py``."""
+cost a few bytes each, not a Python object each; the command line does not load pandas. The peak itself is
+measured in ``benchmarks/io.py``."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 
 from labkit.poses import PoseTrack, interpolate_poses
+
+BIN = Path(sys.executable).parent
 
 
 def test_a_pose_track_answers_one_stamp_at_a_time_in_a_few_bytes_per_pose():
@@ -35,3 +42,37 @@ def test_a_pose_track_answers_one_stamp_at_a_time_in_a_few_bytes_per_pose():
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
     assert first == tuple(got[2]) and all(isinstance(v, float) for v in first)
     assert track.at(-10**12) is None and track.at(n * 40_000_000 + 10**12) is None
+
+
+def test_the_command_line_view_writes_the_same_recording_without_importing_pandas(tmp_path):
+    # pyarrow imports pandas (some 45 MiB) at its first array conversion only to ask whether the data are
+    # pandas objects; the command line's view lets it find none. What it writes is what the library writes
+    # in a process that has pandas (this one); and pandas still works in that process afterwards
+    from labkit.app.data import write_simulation
+    from labkit.app.record import record
+    from tests.test_rr import _batches
+
+    bag, _, _ = write_simulation("corridor", tmp_path / "c.bag", "ros1", seed=0, n_scans=40)
+    script = (
+        "import sys\n"
+        "from labkit.app.cli import main\n"
+        f"rc = main(['view', {str(bag)!r}, '-o', {str(tmp_path / 'cli.rrd')!r}, '-q'])\n"
+        "print(rc, 'pandas' in sys.modules)\n"
+        "import pandas as pd, pyarrow as pa\n"
+        "print(pa.Table.from_pandas(pd.DataFrame({'a': [1, 2]})).num_rows)\n"
+    )
+    # (numpy's engines there, not numba's: the same features bit for bit, and the process starts in half the time)
+    env = {**os.environ, "LABKIT_NO_JIT": "1"}
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, env=env)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split()[-3:] == ["0", "False", "2"], p.stdout
+    record(bag, tmp_path / "lib.rrd")
+    for entity in ("/world/scan/points", "/world/lines", "/world/legs", "/world/truth/walls", "/metrics/count/lines",
+                   "/map/sensor", "/map/accumulated/points"):
+        cli, lib = _batches(tmp_path / "cli.rrd", entity), _batches(tmp_path / "lib.rrd", entity)
+        assert sorted(cli) == sorted(lib) and len(cli) >= 4, entity
+        for k in cli:  # (each row's id is new)
+            assert {**cli[k], "rerun.controls.RowId": None} == {**lib[k], "rerun.controls.RowId": None}, (entity, k)
+    v = subprocess.run([str(BIN / "rerun"), "rrd", "verify", str(tmp_path / "cli.rrd")], capture_output=True, text=True,
+                       timeout=120)
+    assert v.returncode == 0, v.stdout + v.stderr
