@@ -791,9 +791,14 @@ _GL_U, _GL_W = np.polynomial.legendre.leggauss(24)  # (= labkit.fitting's nodes 
 _NEAR = 1e-9  # a probability this close to place_confidence is decided by the reference itself
 
 
+_ERF_ONE = 6.0  # from here on the approximation of erf below is exactly 1 (tests/test_engine.py)
+
+
 @jit
 def _normal_cdf(x):
     z = abs(x) / math.sqrt(2.0)
+    if z >= _ERF_ONE:  # (poly exp(-z^2) < 2^-54 there: 1 - it rounds to 1, and the exp is not needed)
+        return 1.0 if x > 0 else 0.0
     t = 1.0 / (1.0 + 0.3275911 * z)
     poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))))
     erf = 1.0 - poly * math.exp(-z * z)
@@ -889,6 +894,7 @@ def compile_all() -> None:
     its first scan."""
     from .._iav_engine import compile_all as compile_circles
     from .._noise_engine import residuals
+    from .._pipeline_engine import compile_all as compile_pipeline
     from .._segmentation_engine import labels as segment
 
     angles = np.radians(np.arange(-90.0, 90.5, 1.0))
@@ -905,6 +911,7 @@ def compile_all() -> None:
     cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
     _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     compile_circles()
+    compile_pipeline()
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
