@@ -38,7 +38,7 @@ from ._kernels import FUSED_DOT, jit
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import _radians, detect_arcs
 from .circles.legs import pair_legs
-from .features import Features, Leg, find_corners
+from .features import Circle, Features, Leg, find_corners
 from .lines import _split_merge_engine as sm
 from .lines._split_merge_fast import GRAZING_DEG
 from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
@@ -244,7 +244,7 @@ def extract(scan, plan: Plan) -> Features:
                 legs = _legs(scan, idx, xy, starts, ends, t_legs, s, abs(increment) if n > 1 else 0.0)
             else:
                 legs = iav.leg_engine(scan, _as_runs(idx, xy, starts, ends), t_legs, s)[0]
-        people = pair_legs(legs, plan.pair_m)
+        people = pair_legs(legs, plan.pair_m) if len(legs) > 1 else []
     now = perf_counter()
     timings["legs"] = now - t
     t = now
@@ -335,11 +335,14 @@ def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
     if not passed.size:
         return []
     runs = _as_runs(idx, xy, starts, ends)
-    geo = Geometry(ends - starts, None, runs.pts.take(starts, axis=0),  # type: ignore[arg-type]
-                   runs.pts.take(ends - 1, axis=0), None, None)  # type: ignore[arg-type]
-    ang = iav.Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
-    made = [iav._make_circle(runs, geo, ang, k, k, t, t.kind, ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2)))
-            for k in passed.tolist()]
+    if t.center_method == "iav":
+        made = _iav_circles(runs, passed, mean, std, side, lim, t.kind)
+    else:
+        geo = Geometry(ends - starts, None, runs.pts.take(starts, axis=0),  # type: ignore[arg-type]
+                       runs.pts.take(ends - 1, axis=0), None, None)  # type: ignore[arg-type]
+        ang = iav.Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
+        made = [iav._make_circle(runs, geo, ang, k, k, t, t.kind,
+                                 ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2))) for k in passed.tolist()]
     if sigma > 0.0:  # and their points must lie on a circle within the noise
         circle_of = [c for c, _ in made]
         centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
@@ -347,6 +350,46 @@ def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
         wider = wider_than_noise(runs.pts, starts[passed], ends[passed], sigma, centers, radii).tolist()
         made = [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
     return [c for c, _ in made if c is not None]
+
+
+_HALF_PI = math.pi / 2
+
+
+def _iav_circles(runs: Runs, passed: np.ndarray, mean: np.ndarray, std: np.ndarray, side: np.ndarray,
+                 lim: np.ndarray, kind: str) -> list:
+    """``_iav_batch._make_circle`` of the runs ``passed`` with the iav centre, in plain floats gathered
+    in bulk: :func:`labkit.iav.circle_from_iav` and :func:`labkit.iav.circle_confidence`'s arithmetic,
+    operation for operation (the same Python floats and ``math`` functions)."""
+    starts, ends = runs.starts[passed], runs.ends[passed]
+    p1, pn = runs.pts.take(starts, axis=0).tolist(), runs.pts.take(ends - 1, axis=0).tolist()
+    firsts, lasts = runs.idx.take(starts).tolist(), runs.idx.take(ends - 1).tolist()
+    sizes = (ends - starts).tolist()
+    means, stds, sides = mean.take(passed).tolist(), std.take(passed).tolist(), side.take(passed).tolist()
+    limits = lim.take(passed, axis=0).tolist()
+    made: list = []
+    for j in range(len(sizes)):
+        m, sd, sd_side = means[j], stds[j], sides[j]
+        if sd_side == 0:
+            sd_side = 1.0
+        (x1, y1), (x2, y2) = p1[j], pn[j]
+        dx, dy = x2 - x1, y2 - y1
+        chord = math.hypot(dx, dy)
+        if not (0 < m < math.pi) or not math.isfinite(sd_side) or chord == 0:
+            made.append((None, iav.FIT))  # (circle_from_iav raises)
+            continue
+        theta = m - _HALF_PI
+        h = -math.copysign(1.0, sd_side) * 0.5 * math.tan(theta)
+        center = np.array([x1 + 0.5 * dx - h * dy, y1 + 0.5 * dy + h * dx])
+        radius = 0.5 * chord / math.cos(theta)
+        center.setflags(write=False)
+        low, high, std_max = limits[j]
+        n = sizes[j]
+        f_n = 1.0 - math.exp(-max(n - 2, 0) / 5.0)
+        f_std = 1.0 - 0.5 * min(abs(sd) / std_max, 1.0)
+        f_mean = 1.0 - 0.5 * min(abs(m - _HALF_PI) / max(high - _HALF_PI, 1e-12), 1.0)
+        confidence = float(min(max(f_n * f_std * f_mean, 0.0), 1.0))
+        made.append((Circle(center, float(radius), m, sd, confidence, firsts[j], lasts[j], n, kind), ACCEPTED))
+    return made
 
 
 def _lines(scan, labels, p: tuple, full: bool) -> list:
