@@ -35,13 +35,24 @@ from ._iav_batch import ACCEPTED, RESIDUAL, CircleTest, Geometry, LegTest, Runs
 from ._iav_engine import COMPLEX_FMA, _circle_tests, _leg_tests
 from ._iav_noise import wider_than_noise
 from ._kernels import FUSED_DOT, jit
+from ._noise_engine import residuals as _residuals
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import _radians, detect_arcs
 from .circles.legs import pair_legs
 from .features import Circle, Features, Leg, find_corners
 from .lines import _split_merge_engine as sm
 from .lines._split_merge_fast import GRAZING_DEG
-from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
+from .noise import (
+    _CUT,
+    _CUT_SD,
+    _MAD_TO_SIGMA,
+    AUTO,
+    MIN_RESIDUALS,
+    MIN_SIGMA_M,
+    RANGE_SIGMA_M,
+    auto_split_threshold,
+    check_nonneg,
+)
 from .segmentation import SegmentationParams
 
 __all__ = ["READY", "plan_for", "extract"]
@@ -86,6 +97,39 @@ def _scan_beams(scan) -> tuple[np.ndarray, np.ndarray]:
             p.setflags(write=False)
             cache["points"] = points = p
     return valid, points
+
+
+# ---------------------------------------------------------------------------- the scan's noise
+@jit
+def _noise_start(ranges, angles, valid, full_circle, cut):
+    """The start of ``noise._robust_sigma`` on the scan's residuals (:func:`labkit._noise_engine.residuals`):
+    their absolute values, the median's sigma (``numpy.partition``'s value), and the first inliers
+    (those within ``cut`` of it, in order); the inliers empty where the residuals are too few."""
+    z = _residuals(ranges, angles, valid, full_circle)
+    n = len(z)
+    a = np.abs(z)
+    if n < MIN_RESIDUALS:
+        return a, math.nan, a[:0]
+    sigma = _MAD_TO_SIGMA * np.partition(a, n // 2)[n // 2]
+    return a, sigma, a[a <= cut * sigma]
+
+
+def _scan_noise(scan, valid: np.ndarray, full: bool) -> float:
+    """:func:`labkit.noise.scan_sigma` of the scan (kept on it as scan_sigma keeps it): the same
+    residuals and robust standard deviation, the first steps in one compiled call."""
+    cached = scan.__dict__.get("_labkit_sigma")
+    if cached is not None:
+        return cached
+    a, sigma, inl = _noise_start(scan.ranges, scan.angles, valid, full, _CUT)
+    for step in range(2):  # (noise._robust_sigma's loop; its first inliers came with the median)
+        if step:
+            inl = a[a <= _CUT * sigma]
+        if len(inl) < MIN_RESIDUALS or sigma == 0.0:
+            break
+        sigma = math.sqrt(float(np.dot(inl, inl)) / len(inl)) / _CUT_SD
+    cached = RANGE_SIGMA_M if not math.isfinite(sigma) else max(sigma, MIN_SIGMA_M)
+    scan.__dict__["_labkit_sigma"] = cached
+    return cached
 
 
 # ---------------------------------------------------------------------------- the segments of a stage
@@ -216,13 +260,17 @@ def extract(scan, plan: Plan) -> Features:
     t_start = perf_counter()
     ranges, angles = scan.ranges, scan.angles
     valid, points = _scan_beams(scan)
-    full = scan.is_full_circle
     n = ranges.size
-    increment = float((angles[-1] - angles[0]) / (n - 1)) if n >= 2 else math.nan  # (scan.angle_increment)
+    if n >= 2:  # (scan.angle_increment and scan.is_full_circle, in the same float arithmetic)
+        a0, a1 = angles.item(0), angles.item(n - 1)
+        increment = (a1 - a0) / (n - 1)
+        full = n >= 3 and (a1 - a0) + 1.5 * increment >= 2 * math.pi
+    else:
+        increment, full = math.nan, False
     threshold_m, min_points, adaptive, lam, seg_sigma = plan.seg
     if adaptive:  # (the scan's noise: worked out once, when a stage asks for it; scan_sigma keeps it on the scan)
         if seg_sigma == AUTO:
-            seg_sigma = scan_sigma(scan)
+            seg_sigma = _scan_noise(scan, valid, full)
     else:
         seg_sigma = 0.0
     labels = _segment(points, ranges, angles, valid, threshold_m, min_points, adaptive, lam, float(seg_sigma), full,
@@ -239,7 +287,7 @@ def extract(scan, plan: Plan) -> Features:
         if starts.size:
             s = plan.legs_sigma
             if s == AUTO:
-                s = scan_sigma(scan)
+                s = _scan_noise(scan, valid, full)
             if plan.legs_fast:
                 legs = _legs(scan, idx, xy, starts, ends, t_legs, s, abs(increment) if n > 1 else 0.0)
             else:
@@ -256,7 +304,7 @@ def extract(scan, plan: Plan) -> Features:
         if starts.size:
             s = plan.circles_sigma
             if s == AUTO:
-                s = scan_sigma(scan)
+                s = _scan_noise(scan, valid, full)
             if plan.circles_fast:
                 circles = _circles(idx, xy, starts, ends, t_circles, s)
             else:
@@ -271,7 +319,7 @@ def extract(scan, plan: Plan) -> Features:
 
     lines: list = []
     if plan.lines is not None:
-        lines = _lines(scan, rest if plan.lines_skip_round else labels, plan.lines, full)
+        lines = _lines(scan, valid, points, rest if plan.lines_skip_round else labels, plan.lines, full)
     now = perf_counter()
     timings["lines"] = now - t
     t = now
@@ -392,18 +440,18 @@ def _iav_circles(runs: Runs, passed: np.ndarray, mean: np.ndarray, std: np.ndarr
     return made
 
 
-def _lines(scan, labels, p: tuple, full: bool) -> list:
+def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: tuple, full: bool) -> list:
     """``split_and_merge``'s engine path (``lines._split_merge_engine.split_and_merge``) on ``labels``."""
     (fit, split_threshold_m, range_sigma_m, min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m,
      uniform, weights, floor_m, lam_cut, lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = p
-    s = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
+    s = _scan_noise(scan, valid, full) if range_sigma_m == AUTO else range_sigma_m
     if split_threshold_m == AUTO:  # (lines.split_merge._SplitTest)
         noise, threshold = s, auto_split_threshold(s)
     else:
         noise, threshold = 0.0, split_threshold_m
     absorb_m = min(threshold, 3 * s)
     r, alpha, ends, first, last, beams, offsets = sm.extract(
-        scan.points, scan.ranges, scan.angles, scan.valid, labels, fit, float(threshold), float(noise),
+        points, scan.ranges, scan.angles, valid, labels, fit, float(threshold), float(noise),
         float(absorb_m), min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m,
         lam_cut, lam_graze, full, FUSED_DOT)
     return sm.line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, s, place_dr_m,
@@ -417,6 +465,8 @@ def compile_all() -> None:
     points.setflags(write=False)
     ranges = np.ones(7)
     ranges.setflags(write=False)
-    _beams(ranges, ranges, 0.0, 10.0)
+    valid, _ = _beams(ranges, ranges, 0.0, 10.0)
+    valid.setflags(write=False)
+    _noise_start(ranges, ranges, valid, False, _CUT)
     _runs(labels, _NONE, points)
     _runs(labels, np.array([0]), points)

@@ -335,6 +335,8 @@ def the_features(f) -> tuple:
 
 def fused_equals_stages(scan: Scan, configs=CONFIGS) -> int:
     """The fused path's features equal the stages' for every config on ``scan``; how many features."""
+    a, b = fresh(scan), fresh(scan)
+    assert fused._scan_noise(a, a.valid, a.is_full_circle).hex() == labkit.noise.scan_sigma(b).hex()
     found = 0
     for cfg in configs:
         assert fused.plan_for(cfg) is not None
