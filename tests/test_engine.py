@@ -7,7 +7,8 @@ Compared here: every field of every line (floats by their bits, arrays by their 
 scans (hypothesis), full-circle rooms, the simulated worlds at 361-2881 beams and 5 mm-3 cm of
 noise, and the real recordings (``../shared/datasets``, skipped when absent). The arithmetic the
 engines reproduce (numpy's pairwise sums, BLAS's dot rounding, ``math.remainder``, the C library's
-functions) is checked on its own first.
+functions) is checked on its own first. Last, ``extract_features``' fused default path
+(labkit/_pipeline_engine.py) against its stages called one detector at a time (``pipeline._stages``).
 """
 
 from __future__ import annotations
@@ -293,6 +294,9 @@ def test_LABKIT_NO_JIT_runs_the_readable_code_without_numba(tmp_path):
             "out = {'lines': [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)] + [ln.first, ln.last]"
             " for ln in lines], 'labels': labkit.segment_labels(s).tolist(),"
             " 'sigma': float(labkit.estimate_range_noise(s)).hex(), 'numba': 'numba' in sys.modules}\n"
+            "f = labkit.extract_features(labkit.Scan(ranges=d['ranges'], angles=d['angles']))\n"
+            "out['features'] = [f.labels.tolist(), f.counts(), [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)]"
+            " + [ln.first, ln.last] for ln in f.lines], [[float(x).hex() for x in c.point] for c in f.corners]]\n"
             "print(json.dumps(out))\n")
     env = dict(os.environ, LABKIT_NO_JIT="1")
     got = json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
@@ -304,6 +308,10 @@ def test_LABKIT_NO_JIT_runs_the_readable_code_without_numba(tmp_path):
     assert got["labels"] == segment_labels(s).tolist()
     assert got["sigma"] == float(estimate_range_noise(fresh(scan))).hex()
     assert len(got["lines"]) >= 4
+    f = labkit.extract_features(fresh(scan))  # (the fused path here, the stages' readable code there)
+    assert got["features"] == [f.labels.tolist(), f.counts(), [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)]
+                                                               + [ln.first, ln.last] for ln in f.lines],
+                               [[float(x).hex() for x in c.point] for c in f.corners]]
 
 
 # ---------------------------------------------------------------------------- the pipeline's default path
