@@ -32,8 +32,8 @@ import numpy as np
 
 from . import _iav_batch as iav
 from ._iav_batch import ACCEPTED, RESIDUAL, CircleTest, Geometry, LegTest, Runs
-from ._iav_engine import COMPLEX_FMA, _circle_tests, _leg_tests
-from ._iav_noise import wider_than_noise
+from ._iav_engine import COMPLEX_FMA, _circle_tests, _leg_tests, _wider
+from ._iav_noise import EARLY_FACTOR, EARLY_STEPS, wider_than_noise
 from ._kernels import FUSED_DOT, jit
 from ._noise_engine import residuals as _residuals
 from ._segmentation_engine import labels as _segment
@@ -355,21 +355,30 @@ def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float)
     if not passed.size:
         return []
     pts = np.ascontiguousarray(xy.T)
+    ray = t.center_method == "ray"
+    a_s, b_s = starts.take(passed), ends.take(passed)
+    middles = pts.take(a_s + (b_s - a_s) // 2, axis=0)  # (one array: each leg's middle is a row of it)
+    middles.setflags(write=False)
+    mid_xy = middles.tolist()
     legs: list = []
-    for k in passed.tolist():
-        a, b = starts.item(k), ends.item(k)
+    for j, k in enumerate(passed.tolist()):
+        a, b = a_s.item(j), b_s.item(j)
         first, last = idx.item(a), idx.item(b - 1)
         if t.reject_occluded and iav.occluded(scan, first, last):
             continue
         m, sd = mean.item(k), std.item(k)
-        try:
-            center, diameter = iav.leg_center(pts[a:b], chord.item(k), m, side.item(k), t.center_method)
-        except ValueError:
-            continue
-        middle = np.array(pts[a + (b - a) // 2], dtype=np.float64)
+        if ray:  # (iav.leg_center's "ray", in the same Python floats)
+            mx, my = mid_xy[j]
+            h, half = math.hypot(mx, my), 0.5 * chord.item(k)
+            center = np.array([mx + half * mx / h, my + half * my / h])
+            diameter = chord.item(k)
+        else:
+            try:
+                center, diameter = iav.leg_center(pts[a:b], chord.item(k), m, side.item(k), t.center_method)
+            except ValueError:
+                continue
         center.setflags(write=False)
-        middle.setflags(write=False)
-        legs.append(Leg(center, float(diameter), middle, first, last, b - a, m, sd))
+        legs.append(Leg(center, float(diameter), middles[j], first, last, b - a, m, sd))
     return legs
 
 
@@ -393,10 +402,16 @@ def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
                                  ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2))) for k in passed.tolist()]
     if sigma > 0.0:  # and their points must lie on a circle within the noise
         circle_of = [c for c, _ in made]
-        centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
+        cx = np.array([c.center.item(0) if c is not None else np.nan for c in circle_of])
+        cy = np.array([c.center.item(1) if c is not None else np.nan for c in circle_of])
         radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
-        wider = wider_than_noise(runs.pts, starts[passed], ends[passed], sigma, centers, radii).tolist()
-        made = [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
+        # (_iav_noise.wider_than_noise's compiled path, on the runs' own coordinates; numpy's where it hands back)
+        decided, ok = _wider(xy[0], xy[1], starts[passed], ends[passed], float(sigma), cx, cy, radii, True,
+                             EARLY_STEPS, EARLY_FACTOR)
+        if not ok:
+            decided = wider_than_noise(runs.pts, starts[passed], ends[passed], sigma, np.stack([cx, cy], axis=1),
+                                       radii)
+        made = [(None, RESIDUAL) if w else m for w, m in zip(decided.tolist(), made, strict=True)]
     return [c for c, _ in made if c is not None]
 
 
