@@ -810,7 +810,8 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
     """Per line: placed by :func:`labkit.fitting.placement_probability` (1), not (0), or too
     close to ``confidence`` to tell without the reference's own summation order (2). The
     probability is the reference's integral (the same nodes and pieces) summed in another order:
-    it differs by a few units in the 15th digit at most."""
+    it differs by a few units in the 15th digit at most. The middle piece comes first, and a line
+    it already places is placed (the other pieces are integrals of a non-negative function)."""
     k_lines = len(cov)
     out = np.empty(k_lines, np.int64)
     lo = np.empty(3)
@@ -826,8 +827,8 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
         slope = c_ra / va * sd_a
         sd_r = math.sqrt(max(var_r - c_ra * c_ra / va, 1e-300))
         b = min(max_dr_m / abs(slope), half)
-        lo[0], lo[1], lo[2] = -half, -b, b
-        hi[0], hi[1], hi[2] = -b, b, half
+        lo[0], lo[1], lo[2] = -b, -half, b  # (the middle piece first: it holds most of the probability)
+        hi[0], hi[1], hi[2] = b, -b, half
         p = 0.0
         for piece in range(3):
             mid, rad = (hi[piece] + lo[piece]) / 2, (hi[piece] - lo[piece]) / 2
@@ -838,6 +839,8 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
                 inside = _normal_cdf((max_dr_m - mu) / sd_r) - _normal_cdf((-max_dr_m - mu) / sd_r)
                 acc += math.exp(-0.5 * u * u) / math.sqrt(2 * math.pi) * inside * weights[j]
             p += acc * rad
+            if p > confidence + _NEAR and p <= 1.0:  # the pieces left add no less than 0: placed
+                break
         if not math.isfinite(p):
             p = 0.0
         p = min(max(p, 0.0), 1.0)
