@@ -50,6 +50,7 @@ from .noise import (
     MIN_RESIDUALS,
     MIN_SIGMA_M,
     RANGE_SIGMA_M,
+    _robust_sigma,
     auto_split_threshold,
     check_nonneg,
 )
@@ -101,17 +102,60 @@ def _scan_beams(scan) -> tuple[np.ndarray, np.ndarray]:
 
 # ---------------------------------------------------------------------------- the scan's noise
 @jit
+def _kth_smallest(values, k):
+    """The ``k``-th smallest of ``values`` (no NaN), as ``numpy.partition(values, k)[k]`` gives it: a
+    quickselect on a copy (a value is a value, whichever way it is found)."""
+    a = values.copy()
+    lo, hi = 0, len(a) - 1
+    while lo < hi:
+        pivot = a[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return a[k]
+
+
+@jit
 def _noise_start(ranges, angles, valid, full_circle, cut):
     """The start of ``noise._robust_sigma`` on the scan's residuals (:func:`labkit._noise_engine.residuals`):
     their absolute values, the median's sigma (``numpy.partition``'s value), and the first inliers
-    (those within ``cut`` of it, in order); the inliers empty where the residuals are too few."""
+    (those within ``cut`` of it, in order); the inliers empty where the residuals are too few, and
+    ``ok`` False where a residual is NaN (numpy then does it all)."""
     z = _residuals(ranges, angles, valid, full_circle)
     n = len(z)
-    a = np.abs(z)
-    if n < MIN_RESIDUALS:
-        return a, math.nan, a[:0]
-    sigma = _MAD_TO_SIGMA * np.partition(a, n // 2)[n // 2]
-    return a, sigma, a[a <= cut * sigma]
+    a = np.empty(n)
+    ok = True
+    for i in range(n):
+        a[i] = abs(z[i])
+        ok = ok and not math.isnan(a[i])
+    if n < MIN_RESIDUALS or not ok:
+        return a, math.nan, a[:0], ok
+    sigma = _MAD_TO_SIGMA * _kth_smallest(a, n // 2)
+    limit = cut * sigma
+    m = 0
+    for i in range(n):
+        if a[i] <= limit:
+            m += 1
+    inl = np.empty(m)
+    m = 0
+    for i in range(n):
+        if a[i] <= limit:
+            inl[m] = a[i]
+            m += 1
+    return a, sigma, inl, ok
 
 
 def _scan_noise(scan, valid: np.ndarray, full: bool) -> float:
@@ -120,7 +164,10 @@ def _scan_noise(scan, valid: np.ndarray, full: bool) -> float:
     cached = scan.__dict__.get("_labkit_sigma")
     if cached is not None:
         return cached
-    a, sigma, inl = _noise_start(scan.ranges, scan.angles, valid, full, _CUT)
+    a, sigma, inl, ok = _noise_start(scan.ranges, scan.angles, valid, full, _CUT)
+    if not ok:  # (a NaN residual: numpy's partition and masks, as noise._robust_sigma)
+        sigma = _robust_sigma(_residuals(scan.ranges, scan.angles, valid, full))
+        inl = a[:0]
     for step in range(2):  # (noise._robust_sigma's loop; its first inliers came with the median)
         if step:
             inl = a[a <= _CUT * sigma]

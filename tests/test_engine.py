@@ -468,3 +468,13 @@ def test_the_fused_identity_test_can_fail(monkeypatch):
     monkeypatch.setattr(fused, "_beams", one_bit_off)
     with pytest.raises(AssertionError):
         fused_equals_stages(scan, CONFIGS[:1])
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.sampled_from([0.0, 0.001, 0.002, 0.0025, 0.01, 0.3, 1e-300, 7.0]), min_size=1, max_size=60),
+       st.integers(0, 2**32 - 1))
+def test_the_median_of_the_noise_is_numpys(values, seed):
+    """The quickselect of the fused noise estimate: numpy.partition's value at every k, with ties."""
+    a = np.array(values) * np.random.default_rng(seed).choice([1.0, 1.0, 1.5], len(values))
+    for k in range(len(a)):
+        assert fused._kth_smallest(a, k) == np.partition(a, k)[k]
