@@ -17,9 +17,10 @@ into records as the detectors make them (the same functions). So the features ar
 own, bit for bit: ``tests/test_engine.py`` compares the two paths on random scans, the simulated
 worlds and real recordings.
 
-A configuration the engines do not cover (another line method, the chi-square merge, a leg test
-of the inscribed angles, arc-like circles...) runs the stages as :mod:`labkit.pipeline` reads;
-``LABKIT_NO_JIT=1`` runs them too (and their readable code).
+A configuration the engines do not cover (another line method, the chi-square merge) runs the
+stages as :mod:`labkit.pipeline` reads them, and so does ``LABKIT_NO_JIT=1`` (with their readable
+code); a leg test of the inscribed angles, arc-like circles and the arcs run their detectors' own
+batch code on the segments this path lays out.
 """
 
 from __future__ import annotations

@@ -478,3 +478,12 @@ def test_the_median_of_the_noise_is_numpys(values, seed):
     a = np.array(values) * np.random.default_rng(seed).choice([1.0, 1.0, 1.5], len(values))
     for k in range(len(a)):
         assert fused._kth_smallest(a, k) == np.partition(a, k)[k]
+
+
+def test_the_fused_path_on_scans_with_little_in_them():
+    """No beam, one, two, none valid, every beam valid but apart: the stages' (empty) features."""
+    scans = [Scan(ranges=np.zeros(0), angles=np.zeros(0)), Scan(ranges=[1.0], angles=[0.0]),
+             Scan(ranges=[1.0, 1.0], angles=[0.0, 0.01]), Scan(ranges=np.full(50, np.nan), angles=np.arange(50.0) / 10),
+             Scan(ranges=np.arange(1.0, 41.0), angles=np.arange(40.0) / 10, range_max=100.0)]
+    for scan in scans:
+        fused_equals_stages(scan, CONFIGS[:1])
