@@ -10,8 +10,8 @@ calls per scan, which on a 180-beam scan cost more than the compiled work itself
 Here the same stages run on the same arrays with the scan-level quantities worked out once: the
 parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`), the scan's points,
 validity, full-circle flag and noise once per scan, the segmentation and each stage's segments in
-one compiled pass each (:func:`_runs`: the segments left after the legs or circles, laid end to
-end, their points gathered), and the detectors' compiled tests are called directly
+one compiled pass each (:func:`labkit._segmentation_engine.runs`: the segments left after the legs
+or circles, laid end to end, their points gathered), and the detectors' compiled tests are called directly
 (:mod:`labkit._iav_engine`, :mod:`labkit.lines._split_merge_engine`). What a test accepts is made
 into records as the detectors make them (the same functions). So the features are the stages'
 own, bit for bit: ``tests/test_engine.py`` compares the two paths on random scans, the simulated
@@ -31,67 +31,50 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import _iav_batch as iav
-from ._iav_batch import ACCEPTED, RESIDUAL, CircleTest, Geometry, LegTest, Runs
-from ._iav_engine import COMPLEX_FMA, _circle_tests, _leg_tests, _wider
-from ._iav_noise import EARLY_FACTOR, EARLY_STEPS, wider_than_noise
-from ._kernels import FUSED_DOT, jit
-from ._noise_engine import residuals as _residuals
+from ._iav_batch import (
+    ACCEPTED,
+    FIT,
+    Angles,
+    CircleTest,
+    Geometry,
+    LegTest,
+    Runs,
+    circle_engine,
+    drop_wider,
+    leg_center,
+    leg_engine,
+    make_circle,
+    occluded,
+)
+from ._iav_engine import COMPLEX_FMA, circle_kernel, leg_kernel
+from ._kernels import FUSED_DOT
+from ._segmentation_engine import beams, runs
 from ._segmentation_engine import labels as _segment
-from .circles.iav_circles import _radians, detect_arcs
+from .circles.iav_circles import detect_arcs
 from .circles.legs import pair_legs
 from .features import Circle, Features, Leg, find_corners
-from .lines import _split_merge_engine as sm
+from .lines._split_merge_engine import READY as LINES_READY
+from .lines._split_merge_engine import extract as extract_lines
+from .lines._split_merge_engine import line_records
 from .lines._split_merge_fast import GRAZING_DEG
-from .noise import (
-    _CUT,
-    _CUT_SD,
-    _MAD_TO_SIGMA,
-    AUTO,
-    MIN_RESIDUALS,
-    MIN_SIGMA_M,
-    RANGE_SIGMA_M,
-    _robust_sigma,
-    auto_split_threshold,
-    check_nonneg,
-)
+from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
 from .segmentation import SegmentationParams
 
 __all__ = ["READY", "plan_for", "extract"]
 
 #: Whether the engines run here (numba on, the BLAS and complex rounding they reproduce).
-READY = bool(sm.READY and COMPLEX_FMA)
+READY = bool(LINES_READY and COMPLEX_FMA)
 
 
 # ---------------------------------------------------------------------------- the scan's beams
-@jit
-def _beams(ranges, angles, range_min, range_max):
-    """:attr:`labkit.Scan.valid` and :attr:`labkit.Scan.points` in one pass: the same comparisons, and
-    ``r cos(theta)``, ``r sin(theta)`` with the C library's ``cos`` and ``sin`` that numpy's float64
-    loops call too (``tests/test_engine.py`` checks that on this machine); NaN rows where invalid."""
-    n = len(ranges)
-    valid = np.empty(n, np.bool_)
-    points = np.empty((n, 2))
-    for i in range(n):
-        r = ranges[i]
-        ok = math.isfinite(r) and r > 0 and r >= range_min and r < range_max
-        valid[i] = ok
-        if ok:
-            points[i, 0] = r * math.cos(angles[i])
-            points[i, 1] = r * math.sin(angles[i])
-        else:
-            points[i, 0] = math.nan
-            points[i, 1] = math.nan
-    return valid, points
-
-
 def _scan_beams(scan) -> tuple[np.ndarray, np.ndarray]:
-    """The scan's ``valid`` and ``points``: its cached ones, else worked out by :func:`_beams` and
-    kept in the scan's cache, read-only, as its cached properties keep them."""
+    """The scan's ``valid`` and ``points``: its cached ones, else worked out by
+    :func:`labkit._segmentation_engine.beams` and kept in the scan's cache, read-only, as its cached
+    properties keep them."""
     cache = scan.__dict__
     valid, points = cache.get("valid"), cache.get("points")
     if valid is None or points is None:
-        v, p = _beams(scan.ranges, scan.angles, float(scan.range_min), float(scan.range_max))
+        v, p = beams(scan.ranges, scan.angles, float(scan.range_min), float(scan.range_max))
         if valid is None:
             v.setflags(write=False)
             cache["valid"] = valid = v
@@ -101,119 +84,8 @@ def _scan_beams(scan) -> tuple[np.ndarray, np.ndarray]:
     return valid, points
 
 
-# ---------------------------------------------------------------------------- the scan's noise
-@jit
-def _kth_smallest(values, k):
-    """The ``k``-th smallest of ``values`` (no NaN), as ``numpy.partition(values, k)[k]`` gives it: a
-    quickselect on a copy (a value is a value, whichever way it is found)."""
-    a = values.copy()
-    lo, hi = 0, len(a) - 1
-    while lo < hi:
-        pivot = a[(lo + hi) // 2]
-        i, j = lo, hi
-        while i <= j:
-            while a[i] < pivot:
-                i += 1
-            while a[j] > pivot:
-                j -= 1
-            if i <= j:
-                a[i], a[j] = a[j], a[i]
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
-        else:
-            break
-    return a[k]
-
-
-@jit
-def _noise_start(ranges, angles, valid, full_circle, cut):
-    """The start of ``noise._robust_sigma`` on the scan's residuals (:func:`labkit._noise_engine.residuals`):
-    their absolute values, the median's sigma (``numpy.partition``'s value), and the first inliers
-    (those within ``cut`` of it, in order); the inliers empty where the residuals are too few, and
-    ``ok`` False where a residual is NaN (numpy then does it all)."""
-    z = _residuals(ranges, angles, valid, full_circle)
-    n = len(z)
-    a = np.empty(n)
-    ok = True
-    for i in range(n):
-        a[i] = abs(z[i])
-        ok = ok and not math.isnan(a[i])
-    if n < MIN_RESIDUALS or not ok:
-        return a, math.nan, a[:0], ok
-    sigma = _MAD_TO_SIGMA * _kth_smallest(a, n // 2)
-    limit = cut * sigma
-    m = 0
-    for i in range(n):
-        if a[i] <= limit:
-            m += 1
-    inl = np.empty(m)
-    m = 0
-    for i in range(n):
-        if a[i] <= limit:
-            inl[m] = a[i]
-            m += 1
-    return a, sigma, inl, ok
-
-
-def _scan_noise(scan, valid: np.ndarray, full: bool) -> float:
-    """:func:`labkit.noise.scan_sigma` of the scan (kept on it as scan_sigma keeps it): the same
-    residuals and robust standard deviation, the first steps in one compiled call."""
-    cached = scan.__dict__.get("_labkit_sigma")
-    if cached is not None:
-        return cached
-    a, sigma, inl, ok = _noise_start(scan.ranges, scan.angles, valid, full, _CUT)
-    if not ok:  # (a NaN residual: numpy's partition and masks, as noise._robust_sigma)
-        sigma = _robust_sigma(_residuals(scan.ranges, scan.angles, valid, full))
-        inl = a[:0]
-    for step in range(2):  # (noise._robust_sigma's loop; its first inliers came with the median)
-        if step:
-            inl = a[a <= _CUT * sigma]
-        if len(inl) < MIN_RESIDUALS or sigma == 0.0:
-            break
-        sigma = math.sqrt(float(np.dot(inl, inl)) / len(inl)) / _CUT_SD
-    cached = RANGE_SIGMA_M if not math.isfinite(sigma) else max(sigma, MIN_SIGMA_M)
-    scan.__dict__["_labkit_sigma"] = cached
-    return cached
-
-
 # ---------------------------------------------------------------------------- the segments of a stage
-@jit
-def _runs(labels, drop, points):
-    """The segments of ``labels`` less those holding a beam of ``drop`` (the first beams of the
-    features a stage took, as ``pipeline._mask_segments``), laid end to end in label order as
-    :func:`labkit.segmentation.segment_order` lays them: the labels left, each run's beams
-    (``idx``), its points as rows ``xy[0]`` (x) and ``xy[1]`` (y), and its bounds ``starts``,
-    ``ends``."""
-    n = len(labels)
-    rest = labels
-    if len(drop):
-        top = 0
-        for i in range(n):
-            top = max(top, labels[i] + 1)
-        gone = np.zeros(top + 1, np.bool_)
-        for f in drop:
-            if labels[f] >= 0:
-                gone[labels[f]] = True
-        rest = labels.copy()
-        for i in range(n):
-            if rest[i] >= 0 and gone[rest[i]]:
-                rest[i] = -1
-    idx, bounds = sm._order(rest)
-    m = len(idx)
-    xy = np.empty((2, m))
-    for i in range(m):
-        j = idx[i]
-        xy[0, i] = points[j, 0]
-        xy[1, i] = points[j, 1]
-    k = max(len(bounds) - 1, 0)
-    return rest, idx, xy, bounds[:k], bounds[1:]
-
-
-def _as_runs(idx, xy, starts, ends) -> Runs:
+def _asruns(idx, xy, starts, ends) -> Runs:
     """The :class:`labkit._iav_batch.Runs` of a stage (its points as one C-ordered (K, 2) array, as
     ``scan.points.take(idx, axis=0)`` gives them)."""
     return Runs(idx, np.ascontiguousarray(xy.T), starts, ends, False)
@@ -270,8 +142,9 @@ def _plan(cfg) -> Plan | None:
                        center_method=lg.center_method)
     circles = None
     if cc.enabled:  # (as labkit.detect_circles builds its test)
+        low, high = cc.mean_range_deg
         circles = CircleTest(min_points=cc.min_points, chord_range=(cc.min_chord_m, cc.max_chord_m),
-                             middle_range=cc.middle_range, mean_range=_radians(cc.mean_range_deg),
+                             middle_range=cc.middle_range, mean_range=(math.radians(low), math.radians(high)),
                              std_max=math.radians(cc.std_max_deg),
                              arc_like_std_max=math.radians(cc.arc_like_std_max_deg) if cc.arc_like else None,
                              v_corner_neighbours=cc.v_corner_neighbours,
@@ -318,7 +191,7 @@ def extract(scan, plan: Plan) -> Features:
     threshold_m, min_points, adaptive, lam, seg_sigma = plan.seg
     if adaptive:  # (the scan's noise: worked out once, when a stage asks for it; scan_sigma keeps it on the scan)
         if seg_sigma == AUTO:
-            seg_sigma = _scan_noise(scan, valid, full)
+            seg_sigma = scan_sigma(scan)
     else:
         seg_sigma = 0.0
     labels = _segment(points, ranges, angles, valid, threshold_m, min_points, adaptive, lam, float(seg_sigma), full,
@@ -331,15 +204,15 @@ def extract(scan, plan: Plan) -> Features:
     rest = labels
     t_legs = plan.legs
     if t_legs is not None:
-        rest, idx, xy, starts, ends = _runs(labels, _NONE, points)
+        rest, idx, xy, starts, ends = runs(labels, _NONE, points)
         if starts.size:
             s = plan.legs_sigma
             if s == AUTO:
-                s = _scan_noise(scan, valid, full)
+                s = scan_sigma(scan)
             if plan.legs_fast:
                 legs = _legs(scan, idx, xy, starts, ends, t_legs, s, abs(increment) if n > 1 else 0.0)
             else:
-                legs = iav.leg_engine(scan, _as_runs(idx, xy, starts, ends), t_legs, s)[0]
+                legs = leg_engine(scan, _asruns(idx, xy, starts, ends), t_legs, s)[0]
         people = pair_legs(legs, plan.pair_m) if len(legs) > 1 else []
     now = perf_counter()
     timings["legs"] = now - t
@@ -348,19 +221,19 @@ def extract(scan, plan: Plan) -> Features:
     circles: list = []
     t_circles = plan.circles
     if t_circles is not None:
-        rest, idx, xy, starts, ends = _runs(rest, _firsts(legs), points)
+        rest, idx, xy, starts, ends = runs(rest, _firsts(legs), points)
         if starts.size:
             s = plan.circles_sigma
             if s == AUTO:
-                s = _scan_noise(scan, valid, full)
+                s = scan_sigma(scan)
             if plan.circles_fast:
                 circles = _circles(idx, xy, starts, ends, t_circles, s)
             else:
-                circles = iav.circle_engine(_as_runs(idx, xy, starts, ends), t_circles, s)[0]
+                circles = circle_engine(_asruns(idx, xy, starts, ends), t_circles, s)[0]
     elif legs:
-        rest = _runs(rest, _firsts(legs), points)[0]
+        rest = runs(rest, _firsts(legs), points)[0]
     if circles:
-        rest = _runs(rest, _firsts(circles), points)[0]
+        rest = runs(rest, _firsts(circles), points)[0]
     now = perf_counter()
     timings["circles"] = now - t
     t = now
@@ -394,8 +267,8 @@ def _firsts(features) -> np.ndarray:
 
 
 def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float) -> list:
-    """``_iav_batch._compiled_legs`` on the runs of :func:`_runs`."""
-    verdict, chord, mean, std, side = _leg_tests(xy[0], xy[1], starts, ends, False, int(t.min_points),
+    """``_iav_batch._compiled_legs`` on the runs of :func:`labkit._segmentation_engine.runs`."""
+    verdict, chord, mean, std, side = leg_kernel(xy[0], xy[1], starts, ends, False, int(t.min_points),
                                                  float(t.chord_range[0]), float(t.chord_range[1]),
                                                  float(t.middle_range[0]), float(t.middle_range[1]),
                                                  float(t.chord_padding_beams * spacing), float(sigma))
@@ -412,7 +285,7 @@ def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float)
     for j, k in enumerate(passed.tolist()):
         a, b = a_s.item(j), b_s.item(j)
         first, last = idx.item(a), idx.item(b - 1)
-        if t.reject_occluded and iav.occluded(scan, first, last):
+        if t.reject_occluded and occluded(scan, first, last):
             continue
         m, sd = mean.item(k), std.item(k)
         if ray:  # (iav.leg_center's "ray", in the same Python floats)
@@ -422,7 +295,7 @@ def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float)
             diameter = chord.item(k)
         else:
             try:
-                center, diameter = iav.leg_center(pts[a:b], chord.item(k), m, side.item(k), t.center_method)
+                center, diameter = leg_center(pts[a:b], chord.item(k), m, side.item(k), t.center_method)
             except ValueError:
                 continue
         center.setflags(write=False)
@@ -431,35 +304,25 @@ def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float)
 
 
 def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
-    """``_iav_batch._compiled_circles`` on the runs of :func:`_runs`."""
-    verdict, _, mean, std, side, lim = _circle_tests(
+    """``_iav_batch._compiled_circles`` on the runs of :func:`labkit._segmentation_engine.runs`."""
+    verdict, _, mean, std, side, lim = circle_kernel(
         xy[0], xy[1], starts, ends, False, int(max(t.min_points, 3)), float(t.chord_range[0]),
         float(t.chord_range[1]), float(t.middle_range[0]), float(t.middle_range[1]), float(t.mean_range[0]),
         float(t.mean_range[1]), float(t.std_max), float(t.std_max) ** 2, float(sigma))
     passed = np.flatnonzero(verdict == ACCEPTED)
     if not passed.size:
         return []
-    runs = _as_runs(idx, xy, starts, ends)
+    runs = _asruns(idx, xy, starts, ends)
     if t.center_method == "iav":
         made = _iav_circles(runs, passed, mean, std, side, lim, t.kind)
     else:
         geo = Geometry(ends - starts, None, runs.pts.take(starts, axis=0),  # type: ignore[arg-type]
                        runs.pts.take(ends - 1, axis=0), None, None)  # type: ignore[arg-type]
-        ang = iav.Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
-        made = [iav._make_circle(runs, geo, ang, k, k, t, t.kind,
+        ang = Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
+        made = [make_circle(runs, geo, ang, k, k, t, t.kind,
                                  ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2))) for k in passed.tolist()]
     if sigma > 0.0:  # and their points must lie on a circle within the noise
-        circle_of = [c for c, _ in made]
-        cx = np.array([c.center.item(0) if c is not None else np.nan for c in circle_of])
-        cy = np.array([c.center.item(1) if c is not None else np.nan for c in circle_of])
-        radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
-        # (_iav_noise.wider_than_noise's compiled path, on the runs' own coordinates; numpy's where it hands back)
-        decided, ok = _wider(xy[0], xy[1], starts[passed], ends[passed], float(sigma), cx, cy, radii, True,
-                             EARLY_STEPS, EARLY_FACTOR)
-        if not ok:
-            decided = wider_than_noise(runs.pts, starts[passed], ends[passed], sigma, np.stack([cx, cy], axis=1),
-                                       radii)
-        made = [(None, RESIDUAL) if w else m for w, m in zip(decided.tolist(), made, strict=True)]
+        made = drop_wider(runs, passed, made, sigma)
     return [c for c, _ in made if c is not None]
 
 
@@ -486,7 +349,7 @@ def _iav_circles(runs: Runs, passed: np.ndarray, mean: np.ndarray, std: np.ndarr
         dx, dy = x2 - x1, y2 - y1
         chord = math.hypot(dx, dy)
         if not (0 < m < math.pi) or not math.isfinite(sd_side) or chord == 0:
-            made.append((None, iav.FIT))  # (circle_from_iav raises)
+            made.append((None, FIT))  # (circle_from_iav raises)
             continue
         theta = m - _HALF_PI
         h = -math.copysign(1.0, sd_side) * 0.5 * math.tan(theta)
@@ -507,29 +370,15 @@ def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: t
     """``split_and_merge``'s engine path (``lines._split_merge_engine.split_and_merge``) on ``labels``."""
     (fit, split_threshold_m, range_sigma_m, min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m,
      uniform, weights, floor_m, lam_cut, lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = p
-    s = _scan_noise(scan, valid, full) if range_sigma_m == AUTO else range_sigma_m
+    s = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
     if split_threshold_m == AUTO:  # (lines.split_merge._SplitTest)
         noise, threshold = s, auto_split_threshold(s)
     else:
         noise, threshold = 0.0, split_threshold_m
     absorb_m = min(threshold, 3 * s)
-    r, alpha, ends, first, last, beams, offsets = sm.extract(
+    r, alpha, ends, first, last, beams, offsets = extract_lines(
         points, scan.ranges, scan.angles, valid, labels, fit, float(threshold), float(noise),
         float(absorb_m), min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m,
         lam_cut, lam_graze, full, FUSED_DOT)
-    return sm.line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, s, place_dr_m,
+    return line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, s, place_dr_m,
                            place_dalpha_deg, place_confidence)
-
-
-def compile_all() -> None:
-    """Compile (or load from numba's cache) this module's kernel, as the scans hand it its arrays."""
-    labels = np.array([0, 0, 0, -1, 1, 1, 1], dtype=np.int64)
-    points = np.ones((7, 2))
-    points.setflags(write=False)
-    ranges = np.ones(7)
-    ranges.setflags(write=False)
-    valid, _ = _beams(ranges, ranges, 0.0, 10.0)
-    valid.setflags(write=False)
-    _noise_start(ranges, ranges, valid, False, _CUT)
-    _runs(labels, _NONE, points)
-    _runs(labels, np.array([0]), points)

@@ -451,8 +451,8 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
     if not isinstance(cfg, Config):
         raise ValueError(f"config must be a labkit.Config, got {type(cfg).__name__}")
     # the same stages with the scan's quantities worked out once (labkit._pipeline_engine): the same features
-    if (engine := _engine()) is not None and (plan := engine.plan_for(cfg)) is not None:
-        return engine.extract(scan, plan)
+    if (engine := _engine()) is not None and (plan := engine[0](cfg)) is not None:
+        return engine[1](scan, plan)
     return _stages(scan, cfg)
 
 
@@ -460,15 +460,15 @@ _ENGINE: Any = False  # (False: not imported yet)
 
 
 def _engine():
-    """labkit._pipeline_engine, or None where the compiled engines do not run (``LABKIT_NO_JIT=1``);
-    imported on the first scan (it imports numba)."""
+    """``(plan_for, extract)`` of labkit._pipeline_engine, or None where the compiled engines do not
+    run (``LABKIT_NO_JIT=1``); imported on the first scan (it imports numba)."""
     global _ENGINE
     if _ENGINE is False:
         _ENGINE = None
         if _JIT:
-            from . import _pipeline_engine as engine
+            from ._pipeline_engine import READY, extract, plan_for
 
-            _ENGINE = engine if engine.READY else None
+            _ENGINE = (plan_for, extract) if READY else None
     return _ENGINE
 
 

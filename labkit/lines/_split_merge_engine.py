@@ -41,6 +41,7 @@ from .._kernels import (
     segment_sum,
     sum_at,
 )
+from .._segmentation_engine import order as _order
 from .._segmentation_engine import threshold as breakpoint_threshold
 from ..features import LineSegment
 from ..fitting import placement_probability
@@ -177,49 +178,6 @@ def _grazing_runs(points, ranges, angles, valid, labels, floor_m, min_points, si
 
 
 # ---------------------------------------------------------------------------- the lists
-@jit_inline
-def _order(labels):
-    """:func:`labkit.segmentation.segment_order`: the labelled beams laid end to end, and each
-    segment's bounds in that order."""
-    n = len(labels)
-    beams = np.empty(n, np.int64)
-    m = 0
-    if n and labels[0] >= 0 and labels[0] == labels[n - 1]:
-        t = -1
-        for i in range(n - 1, -1, -1):
-            if labels[i] != labels[0]:
-                t = i + 1
-                break
-        if t >= 0:  # a segment across the seam: the order starts where it starts
-            for u in range(n):
-                i = (t + u) % n
-                if labels[i] >= 0:
-                    beams[m] = i
-                    m += 1
-        else:
-            for i in range(n):
-                beams[m] = i
-                m += 1
-    else:
-        for i in range(n):
-            if labels[i] >= 0:
-                beams[m] = i
-                m += 1
-    beams = beams[:m]
-    bounds = np.empty(m + 1, np.int64)
-    nb = 0
-    if m:
-        bounds[0] = 0
-        nb = 1
-        for i in range(1, m):
-            if labels[beams[i]] != labels[beams[i - 1]]:
-                bounds[nb] = i
-                nb += 1
-        bounds[nb] = m
-        nb += 1
-    return beams, bounds[:nb]
-
-
 @jit_inline
 def _prefix_sums(X, Y, W):
     """Rows ``i``: the sums of ``w, w x, w y, w x x, w y y, w x y`` over points ``0..i-1``."""
@@ -897,7 +855,7 @@ def compile_all() -> None:
     its first scan."""
     from .._iav_engine import compile_all as compile_circles
     from .._noise_engine import residuals
-    from .._pipeline_engine import compile_all as compile_pipeline
+    from .._segmentation_engine import compile_all as compile_scan_kernels
     from .._segmentation_engine import labels as segment
 
     angles = np.radians(np.arange(-90.0, 90.5, 1.0))
@@ -914,7 +872,7 @@ def compile_all() -> None:
     cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
     _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     compile_circles()
-    compile_pipeline()
+    compile_scan_kernels()
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
