@@ -40,8 +40,8 @@ from .steps import Step
 __all__ = ["VERDICTS", "ACCEPTED", "FEW", "SHORT", "LONG", "PREREQ", "DEGENERATE", "MEAN", "STD", "VCORNER", "FIT",
            "OCCLUDED", "RESIDUAL", "Runs", "NO_RUNS", "scan_runs", "check_scan", "geometry", "cheap_tests",
            "batch_angles", "segment_step", "Seen", "trace", "CircleTest", "circle_limits", "circle_engine",
-           "arc_pieces", "LegTest", "leg_limits", "leg_center", "padded_chords", "occluded", "leg_engine", "LineTest",
-           "line_limits", "line_engine"]
+           "arc_pieces", "make_circle", "drop_wider", "LegTest", "leg_limits", "leg_center", "padded_chords",
+           "occluded", "leg_engine", "LineTest", "line_limits", "line_engine"]
 
 #: What decided a segment, in the trace's words (``Step.test``); the codes below index it.
 VERDICTS = ("accepted", "too few points", "chord too short", "chord too long", "prerequisite", "degenerate",
@@ -394,7 +394,7 @@ def circle_engine(runs: Runs, t: CircleTest, sigma: float = 0.0, *, want_trace: 
             verdict[k] = v
             if v == ACCEPTED:
                 passed.append((j, k, kind, limits))
-        made = [_make_circle(runs, geo, ang, j, k, t, kind, limits) for j, k, kind, limits in passed]
+        made = [make_circle(runs, geo, ang, j, k, t, kind, limits) for j, k, kind, limits in passed]
         if sigma > 0.0 and passed:  # and their points must lie on a circle within the noise
             ks = [k for _, k, _, _ in passed]
             circle_of = [c for c, _ in made]
@@ -442,15 +442,22 @@ def _compiled_circles(runs: Runs, t: CircleTest, sigma: float) -> list[Circle]:
     geo = Geometry(runs.ends - runs.starts, None, runs.pts.take(runs.starts, axis=0),  # type: ignore[arg-type]
                    runs.pts.take(runs.ends - 1, axis=0), None, None)  # type: ignore[arg-type]
     ang = Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
-    made = [_make_circle(runs, geo, ang, k, k, t, t.kind, ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2)))
+    made = [make_circle(runs, geo, ang, k, k, t, t.kind, ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2)))
             for k in passed.tolist()]
     if sigma > 0.0:  # and their points must lie on a circle within the noise
-        circle_of = [c for c, _ in made]
-        centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
-        radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
-        wider = wider_than_noise(runs.pts, runs.starts[passed], runs.ends[passed], sigma, centers, radii).tolist()
-        made = [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
+        made = drop_wider(runs, passed, made, sigma)
     return [c for c, _ in made if c is not None]
+
+
+def drop_wider(runs: Runs, passed: np.ndarray, made: list, sigma: float) -> list:
+    """``made`` (a ``(circle, verdict)`` per run of ``passed``) with ``(None, RESIDUAL)`` where the
+    run's points lie wider than noise ``sigma`` allows (:func:`labkit._iav_noise.wider_than_noise`,
+    each run's circle tried first)."""
+    circle_of = [c for c, _ in made]
+    centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in circle_of]).reshape(-1, 2)
+    radii = np.array([c.radius if c is not None else np.nan for c in circle_of])
+    wider = wider_than_noise(runs.pts, runs.starts[passed], runs.ends[passed], sigma, centers, radii).tolist()
+    return [(None, RESIDUAL) if w else m for w, m in zip(wider, made, strict=True)]
 
 
 def _angle_verdict(ang: Angles, j: int, t: CircleTest, noise: tuple | None = None,
@@ -481,7 +488,7 @@ def _angle_verdict(ang: Angles, j: int, t: CircleTest, noise: tuple | None = Non
     return ACCEPTED, kind, (mean_range, std_max)
 
 
-def _make_circle(runs: Runs, geo: Geometry, ang: Angles, j: int, k: int, t: CircleTest, kind: str,
+def make_circle(runs: Runs, geo: Geometry, ang: Angles, j: int, k: int, t: CircleTest, kind: str,
                  limits: tuple) -> tuple[Circle | None, int]:
     """The circle of run ``k`` (``j``-th of the selected), which passed the tests with ``limits``
     (:func:`_angle_verdict`), and its verdict (``FIT`` when no circle fits it)."""

@@ -15,7 +15,7 @@ import numpy as np
 
 from ._kernels import TWO_PI, jit, pairwise_sum
 
-__all__ = ["residuals"]
+__all__ = ["residuals", "kth_smallest", "robust_start", "robust_sigma"]
 
 
 @jit
@@ -68,3 +68,80 @@ def residuals(ranges, angles, valid, full_circle):
         out[k] = s / math.sqrt(1.0 + q0 * q0 + q2 * q2)
         k += 1
     return out[:k]  # (a view: no copy)
+
+
+@jit
+def kth_smallest(values, k):
+    """The ``k``-th smallest of ``values`` (no NaN), as ``numpy.partition(values, k)[k]`` gives it: a
+    quickselect on a copy (a value is a value, whichever way it is found)."""
+    a = values.copy()
+    lo, hi = 0, len(a) - 1
+    while lo < hi:
+        pivot = a[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return a[k]
+
+
+@jit
+def robust_start(ranges, angles, valid, full_circle, min_residuals, mad_to_sigma, cut):
+    """The start of ``noise._robust_sigma`` on the scan's :func:`residuals`: their absolute values,
+    the median's sigma (``numpy.partition``'s value), the first inliers (within ``cut`` of it, in
+    order; empty where the residuals are too few), and False where a residual is NaN."""
+    z = residuals(ranges, angles, valid, full_circle)
+    n = len(z)
+    a = np.empty(n)
+    ok = True
+    for i in range(n):
+        a[i] = abs(z[i])
+        ok = ok and not math.isnan(a[i])
+    if n < min_residuals or not ok:
+        return a, math.nan, a[:0], ok
+    sigma = mad_to_sigma * kth_smallest(a, n // 2)
+    limit = cut * sigma
+    m = 0
+    for i in range(n):
+        if a[i] <= limit:
+            m += 1
+    inl = np.empty(m)
+    m = 0
+    for i in range(n):
+        if a[i] <= limit:
+            inl[m] = a[i]
+            m += 1
+    return a, sigma, inl, ok
+
+
+def robust_sigma(ranges, angles, valid, full_circle, min_residuals: int, mad_to_sigma: float, cut: float,
+                 cut_sd: float) -> float:
+    """``noise._robust_sigma(range_noise_residuals(scan))`` (its constants given), bit for bit: the
+    start in one compiled call (:func:`robust_start`; numpy's where a residual is NaN), then its
+    loop's dot products as numpy computes them (BLAS)."""
+    a, sigma, inl, ok = robust_start(ranges, angles, valid, full_circle, min_residuals, mad_to_sigma, cut)
+    n = len(a)
+    if not ok:
+        if n < min_residuals:
+            return math.nan
+        sigma = mad_to_sigma * float(np.partition(a, n // 2)[n // 2])
+        inl = a[a <= cut * sigma]
+    for step in range(2):
+        if step:
+            inl = a[a <= cut * sigma]
+        if len(inl) < min_residuals or sigma == 0.0:
+            break
+        sigma = math.sqrt(float(np.dot(inl, inl)) / len(inl)) / cut_sd
+    return sigma

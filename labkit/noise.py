@@ -55,14 +55,13 @@ from .params import AUTO
 from .scan import Scan
 
 
-def _engine_residuals(ranges, angles, valid, full_circle):
-    """labkit._noise_engine.residuals, imported on the first scan (numba's import alone costs some
-    0.35 s of CPU, which a process that extracts nothing should not pay); it then takes this name."""
-    global _engine_residuals
-    from ._noise_engine import residuals
+def _engine_sigma(ranges, angles, valid, full_circle):
+    """:func:`_robust_sigma` of :func:`range_noise_residuals` by labkit._noise_engine.robust_sigma, bit for
+    bit; imported on the first scan (numba's import alone costs some 0.35 s of CPU, which a process that
+    extracts nothing should not pay)."""
+    from ._noise_engine import robust_sigma
 
-    _engine_residuals = residuals
-    return residuals(ranges, angles, valid, full_circle)
+    return robust_sigma(ranges, angles, valid, full_circle, MIN_RESIDUALS, _MAD_TO_SIGMA, _CUT, _CUT_SD)
 
 __all__ = ["range_noise_residuals", "estimate_range_noise", "scan_sigma", "noise_sigma", "auto_split_threshold",
            "chi2_upper_over_dof", "noise_config", "MIN_RESIDUALS", "AUTO_LINES", "AUTO_RANSAC", "AUTO_HOUGH",
@@ -187,8 +186,8 @@ def estimate_range_noise(scans: Scan | Iterable[Scan]) -> float:
     if isinstance(scans, Scan):
         if not _JIT:
             return _robust_sigma(range_noise_residuals(scans))
-        # the residuals in one compiled pass, bit for bit range_noise_residuals'
-        return _robust_sigma(_engine_residuals(scans.ranges, scans.angles, scans.valid, scans.is_full_circle))
+        # the residuals and the start of their robust sigma in one compiled pass, bit for bit
+        return _engine_sigma(scans.ranges, scans.angles, scans.valid, scans.is_full_circle)
     if isinstance(scans, (str, bytes)) or not isinstance(scans, Iterable):
         raise ValueError(f"scans must be a labkit.Scan or an iterable of them, got {type(scans).__name__}")
     parts = [range_noise_residuals(s) for s in scans]

@@ -52,10 +52,11 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from time import perf_counter
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
+from ._jit import ENABLED as _JIT
 from ._safe import OutputKind, safe_output
 from .circles.iav_circles import ArcParams, CircleParams, detect_arcs, detect_circles
 from .circles.legs import LegsParams, detect_legs, pair_legs
@@ -449,6 +450,30 @@ def extract_features(scan: Scan, config: Config | None = None) -> Features:
     cfg = _DEFAULT if config is None else config
     if not isinstance(cfg, Config):
         raise ValueError(f"config must be a labkit.Config, got {type(cfg).__name__}")
+    # the same stages with the scan's quantities worked out once (labkit._pipeline_engine): the same features
+    if (engine := _engine()) is not None and (plan := engine[0](cfg)) is not None:
+        return engine[1](scan, plan)
+    return _stages(scan, cfg)
+
+
+_ENGINE: Any = False  # (False: not imported yet)
+
+
+def _engine():
+    """``(plan_for, extract)`` of labkit._pipeline_engine, or None where the compiled engines do not
+    run (``LABKIT_NO_JIT=1``); imported on the first scan (it imports numba)."""
+    global _ENGINE
+    if _ENGINE is False:
+        _ENGINE = None
+        if _JIT:
+            from ._pipeline_engine import READY, extract, plan_for
+
+            _ENGINE = (plan_for, extract) if READY else None
+    return _ENGINE
+
+
+def _stages(scan: Scan, cfg: Config) -> Features:
+    """The stages of :func:`extract_features`, each its detector called with its section."""
     seg, lc, cc, lg = cfg.segmentation, cfg.lines, cfg.circles, cfg.legs
     timings: dict[str, float] = {}
     t_start = t = perf_counter()

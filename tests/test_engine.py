@@ -7,7 +7,8 @@ Compared here: every field of every line (floats by their bits, arrays by their 
 scans (hypothesis), full-circle rooms, the simulated worlds at 361-2881 beams and 5 mm-3 cm of
 noise, and the real recordings (``../shared/datasets``, skipped when absent). The arithmetic the
 engines reproduce (numpy's pairwise sums, BLAS's dot rounding, ``math.remainder``, the C library's
-functions) is checked on its own first.
+functions) is checked on its own first. Last, ``extract_features``' fused default path
+(labkit/_pipeline_engine.py) against its stages called one detector at a time (``pipeline._stages``).
 """
 
 from __future__ import annotations
@@ -293,6 +294,9 @@ def test_LABKIT_NO_JIT_runs_the_readable_code_without_numba(tmp_path):
             "out = {'lines': [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)] + [ln.first, ln.last]"
             " for ln in lines], 'labels': labkit.segment_labels(s).tolist(),"
             " 'sigma': float(labkit.estimate_range_noise(s)).hex(), 'numba': 'numba' in sys.modules}\n"
+            "f = labkit.extract_features(labkit.Scan(ranges=d['ranges'], angles=d['angles']))\n"
+            "out['features'] = [f.labels.tolist(), f.counts(), [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)]"
+            " + [ln.first, ln.last] for ln in f.lines], [[float(x).hex() for x in c.point] for c in f.corners]]\n"
             "print(json.dumps(out))\n")
     env = dict(os.environ, LABKIT_NO_JIT="1")
     got = json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
@@ -304,3 +308,196 @@ def test_LABKIT_NO_JIT_runs_the_readable_code_without_numba(tmp_path):
     assert got["labels"] == segment_labels(s).tolist()
     assert got["sigma"] == float(estimate_range_noise(fresh(scan))).hex()
     assert len(got["lines"]) >= 4
+    f = labkit.extract_features(fresh(scan))  # (the fused path here, the stages' readable code there)
+    assert got["features"] == [f.labels.tolist(), f.counts(), [[float(x).hex() for x in (ln.r, ln.alpha, ln.error)]
+                                                               + [ln.first, ln.last] for ln in f.lines],
+                               [[float(x).hex() for x in c.point] for c in f.corners]]
+
+
+# ---------------------------------------------------------------------------- the pipeline's default path
+# extract_features runs labkit._pipeline_engine where the engines cover the Config: the same stages
+# with the scan's quantities worked out once. Compared with the stages as pipeline.py reads them
+# (pipeline._stages: each detector called with its section, each detector compared with its readable
+# reference above and in tests/test_iav_engine.py), every field of every feature, by its bits.
+from labkit import Config, pipeline  # noqa: E402
+from labkit import _noise_engine as NE  # noqa: E402
+from labkit import _pipeline_engine as fused  # noqa: E402
+from labkit import _segmentation_engine as SE  # noqa: E402
+from labkit.noise import FIXED_CONFIG  # noqa: E402
+from labkit.segmentation import segment_order  # noqa: E402
+from tests.test_iav_reference import _canon, _random_scan  # noqa: E402
+
+#: configurations the fused path covers (every branch of its plan), and one it hands back to the stages
+CONFIGS = [Config(), Config().updated(FIXED_CONFIG),
+           Config().updated({"lines": {"method": "split_and_merge", "skip_round": False, "weights": "uniform"},
+                             "legs": {"center_method": "iav", "reject_occluded": False},
+                             "circles": {"center_method": "geometric", "min_points": 3}}),
+           Config().updated({"legs.enabled": False, "corners.enabled": False, "lines.merge": "none"}),
+           Config().updated({"circles.enabled": False, "segmentation.adaptive": False, "lines.method": "none"}),
+           Config().updated({"legs": {"iav_std_max_deg": 20.0}, "circles": {"arc_like": True}, "arcs.enabled": True})]
+
+
+def the_features(f) -> tuple:
+    """Every field of a :class:`labkit.Features` but the timings, exactly; and the timings' stages."""
+    fields = (f.stamp_ns, f.n_beams, f.labels, f.lines, f.corners, f.circles, f.arcs, f.legs, f.people)
+    return _canon(fields), tuple(f.timings)
+
+
+def fused_equals_stages(scan: Scan, configs=CONFIGS) -> int:
+    """The fused path's features equal the stages' for every config on ``scan``; how many features."""
+    a, b = estimate_range_noise(fresh(scan)), _robust_sigma(range_noise_residuals(fresh(scan)))
+    assert a == b or (math.isnan(a) and math.isnan(b))
+    found = 0
+    for cfg in configs:
+        assert fused.plan_for(cfg) is not None
+        fast = labkit.extract_features(fresh(scan), cfg)
+        stages = pipeline._stages(fresh(scan), cfg)
+        assert the_features(fast) == the_features(stages), cfg
+        found += sum(fast.counts().values())
+    return found
+
+
+def test_the_fused_path_runs_here_and_hands_back_what_it_does_not_cover():
+    assert pipeline._engine() == (fused.plan_for, fused.extract) and fused.READY
+    for changes in ({"lines.method": "ransac"}, {"lines.merge": "chi2"}):
+        cfg = Config().updated(changes)
+        assert fused.plan_for(cfg) is None
+        scan = polygon_scan(SQUARE_ROOM, 361)
+        assert the_features(labkit.extract_features(fresh(scan), cfg)) == the_features(pipeline._stages(scan, cfg))
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 600), step=st.sampled_from([0.25, 0.5, 1.0]),
+       full=st.booleans(), noise=st.sampled_from([0.0, 0.005, 0.02, 0.03]), dropouts=st.sampled_from([0.0, 0.05]))
+def test_the_fused_path_equals_the_stages_on_random_scans(seed, n, step, full, noise, dropouts):
+    fused_equals_stages(_random_scan(seed, n, step, full, noise, dropouts), CONFIGS[:3])
+
+
+@pytest.mark.parametrize("beams", [180, 361, 541, 722, 1441, 2881])
+def test_the_fused_path_equals_the_stages_on_simulated_worlds(beams):
+    from labkit.app.experiments import nguyen_lidar, world_scans
+
+    found = 0
+    rng = np.random.default_rng(beams)
+    for world, noise in zip(("hall", "office", "corridor"), (0.005, 0.02, 0.03), strict=True):
+        for scan, _ in world_scans(world, nguyen_lidar(beams, noise), 1, rng):
+            found += fused_equals_stages(scan, CONFIGS if beams == 361 else CONFIGS[:2])
+    assert found > 0
+
+
+@pytest.mark.shared
+def test_the_fused_path_equals_the_stages_on_real_scans(shared_datasets):
+    found = 0
+    for k in range(1, 7):
+        found += fused_equals_stages(labkit.read_json_scan(shared_datasets / "single_scans" / f"laser_scan_{k}.json"),
+                                     CONFIGS[:2])
+    for log in RADISH:
+        path = shared_datasets / "carmen" / f"{log}-corrected.log.gz"
+        for scan in itertools.islice(labkit.read_scans(path), 0, 300, 60):
+            found += fused_equals_stages(scan, CONFIGS[:2])
+    assert found > 100
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.sampled_from([0.0, -1.0, 0.05, 0.5, 1.0, 3.0, 29.999, 30.0, 31.0, math.inf, -math.inf, math.nan]),
+                min_size=0, max_size=40), st.floats(0.0, 1.0))
+def test_the_scans_beams_are_the_scans_own(ranges, range_min):
+    """valid and points of the fused pass: Scan.valid and Scan.points, by their bits."""
+    rng = np.random.default_rng(len(ranges))
+    r = np.array(ranges) * rng.uniform(0.5, 1.5, len(ranges))
+    angles = -3.0 + np.cumsum(rng.uniform(0.01, 6.0 / max(len(r), 1), len(r)))
+    scan = Scan(ranges=r, angles=angles, range_min=range_min, range_max=30.0)
+    valid, points = fused._scan_beams(fresh(scan))
+    assert _canon((valid, points)) == _canon((scan.valid, scan.points))
+    assert not valid.flags.writeable and not points.flags.writeable
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.integers(-1, 4), min_size=1, max_size=30), st.lists(st.integers(0, 29), max_size=4),
+       st.booleans())
+def test_the_runs_of_a_stage_are_the_stages_own(sizes, firsts, seam):
+    """The segments _runs lays out: pipeline._mask_segments, then segment_order and the points
+    gathered, as the detectors' _runs_from_labels does."""
+    labels = np.concatenate([np.full(abs(s) + 1, k if s >= 0 else -1) for k, s in enumerate(sizes)]).astype(np.int64)
+    labels = np.where(labels >= 0, np.unique(labels[labels >= 0], return_inverse=True)[1].reshape(-1)[
+        np.cumsum(labels >= 0) - 1], -1) if (labels >= 0).any() else labels
+    if seam and labels[0] >= 0 and labels[-1] >= 0:
+        labels[labels == labels[-1]] = labels[0]  # a segment across the seam
+    n = labels.size
+    points = np.random.default_rng(n).normal(size=(n, 2))
+    firsts = [f for f in firsts if f < n]
+
+    class _Taken:
+        def __init__(self, first):
+            self.first = first
+
+    rest_ref = pipeline._mask_segments(labels, [_Taken(f) for f in firsts])
+    idx_ref, starts_ref, ends_ref = segment_order(rest_ref)
+    rest, idx, xy, starts, ends = SE.runs(labels, np.array(firsts, dtype=np.int64), points)
+    assert _canon((rest, idx, starts, ends)) == _canon((rest_ref, idx_ref, starts_ref, ends_ref))
+    assert _canon(np.ascontiguousarray(xy.T)) == _canon(points.take(idx_ref, axis=0))
+
+
+def test_the_erf_shortcut_of_placing_is_exact():
+    """From z = 6 on the placing's erf approximation is 1.0 exactly (the shortcut skips its exp):
+    the formula in Python floats, and the kernel against it on both sides of the shortcut."""
+    def cdf(x):
+        z = abs(x) / math.sqrt(2.0)
+        t = 1.0 / (1.0 + 0.3275911 * z)
+        poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))))
+        return 0.5 * (1.0 + math.copysign(1.0 - poly * math.exp(-z * z), x))
+
+    for z in np.linspace(engine._ERF_ONE, 60.0, 5000).tolist():
+        assert cdf(z * math.sqrt(2.0)) == 1.0 and cdf(-z * math.sqrt(2.0)) == 0.0
+    for x in np.random.default_rng(7).uniform(-12.0, 12.0, 3000).tolist():
+        assert engine._normal_cdf(x) == cdf(x)
+
+
+def test_the_fused_identity_test_can_fail(monkeypatch):
+    """One bit off in one point of the fused pass's beams (the first point of a line, whose end
+    it gives), and the comparison sees it."""
+    room = polygon_scan(SQUARE_ROOM, 361)
+    scan = Scan(ranges=room.ranges + np.random.default_rng(3).normal(0.0, 0.01, 361), angles=room.angles)
+    fused_equals_stages(scan, CONFIGS[:1])
+    beams = fused.beams
+    first = labkit.extract_features(fresh(scan)).lines[1].first
+
+    def one_bit_off(*args):
+        valid, points = beams(*args)
+        points[first, 0] = np.nextafter(points[first, 0], np.inf)
+        return valid, points
+
+    monkeypatch.setattr(fused, "beams", one_bit_off)
+    with pytest.raises(AssertionError):
+        fused_equals_stages(scan, CONFIGS[:1])
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.sampled_from([0.0, 0.001, 0.002, 0.0025, 0.01, 0.3, 1e-300, 7.0]), min_size=1, max_size=60),
+       st.integers(0, 2**32 - 1))
+def test_the_median_of_the_noise_is_numpys(values, seed):
+    """The quickselect of the fused noise estimate: numpy.partition's value at every k, with ties."""
+    a = np.array(values) * np.random.default_rng(seed).choice([1.0, 1.0, 1.5], len(values))
+    for k in range(len(a)):
+        assert NE.kth_smallest(a, k) == np.partition(a, k)[k]
+
+
+def test_the_noise_estimate_with_a_nan_residual_is_numpys(monkeypatch):
+    """Where a residual is NaN the compiled start hands the robust sigma to numpy's partition."""
+    z = np.random.default_rng(8).normal(0.0, 0.01, 200)
+    z[[5, 50, 199]] = np.nan
+    monkeypatch.setattr(NE, "robust_start", lambda *args: (np.abs(z), math.nan, z[:0], False))
+    from labkit import noise
+
+    got = NE.robust_sigma(None, None, None, False, noise.MIN_RESIDUALS, noise._MAD_TO_SIGMA, noise._CUT,
+                          noise._CUT_SD)
+    assert got.hex() == _robust_sigma(z).hex() and math.isfinite(got)
+
+
+def test_the_fused_path_on_scans_with_little_in_them():
+    """No beam, one, two, none valid, every beam valid but apart: the stages' (empty) features."""
+    scans = [Scan(ranges=np.zeros(0), angles=np.zeros(0)), Scan(ranges=[1.0], angles=[0.0]),
+             Scan(ranges=[1.0, 1.0], angles=[0.0, 0.01]), Scan(ranges=np.full(50, np.nan), angles=np.arange(50.0) / 10),
+             Scan(ranges=np.arange(1.0, 41.0), angles=np.arange(40.0) / 10, range_max=100.0)]
+    for scan in scans:
+        fused_equals_stages(scan, CONFIGS[:1])

@@ -15,6 +15,7 @@ LABKIT = Path(__file__).resolve().parents[1] / "labkit"
 #: others, numpy and the standard library
 ALGORITHMS = ["_validate", "_jit", "_safe", "iav", "_iav_batch", "_iav_noise", "params", "_fastinit", "_plainfloat",
               "_dbscan_fast", "_kernels", "_segmentation_engine", "_noise_engine", "_iav_engine", "_tracking_engine",
+              "_pipeline_engine",
               "errors", "scan", "steps", "geometry", "noise", "segmentation", "fitting",
               "features", "dbscan", "pipeline", "evaluation", "poses", "lines", "circles", "sim",
               "tracking", "tracking_metrics"]

@@ -41,6 +41,7 @@ from .._kernels import (
     segment_sum,
     sum_at,
 )
+from .._segmentation_engine import order as _order
 from .._segmentation_engine import threshold as breakpoint_threshold
 from ..features import LineSegment
 from ..fitting import placement_probability
@@ -177,49 +178,6 @@ def _grazing_runs(points, ranges, angles, valid, labels, floor_m, min_points, si
 
 
 # ---------------------------------------------------------------------------- the lists
-@jit_inline
-def _order(labels):
-    """:func:`labkit.segmentation.segment_order`: the labelled beams laid end to end, and each
-    segment's bounds in that order."""
-    n = len(labels)
-    beams = np.empty(n, np.int64)
-    m = 0
-    if n and labels[0] >= 0 and labels[0] == labels[n - 1]:
-        t = -1
-        for i in range(n - 1, -1, -1):
-            if labels[i] != labels[0]:
-                t = i + 1
-                break
-        if t >= 0:  # a segment across the seam: the order starts where it starts
-            for u in range(n):
-                i = (t + u) % n
-                if labels[i] >= 0:
-                    beams[m] = i
-                    m += 1
-        else:
-            for i in range(n):
-                beams[m] = i
-                m += 1
-    else:
-        for i in range(n):
-            if labels[i] >= 0:
-                beams[m] = i
-                m += 1
-    beams = beams[:m]
-    bounds = np.empty(m + 1, np.int64)
-    nb = 0
-    if m:
-        bounds[0] = 0
-        nb = 1
-        for i in range(1, m):
-            if labels[beams[i]] != labels[beams[i - 1]]:
-                bounds[nb] = i
-                nb += 1
-        bounds[nb] = m
-        nb += 1
-    return beams, bounds[:nb]
-
-
 @jit_inline
 def _prefix_sums(X, Y, W):
     """Rows ``i``: the sums of ``w, w x, w y, w x x, w y y, w x y`` over points ``0..i-1``."""
@@ -791,9 +749,14 @@ _GL_U, _GL_W = np.polynomial.legendre.leggauss(24)  # (= labkit.fitting's nodes 
 _NEAR = 1e-9  # a probability this close to place_confidence is decided by the reference itself
 
 
+_ERF_ONE = 6.0  # from here on the approximation of erf below is exactly 1 (tests/test_engine.py)
+
+
 @jit
 def _normal_cdf(x):
     z = abs(x) / math.sqrt(2.0)
+    if z >= _ERF_ONE:  # (poly exp(-z^2) < 2^-54 there: 1 - it rounds to 1, and the exp is not needed)
+        return 1.0 if x > 0 else 0.0
     t = 1.0 / (1.0 + 0.3275911 * z)
     poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))))
     erf = 1.0 - poly * math.exp(-z * z)
@@ -805,7 +768,8 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
     """Per line: placed by :func:`labkit.fitting.placement_probability` (1), not (0), or too
     close to ``confidence`` to tell without the reference's own summation order (2). The
     probability is the reference's integral (the same nodes and pieces) summed in another order:
-    it differs by a few units in the 15th digit at most."""
+    it differs by a few units in the 15th digit at most. The middle piece comes first, and a line
+    it already places is placed (the other pieces are integrals of a non-negative function)."""
     k_lines = len(cov)
     out = np.empty(k_lines, np.int64)
     lo = np.empty(3)
@@ -821,8 +785,8 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
         slope = c_ra / va * sd_a
         sd_r = math.sqrt(max(var_r - c_ra * c_ra / va, 1e-300))
         b = min(max_dr_m / abs(slope), half)
-        lo[0], lo[1], lo[2] = -half, -b, b
-        hi[0], hi[1], hi[2] = -b, b, half
+        lo[0], lo[1], lo[2] = -b, -half, b  # (the middle piece first: it holds most of the probability)
+        hi[0], hi[1], hi[2] = b, -b, half
         p = 0.0
         for piece in range(3):
             mid, rad = (hi[piece] + lo[piece]) / 2, (hi[piece] - lo[piece]) / 2
@@ -833,6 +797,8 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
                 inside = _normal_cdf((max_dr_m - mu) / sd_r) - _normal_cdf((-max_dr_m - mu) / sd_r)
                 acc += math.exp(-0.5 * u * u) / math.sqrt(2 * math.pi) * inside * weights[j]
             p += acc * rad
+            if p > confidence + _NEAR and p <= 1.0:  # the pieces left add no less than 0: placed
+                break
         if not math.isfinite(p):
             p = 0.0
         p = min(max(p, 0.0), 1.0)
@@ -889,6 +855,7 @@ def compile_all() -> None:
     its first scan."""
     from .._iav_engine import compile_all as compile_circles
     from .._noise_engine import residuals
+    from .._segmentation_engine import compile_all as compile_scan_kernels
     from .._segmentation_engine import labels as segment
 
     angles = np.radians(np.arange(-90.0, 90.5, 1.0))
@@ -905,6 +872,7 @@ def compile_all() -> None:
     cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
     _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     compile_circles()
+    compile_scan_kernels()
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:

@@ -1,0 +1,384 @@
+"""The default path of :func:`labkit.extract_features` with few Python calls per scan (private).
+
+:func:`labkit.extract_features` reads as its stages: each detector called with its section of the
+:class:`labkit.Config`, given the segments the stages before left. Called that way, every detector
+works out again what the scan already knows -- the labels copied and masked, the segments laid
+end to end, their points gathered and split into coordinates, the noise estimate looked up, the
+parameters turned into keyword arguments and the tests' records built -- some two hundred Python
+calls per scan, which on a 180-beam scan cost more than the compiled work itself.
+
+Here the same stages run on the same arrays with the scan-level quantities worked out once: the
+parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`), the scan's points,
+validity, full-circle flag and noise once per scan, the segmentation and each stage's segments in
+one compiled pass each (:func:`labkit._segmentation_engine.runs`: the segments left after the legs
+or circles, laid end to end, their points gathered), and the detectors' compiled tests are called directly
+(:mod:`labkit._iav_engine`, :mod:`labkit.lines._split_merge_engine`). What a test accepts is made
+into records as the detectors make them (the same functions). So the features are the stages'
+own, bit for bit: ``tests/test_engine.py`` compares the two paths on random scans, the simulated
+worlds and real recordings.
+
+A configuration the engines do not cover (another line method, the chi-square merge) runs the
+stages as :mod:`labkit.pipeline` reads them, and so does ``LABKIT_NO_JIT=1`` (with their readable
+code); a leg test of the inscribed angles, arc-like circles and the arcs run their detectors' own
+batch code on the segments this path lays out.
+"""
+
+from __future__ import annotations
+
+import math
+from time import perf_counter
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ._iav_batch import (
+    ACCEPTED,
+    FIT,
+    Angles,
+    CircleTest,
+    Geometry,
+    LegTest,
+    Runs,
+    circle_engine,
+    drop_wider,
+    leg_center,
+    leg_engine,
+    make_circle,
+    occluded,
+)
+from ._iav_engine import COMPLEX_FMA, circle_kernel, leg_kernel
+from ._kernels import FUSED_DOT
+from ._segmentation_engine import beams, runs
+from ._segmentation_engine import labels as _segment
+from .circles.iav_circles import detect_arcs
+from .circles.legs import pair_legs
+from .features import Circle, Features, Leg, find_corners
+from .lines._split_merge_engine import READY as LINES_READY
+from .lines._split_merge_engine import extract as extract_lines
+from .lines._split_merge_engine import line_records
+from .lines._split_merge_fast import GRAZING_DEG
+from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
+from .segmentation import SegmentationParams
+
+__all__ = ["READY", "plan_for", "extract"]
+
+#: Whether the engines run here (numba on, the BLAS and complex rounding they reproduce).
+READY = bool(LINES_READY and COMPLEX_FMA)
+
+
+# ---------------------------------------------------------------------------- the scan's beams
+def _scan_beams(scan) -> tuple[np.ndarray, np.ndarray]:
+    """The scan's ``valid`` and ``points``: its cached ones, else worked out by
+    :func:`labkit._segmentation_engine.beams` and kept in the scan's cache, read-only, as its cached
+    properties keep them."""
+    cache = scan.__dict__
+    valid, points = cache.get("valid"), cache.get("points")
+    if valid is None or points is None:
+        v, p = beams(scan.ranges, scan.angles, float(scan.range_min), float(scan.range_max))
+        if valid is None:
+            v.setflags(write=False)
+            cache["valid"] = valid = v
+        if points is None:
+            p.setflags(write=False)
+            cache["points"] = points = p
+    return valid, points
+
+
+# ---------------------------------------------------------------------------- the segments of a stage
+def _asruns(idx, xy, starts, ends) -> Runs:
+    """The :class:`labkit._iav_batch.Runs` of a stage (its points as one C-ordered (K, 2) array, as
+    ``scan.points.take(idx, axis=0)`` gives them)."""
+    return Runs(idx, np.ascontiguousarray(xy.T), starts, ends, False)
+
+
+# ---------------------------------------------------------------------------- the plan of a Config
+class Plan(NamedTuple):
+    """A :class:`labkit.Config` resolved once: the arguments every stage's engine takes."""
+
+    seg: tuple  # threshold_m, min_points, adaptive, lambda (rad), range_sigma_m (AUTO or metres)
+    legs: LegTest | None  # None: legs off
+    legs_sigma: Any  # AUTO or metres
+    legs_fast: bool  # the compiled leg tests cover the test (no angle mean or spread tested)
+    pair_m: float
+    circles: CircleTest | None
+    circles_sigma: Any
+    circles_fast: bool
+    lines: tuple | None  # None: no lines; else the engine's arguments but the scan's
+    lines_skip_round: bool
+    corners: dict | None
+    arcs: dict | None
+
+
+def plan_for(cfg) -> Plan | None:
+    """The plan of ``cfg`` (cached on it: a Config is frozen), or None where the engines do not
+    cover it (the stages then run as :func:`labkit.extract_features` reads)."""
+    cached = cfg.__dict__.get("_labkit_plan", False)
+    if cached is False:
+        cached = _plan(cfg) if READY else None
+        cfg.__dict__["_labkit_plan"] = cached  # (a frozen dataclass's cache, as Params.kwargs keeps its own)
+    return cached
+
+
+def _sigma_of(value):
+    """A detector's ``range_sigma_m`` as :func:`labkit.noise.noise_sigma` resolves it (AUTO: per scan)."""
+    return AUTO if value == AUTO else check_nonneg("range_sigma_m", value)
+
+
+def _plan(cfg) -> Plan | None:
+    seg, lg, cc, lc = cfg.segmentation, cfg.legs, cfg.circles, cfg.lines
+    if lc.method not in ("iepf", "split_and_merge", "none") or (lc.method != "none" and lc.merge == "chi2"):
+        return None
+    legs = None
+    if lg.enabled:  # (as labkit.detect_legs builds its test)
+        mean_range = std_max = None
+        if lg.iav_mean_range_deg is not None and lg.iav_mean_range_deg != (0.0, 180.0):
+            low, high = lg.iav_mean_range_deg
+            mean_range = (math.radians(low), math.radians(high))
+        if lg.iav_std_max_deg is not None and not math.isinf(lg.iav_std_max_deg):
+            std_max = math.radians(lg.iav_std_max_deg)
+        legs = LegTest(min_points=lg.min_points, chord_range=lg.chord_range_m,
+                       chord_padding_beams=lg.chord_padding_beams, middle_range=lg.middle_range,
+                       iav_mean_range=mean_range, iav_std_max=std_max, reject_occluded=lg.reject_occluded,
+                       center_method=lg.center_method)
+    circles = None
+    if cc.enabled:  # (as labkit.detect_circles builds its test)
+        low, high = cc.mean_range_deg
+        circles = CircleTest(min_points=cc.min_points, chord_range=(cc.min_chord_m, cc.max_chord_m),
+                             middle_range=cc.middle_range, mean_range=(math.radians(low), math.radians(high)),
+                             std_max=math.radians(cc.std_max_deg),
+                             arc_like_std_max=math.radians(cc.arc_like_std_max_deg) if cc.arc_like else None,
+                             v_corner_neighbours=cc.v_corner_neighbours,
+                             v_corner_stride=None, hollow=False,
+                             center_method=cc.center_method, kind="circle")
+    lines = None
+    if lc.method != "none":  # (as labkit.split_and_merge resolves its arguments)
+        lines = (lc.method == "split_and_merge", lc.split_threshold_m, _sigma_of(lc.range_sigma_m),
+                 int(lc.min_points), float(lc.max_gap_m), lc.merge != "none" and lc.merge is not None,
+                 float(lc.merge_dr_m), math.radians(lc.merge_dalpha_deg), float(lc.min_length_m),
+                 lc.weights == "uniform", lc.weights, float(SegmentationParams.threshold_m),
+                 math.radians(SegmentationParams.incidence_deg), math.radians(GRAZING_DEG), lc.place_dr_m,
+                 lc.place_dalpha_deg, lc.place_confidence)
+    return Plan(
+        seg=(float(seg.threshold_m), int(seg.min_points), bool(seg.adaptive), math.radians(seg.incidence_deg),
+             seg.range_sigma_m),
+        legs=legs, legs_sigma=_sigma_of(lg.range_sigma_m),
+        legs_fast=legs is not None and legs.iav_mean_range is None and legs.iav_std_max is None,
+        pair_m=lg.pair_max_distance_m,
+        circles=circles, circles_sigma=_sigma_of(cc.range_sigma_m),
+        circles_fast=circles is not None and circles.arc_like_std_max is None,
+        lines=lines, lines_skip_round=bool(lc.skip_round),
+        corners=cfg.corners.kwargs() if cfg.corners.enabled else None,
+        arcs=cfg.arcs.kwargs() if cfg.arcs.enabled else None)
+
+
+# ---------------------------------------------------------------------------- one scan
+_NONE = np.zeros(0, np.int64)
+
+
+def extract(scan, plan: Plan) -> Features:
+    """:func:`labkit.extract_features` of ``scan`` with the configuration ``plan`` resolves."""
+    timings: dict[str, float] = {}
+    t_start = perf_counter()
+    ranges, angles = scan.ranges, scan.angles
+    valid, points = _scan_beams(scan)
+    n = ranges.size
+    if n >= 2:  # (scan.angle_increment and scan.is_full_circle, in the same float arithmetic)
+        a0, a1 = angles.item(0), angles.item(n - 1)
+        increment = (a1 - a0) / (n - 1)
+        full = n >= 3 and (a1 - a0) + 1.5 * increment >= 2 * math.pi
+    else:
+        increment, full = math.nan, False
+    threshold_m, min_points, adaptive, lam, seg_sigma = plan.seg
+    if adaptive:  # (the scan's noise: worked out once, when a stage asks for it; scan_sigma keeps it on the scan)
+        if seg_sigma == AUTO:
+            seg_sigma = scan_sigma(scan)
+    else:
+        seg_sigma = 0.0
+    labels = _segment(points, ranges, angles, valid, threshold_m, min_points, adaptive, lam, float(seg_sigma), full,
+                      increment)
+    t = perf_counter()
+    timings["segmentation"] = t - t_start
+
+    legs: list = []
+    people: list = []
+    rest = labels
+    t_legs = plan.legs
+    if t_legs is not None:
+        rest, idx, xy, starts, ends = runs(labels, _NONE, points)
+        if starts.size:
+            s = plan.legs_sigma
+            if s == AUTO:
+                s = scan_sigma(scan)
+            if plan.legs_fast:
+                legs = _legs(scan, idx, xy, starts, ends, t_legs, s, abs(increment) if n > 1 else 0.0)
+            else:
+                legs = leg_engine(scan, _asruns(idx, xy, starts, ends), t_legs, s)[0]
+        people = pair_legs(legs, plan.pair_m) if len(legs) > 1 else []
+    now = perf_counter()
+    timings["legs"] = now - t
+    t = now
+
+    circles: list = []
+    t_circles = plan.circles
+    if t_circles is not None:
+        rest, idx, xy, starts, ends = runs(rest, _firsts(legs), points)
+        if starts.size:
+            s = plan.circles_sigma
+            if s == AUTO:
+                s = scan_sigma(scan)
+            if plan.circles_fast:
+                circles = _circles(idx, xy, starts, ends, t_circles, s)
+            else:
+                circles = circle_engine(_asruns(idx, xy, starts, ends), t_circles, s)[0]
+    elif legs:
+        rest = runs(rest, _firsts(legs), points)[0]
+    if circles:
+        rest = runs(rest, _firsts(circles), points)[0]
+    now = perf_counter()
+    timings["circles"] = now - t
+    t = now
+
+    lines: list = []
+    if plan.lines is not None:
+        lines = _lines(scan, valid, points, rest if plan.lines_skip_round else labels, plan.lines, full)
+    now = perf_counter()
+    timings["lines"] = now - t
+    t = now
+
+    corners: list = []
+    if plan.corners is not None and len(lines) > 1:
+        corners = find_corners.unchecked(lines, **plan.corners, wrap=full)
+    now = perf_counter()
+    timings["corners"] = now - t
+    t = now
+
+    arcs: list = []
+    if plan.arcs is not None:
+        arcs = detect_arcs.unchecked(scan, **plan.arcs, segments=rest)
+    now = perf_counter()
+    timings["arcs"] = now - t
+    timings["total"] = now - t_start
+    return Features(scan.stamp_ns, n, labels, tuple(lines), tuple(corners), tuple(circles), tuple(arcs), tuple(legs),
+                    tuple(people), timings)
+
+
+def _firsts(features) -> np.ndarray:
+    return np.array([f.first for f in features], dtype=np.int64) if features else _NONE
+
+
+def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float) -> list:
+    """``_iav_batch._compiled_legs`` on the runs of :func:`labkit._segmentation_engine.runs`."""
+    verdict, chord, mean, std, side = leg_kernel(xy[0], xy[1], starts, ends, False, int(t.min_points),
+                                                 float(t.chord_range[0]), float(t.chord_range[1]),
+                                                 float(t.middle_range[0]), float(t.middle_range[1]),
+                                                 float(t.chord_padding_beams * spacing), float(sigma))
+    passed = np.flatnonzero(verdict == ACCEPTED)
+    if not passed.size:
+        return []
+    pts = np.ascontiguousarray(xy.T)
+    ray = t.center_method == "ray"
+    a_s, b_s = starts.take(passed), ends.take(passed)
+    middles = pts.take(a_s + (b_s - a_s) // 2, axis=0)  # (one array: each leg's middle is a row of it)
+    middles.setflags(write=False)
+    mid_xy = middles.tolist()
+    legs: list = []
+    for j, k in enumerate(passed.tolist()):
+        a, b = a_s.item(j), b_s.item(j)
+        first, last = idx.item(a), idx.item(b - 1)
+        if t.reject_occluded and occluded(scan, first, last):
+            continue
+        m, sd = mean.item(k), std.item(k)
+        if ray:  # (iav.leg_center's "ray", in the same Python floats)
+            mx, my = mid_xy[j]
+            h, half = math.hypot(mx, my), 0.5 * chord.item(k)
+            center = np.array([mx + half * mx / h, my + half * my / h])
+            diameter = chord.item(k)
+        else:
+            try:
+                center, diameter = leg_center(pts[a:b], chord.item(k), m, side.item(k), t.center_method)
+            except ValueError:
+                continue
+        center.setflags(write=False)
+        legs.append(Leg(center, float(diameter), middles[j], first, last, b - a, m, sd))
+    return legs
+
+
+def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
+    """``_iav_batch._compiled_circles`` on the runs of :func:`labkit._segmentation_engine.runs`."""
+    verdict, _, mean, std, side, lim = circle_kernel(
+        xy[0], xy[1], starts, ends, False, int(max(t.min_points, 3)), float(t.chord_range[0]),
+        float(t.chord_range[1]), float(t.middle_range[0]), float(t.middle_range[1]), float(t.mean_range[0]),
+        float(t.mean_range[1]), float(t.std_max), float(t.std_max) ** 2, float(sigma))
+    passed = np.flatnonzero(verdict == ACCEPTED)
+    if not passed.size:
+        return []
+    runs = _asruns(idx, xy, starts, ends)
+    if t.center_method == "iav":
+        made = _iav_circles(runs, passed, mean, std, side, lim, t.kind)
+    else:
+        geo = Geometry(ends - starts, None, runs.pts.take(starts, axis=0),  # type: ignore[arg-type]
+                       runs.pts.take(ends - 1, axis=0), None, None)  # type: ignore[arg-type]
+        ang = Angles(None, None, None, mean, std, side, None)  # type: ignore[arg-type]
+        made = [make_circle(runs, geo, ang, k, k, t, t.kind,
+                                 ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2))) for k in passed.tolist()]
+    if sigma > 0.0:  # and their points must lie on a circle within the noise
+        made = drop_wider(runs, passed, made, sigma)
+    return [c for c, _ in made if c is not None]
+
+
+_HALF_PI = math.pi / 2
+
+
+def _iav_circles(runs: Runs, passed: np.ndarray, mean: np.ndarray, std: np.ndarray, side: np.ndarray,
+                 lim: np.ndarray, kind: str) -> list:
+    """``_iav_batch._make_circle`` of the runs ``passed`` with the iav centre, in plain floats gathered
+    in bulk: :func:`labkit.iav.circle_from_iav` and :func:`labkit.iav.circle_confidence`'s arithmetic,
+    operation for operation (the same Python floats and ``math`` functions)."""
+    starts, ends = runs.starts[passed], runs.ends[passed]
+    p1, pn = runs.pts.take(starts, axis=0).tolist(), runs.pts.take(ends - 1, axis=0).tolist()
+    firsts, lasts = runs.idx.take(starts).tolist(), runs.idx.take(ends - 1).tolist()
+    sizes = (ends - starts).tolist()
+    means, stds, sides = mean.take(passed).tolist(), std.take(passed).tolist(), side.take(passed).tolist()
+    limits = lim.take(passed, axis=0).tolist()
+    made: list = []
+    for j in range(len(sizes)):
+        m, sd, sd_side = means[j], stds[j], sides[j]
+        if sd_side == 0:
+            sd_side = 1.0
+        (x1, y1), (x2, y2) = p1[j], pn[j]
+        dx, dy = x2 - x1, y2 - y1
+        chord = math.hypot(dx, dy)
+        if not (0 < m < math.pi) or not math.isfinite(sd_side) or chord == 0:
+            made.append((None, FIT))  # (circle_from_iav raises)
+            continue
+        theta = m - _HALF_PI
+        h = -math.copysign(1.0, sd_side) * 0.5 * math.tan(theta)
+        center = np.array([x1 + 0.5 * dx - h * dy, y1 + 0.5 * dy + h * dx])
+        radius = 0.5 * chord / math.cos(theta)
+        center.setflags(write=False)
+        low, high, std_max = limits[j]
+        n = sizes[j]
+        f_n = 1.0 - math.exp(-max(n - 2, 0) / 5.0)
+        f_std = 1.0 - 0.5 * min(abs(sd) / std_max, 1.0)
+        f_mean = 1.0 - 0.5 * min(abs(m - _HALF_PI) / max(high - _HALF_PI, 1e-12), 1.0)
+        confidence = float(min(max(f_n * f_std * f_mean, 0.0), 1.0))
+        made.append((Circle(center, float(radius), m, sd, confidence, firsts[j], lasts[j], n, kind), ACCEPTED))
+    return made
+
+
+def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: tuple, full: bool) -> list:
+    """``split_and_merge``'s engine path (``lines._split_merge_engine.split_and_merge``) on ``labels``."""
+    (fit, split_threshold_m, range_sigma_m, min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m,
+     uniform, weights, floor_m, lam_cut, lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = p
+    s = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
+    if split_threshold_m == AUTO:  # (lines.split_merge._SplitTest)
+        noise, threshold = s, auto_split_threshold(s)
+    else:
+        noise, threshold = 0.0, split_threshold_m
+    absorb_m = min(threshold, 3 * s)
+    r, alpha, ends, first, last, beams, offsets = extract_lines(
+        points, scan.ranges, scan.angles, valid, labels, fit, float(threshold), float(noise),
+        float(absorb_m), min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m,
+        lam_cut, lam_graze, full, FUSED_DOT)
+    return line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, s, place_dr_m,
+                           place_dalpha_deg, place_confidence)
