@@ -290,13 +290,23 @@ def test_ctrl_c_keeps_what_the_ranges_of_a_split_recording_wrote(tmp_path, clien
     from tests.test_scan_ranges import carmen_log
 
     monkeypatch.setattr(parallel, "MIN_PIECE_SCANS", 50)
-    log = carmen_log(tmp_path / "long.log", 1000)  # two ranges of 500, after other.log's 600 (not split)
-    other = carmen_log(tmp_path / "other.log", 600, seed=1)
+    log = carmen_log(tmp_path / "long.log", 1000)  # two ranges of 500 (other.log, 300 scans, is not split)
+    # The first range is quick (no valid beam) and the second slow (1441 beams a scan), so the interrupt at
+    # the end of the first always finds the second running: with ranges of one speed the second was at times
+    # done before it, and the recording whole (seen in make test).
+    rng = np.random.default_rng(7)
+    lines = log.read_text().splitlines()
+    for i, k in enumerate(k for k, line in enumerate(lines) if line.startswith("FLASER")):
+        words = lines[k].split()
+        readings = ["0.000"] * 180 if i < 500 else [f"{r:.3f}" for r in rng.uniform(0.5, 8.0, 1441)]
+        lines[k] = " ".join(["FLASER", str(len(readings)), *readings, *words[182:]])
+    log.write_text("\n".join(lines) + "\n")
+    other = carmen_log(tmp_path / "other.log", 300, seed=1)
 
     def interrupting(total, unit):
         class Bar:
             def update(self, n):
-                if n == 500:  # a range of long.log (other.log, 600 scans, may finish first under load)
+                if n == 500:  # a range of long.log (other.log's 300 may finish first)
                     raise KeyboardInterrupt
 
             def close(self):
