@@ -329,7 +329,7 @@ def print_changes(rows: Sequence[dict], before: str, after: str, *, by: str = "s
         print(f"{g}: " + ", ".join(f"{v} {old[v]:.3f} -> {new[v]:.3f}" for v in values))
 
 
-def fixed_and_auto_on_log(path: str | Path, n_scans: int) -> dict:
+def fixed_and_auto_on_log(path: str | Path, n_scans: int, compare: Callable) -> dict:
     """One recording's row: split-and-merge with ``FIXED_LINES`` against the defaults, without truth.
 
     The row holds the beam step, the pooled noise estimate, the median auto threshold, and the ray-axis
@@ -341,19 +341,20 @@ def fixed_and_auto_on_log(path: str | Path, n_scans: int) -> dict:
         The recording (a bag or a Carmen log).
     n_scans : int
         How many scans from its start.
+    compare : callable
+        ``labkit.app.experiments.compare_on_logs`` (the library does not import its applications).
 
     Returns
     -------
     dict
         Keys of :data:`FIXED_AND_AUTO_COLUMNS`.
     """
-    from .app.experiments import compare_on_logs
     from .io import read_scans
     from .lines.split_merge import split_and_merge
     from .noise import FIXED_LINES, auto_split_threshold, estimate_range_noise, scan_sigma
 
     scans = list(itertools.islice(read_scans(path), n_scans))
-    fixed, auto = compare_on_logs([path], {"FIXED_LINES": partial(split_and_merge, **FIXED_LINES),
+    fixed, auto = compare([path], {"FIXED_LINES": partial(split_and_merge, **FIXED_LINES),
                                            "default": split_and_merge}, n_scans=n_scans)
     return {"log": Path(path).name, "step": f"{np.degrees(scans[0].angle_increment):.2f}",
             "sigma_m": estimate_range_noise(scans),

@@ -199,10 +199,11 @@ def test_auto_on_logs_and_more_circles(capsys):
 
 
 def test_fixed_and_auto_on_a_bag_are_its_pooled_ray_errors():
+    from labkit.app.experiments import compare_on_logs
     from labkit.noise import FIXED_LINES
 
     bag = labkit.bundled_data("hall.bag")
-    row = reports.fixed_and_auto_on_log(bag, 3)
+    row = reports.fixed_and_auto_on_log(bag, 3, compare_on_logs)
     scans = list(labkit.read_scans(bag))[:3]
     fixed = reports.pooled_ray_errors(scans, [labkit.split_and_merge(s, **FIXED_LINES) for s in scans])
     auto = reports.pooled_ray_errors(scans, [labkit.split_and_merge(s) for s in scans])
