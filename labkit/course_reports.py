@@ -426,7 +426,7 @@ def print_beams_on(shapes: Mapping[str, np.ndarray], beam_deg: float) -> dict[st
     Parameters
     ----------
     shapes : mapping of str to ndarray
-        ``{name: points (M, 2)}``, metres, all in front of the sensor (|bearing| < 90 degrees).
+        ``{name: points (M, 2)}``, metres, all in front of the sensor (bearings within 90 degrees of straight ahead).
     beam_deg : float
         The scanner's angular step, degrees.
 
