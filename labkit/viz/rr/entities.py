@@ -89,7 +89,7 @@ class _Chunked:
     Why: an ``.rrd`` file's footer lists every chunk, and rerun (0.41) keeps that list in memory until
     the file is closed, some kilobytes per chunk. Sent a batch of scans at a time, a labkit recording
     makes a chunk per entity (some forty with the map) per batch: 20,000 simulated corridor scans with
-    poses grew by 1.4 KiB per scan (5 KiB per chunk) and peaked at 474 MiB. Gathered, the small
+    poses grew by 1.4 KiB per scan and peaked at 474 MiB. Gathered, the small
     entities (counts, stage times, features, the sensor's pose, truth) make a chunk per few thousand
     scans; the heavy ones (the scan's points, about
     1.5 MB a batch) still go out a batch at a time, so what waits stays small.
