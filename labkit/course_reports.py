@@ -1,4 +1,4 @@
-"""Bookkeeping of the course notebooks (03 to 10b): sums, checks, loops over trials, printouts.
+"""Bookkeeping of the course notebooks (01 to 10b): sums, checks, loops over trials, printouts.
 
 A notebook's code cell keeps its experiment (what is run, on which data, with which settings); the
 loops that only add up, compare with labkit or format a printout live here, so that the cell stays
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
@@ -28,7 +29,8 @@ __all__ = ["FIXED_AND_AUTO_COLUMNS", "NOISE_ESTIMATE_COLUMNS", "pooled_ray_error
            "print_parameter_sweeps", "majority_label", "walls_found", "print_eps_answers", "extractor_row",
            "print_extractor_table", "lines_on", "score_legs", "print_data_set", "pick_example", "print_match",
            "round_object_notes", "print_level_summaries", "print_speed_and_noise", "print_ranking_against_paper",
-           "weighting_row", "print_weighting_verdicts", "print_count_table", "print_recording_summary"]
+           "weighting_row", "print_weighting_verdicts", "print_count_table", "print_recording_summary",
+           "print_beam_reasons", "print_seam", "shared_datasets"]
 
 #: Columns of :func:`print_noise_estimates`'s table (for :func:`labkit.app.experiments.markdown_table`).
 NOISE_ESTIMATE_COLUMNS = {
@@ -40,6 +42,34 @@ FIXED_AND_AUTO_COLUMNS = {
     "log": "recording", "step": "beam step (deg)", "sigma_m": "estimate, pooled (mm)",
     "split_m": "auto threshold, median (mm)", "rmse_fixed": "RMSE FIXED_LINES (m):.4f",
     "cov_fixed": "coverage FIXED_LINES:.0%", "rmse_auto": "RMSE default (m):.4f", "cov_auto": "coverage default:.0%"}
+
+
+# ---------------------------------------------------------------------------- every notebook
+def shared_datasets() -> Path:
+    """The folder of the course's real recordings, seen from the notebooks' folder.
+
+    Returns
+    -------
+    Path
+        ``$LABKIT_SHARED_DATASETS`` when that is set, else ``../../shared/datasets`` (the datasets beside the
+        repository, from ``notebooks/``). It may not exist: the notebooks then skip their real-data cells.
+    """
+    return Path(os.environ.get("LABKIT_SHARED_DATASETS", "../../shared/datasets"))
+
+
+# ---------------------------------------------------------------------------- notebook 01: scans
+def print_beam_reasons(scan, reasons: Sequence[str]) -> None:
+    """Print one line a beam: its number, angle (degrees), range, and "valid" or "invalid, " and its reason.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan (its ``angles`` and ``ranges``).
+    reasons : sequence of str
+        Per beam, why its reading is not a distance, or ``""`` when it is one.
+    """
+    for i, (theta, r, reason) in enumerate(zip(np.degrees(scan.angles), scan.ranges, reasons, strict=True)):
+        print(f"beam {i}: {theta:5.0f} deg  r = {r:5}  {'invalid, ' + reason if reason else 'valid'}")
 
 
 def pooled_ray_errors(scans: Sequence, lines_per_scan: Sequence, label: str | None = None) -> RayErrors:
@@ -664,6 +694,31 @@ def wall_score(lines, truth, dr_m: float = 0.05, dalpha: float = math.radians(3)
         pieces = [w for w in truth.walls if w.wall_id == owner]
         wrong += bool(pieces) and not any(matches(line, w) for w in pieces)
     return np.array([found, len(eligible), wrong, len(lines)])
+
+
+def print_seam(scan, last, first) -> list[int]:
+    """Print a full-circle scan's seam: the scan, the angles of its first and last beams, the two lines that
+    meet there and the invalid beams between them.
+
+    Parameters
+    ----------
+    scan : labkit.Scan
+        The scan.
+    last, first : labkit.LineSegment
+        The scan's last line and its first one.
+
+    Returns
+    -------
+    list of int
+        The invalid beams after ``last``'s last beam, up to the end of the scan.
+    """
+    print(scan, "| full circle:", scan.is_full_circle)
+    print(f"beam 0 is at {np.degrees(scan.angles[0]):.0f} deg, beam {scan.n_beams - 1} at "
+          f"{np.degrees(scan.angles[-1]):.0f} deg: neighbours across the seam")
+    print(f"last line:  {last}", f"first line: {first}", sep="\n")
+    dropped = [i for i in range(last.last + 1, scan.n_beams) if not scan.valid[i]]
+    print("invalid beams between them:", dropped, "at", [f"{np.degrees(scan.angles[i]):+.0f} deg" for i in dropped])
+    return dropped
 
 
 def print_merges(before, naive, wrapped) -> int:

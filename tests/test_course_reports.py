@@ -4,6 +4,7 @@ against values worked out by hand."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -796,3 +797,30 @@ def test_the_notebook_01_cases_pass_labkits_answers_and_fail_wrong_ones(capsys):
 
     with pytest.raises(YourTurnError, match="next to every invalid beam"):
         check(gaps_only, cases.cut_points(scan), fallback=None, name="cut_points")
+
+
+def test_beam_reasons_by_hand(capsys):
+    scan = SimpleNamespace(angles=np.radians([-10.0, 0.0, 10.0]), ranges=np.array([1.0, np.nan, 0.02]))
+    reports.print_beam_reasons(scan, ["", "NaN: no measurement", "below range_min"])
+    assert capsys.readouterr().out.splitlines() == [
+        "beam 0:   -10 deg  r =   1.0  valid",
+        "beam 1:     0 deg  r =   nan  invalid, NaN: no measurement",
+        "beam 2:    10 deg  r =  0.02  invalid, below range_min"]
+
+
+def test_print_seam_finds_the_invalid_beams_before_the_seam(capsys):
+    ranges = np.array([1.0, 1.0, 1.0, 1.0, np.nan, 1.0, np.inf, 1.0])  # beams 4 and 6 dropped out
+    scan = labkit.Scan(ranges=ranges, angles=np.radians(np.arange(-180, 180, 45)), range_min=0.05, range_max=8.0)
+    assert reports.print_seam(scan, SimpleNamespace(last=3), SimpleNamespace(last=1)) == [4, 6]
+    out = capsys.readouterr().out.splitlines()
+    assert out[1] == "beam 0 is at -180 deg, beam 7 at 135 deg: neighbours across the seam"
+    assert out[-1] == "invalid beams between them: [4, 6] at ['+0 deg', '+90 deg']"
+    assert out[0].endswith("| full circle: True")                 # 8 beams, 45 degrees apart
+    assert out[2:4] == ["last line:  namespace(last=3)", "first line: namespace(last=1)"]
+
+
+def test_shared_datasets_reads_the_environment_first(monkeypatch):
+    monkeypatch.setenv("LABKIT_SHARED_DATASETS", "/data/recordings")
+    assert reports.shared_datasets() == Path("/data/recordings")
+    monkeypatch.delenv("LABKIT_SHARED_DATASETS")
+    assert reports.shared_datasets() == Path("../../shared/datasets")   # notebooks/ -> the repository's sibling
