@@ -697,8 +697,9 @@ def wall_score(lines, truth, dr_m: float = 0.05, dalpha: float = math.radians(3)
 
 
 def print_seam(scan, last, first) -> list[int]:
-    """Print a full-circle scan's seam: the scan, the angles of its first and last beams, the two lines that
-    meet there and the invalid beams between them.
+    """Print a full-circle scan's seam: its end beams, the two lines that meet there, the invalid beams between.
+
+    First the scan itself and whether it is a full circle, then the angles of its first and last beams.
 
     Parameters
     ----------
