@@ -90,10 +90,10 @@ class _ByLabel(Mapping):
 #: and its parameter record's defaults, and no line across a gap wider than 0.3 m
 #: (``max_gap_m``; angular segmentation's ``split_gap_m``: without it its lines span collinear
 #: walls across doorways). Most share ``min_points`` 5 and ``min_length_m`` 0.15 (angular
-#: segmentation: ``min_pts`` 8, Meglicki's setting); the distance thresholds are 5 cm for
-#: split-and-merge and incremental, 3 cm for RANSAC and Hough, whose bands take in the next
-#: wall's first points at 5 cm. Nguyen et al.'s six minus EM, plus labkit's angular
-#: segmentation and IAV lines.
+#: segmentation: ``min_pts`` 8, Meglicki's setting); the distance thresholds follow the scan's
+#: range noise ("auto", each extractor's parameter record says how: split-and-merge 5 sigma,
+#: incremental 4 sigma, RANSAC and Hough 2.5 sigma, none under 2 cm). Nguyen et al.'s six minus
+#: EM, plus labkit's angular segmentation and IAV lines.
 LINE_EXTRACTORS: Mapping[str, Callable[[Scan], list]] = _ByLabel()
 
 
