@@ -52,26 +52,15 @@ from ._iav_batch import (
 )
 from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass
 from ._kernels import FUSED_DOT
-from ._noise_engine import robust_sigma
 from ._segmentation_engine import beams, runs, without
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import detect_arcs
 from .circles.legs import pair_legs
 from .features import Circle, Corner, Features, Leg
-from .lines._split_merge_engine import _GL_U, _GL_W, corners_pass, lines_pass, placed_records
+from .lines._split_merge_engine import PLACING_NODES, PLACING_WEIGHTS, corners_pass, lines_pass, placed_records
 from .lines._split_merge_engine import READY as LINES_READY
 from .lines._split_merge_fast import GRAZING_DEG
-from .noise import (
-    _CUT,
-    _CUT_SD,
-    _MAD_TO_SIGMA,
-    AUTO,
-    MIN_RESIDUALS,
-    MIN_SIGMA_M,
-    RANGE_SIGMA_M,
-    auto_split_threshold,
-    check_nonneg,
-)
+from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
 from .segmentation import SegmentationParams
 
 __all__ = ["READY", "plan_for", "extract"]
@@ -96,17 +85,6 @@ def _scan_beams(scan) -> tuple[np.ndarray, np.ndarray]:
             p.setflags(write=False)
             cache["points"] = points = p
     return valid, points
-
-
-def _sigma(scan, valid: np.ndarray, full: bool) -> float:
-    """:func:`labkit.noise.scan_sigma` of ``scan`` (kept on the scan as it keeps it), given the scan's
-    ``valid`` and ``is_full_circle``: the compiled estimate called directly."""
-    cached = scan.__dict__.get("_labkit_sigma")
-    if cached is None:
-        sigma = robust_sigma(scan.ranges, scan.angles, valid, full, MIN_RESIDUALS, _MAD_TO_SIGMA, _CUT, _CUT_SD)
-        cached = RANGE_SIGMA_M if not math.isfinite(sigma) else max(sigma, MIN_SIGMA_M)
-        scan.__dict__["_labkit_sigma"] = cached
-    return cached
 
 
 # ---------------------------------------------------------------------------- the segments of a stage
@@ -216,7 +194,7 @@ def extract(scan, plan: Plan) -> Features:
     threshold_m, min_points, adaptive, lam, seg_sigma = plan.seg
     if adaptive:  # (the scan's noise: worked out once, when a stage asks for it; scan_sigma keeps it on the scan)
         if seg_sigma == AUTO:
-            seg_sigma = _sigma(scan, valid, full)
+            seg_sigma = scan_sigma(scan)
     else:
         seg_sigma = 0.0
     labels = _segment(points, ranges, angles, valid, threshold_m, min_points, adaptive, lam, float(seg_sigma), full,
@@ -231,7 +209,7 @@ def extract(scan, plan: Plan) -> Features:
     if t_legs is not None:
         s = plan.legs_sigma
         if s == AUTO:
-            s = _sigma(scan, valid, full)
+            s = scan_sigma(scan)
         if plan.legs_fast:
             legs = _legs(scan, labels, points, t_legs, s, abs(increment) if n > 1 else 0.0)
         else:
@@ -248,7 +226,7 @@ def extract(scan, plan: Plan) -> Features:
     if t_circles is not None:
         s = plan.circles_sigma
         if s == AUTO:
-            s = _sigma(scan, valid, full)
+            s = scan_sigma(scan)
         if plan.circles_fast:
             rest, circles = _circles(rest, _firsts(legs), points, t_circles, s)
         else:
@@ -405,7 +383,7 @@ def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: t
     and the lines' rows (for :func:`_corners`)."""
     (fit, split_threshold_m, range_sigma_m, min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m,
      uniform, weights, floor_m, lam_cut, lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = p
-    s = _sigma(scan, valid, full) if range_sigma_m == AUTO else range_sigma_m
+    s = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
     if split_threshold_m == AUTO:  # (lines.split_merge._SplitTest)
         noise, threshold = s, auto_split_threshold(s)
     else:
@@ -415,7 +393,7 @@ def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: t
         points, scan.ranges, scan.angles, valid, labels, fit, float(threshold), float(noise), float(absorb_m),
         min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m, lam_cut, lam_graze,
         full, FUSED_DOT, float(s), place_confidence > 0, float(place_dr_m), math.radians(place_dalpha_deg),
-        float(place_confidence), _GL_U, _GL_W)
+        float(place_confidence), PLACING_NODES, PLACING_WEIGHTS)
     lines, keep = placed_records(out, ints, beams, place_dr_m, place_dalpha_deg, place_confidence)
     return lines, (out, ints, keep)
 

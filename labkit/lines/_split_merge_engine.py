@@ -747,6 +747,7 @@ def _covariances(points, ranges, beams, offsets, alpha, r, uniform, sigma):
 
 
 _GL_U, _GL_W = np.polynomial.legendre.leggauss(24)  # (= labkit.fitting's nodes and weights)
+PLACING_NODES, PLACING_WEIGHTS = _GL_U, _GL_W  # (the arguments lines_pass takes for them)
 _NEAR = 1e-9  # a probability this close to place_confidence is decided by the reference itself
 
 
