@@ -32,9 +32,10 @@ import math
 import numpy as np
 
 from ._kernels import fma, jit, jit_inline, segment_sum, sum_at
+from ._segmentation_engine import runs as _runs
 
 __all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "wider_than_noise", "COMPLEX_FMA",
-           "circle_kernel", "leg_kernel"]
+           "circle_kernel", "leg_kernel", "leg_pass", "circle_pass"]
 
 NOISE_Z = 2.0  # (= labkit.iav.NOISE_Z, LINE_Z, ARC_LIKE_STD_MAX and labkit._iav_batch's verdicts:
 LINE_Z = 3.0  # the engine cannot import the modules it serves; tests/test_engine.py checks they agree)
@@ -501,6 +502,60 @@ def _leg_tests(px, py, starts, ends, check_finite, min_points, c_lo, c_hi, lo, h
 #: The kernels themselves, for a caller that holds the runs' coordinates as two contiguous arrays
 #: (labkit._pipeline_engine): the arguments :func:`circle_tests` and :func:`leg_tests` hand them.
 circle_kernel, leg_kernel = _circle_tests, _leg_tests
+
+
+@jit
+def _accepted(verdict):
+    n = 0
+    for k in range(len(verdict)):
+        if verdict[k] == ACCEPTED:
+            n += 1
+    out = np.empty(n, np.int64)
+    n = 0
+    for k in range(len(verdict)):
+        if verdict[k] == ACCEPTED:
+            out[n] = k
+            n += 1
+    return out
+
+
+@jit
+def leg_pass(labels, points, min_points, c_lo, c_hi, lo, hi, padding, sigma):
+    """The legs stage of :mod:`labkit._pipeline_engine` up to its records, in one call (each call and
+    each array handed back to Python costs about a microsecond): the segments of ``labels`` laid end
+    to end (:func:`labkit._segmentation_engine.runs`), :func:`_leg_tests` on them, and the runs
+    accepted. Returns the runs' beams and points (``xy``: x row, y row), their bounds ``(2, K)``
+    (starts, ends), their floats ``(K, 4)`` (padded chord, mean, std, side) and the accepted runs."""
+    _, idx, xy, starts, ends = _runs(labels, np.zeros(0, np.int64), points)
+    verdict, chord, mean, std, side = _leg_tests(xy[0], xy[1], starts, ends, False, min_points, c_lo, c_hi, lo, hi,
+                                                 padding, sigma)
+    k_runs = len(starts)
+    bounds = np.empty((2, k_runs), np.int64)
+    floats = np.empty((k_runs, 4))
+    for k in range(k_runs):
+        bounds[0, k], bounds[1, k] = starts[k], ends[k]
+        floats[k, 0], floats[k, 1], floats[k, 2], floats[k, 3] = chord[k], mean[k], std[k], side[k]
+    return idx, xy, bounds, floats, _accepted(verdict)
+
+
+@jit
+def circle_pass(labels, drop, points, min_points, c_lo, c_hi, lo, hi, mean_lo, mean_hi, std_max0, std_max_sq, sigma):
+    """The circles stage of :mod:`labkit._pipeline_engine` up to its centres, in one call: the segments
+    of ``labels`` less those holding a beam of ``drop``, laid end to end
+    (:func:`labkit._segmentation_engine.runs`), :func:`_circle_tests` on them, and the runs accepted.
+    Returns the labels left, the runs' beams and points, their bounds ``(2, K)``, their floats
+    ``(K, 6)`` (mean, std, side, the limits held to) and the accepted runs."""
+    rest, idx, xy, starts, ends = _runs(labels, drop, points)
+    verdict, _, mean, std, side, lim = _circle_tests(xy[0], xy[1], starts, ends, False, min_points, c_lo, c_hi, lo,
+                                                     hi, mean_lo, mean_hi, std_max0, std_max_sq, sigma)
+    k_runs = len(starts)
+    bounds = np.empty((2, k_runs), np.int64)
+    floats = np.empty((k_runs, 6))
+    for k in range(k_runs):
+        bounds[0, k], bounds[1, k] = starts[k], ends[k]
+        floats[k, 0], floats[k, 1], floats[k, 2] = mean[k], std[k], side[k]
+        floats[k, 3], floats[k, 4], floats[k, 5] = lim[k, 0], lim[k, 1], lim[k, 2]
+    return rest, idx, xy, bounds, floats, _accepted(verdict)
 
 
 def circle_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_finite: bool, min_points: int,

@@ -12,10 +12,14 @@ parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`), the 
 validity, full-circle flag and noise once per scan, the segmentation and each stage's segments in
 one compiled pass each (:func:`labkit._segmentation_engine.runs`: the segments left after the legs
 or circles, laid end to end, their points gathered), and the detectors' compiled tests are called directly
-(:mod:`labkit._iav_engine`, :mod:`labkit.lines._split_merge_engine`). What a test accepts is made
-into records as the detectors make them (the same functions). So the features are the stages'
-own, bit for bit: ``tests/test_engine.py`` compares the two paths on random scans, the simulated
-worlds and real recordings.
+(:mod:`labkit._iav_engine`, :mod:`labkit.lines._split_merge_engine`). Each stage is one compiled
+call that hands back few arrays (:func:`labkit._iav_engine.leg_pass` and ``circle_pass``: the runs
+and their tests; :func:`labkit.lines._split_merge_engine.lines_pass`: the lines, their covariances
+and placing; ``corners_pass``: the corners of the lines kept): a call costs a few microseconds and
+each array numba hands back to Python about one, which at 180 beams is a good part of the scan.
+What a test accepts is made into records as the detectors make them (the same arithmetic). So the
+features are the stages' own, bit for bit: ``tests/test_engine.py`` compares the two paths on random
+scans, the simulated worlds and real recordings.
 
 A configuration the engines do not cover (another line method, the chi-square merge) runs the
 stages as :mod:`labkit.pipeline` reads them, and so does ``LABKIT_NO_JIT=1`` (with their readable
@@ -46,16 +50,15 @@ from ._iav_batch import (
     make_circle,
     occluded,
 )
-from ._iav_engine import COMPLEX_FMA, circle_kernel, leg_kernel
+from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass
 from ._kernels import FUSED_DOT
-from ._segmentation_engine import beams, runs
+from ._segmentation_engine import beams, runs, without
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import detect_arcs
 from .circles.legs import pair_legs
-from .features import Circle, Features, Leg, find_corners
+from .features import Circle, Corner, Features, Leg
+from .lines._split_merge_engine import PLACING_NODES, PLACING_WEIGHTS, corners_pass, lines_pass, placed_records
 from .lines._split_merge_engine import READY as LINES_READY
-from .lines._split_merge_engine import extract as extract_lines
-from .lines._split_merge_engine import line_records
 from .lines._split_merge_fast import GRAZING_DEG
 from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
 from .segmentation import SegmentationParams
@@ -204,14 +207,14 @@ def extract(scan, plan: Plan) -> Features:
     rest = labels
     t_legs = plan.legs
     if t_legs is not None:
-        rest, idx, xy, starts, ends = runs(labels, _NONE, points)
-        if starts.size:
-            s = plan.legs_sigma
-            if s == AUTO:
-                s = scan_sigma(scan)
-            if plan.legs_fast:
-                legs = _legs(scan, idx, xy, starts, ends, t_legs, s, abs(increment) if n > 1 else 0.0)
-            else:
+        s = plan.legs_sigma
+        if s == AUTO:
+            s = scan_sigma(scan)
+        if plan.legs_fast:
+            legs = _legs(scan, labels, points, t_legs, s, abs(increment) if n > 1 else 0.0)
+        else:
+            rest, idx, xy, starts, ends = runs(labels, _NONE, points)
+            if starts.size:
                 legs = leg_engine(scan, _asruns(idx, xy, starts, ends), t_legs, s)[0]
         people = pair_legs(legs, plan.pair_m) if len(legs) > 1 else []
     now = perf_counter()
@@ -221,33 +224,34 @@ def extract(scan, plan: Plan) -> Features:
     circles: list = []
     t_circles = plan.circles
     if t_circles is not None:
-        rest, idx, xy, starts, ends = runs(rest, _firsts(legs), points)
-        if starts.size:
-            s = plan.circles_sigma
-            if s == AUTO:
-                s = scan_sigma(scan)
-            if plan.circles_fast:
-                circles = _circles(idx, xy, starts, ends, t_circles, s)
-            else:
+        s = plan.circles_sigma
+        if s == AUTO:
+            s = scan_sigma(scan)
+        if plan.circles_fast:
+            rest, circles = _circles(rest, _firsts(legs), points, t_circles, s)
+        else:
+            rest, idx, xy, starts, ends = runs(rest, _firsts(legs), points)
+            if starts.size:
                 circles = circle_engine(_asruns(idx, xy, starts, ends), t_circles, s)[0]
     elif legs:
-        rest = runs(rest, _firsts(legs), points)[0]
+        rest = without(rest, _firsts(legs))
     if circles:
-        rest = runs(rest, _firsts(circles), points)[0]
+        rest = without(rest, _firsts(circles))
     now = perf_counter()
     timings["circles"] = now - t
     t = now
 
     lines: list = []
+    rows: tuple = ()
     if plan.lines is not None:
-        lines = _lines(scan, valid, points, rest if plan.lines_skip_round else labels, plan.lines, full)
+        lines, rows = _lines(scan, valid, points, rest if plan.lines_skip_round else labels, plan.lines, full)
     now = perf_counter()
     timings["lines"] = now - t
     t = now
 
     corners: list = []
     if plan.corners is not None and len(lines) > 1:
-        corners = find_corners.unchecked(lines, **plan.corners, wrap=full)
+        corners = _corners(lines, rows, plan.corners, full)
     now = perf_counter()
     timings["corners"] = now - t
     t = now
@@ -258,44 +262,50 @@ def extract(scan, plan: Plan) -> Features:
     now = perf_counter()
     timings["arcs"] = now - t
     timings["total"] = now - t_start
-    return Features(scan.stamp_ns, n, labels, tuple(lines), tuple(corners), tuple(circles), tuple(arcs), tuple(legs),
-                    tuple(people), timings)
+    features = _new_features(Features)  # (Features(...) as its fields in one update: a frozen dataclass's
+    features.__dict__.update(stamp_ns=scan.stamp_ns, n_beams=n, labels=labels, lines=tuple(lines),  # __init__
+                             corners=tuple(corners), circles=tuple(circles), arcs=tuple(arcs),  # sets them one
+                             legs=tuple(legs), people=tuple(people), timings=timings)  # by one, slowly)
+    return features
+
+
+_new_features = object.__new__
 
 
 def _firsts(features) -> np.ndarray:
     return np.array([f.first for f in features], dtype=np.int64) if features else _NONE
 
 
-def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float) -> list:
-    """``_iav_batch._compiled_legs`` on the runs of :func:`labkit._segmentation_engine.runs`."""
-    verdict, chord, mean, std, side = leg_kernel(xy[0], xy[1], starts, ends, False, int(t.min_points),
-                                                 float(t.chord_range[0]), float(t.chord_range[1]),
-                                                 float(t.middle_range[0]), float(t.middle_range[1]),
-                                                 float(t.chord_padding_beams * spacing), float(sigma))
-    passed = np.flatnonzero(verdict == ACCEPTED)
+def _legs(scan, labels, points, t: LegTest, sigma: float, spacing: float) -> list:
+    """``_iav_batch._compiled_legs`` on the segments of ``labels`` (:func:`labkit._iav_engine.leg_pass`)."""
+    idx, xy, bounds, floats, passed = leg_pass(labels, points, int(t.min_points), float(t.chord_range[0]),
+                                               float(t.chord_range[1]), float(t.middle_range[0]),
+                                               float(t.middle_range[1]), float(t.chord_padding_beams * spacing),
+                                               float(sigma))
     if not passed.size:
         return []
     pts = np.ascontiguousarray(xy.T)
     ray = t.center_method == "ray"
-    a_s, b_s = starts.take(passed), ends.take(passed)
+    a_s, b_s = bounds[0].take(passed), bounds[1].take(passed)
     middles = pts.take(a_s + (b_s - a_s) // 2, axis=0)  # (one array: each leg's middle is a row of it)
     middles.setflags(write=False)
     mid_xy = middles.tolist()
+    rows = floats.take(passed, axis=0).tolist()
     legs: list = []
-    for j, k in enumerate(passed.tolist()):
+    for j in range(len(rows)):
         a, b = a_s.item(j), b_s.item(j)
         first, last = idx.item(a), idx.item(b - 1)
         if t.reject_occluded and occluded(scan, first, last):
             continue
-        m, sd = mean.item(k), std.item(k)
+        chord, m, sd, side = rows[j]
         if ray:  # (iav.leg_center's "ray", in the same Python floats)
             mx, my = mid_xy[j]
-            h, half = math.hypot(mx, my), 0.5 * chord.item(k)
+            h, half = math.hypot(mx, my), 0.5 * chord
             center = np.array([mx + half * mx / h, my + half * my / h])
-            diameter = chord.item(k)
+            diameter = chord
         else:
             try:
-                center, diameter = leg_center(pts[a:b], chord.item(k), m, side.item(k), t.center_method)
+                center, diameter = leg_center(pts[a:b], chord, m, side, t.center_method)
             except ValueError:
                 continue
         center.setflags(write=False)
@@ -303,15 +313,17 @@ def _legs(scan, idx, xy, starts, ends, t: LegTest, sigma: float, spacing: float)
     return legs
 
 
-def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
-    """``_iav_batch._compiled_circles`` on the runs of :func:`labkit._segmentation_engine.runs`."""
-    verdict, _, mean, std, side, lim = circle_kernel(
-        xy[0], xy[1], starts, ends, False, int(max(t.min_points, 3)), float(t.chord_range[0]),
-        float(t.chord_range[1]), float(t.middle_range[0]), float(t.middle_range[1]), float(t.mean_range[0]),
-        float(t.mean_range[1]), float(t.std_max), float(t.std_max) ** 2, float(sigma))
-    passed = np.flatnonzero(verdict == ACCEPTED)
+def _circles(labels, drop, points, t: CircleTest, sigma: float) -> tuple[np.ndarray, list]:
+    """``_iav_batch._compiled_circles`` on the segments of ``labels`` less those holding a beam of
+    ``drop`` (:func:`labkit._iav_engine.circle_pass`); and the labels left."""
+    rest, idx, xy, bounds, floats, passed = circle_pass(
+        labels, drop, points, int(max(t.min_points, 3)), float(t.chord_range[0]), float(t.chord_range[1]),
+        float(t.middle_range[0]), float(t.middle_range[1]), float(t.mean_range[0]), float(t.mean_range[1]),
+        float(t.std_max), float(t.std_max) ** 2, float(sigma))
     if not passed.size:
-        return []
+        return rest, []
+    starts, ends = bounds[0], bounds[1]
+    mean, std, side, lim = floats[:, 0], floats[:, 1], floats[:, 2], floats[:, 3:]
     runs = _asruns(idx, xy, starts, ends)
     if t.center_method == "iav":
         made = _iav_circles(runs, passed, mean, std, side, lim, t.kind)
@@ -323,7 +335,7 @@ def _circles(idx, xy, starts, ends, t: CircleTest, sigma: float) -> list:
                                  ((lim.item(k, 0), lim.item(k, 1)), lim.item(k, 2))) for k in passed.tolist()]
     if sigma > 0.0:  # and their points must lie on a circle within the noise
         made = drop_wider(runs, passed, made, sigma)
-    return [c for c, _ in made if c is not None]
+    return rest, [c for c, _ in made if c is not None]
 
 
 _HALF_PI = math.pi / 2
@@ -366,8 +378,9 @@ def _iav_circles(runs: Runs, passed: np.ndarray, mean: np.ndarray, std: np.ndarr
     return made
 
 
-def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: tuple, full: bool) -> list:
-    """``split_and_merge``'s engine path (``lines._split_merge_engine.split_and_merge``) on ``labels``."""
+def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: tuple, full: bool) -> tuple[list, tuple]:
+    """``split_and_merge``'s engine path (``lines._split_merge_engine.split_and_merge``) on ``labels``;
+    and the lines' rows (for :func:`_corners`)."""
     (fit, split_threshold_m, range_sigma_m, min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m,
      uniform, weights, floor_m, lam_cut, lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = p
     s = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
@@ -376,9 +389,28 @@ def _lines(scan, valid: np.ndarray, points: np.ndarray, labels: np.ndarray, p: t
     else:
         noise, threshold = 0.0, split_threshold_m
     absorb_m = min(threshold, 3 * s)
-    r, alpha, ends, first, last, beams, offsets = extract_lines(
-        points, scan.ranges, scan.angles, valid, labels, fit, float(threshold), float(noise),
-        float(absorb_m), min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m,
-        lam_cut, lam_graze, full, FUSED_DOT)
-    return line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, s, place_dr_m,
-                           place_dalpha_deg, place_confidence)
+    out, ints, beams = lines_pass(
+        points, scan.ranges, scan.angles, valid, labels, fit, float(threshold), float(noise), float(absorb_m),
+        min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m, lam_cut, lam_graze,
+        full, FUSED_DOT, float(s), place_confidence > 0, float(place_dr_m), math.radians(place_dalpha_deg),
+        float(place_confidence), PLACING_NODES, PLACING_WEIGHTS)
+    lines, keep = placed_records(out, ints, beams, place_dr_m, place_dalpha_deg, place_confidence)
+    return lines, (out, ints, keep)
+
+
+def _corners(lines: list, rows: tuple, p: dict, full: bool) -> list:
+    """:func:`labkit.find_corners` of ``lines`` (``p`` its arguments), from the lines' rows of
+    :func:`labkit.lines._split_merge_engine.lines_pass` (:func:`corners_pass`)."""
+    out, ints, keep = rows
+    found = corners_pass(out, ints, np.array(keep, dtype=np.int64), math.radians(p["min_angle_deg"]),
+                         float(p["max_gap_m"]), float(p["max_extension_m"]), full)
+    if not len(found):
+        return []
+    found.setflags(write=False)
+    points = found[:, :2]
+    corners = []
+    for c, (_, _, angle, concave, extrapolated, i, j) in enumerate(found.tolist()):
+        i, j = int(i), int(j)
+        corners.append(Corner(points[c], angle, "concave" if concave else "convex", bool(extrapolated), (i, j),
+                              lines[i].last, lines[j].first))
+    return corners

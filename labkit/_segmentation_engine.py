@@ -19,7 +19,7 @@ import numpy as np
 
 from ._kernels import jit, jit_inline
 
-__all__ = ["labels", "threshold", "order", "beams", "runs", "compile_all"]
+__all__ = ["labels", "threshold", "order", "beams", "runs", "without", "compile_all"]
 
 
 @jit_inline
@@ -150,12 +150,8 @@ def beams(ranges, angles, range_min, range_max):
 
 
 @jit
-def runs(labels, drop, points):
-    """The segments of ``labels`` less those holding a beam of ``drop`` (the first beams of the
-    features a stage took, as ``labkit.pipeline._mask_segments``), laid end to end in label order as
-    :func:`labkit.segmentation.segment_order` lays them: the labels left, each run's beams
-    (``idx``), its points as rows ``xy[0]`` (x) and ``xy[1]`` (y), and its bounds ``starts``,
-    ``ends``."""
+def without(labels, drop):
+    """``labels`` less the segments holding a beam of ``drop`` (``labels`` itself when ``drop`` is empty)."""
     n = len(labels)
     rest = labels
     if len(drop):
@@ -170,6 +166,17 @@ def runs(labels, drop, points):
         for i in range(n):
             if rest[i] >= 0 and gone[rest[i]]:
                 rest[i] = -1
+    return rest
+
+
+@jit
+def runs(labels, drop, points):
+    """The segments of ``labels`` less those holding a beam of ``drop`` (the first beams of the
+    features a stage took, as ``labkit.pipeline._mask_segments``), laid end to end in label order as
+    :func:`labkit.segmentation.segment_order` lays them: the labels left, each run's beams
+    (``idx``), its points as rows ``xy[0]`` (x) and ``xy[1]`` (y), and its bounds ``starts``,
+    ``ends``."""
+    rest = without(labels, drop)
     idx, bounds = order(rest)
     m = len(idx)
     xy = np.empty((2, m))
@@ -191,3 +198,4 @@ def compile_all() -> None:
     lab = np.array([0, 0, 0, -1, 1, 1, 1], dtype=np.int64)
     runs(lab, np.zeros(0, np.int64), points)
     runs(lab, np.array([0]), points)
+    without(lab, np.array([0]))

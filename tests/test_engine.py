@@ -13,6 +13,7 @@ functions) is checked on its own first. Last, ``extract_features``' fused defaul
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -501,3 +502,117 @@ def test_the_fused_path_on_scans_with_little_in_them():
              Scan(ranges=np.arange(1.0, 41.0), angles=np.arange(40.0) / 10, range_max=100.0)]
     for scan in scans:
         fused_equals_stages(scan, CONFIGS[:1])
+
+
+# ---------------------------------------------------------------------------- the stages' passes
+def _hall_scan() -> Scan:
+    """A simulated hall at 361 beams with lines, corners, circles, legs and people in it."""
+    from labkit.app.experiments import nguyen_lidar, world_scans
+
+    return world_scans("hall", nguyen_lidar(361, 0.005), 1, np.random.default_rng(361))[0][0]
+
+
+def test_the_fused_records_are_frozen_and_pickle():
+    """Every array of every record the fused path builds is read-only (as the stages' records are),
+    the features come back from a pickle as they went in, field by field, and the Features record
+    is one its own ``__init__`` would build."""
+    import pickle
+
+    features = labkit.extract_features(fresh(_hall_scan()))
+    assert all(len(getattr(features, k)) for k in features.LAYERS if k != "arcs"), features.counts()
+    for layer in features.LAYERS:
+        for record in getattr(features, layer):
+            for f in dataclasses.fields(record):
+                value = getattr(record, f.name)
+                if isinstance(value, np.ndarray):
+                    assert not value.flags.writeable, (layer, f.name)
+    assert the_features(pickle.loads(pickle.dumps(features))) == the_features(features)
+    # built by its fields in one update: the same instance dictionary as Features(...) gives, still frozen
+    rebuilt = labkit.Features(*(getattr(features, f.name) for f in dataclasses.fields(labkit.Features)))
+    assert type(features) is labkit.Features and list(vars(features)) == list(vars(rebuilt))
+    assert the_features(rebuilt) == the_features(features) and repr(rebuilt) == repr(features)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        features.lines = ()  # type: ignore[misc]
+
+
+def _one_bit_off(kernel, which: int):
+    """``kernel`` with every float of its result ``which`` one bit larger."""
+    def off(*args):
+        out = list(kernel(*args))
+        out[which] = np.nextafter(out[which], np.inf)
+        return tuple(out)
+    return off
+
+
+@pytest.mark.parametrize("name, which", [("lines_pass", 0), ("leg_pass", 3), ("circle_pass", 4)])
+def test_the_passes_identity_tests_can_fail(monkeypatch, name, which):
+    """One bit off in the floats a stage's pass hands back (the lines' r, alpha, ..., the leg runs'
+    padded chords and angles, the circle runs' angles and limits), and the comparison with the
+    stages sees it."""
+    scan = _hall_scan()
+    fused_equals_stages(scan, CONFIGS[:1])
+    monkeypatch.setattr(fused, name, _one_bit_off(getattr(fused, name), which))
+    with pytest.raises(AssertionError):
+        fused_equals_stages(scan, CONFIGS[:1])
+
+
+def test_split_and_merges_pass_identity_test_can_fail(monkeypatch):
+    """The same for :func:`labkit.split_and_merge`'s default path."""
+    scan = _hall_scan()
+    check_identical(scan, SETTINGS[:1])
+    monkeypatch.setattr(engine, "lines_pass", _one_bit_off(engine.lines_pass, 0))
+    with pytest.raises(AssertionError):
+        check_identical(scan, SETTINGS[:1])
+
+
+def test_the_records_hand_near_ties_to_the_reference():
+    """A line the compiled placing cannot call (2) is kept exactly when the reference's own
+    probability reaches the confidence; the lines it calls are kept as called."""
+    s = fresh(_hall_scan())
+    labels = segment_labels(s, range_sigma_m=0.01)
+    out, ints, beams = engine.lines_pass(s.points, s.ranges, s.angles, s.valid, labels, False, 0.05, 0.0, 0.03, 5,
+                                         0.3, True, 0.2, math.radians(10.0), 0.15, False, 0.08, math.radians(10.0),
+                                         math.radians(3.0), False, K.FUSED_DOT, 0.01, True, 0.05, math.radians(3.0),
+                                         0.8, engine._GL_U, engine._GL_W)
+    k = len(out)
+    assert k >= 4
+    chance = placement_probability(out[:, 7:].reshape(-1, 2, 2), 0.05, math.radians(3.0))
+    confidence = float(np.median(chance))
+    ints[:, 4] = 2
+    ints[0, 4] = 0  # called: dropped whatever its chance
+    kept = engine.records(out.copy(), ints, beams.copy(), 0.05, 3.0, confidence)
+    want = [i for i in range(1, k) if chance[i] >= confidence]
+    assert 0 < len(want) < k - 1
+    assert [ln.first for ln in kept] == ints[want, 0].tolist()
+    assert [float(ln.r).hex() for ln in kept] == [float(x).hex() for x in out[want, 0]]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(2, 12), st.booleans(), st.sampled_from([10.0, 30.0, 60.0]),
+       st.sampled_from([0.05, 0.3, 2.0]), st.sampled_from([0.0, 0.1, 1.0]))
+def test_the_corners_pass_is_find_corners(seed, k, wrap, min_angle_deg, max_gap_m, max_extension_m):
+    """Random lines (some ending on neighbouring beams, some parallel, some dropped by the placing):
+    the compiled corners are :func:`labkit.find_corners`' own, field by field."""
+    from labkit import _pipeline_engine as pe
+    from labkit.features import LineSegment, find_corners
+
+    rng = np.random.default_rng(seed)
+    out = np.zeros((k, 11))
+    out[:, 0] = rng.uniform(0.2, 6.0, k)
+    out[:, 1] = rng.choice([rng.uniform(-math.pi, math.pi), 0.5, math.pi / 2], k)  # (repeats: parallel lines)
+    out[:, 3:7] = rng.uniform(-4.0, 4.0, (k, 4))
+    out[1:, 3:5] = out[:-1, 5:7] + rng.choice([0.0, 0.01, 0.2, 1.0], (k - 1, 1))  # ends near the next start
+    ints = np.zeros((k, 5), np.int64)
+    ints[:, 0] = np.cumsum(rng.integers(1, 12, k))
+    ints[:, 1] = ints[:, 0] + rng.integers(0, 3, k)
+    ints[:, 4] = rng.random(k) < 0.8
+    keep = np.flatnonzero(ints[:, 4]).tolist()
+    frozen = out.copy()
+    frozen.setflags(write=False)
+    lines = [LineSegment(float(out[i, 0]), float(out[i, 1]), frozen[i, 7:].reshape(2, 2), frozen[i, 3:5],
+                         frozen[i, 5:7], int(ints[i, 0]), int(ints[i, 1]), 2, 0.0, np.zeros(2, np.int64))
+             for i in keep]
+    kw = {"min_angle_deg": min_angle_deg, "max_gap_m": max_gap_m, "max_extension_m": max_extension_m}
+    got = pe._corners(lines, (frozen, ints, keep), kw, wrap) if len(lines) > 1 else []
+    want = find_corners.unchecked(lines, **kw, wrap=wrap) if len(lines) > 1 else []
+    assert _canon(got) == _canon(want)

@@ -32,6 +32,7 @@ from .._kernels import (
     FUSED_DOT,
     HALF_PI,
     PI,
+    TWO_PI,
     dot2,
     jit,
     jit_inline,
@@ -746,6 +747,7 @@ def _covariances(points, ranges, beams, offsets, alpha, r, uniform, sigma):
 
 
 _GL_U, _GL_W = np.polynomial.legendre.leggauss(24)  # (= labkit.fitting's nodes and weights)
+PLACING_NODES, PLACING_WEIGHTS = _GL_U, _GL_W  # (the arguments lines_pass takes for them)
 _NEAR = 1e-9  # a probability this close to place_confidence is decided by the reference itself
 
 
@@ -809,6 +811,122 @@ def _placing(cov, max_dr_m, max_dalpha, confidence, nodes, weights):
     return out
 
 
+@jit
+def lines_pass(points, ranges, angles, valid, labels, fit, threshold_m, noise_sigma, absorb_m, min_points, max_gap_m,
+               merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m, lam_cut, lam_graze, full_circle,
+               fused, sigma, place_on, place_dr_m, place_dalpha, place_confidence, nodes, weights):
+    """:func:`extract`, :func:`_covariances` and :func:`_placing` in one call, their results in three
+    arrays (each array numba hands back to Python costs about a microsecond, each call a few): per
+    line a row of floats ``r, alpha, rms, sx, sy, ex, ey, cov (4)``, a row of integers ``first, last,
+    offset, next offset, placed`` (as :func:`_placing`: 1, 0 or 2; 1 when ``place_on`` is off), and
+    the beams of every line end to end."""
+    r, alpha, ends, first, last, beams, offsets = extract(
+        points, ranges, angles, valid, labels, fit, threshold_m, noise_sigma, absorb_m, min_points, max_gap_m,
+        merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, floor_m, lam_cut, lam_graze, full_circle, fused)
+    k_lines = len(r)
+    cov, rms = _covariances(points, ranges, beams, offsets, alpha, r, uniform, sigma)
+    if place_on:
+        verdict = _placing(cov, place_dr_m, place_dalpha, place_confidence, nodes, weights)
+    else:
+        verdict = np.ones(k_lines, np.int64)
+    out = np.empty((k_lines, 11))
+    ints = np.empty((k_lines, 5), np.int64)
+    for k in range(k_lines):
+        out[k, 0], out[k, 1], out[k, 2] = r[k], alpha[k], rms[k]
+        for c in range(4):
+            out[k, 3 + c] = ends[k, c]
+        out[k, 7], out[k, 8], out[k, 9], out[k, 10] = cov[k, 0, 0], cov[k, 0, 1], cov[k, 1, 0], cov[k, 1, 1]
+        ints[k, 0], ints[k, 1], ints[k, 2], ints[k, 3], ints[k, 4] = first[k], last[k], offsets[k], offsets[k + 1], \
+            verdict[k]
+    return out, ints, beams
+
+
+def records(out: np.ndarray, ints: np.ndarray, beams: np.ndarray, place_dr_m: float, place_dalpha_deg: float,
+            place_confidence: float) -> list[LineSegment]:
+    """:class:`labkit.LineSegment` records of :func:`lines_pass`'s lines, less those the data cannot
+    place (:func:`labkit.lines.placing.placed`), built in bulk."""
+    return placed_records(out, ints, beams, place_dr_m, place_dalpha_deg, place_confidence)[0]
+
+
+def placed_records(out: np.ndarray, ints: np.ndarray, beams: np.ndarray, place_dr_m: float, place_dalpha_deg: float,
+                   place_confidence: float) -> tuple[list[LineSegment], list[int]]:
+    """:func:`records`, and the rows of ``out`` they were built from."""
+    if not len(out):
+        return [], []
+    out.setflags(write=False)
+    beams.setflags(write=False)
+    cov = out[:, 7:].reshape(-1, 2, 2)
+    rows, irows = out.tolist(), ints.tolist()
+    if place_confidence > 0 and any(row[4] == 2 for row in irows):  # a near tie: the reference's own sum decides
+        chance = np.asarray(placement_probability(np.ascontiguousarray(cov), place_dr_m,
+                                                  math.radians(place_dalpha_deg)))
+        for i, row in enumerate(irows):
+            if row[4] == 2:
+                row[4] = int(chance[i] >= place_confidence)
+    starts, ends = out[:, 3:5], out[:, 5:7]
+    keep = [i for i, g in enumerate(irows) if g[4]]
+    lines = []
+    for i in keep:
+        f, g = rows[i], irows[i]
+        lines.append(LineSegment(f[0], f[1], cov[i], starts[i], ends[i], g[0], g[1], g[3] - g[2], f[2],
+                                 beams[g[2]:g[3]]))
+    return lines, keep
+
+
+@jit_inline
+def _wrap1(angle):
+    """``labkit._plainfloat.wrap1``."""
+    return PI - (PI - angle) % TWO_PI
+
+
+@jit
+def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
+    """:func:`labkit.find_corners` of the lines ``keep`` (rows of :func:`lines_pass`'s ``out`` and
+    ``ints``), in the same float arithmetic (``labkit._plainfloat``'s ``wrap1`` and ``intersect1``,
+    Python's ``min`` and ``max``): per corner a row ``x, y, angle, concave, extrapolated, i, j``
+    (``i, j`` the lines' places in ``keep``)."""
+    n = len(keep)
+    n_pairs = max(n - 1, 0) + (1 if wrap and n > 2 else 0)
+    rows = np.empty((n_pairs, 7))
+    m = 0
+    for q in range(n_pairs):
+        i = q
+        j = q + 1 if q < n - 1 else 0
+        a, b = keep[i], keep[j]
+        d = abs(_wrap1(out[a, 1] - out[b, 1]))
+        angle = PI - d if PI - d < d else d
+        if angle < min_angle:
+            continue
+        asx, asy, aex, aey = out[a, 3], out[a, 4], out[a, 5], out[a, 6]
+        bsx, bsy, bex, bey = out[b, 3], out[b, 4], out[b, 5], out[b, 6]
+        gap = math.hypot(bsx - aex, bsy - aey)
+        if gap > max_gap_m:
+            continue
+        r1, r2 = out[a, 0], out[b, 0]
+        c1, s1, c2, s2 = math.cos(out[a, 1]), math.sin(out[a, 1]), math.cos(out[b, 1]), math.sin(out[b, 1])
+        if abs(c2) > abs(c1):
+            c1, s1, r1, c2, s2, r2 = c2, s2, r2, c1, s1, r1
+        f = c2 * (1.0 / c1)
+        u = s2 - f * s1
+        if abs(c1 * u) < 1e-12:
+            continue
+        y = (r2 - f * r1) / u
+        x = (r1 - s1 * y) / c1
+        e1, e2 = math.hypot(x - aex, y - aey), math.hypot(x - bsx, y - bsy)
+        extension = e2 if e2 > e1 else e1
+        allowed = max_extension_m
+        if ints[b, 0] - ints[a, 1] == 1 and gap > allowed:
+            allowed = gap
+        side_origin = (bex - asx) * (0.0 - asy) - (bey - asy) * (0.0 - asx)
+        side_corner = (bex - asx) * (y - asy) - (bey - asy) * (x - asx)
+        rows[m, 0], rows[m, 1], rows[m, 2] = x, y, angle
+        rows[m, 3] = 1.0 if side_origin * side_corner < 0 else 0.0
+        rows[m, 4] = 1.0 if extension > allowed else 0.0
+        rows[m, 5], rows[m, 6] = i, j
+        m += 1
+    return rows[:m]
+
+
 def line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma: float, place_dr_m: float,
                  place_dalpha_deg: float, place_confidence: float) -> list[LineSegment]:
     """:class:`labkit.LineSegment` records of the engine's lines, less those the data cannot place
@@ -840,13 +958,14 @@ def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma:
                     place_confidence: float) -> list[LineSegment]:
     """The default path of :func:`labkit.lines.split_and_merge` on the range segments ``labels``
     (the arguments resolved as it resolves them)."""
-    r, alpha, ends, first, last, beams, offsets = extract(
+    out, ints, beams = lines_pass(
         scan.points, scan.ranges, scan.angles, scan.valid, labels, fit, float(threshold_m), float(noise_sigma),
         float(absorb_m), int(min_points), float(max_gap_m), merge != "none" and merge is not None, float(merge_dr_m),
         math.radians(merge_dalpha_deg), float(min_length_m), weights == "uniform", float(floor_m),
-        math.radians(SegmentationParams.incidence_deg), math.radians(GRAZING_DEG), scan.is_full_circle, FUSED_DOT)
-    return line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma, place_dr_m,
-                        place_dalpha_deg, place_confidence)
+        math.radians(SegmentationParams.incidence_deg), math.radians(GRAZING_DEG), scan.is_full_circle, FUSED_DOT,
+        float(sigma), place_confidence > 0, float(place_dr_m), math.radians(place_dalpha_deg), float(place_confidence),
+        _GL_U, _GL_W)
+    return records(out, ints, beams, place_dr_m, place_dalpha_deg, place_confidence)
 
 
 def compile_all() -> None:
@@ -867,10 +986,14 @@ def compile_all() -> None:
     r, a, v, p = (_read_only(x) for x in (ranges, angles, valid, points))
     residuals(r, a, v, False)
     labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
-    out = extract(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15, False,
-                  0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, bool(FUSED_DOT))
-    cov, _ = _covariances(p, r, out[5], out[6], out[1], out[0], False, 0.01)
-    _placing(cov, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
+    lines_pass(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15, False, 0.08,
+               math.radians(10.0), math.radians(GRAZING_DEG), False, FUSED_DOT, 0.01, True, 0.05, math.radians(3.0),
+               0.8, _GL_U, _GL_W)
+    out, ints, _ = lines_pass(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15,
+                              False, 0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, FUSED_DOT, 0.01,
+                              True, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
+    out.setflags(write=False)  # (as placed_records hands it over)
+    corners_pass(out, ints, np.arange(len(out)), math.radians(30.0), 0.3, 0.1, False)
     compile_circles()
     compile_scan_kernels()
 
