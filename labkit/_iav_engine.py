@@ -35,7 +35,7 @@ from ._kernels import fma, jit, jit_inline, segment_sum, sum_at
 from ._segmentation_engine import runs as _runs
 
 __all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "wider_than_noise", "COMPLEX_FMA",
-           "circle_kernel", "leg_kernel", "leg_pass", "circle_pass"]
+           "leg_pass", "circle_pass"]
 
 NOISE_Z = 2.0  # (= labkit.iav.NOISE_Z, LINE_Z, ARC_LIKE_STD_MAX and labkit._iav_batch's verdicts:
 LINE_Z = 3.0  # the engine cannot import the modules it serves; tests/test_engine.py checks they agree)
@@ -497,11 +497,6 @@ def _leg_tests(px, py, starts, ends, check_finite, min_points, c_lo, c_hi, lo, h
         if degenerate:
             verdict[k] = DEGENERATE
     return verdict, chord, mean, std, side
-
-
-#: The kernels themselves, for a caller that holds the runs' coordinates as two contiguous arrays
-#: (labkit._pipeline_engine): the arguments :func:`circle_tests` and :func:`leg_tests` hand them.
-circle_kernel, leg_kernel = _circle_tests, _leg_tests
 
 
 @jit

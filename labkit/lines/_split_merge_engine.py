@@ -50,7 +50,7 @@ from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS
 from ..segmentation import SegmentationParams
 from ._split_merge_fast import GRAZING_DEG
 
-__all__ = ["extract", "line_records", "split_and_merge", "READY"]
+__all__ = ["extract", "split_and_merge", "READY"]
 
 #: Whether the engine gives the reference's lines on this machine (its BLAS rounds a dot product in
 #: a way :func:`labkit._kernels.dot2` reproduces); if not, split_and_merge runs its readable steps.
@@ -927,31 +927,6 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
     return rows[:m]
 
 
-def line_records(scan, r, alpha, ends, first, last, beams, offsets, weights, sigma: float, place_dr_m: float,
-                 place_dalpha_deg: float, place_confidence: float) -> list[LineSegment]:
-    """:class:`labkit.LineSegment` records of the engine's lines, less those the data cannot place
-    (:func:`labkit.lines.placing.placed`), built in bulk."""
-    k = len(r)
-    if not k:
-        return []
-    cov, rms = _covariances(scan.points, scan.ranges, beams, offsets, alpha, r, weights == "uniform", float(sigma))
-    keep: range | list[int] = range(k)
-    if place_confidence > 0:
-        verdict = _placing(cov, float(place_dr_m), math.radians(place_dalpha_deg), float(place_confidence), _GL_U,
-                           _GL_W)
-        if (verdict == 2).any():  # a near tie: the reference's own sum decides
-            chance = placement_probability(cov, place_dr_m, math.radians(place_dalpha_deg))
-            verdict = np.where(verdict == 2, chance >= place_confidence, verdict)
-        keep = np.flatnonzero(verdict).tolist()
-    cov.setflags(write=False)
-    ends.setflags(write=False)
-    beams.setflags(write=False)
-    pairs = ends.reshape(-1, 2)
-    o, rl, al, fl, ll, el = offsets.tolist(), r.tolist(), alpha.tolist(), first.tolist(), last.tolist(), rms.tolist()
-    return [LineSegment(rl[i], al[i], cov[i], pairs[2 * i], pairs[2 * i + 1], fl[i], ll[i], o[i + 1] - o[i], el[i],
-                        beams[o[i]:o[i + 1]]) for i in keep]
-
-
 def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma: float, absorb_m: float, sigma: float,
                     min_points: int, min_length_m: float, max_gap_m: float, merge: str, merge_dr_m: float,
                     merge_dalpha_deg: float, weights, floor_m: float, place_dr_m: float, place_dalpha_deg: float,
@@ -986,9 +961,6 @@ def compile_all() -> None:
     r, a, v, p = (_read_only(x) for x in (ranges, angles, valid, points))
     residuals(r, a, v, False)
     labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
-    lines_pass(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15, False, 0.08,
-               math.radians(10.0), math.radians(GRAZING_DEG), False, FUSED_DOT, 0.01, True, 0.05, math.radians(3.0),
-               0.8, _GL_U, _GL_W)
     out, ints, _ = lines_pass(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15,
                               False, 0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, FUSED_DOT, 0.01,
                               True, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
