@@ -29,6 +29,12 @@ $(BIN)/python:
 # notebook, test or command pays it on its first scan
 ENGINES = $(BIN)/python -c "from labkit.lines._split_merge_engine import compile_all; compile_all(); from labkit.tracking import _compile_engine; _compile_engine()"
 
+# BYTECODE: labkit's modules (and the tests') compiled into __pycache__ before a run. Python writes no bytecode
+# when PYTHONDONTWRITEBYTECODE is set (it is on some machines and CI runners); then every process that imports
+# labkit compiled its ~75 modules from source again (0.4-0.5 s of CPU each), and make test starts hundreds of
+# them (commands, kernels, grading processes, sandboxed workers). Reading bytecode is allowed either way.
+BYTECODE = $(BIN)/python -m compileall -q -j 0 labkit tests docs exercises benchmarks > /dev/null
+
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(PIP) install --quiet -e ".[research]"
 	$(ENGINES)
@@ -40,6 +46,7 @@ $(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
+	$(BYTECODE)
 	$(BIN)/labkit demo data/hall.bag -o out
 
 # bubblewrap, the sandbox `labkit grade` runs student code in, is a Debian package: installed here when
@@ -66,6 +73,7 @@ chromium:
 # chromium), from the notebook outputs the first run kept: the course is executed once, not twice
 test: $(VENV)/.installed-dev sandbox chromium
 	$(ENGINES)
+	$(BYTECODE)
 	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --ignore=tests/test_docs_site.py
 	$(BIN)/python -m pytest -n 0 -p no:cacheprovider tests/test_docs_site.py
 
@@ -73,6 +81,7 @@ test: $(VENV)/.installed-dev sandbox chromium
 # run `labkit grade --check` (student code sandboxed) and serves the rerun viewer offline; any folder works the same,
 # e.g. `labkit lab ~/labkit-exercises`
 lab: $(VENV)/.installed sandbox
+	$(BYTECODE)
 	$(BIN)/labkit lab . --open notebooks/00_tour.ipynb
 
 data: $(VENV)/.installed
