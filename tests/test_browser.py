@@ -246,6 +246,29 @@ _MODEL = "() => window.jupyterapp.shell.currentWidget.context.model.toJSON()"
 _UNRENDERED = """() => [...document.querySelectorAll('.jp-OutputArea-output')]
   .map(o => o.innerText || '')
   .filter(t => /Error displaying widget|Loading widget|model not found/i.test(t))"""
+# The viewers' frames, at most one every FRAME_MS. rerun's viewer (egui) draws a new frame on every animation
+# frame the browser gives it, which in this headless Chromium (no GPU: WebGL drawn by the CPU) costs 0.6-0.7 of
+# a core per viewer on the page, even with nothing changing, so a notebook's viewers starved the kernel and the
+# other pytest worker. A student's browser draws on the GPU; the test asks the viewers what they hold and show,
+# which does not depend on how often they draw. Only the viewer's own frame requests (the two calls of
+# wasm-bindgen's glue in widget.js) are throttled; JupyterLab's are not.
+FRAME_MS = 100
+FRAME_CALLS = {"arg0.requestAnimationFrame(arg1)": "globalThis.__labkitFrame(arg0, arg1)",
+               "arg0.cancelAnimationFrame(arg1)": "globalThis.__labkitCancelFrame(arg0, arg1)"}
+FRAME_THROTTLE = f"""(() => {{
+  let next = 0; const pending = new Map();  // id -> ['timer', id] then ['frame', id]
+  globalThis.__labkitFrame = (w, callback) => {{
+    const id = ++next;
+    pending.set(id, ['timer', w.setTimeout(() => pending.set(id, ['frame', w.requestAnimationFrame(t => {{
+      pending.delete(id); callback(t); }})]), {FRAME_MS})]);
+    return id;
+  }};
+  globalThis.__labkitCancelFrame = (w, id) => {{
+    const p = pending.get(id); if (!p) return;
+    pending.delete(id); if (p[0] === 'timer') w.clearTimeout(p[1]); else w.cancelAnimationFrame(p[1]);
+  }};
+}})();"""
+
 # Each inline viewer, scrolled into sight as a student would (it draws, and reports, when shown), asked
 # what it holds once it has drawn a frame (get_state answers after the next frame).
 _VIEWERS = """async () => {
@@ -323,9 +346,13 @@ def _has_viewers(path: Path) -> bool:
 def _instrument(route) -> None:
     response = route.fetch()
     source = response.text()
-    if WIDGET_ANCHOR not in source:  # make the reason visible in every viewer's test
-        source = "throw new Error('labkit browser test: rerun widget.js changed, update WIDGET_ANCHOR');\n" + source
-    route.fulfill(response=response, body=source.replace(WIDGET_ANCHOR, WIDGET_ANCHOR + WIDGET_HOOK, 1))
+    for anchor in (WIDGET_ANCHOR, *FRAME_CALLS):
+        if anchor not in source:  # make the reason visible in every viewer's test
+            source = f"throw new Error('labkit browser test: rerun widget.js changed, update {anchor!r}');\n" + source
+    source = source.replace(WIDGET_ANCHOR, WIDGET_ANCHOR + WIDGET_HOOK, 1)
+    for anchor, throttled in FRAME_CALLS.items():
+        source = source.replace(anchor, throttled)
+    route.fulfill(response=response, body=source)
 
 
 def _settle_viewers(page, run: BrowserRun) -> None:
@@ -365,6 +392,7 @@ def _lab_page(browser, sink: list[BrowserRun], *, viewers: bool = True):
     """A page in a new context of ``browser``, its console going to ``sink[0]``, rerun's widget.js instrumented."""
     context = browser.new_context(viewport={"width": 1400, "height": 1000})
     if viewers:
+        context.add_init_script(FRAME_THROTTLE)
         context.route("**/widget.js", _instrument)
     page = context.new_page()
     page.set_default_timeout(180_000)
