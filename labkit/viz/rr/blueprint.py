@@ -5,6 +5,8 @@ from __future__ import annotations
 import rerun as rr
 import rerun.blueprint as rrb
 
+from . import _assets
+
 __all__ = ["APP_ID", "TIME", "SEQUENCE", "STEP", "map_view", "blueprint", "steps_blueprint", "show_inline"]
 
 APP_ID = "labkit"
@@ -113,7 +115,14 @@ def show_inline(rec: rr.RecordingStream, *, width: int = 950, height: int = 600,
         Also the map view.
     with_tracks : bool
         Also the track events.
+
+    Notes
+    -----
+    The viewer's code (67 MB) is sent to the browser from this process, as it is on disk, by a small
+    server started at the first call (``labkit.viz.rr._assets``): rerun-notebook's own ``serve-local``
+    compresses it first, 4 s of CPU per kernel.
     """
+    _assets.serve()
     rec.notebook_show(width=width, height=height, blueprint=blueprint(compare, with_map=with_map,
                                                                       with_tracks=with_tracks))
 
