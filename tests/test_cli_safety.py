@@ -707,14 +707,14 @@ def test_json_lines_keep_intensities_infinity_nan_and_the_receive_time(tmp_path)
 
 # ---------------------------------------------------------------------------- real logs
 RADISH = ["intel", "aces", "csail", "freiburg-079", "infinite-corridor", "orebro"]
-FORMATS = ["x.bag", "x.mcap", "x_ros2", "x.jsonl"]
+OUT_FORMATS = ["x.bag", "x.mcap", "x_ros2", "x.jsonl"]
 # Every format on the two logs whose stamps need a note (intel's go back in time, infinite-corridor's are
 # garbage), and every other log once, each into another format: every writer and reader meets real logs and
 # every log is converted, in 12 conversions instead of 24 (freiburg, the largest, alone was 2 minutes of
 # make test in four formats).
-CONVERSIONS = [(log, out) for log in ("intel", "infinite-corridor") for out in FORMATS] + [
+CONVERSIONS = [(log, out) for log in ("intel", "infinite-corridor") for out in OUT_FORMATS] + [
     ("aces", "x.mcap"), ("csail", "x_ros2"), ("freiburg-079", "x.bag"), ("orebro", "x.jsonl")]
-assert {log for log, _ in CONVERSIONS} == set(RADISH) and {out for _, out in CONVERSIONS} == set(FORMATS)
+assert {log for log, _ in CONVERSIONS} == set(RADISH) and {out for _, out in CONVERSIONS} == set(OUT_FORMATS)
 
 
 @pytest.mark.shared
