@@ -28,6 +28,8 @@ checks that on this machine.
 from __future__ import annotations
 
 import math
+import sys
+import time
 import warnings
 from fractions import Fraction
 
@@ -38,7 +40,7 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 __all__ = ["jit", "jit_inline", "fma", "pairwise_sum", "sum_at", "segment_sum", "remainder_2pi", "line_from_sums",
-           "dot2", "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
+           "dot2", "monotonic_ns", "MONOTONIC_CLOCK", "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
 
 PI = math.pi
 TWO_PI = 2 * math.pi
@@ -199,6 +201,34 @@ def fma(typingctx, a, b, c):
         return builder.call(fn, args)
 
     return sig, codegen
+
+
+@intrinsic
+def monotonic_ns(typingctx):
+    """The clock :func:`time.perf_counter` reads on Linux (``clock_gettime(CLOCK_MONOTONIC)``), in
+    nanoseconds: a compiled pass of several stages times each as Python would (the C library's
+    function, found by name when the machine code is loaded, so a cached kernel keeps working)."""
+    sig = types.int64()
+
+    def codegen(context, builder, signature, args):
+        i64, i32 = ir.IntType(64), ir.IntType(32)
+        timespec = ir.LiteralStructType([i64, i64])
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(i32, [i32, timespec.as_pointer()]),
+                                            "clock_gettime")
+        ts = cgutils.alloca_once(builder, timespec)
+        builder.call(fn, [ir.Constant(i32, _CLOCK_MONOTONIC), ts])
+        sec = builder.load(cgutils.gep_inbounds(builder, ts, 0, 0))
+        nsec = builder.load(cgutils.gep_inbounds(builder, ts, 0, 1))
+        return builder.add(builder.mul(sec, ir.Constant(i64, 1_000_000_000)), nsec)
+
+    return sig, codegen
+
+
+_CLOCK_MONOTONIC = 1  # (Linux's clockid; monotonic_ns is used only where perf_counter reads it: MONOTONIC_CLOCK)
+
+#: Whether :func:`monotonic_ns` reads :func:`time.perf_counter`'s clock here (Linux).
+MONOTONIC_CLOCK = sys.platform.startswith("linux") and \
+    time.get_clock_info("perf_counter").implementation == "clock_gettime(CLOCK_MONOTONIC)"
 
 
 @jit_inline

@@ -324,6 +324,7 @@ from labkit import Config, pipeline  # noqa: E402
 from labkit import _noise_engine as NE  # noqa: E402
 from labkit import _pipeline_engine as fused  # noqa: E402
 from labkit import _segmentation_engine as SE  # noqa: E402
+from labkit._fused_layout import H_STATUS  # noqa: E402
 from labkit.noise import FIXED_CONFIG  # noqa: E402
 from labkit.segmentation import segment_order  # noqa: E402
 from tests.test_iav_reference import _canon, _random_scan  # noqa: E402
@@ -544,16 +545,74 @@ def _one_bit_off(kernel, which: int):
     return off
 
 
-@pytest.mark.parametrize("name, which", [("lines_pass", 0), ("leg_pass", 3), ("circle_pass", 4)])
-def test_the_passes_identity_tests_can_fail(monkeypatch, name, which):
-    """One bit off in the floats a stage's pass hands back (the lines' r, alpha, ..., the leg runs'
-    padded chords and angles, the circle runs' angles and limits), and the comparison with the
-    stages sees it."""
+@pytest.mark.parametrize("name, which, config", [("stage_pass", 3, 0), ("line_pass", 0, 0), ("lines_pass", 0, 2),
+                                                   ("leg_pass", 3, 2), ("circle_pass", 4, 2)])
+def test_the_passes_identity_tests_can_fail(monkeypatch, name, which, config):
+    """One bit off in the floats a pass hands back (the two passes of the default Config: the legs'
+    and circles', the lines' and corners'; the staged passes of a Config they do not cover: the
+    lines' r, alpha, ..., the leg runs' padded chords and angles, the circle runs' angles and
+    limits), and the comparison with the stages sees it."""
     scan = _hall_scan()
-    fused_equals_stages(scan, CONFIGS[:1])
+    configs = CONFIGS[config:config + 1]
+    assert (fused.plan_for(configs[0]).packed is None) == (config == 2)
+    fused_equals_stages(scan, configs)
     monkeypatch.setattr(fused, name, _one_bit_off(getattr(fused, name), which))
     with pytest.raises(AssertionError):
-        fused_equals_stages(scan, CONFIGS[:1])
+        fused_equals_stages(scan, configs)
+
+
+def test_two_passes_cover_the_default_and_hand_the_rest_to_the_stages(monkeypatch):
+    """The configurations :func:`labkit._pipeline_engine.stage_pass` and ``line_pass`` cover run
+    them once per scan; a scan they cannot finish (a placing too close to call) gets the staged
+    path's features, the same."""
+    covered = [fused.plan_for(cfg).packed is not None for cfg in CONFIGS]
+    assert covered == [True, True, False, True, False, False]
+    scan = _hall_scan()
+    calls = []
+    stage_pass, line_pass = fused.stage_pass, fused.line_pass
+
+    def counted(*args):
+        calls.append(1)
+        return stage_pass(*args)
+
+    monkeypatch.setattr(fused, "stage_pass", counted)
+    fused_equals_stages(scan, [CONFIGS[0], CONFIGS[1], CONFIGS[3]])
+    assert len(calls) == 3
+
+    def refused(*args):
+        fo, io = line_pass(*args)
+        io[H_STATUS] = 2
+        return fo, io
+
+    staged = []
+    monkeypatch.setattr(fused, "_staged", lambda *a, _s=fused._staged: staged.append(1) or _s(*a))
+    monkeypatch.setattr(fused, "line_pass", refused)
+    fused_equals_stages(scan, CONFIGS[:1])
+    assert len(staged) == 1
+
+
+def test_the_passes_time_their_stages_by_perf_counters_clock():
+    """The passes read the clock :func:`time.perf_counter` reads (so a stage's time is its own);
+    every stage's time is >= 0 and they add up to no more than the total."""
+    import time
+
+    from numba import njit
+
+    @njit
+    def clock():
+        return K.monotonic_ns()
+
+    clock()
+    assert K.MONOTONIC_CLOCK
+    for _ in range(5):
+        before = time.perf_counter()
+        now = clock() * 1e-9
+        after = time.perf_counter()
+        assert before <= now <= after
+    features = labkit.extract_features(fresh(_hall_scan()))
+    t = features.timings
+    assert list(t) == ["segmentation", "legs", "circles", "lines", "corners", "arcs", "total"]
+    assert min(t.values()) >= 0.0 and sum(t.values()) - t["total"] <= t["total"] * (1 + 1e-9)
 
 
 def test_split_and_merges_pass_identity_test_can_fail(monkeypatch):

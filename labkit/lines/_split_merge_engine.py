@@ -28,6 +28,42 @@ import math
 
 import numpy as np
 
+from .._fused_layout import (
+    CORNER_F,
+    CORNER_I,
+    F_K_ANGLE,
+    F_K_EXT,
+    F_K_GAP,
+    F_L_ABSORB,
+    F_L_FLOOR,
+    F_L_GAP,
+    F_L_LAM_CUT,
+    F_L_LAM_GRAZE,
+    F_L_MERGE_DA,
+    F_L_MERGE_DR,
+    F_L_MIN_LEN,
+    F_L_NOISE,
+    F_L_PLACE_DA,
+    F_L_PLACE_DR,
+    F_L_PLACE_P,
+    F_L_SIGMA,
+    F_L_THRESHOLD,
+    H_BEAMS,
+    H_CORNERS,
+    H_LINES,
+    H_STATUS,
+    I_CORNERS,
+    I_FIT,
+    I_FULL,
+    I_FUSED,
+    I_L_MIN,
+    I_MERGE,
+    I_PLACE,
+    I_UNIFORM,
+    LINE_F,
+    LINE_I,
+    N_H,
+)
 from .._kernels import (
     FUSED_DOT,
     HALF_PI,
@@ -37,6 +73,7 @@ from .._kernels import (
     jit,
     jit_inline,
     line_from_sums,
+    monotonic_ns,
     pairwise_sum,
     remainder_2pi,
     segment_sum,
@@ -50,7 +87,7 @@ from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS
 from ..segmentation import SegmentationParams
 from ._split_merge_fast import GRAZING_DEG
 
-__all__ = ["extract", "split_and_merge", "READY"]
+__all__ = ["extract", "split_and_merge", "line_pass", "READY"]
 
 #: Whether the engine gives the reference's lines on this machine (its BLAS rounds a dot product in
 #: a way :func:`labkit._kernels.dot2` reproduces); if not, split_and_merge runs its readable steps.
@@ -927,6 +964,69 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
     return rows[:m]
 
 
+@jit
+def line_pass(points, ranges, angles, valid, labels, fp, ip):
+    """The lines of :func:`labkit._pipeline_engine.extract` (:func:`lines_pass`, the lines
+    placed kept) and their corners (``corners_pass``) in one compiled call: one float array (the
+    clock at the end of the lines and of the corners, ns; per line ``r, alpha, rms, sx, sy, ex, ey,
+    cov (4)``; per corner ``x, y, angle, concave, extrapolated``) and one integer array (the head
+    ``H_*``; per line ``first, last, offset, next offset, placed``; per corner its lines' places;
+    the lines' beams)."""
+    full = ip[I_FULL] != 0
+    out, ints, beams = lines_pass(
+        points, ranges, angles, valid, labels, ip[I_FIT] != 0, fp[F_L_THRESHOLD], fp[F_L_NOISE], fp[F_L_ABSORB],
+        ip[I_L_MIN], fp[F_L_GAP], ip[I_MERGE] != 0, fp[F_L_MERGE_DR], fp[F_L_MERGE_DA], fp[F_L_MIN_LEN],
+        ip[I_UNIFORM] != 0, fp[F_L_FLOOR], fp[F_L_LAM_CUT], fp[F_L_LAM_GRAZE], full, ip[I_FUSED] != 0,
+        fp[F_L_SIGMA], ip[I_PLACE] != 0, fp[F_L_PLACE_DR], fp[F_L_PLACE_DA], fp[F_L_PLACE_P], _GL_U, _GL_W)
+    n_kept = 0
+    for k in range(len(out)):
+        if ints[k, 4] == 2:  # a near tie: the reference's own sum decides (in Python)
+            io = np.zeros(N_H, np.int64)
+            io[H_STATUS] = 2
+            return np.zeros(2), io
+        n_kept += ints[k, 4]
+    keep = np.empty(n_kept, np.int64)
+    n_kept = 0
+    n_beams = 0
+    for k in range(len(out)):
+        if ints[k, 4]:
+            keep[n_kept] = k
+            n_kept += 1
+            n_beams += ints[k, 3] - ints[k, 2]
+    t_lines = monotonic_ns()
+    corners = np.empty((0, 7))
+    if ip[I_CORNERS] and n_kept > 1:
+        corners = corners_pass(out, ints, keep, fp[F_K_ANGLE], fp[F_K_GAP], fp[F_K_EXT], full)
+    n_corners = len(corners)
+    t_corners = monotonic_ns()
+    fo = np.empty(2 + LINE_F * n_kept + CORNER_F * n_corners)
+    io = np.empty(N_H + LINE_I * n_kept + CORNER_I * n_corners + n_beams, np.int64)
+    fo[0], fo[1] = t_lines, t_corners
+    io[H_STATUS], io[H_LINES], io[H_CORNERS], io[H_BEAMS] = 0, n_kept, n_corners, n_beams
+    f, i = 2, N_H
+    offset = 0
+    for k in keep:
+        for c in range(LINE_F):
+            fo[f + c] = out[k, c]
+        f += LINE_F
+        io[i], io[i + 1], io[i + 2] = ints[k, 0], ints[k, 1], offset
+        io[i + 3] = offset + ints[k, 3] - ints[k, 2]
+        io[i + 4] = ints[k, 4]
+        offset = io[i + 3]
+        i += LINE_I
+    for q in range(n_corners):
+        for c in range(CORNER_F):
+            fo[f + c] = corners[q, c]
+        io[i], io[i + 1] = int(corners[q, 5]), int(corners[q, 6])
+        f += CORNER_F
+        i += CORNER_I
+    for k in keep:
+        for b in range(ints[k, 2], ints[k, 3]):
+            io[i] = beams[b]
+            i += 1
+    return fo, io
+
+
 def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma: float, absorb_m: float, sigma: float,
                     min_points: int, min_length_m: float, max_gap_m: float, merge: str, merge_dr_m: float,
                     merge_dalpha_deg: float, weights, floor_m: float, place_dr_m: float, place_dalpha_deg: float,
@@ -966,6 +1066,9 @@ def compile_all() -> None:
                               True, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     out.setflags(write=False)  # (as placed_records hands it over)
     corners_pass(out, ints, np.arange(len(out)), math.radians(30.0), 0.3, 0.1, False)
+    from .._fused_layout import N_F, N_I
+
+    line_pass(p, r, a, v, labels, np.zeros(N_F), np.zeros(N_I, np.int64))
     compile_circles()
     compile_scan_kernels()
 
