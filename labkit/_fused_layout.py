@@ -18,13 +18,17 @@ F_LEG_C_LO, F_LEG_C_HI, F_LEG_LO, F_LEG_HI, F_LEG_PAD, F_LEG_SIGMA = 4, 5, 6, 7,
 F_C_C_LO, F_C_C_HI, F_C_LO, F_C_HI, F_C_MEAN_LO, F_C_MEAN_HI, F_C_STD, F_C_STD_SQ, F_C_SIGMA = range(10, 19)
 F_L_THRESHOLD, F_L_NOISE, F_L_ABSORB, F_L_GAP, F_L_MERGE_DR, F_L_MERGE_DA, F_L_MIN_LEN = range(19, 26)
 F_L_FLOOR, F_L_LAM_CUT, F_L_LAM_GRAZE, F_L_SIGMA, F_L_PLACE_DR, F_L_PLACE_DA, F_L_PLACE_P = range(26, 33)
-F_K_ANGLE, F_K_GAP, F_K_EXT = range(33, 36)
-N_F = 36
+F_K_ANGLE, F_K_GAP, F_K_EXT, F_EARLY_FACTOR = range(33, 37)
+N_F = 37
 I_SEG_MIN, I_ADAPTIVE, I_FULL, I_LEGS, I_LEG_MIN, I_OCCLUDED, I_CIRCLES, I_C_MIN = range(8)
-I_FIT, I_L_MIN, I_MERGE, I_UNIFORM, I_SKIP_ROUND, I_PLACE, I_CORNERS, I_FUSED = range(8, 16)
-N_I = 16
-LEG_F, LEG_I, CIRCLE_F, CIRCLE_I, LINE_F, LINE_I, CORNER_F, CORNER_I = 5, 3, 9, 4, 11, 5, 5, 2
-N_T = 3  # stage_pass's floats start with the clock at the end of the segmentation, legs, circles' tests (ns)
+I_FIT, I_L_MIN, I_MERGE, I_UNIFORM, I_SKIP_ROUND, I_PLACE, I_CORNERS, I_FUSED, I_EARLY_STEPS = range(8, 17)
+N_I = 17
+LEG_F, LEG_I, CIRCLE_F, CIRCLE_I, LINE_F, LINE_I, CORNER_F, CORNER_I = 7, 3, 7, 3, 11, 5, 5, 2
+N_T = 3  # stage_pass's floats start with the clock at the end of the segmentation, legs, circles (ns)
+# the head of stage_pass's integer output: a status (0: done; 1: a case only Python computes, which the
+# staged path hands to it), the legs and circles it holds
+S_STATUS, S_LEGS, S_CIRCLES = range(3)
+N_S = 3
 
 
 # the head of line_pass's integer output: a status (0: done; 2: a placing too close to call, which

@@ -43,6 +43,7 @@ from ._fused_layout import (
     F_C_SIGMA,
     F_C_STD,
     F_C_STD_SQ,
+    F_EARLY_FACTOR,
     F_INCREMENT,
     F_LAM,
     F_LEG_C_HI,
@@ -56,6 +57,7 @@ from ._fused_layout import (
     I_ADAPTIVE,
     I_C_MIN,
     I_CIRCLES,
+    I_EARLY_STEPS,
     I_FULL,
     I_LEG_MIN,
     I_LEGS,
@@ -63,9 +65,13 @@ from ._fused_layout import (
     I_SEG_MIN,
     LEG_F,
     LEG_I,
+    N_S,
     N_T,
+    S_CIRCLES,
+    S_LEGS,
+    S_STATUS,
 )
-from ._kernels import fma, jit, jit_inline, monotonic_ns, segment_sum, sum_at
+from ._kernels import fma, jit, jit_inline, monotonic_ns, py_hypot, py_hypot_in_range, segment_sum, sum_at
 from ._segmentation_engine import labels as _labels
 from ._segmentation_engine import runs as _runs
 from ._segmentation_engine import without as _without
@@ -78,6 +84,7 @@ LINE_Z = 3.0  # the engine cannot import the modules it serves; tests/test_engin
 ARC_LIKE_STD_MAX = math.radians(23.0)
 ACCEPTED, FEW, SHORT, LONG, PREREQ, DEGENERATE, MEAN, STD = range(8)
 _PI = math.pi
+_HALF_PI = math.pi / 2
 _TWO_PI = 2 * math.pi
 
 
@@ -591,29 +598,30 @@ def circle_pass(labels, drop, points, min_points, c_lo, c_hi, lo, hi, mean_lo, m
 
 @jit
 def stage_pass(points, ranges, angles, valid, fp, ip):
-    """The segmentation, legs and circles of :func:`labkit._pipeline_engine.extract` up to what Python's own arithmetic
-    computes (``math.hypot`` is not the C library's), in one compiled call: the labels
-    (:func:`labkit._segmentation_engine.labels`); the legs' tests and occlusion (as ``labkit._pipeline_engine._legs``);
-    the circles' tests on the segments the legs left (as ``_circles``). Returns the labels, the
-    labels the legs left, the circle runs' points (``xy``: x row, y row), and one float and one
-    integer array: the clock at the end of each stage (ns), then per leg ``mx, my, chord, mean,
-    std`` (its middle point, padded chord, angles) and ``first, last, n``, per circle run accepted
-    ``x1, y1, xn, yn, mean, std, side, high, std_max`` and ``start, end`` (in ``xy``), ``first, last``;
-    the integers start with the counts of legs and circle runs."""
+    """The segmentation, legs and circles of :func:`labkit._pipeline_engine.extract` up to their
+    records, in one compiled call: the labels (:func:`labkit._segmentation_engine.labels`); the
+    legs' tests, occlusion and ``"ray"`` centres (as ``labkit._pipeline_engine._legs``); the
+    circles' tests on the segments the legs left, their ``"iav"`` centres and the noise test (as
+    ``_circles``), with :func:`labkit._kernels.py_hypot` where Python computes ``math.hypot``.
+    Returns the labels, the labels the legs and circles left, and one float and one integer
+    array: the clock at the end of each stage (ns), then per leg ``cx, cy, diameter, mx, my, mean,
+    std`` and per circle ``cx, cy, radius, mean, std, high, std_max`` (the limits held to); the
+    integers: a status (0; 1 where only Python can finish the scan: a fit by numpy's least
+    squares, a subnormal distance), the counts, per leg and circle ``first, last, n``."""
     n = len(ranges)
     none = np.empty(0, np.int64)
     full = ip[I_FULL] != 0
     lab = _labels(points, ranges, angles, valid, fp[F_SEG_M], ip[I_SEG_MIN], ip[I_ADAPTIVE] != 0, fp[F_LAM],
-                   fp[F_SEG_SIGMA], full, fp[F_INCREMENT])
+                  fp[F_SEG_SIGMA], full, fp[F_INCREMENT])
     t_seg = monotonic_ns()
     n_legs = 0
     leg_f = np.empty((0, LEG_F))
     leg_i = np.empty((0, LEG_I), np.int64)
     if ip[I_LEGS]:
         _, idx, xy, starts, ends = _runs(lab, none, points)
-        verdict, chord, mean, std, _ = _leg_tests(xy[0], xy[1], starts, ends, False, ip[I_LEG_MIN],
-                                                     fp[F_LEG_C_LO], fp[F_LEG_C_HI], fp[F_LEG_LO], fp[F_LEG_HI],
-                                                     fp[F_LEG_PAD], fp[F_LEG_SIGMA])
+        verdict, chord, mean, std, _ = _leg_tests(xy[0], xy[1], starts, ends, False, ip[I_LEG_MIN], fp[F_LEG_C_LO],
+                                                  fp[F_LEG_C_HI], fp[F_LEG_LO], fp[F_LEG_HI], fp[F_LEG_PAD],
+                                                  fp[F_LEG_SIGMA])
         passed = _accepted(verdict)
         leg_f = np.empty((len(passed), LEG_F))
         leg_i = np.empty((len(passed), LEG_I), np.int64)
@@ -623,8 +631,13 @@ def stage_pass(points, ranges, angles, valid, fp, ip):
             if ip[I_OCCLUDED] and _occluded(ranges, valid, n, full, first, last):
                 continue
             mid = a + (b - a) // 2
-            leg_f[n_legs, 0], leg_f[n_legs, 1], leg_f[n_legs, 2] = xy[0, mid], xy[1, mid], chord[k]
-            leg_f[n_legs, 3], leg_f[n_legs, 4] = mean[k], std[k]
+            mx, my = xy[0, mid], xy[1, mid]
+            if not py_hypot_in_range(mx, my):
+                return _refused(lab)
+            h, half = py_hypot(mx, my), 0.5 * chord[k]
+            leg_f[n_legs, 0], leg_f[n_legs, 1] = mx + half * mx / h, my + half * my / h
+            leg_f[n_legs, 2], leg_f[n_legs, 3], leg_f[n_legs, 4] = chord[k], mx, my
+            leg_f[n_legs, 5], leg_f[n_legs, 6] = mean[k], std[k]
             leg_i[n_legs, 0], leg_i[n_legs, 1], leg_i[n_legs, 2] = first, last, b - a
             n_legs += 1
     drop = np.empty(n_legs, np.int64)
@@ -632,35 +645,66 @@ def stage_pass(points, ranges, angles, valid, fp, ip):
         drop[j] = leg_i[j, 0]
     t_legs = monotonic_ns()
     rest = lab
-    cxy = np.empty((2, 0))
-    n_p = 0
+    n_circles = 0
     circle_f = np.empty((0, CIRCLE_F))
     circle_i = np.empty((0, CIRCLE_I), np.int64)
     if ip[I_CIRCLES]:
-        rest, idx, cxy, starts, ends = _runs(lab, drop, points)
+        rest, idx, xy, starts, ends = _runs(lab, drop, points)
+        sigma = fp[F_C_SIGMA]
         verdict, _, mean, std, side, lim = _circle_tests(
-            cxy[0], cxy[1], starts, ends, False, ip[I_C_MIN], fp[F_C_C_LO], fp[F_C_C_HI], fp[F_C_LO], fp[F_C_HI],
-            fp[F_C_MEAN_LO], fp[F_C_MEAN_HI], fp[F_C_STD], fp[F_C_STD_SQ], fp[F_C_SIGMA])
+            xy[0], xy[1], starts, ends, False, ip[I_C_MIN], fp[F_C_C_LO], fp[F_C_C_HI], fp[F_C_LO], fp[F_C_HI],
+            fp[F_C_MEAN_LO], fp[F_C_MEAN_HI], fp[F_C_STD], fp[F_C_STD_SQ], sigma)
         passed = _accepted(verdict)
         n_p = len(passed)
+        cx, cy, radii = np.full(n_p, math.nan), np.full(n_p, math.nan), np.full(n_p, math.nan)
+        for j in range(n_p):  # (labkit.iav.circle_from_iav's arithmetic, as _pipeline_engine._iav_circles)
+            k = passed[j]
+            m, sd_side = mean[k], side[k]
+            if sd_side == 0:
+                sd_side = 1.0
+            a, e = starts[k], ends[k]
+            x1, y1 = xy[0, a], xy[1, a]
+            dx, dy = xy[0, e - 1] - x1, xy[1, e - 1] - y1
+            if not py_hypot_in_range(dx, dy):
+                return _refused(lab)
+            c = py_hypot(dx, dy)
+            if not (0 < m < _PI) or not math.isfinite(sd_side) or c == 0:
+                continue
+            theta = m - _HALF_PI
+            hh = -math.copysign(1.0, sd_side) * 0.5 * math.tan(theta)
+            cx[j], cy[j] = x1 + 0.5 * dx - hh * dy, y1 + 0.5 * dy + hh * dx
+            radii[j] = 0.5 * c / math.cos(theta)
+        wide = np.zeros(n_p, np.bool_)
+        if sigma > 0.0 and n_p:  # and their points must lie on a circle within the noise
+            s_p, e_p = np.empty(n_p, np.int64), np.empty(n_p, np.int64)
+            for j in range(n_p):
+                s_p[j], e_p[j] = starts[passed[j]], ends[passed[j]]
+            wide, ok = _wider(xy[0], xy[1], s_p, e_p, sigma, cx, cy, radii, True, ip[I_EARLY_STEPS],
+                              fp[F_EARLY_FACTOR])
+            if not ok:
+                return _refused(lab)
         circle_f = np.empty((n_p, CIRCLE_F))
         circle_i = np.empty((n_p, CIRCLE_I), np.int64)
         for j in range(n_p):
+            if math.isnan(radii[j]) or wide[j]:
+                continue
             k = passed[j]
             a, e = starts[k], ends[k]
-            circle_f[j, 0], circle_f[j, 1], circle_f[j, 2], circle_f[j, 3] = cxy[0, a], cxy[1, a], cxy[0, e - 1], \
-                cxy[1, e - 1]
-            circle_f[j, 4], circle_f[j, 5], circle_f[j, 6] = mean[k], std[k], side[k]
-            circle_f[j, 7], circle_f[j, 8] = lim[k, 1], lim[k, 2]
-            circle_i[j, 0], circle_i[j, 1], circle_i[j, 2], circle_i[j, 3] = a, e, idx[a], idx[e - 1]
-    else:
-        rest = _without(lab, drop)
+            circle_f[n_circles, 0], circle_f[n_circles, 1], circle_f[n_circles, 2] = cx[j], cy[j], radii[j]
+            circle_f[n_circles, 3], circle_f[n_circles, 4] = mean[k], std[k]
+            circle_f[n_circles, 5], circle_f[n_circles, 6] = lim[k, 1], lim[k, 2]
+            circle_i[n_circles, 0], circle_i[n_circles, 1], circle_i[n_circles, 2] = idx[a], idx[e - 1], e - a
+            n_circles += 1
+        drop = np.empty(n_circles, np.int64)
+        for j in range(n_circles):
+            drop[j] = circle_i[j, 0]
+    rest = _without(rest, drop)
     t_circles = monotonic_ns()
-    fo = np.empty(N_T + LEG_F * n_legs + CIRCLE_F * n_p)
-    io = np.empty(2 + LEG_I * n_legs + CIRCLE_I * n_p, np.int64)
+    fo = np.empty(N_T + LEG_F * n_legs + CIRCLE_F * n_circles)
+    io = np.empty(N_S + LEG_I * n_legs + CIRCLE_I * n_circles, np.int64)
     fo[0], fo[1], fo[2] = t_seg, t_legs, t_circles
-    io[0], io[1] = n_legs, n_p
-    f, i = N_T, 2
+    io[S_STATUS], io[S_LEGS], io[S_CIRCLES] = 0, n_legs, n_circles
+    f, i = N_T, N_S
     for j in range(n_legs):
         for c in range(LEG_F):
             fo[f + c] = leg_f[j, c]
@@ -668,14 +712,21 @@ def stage_pass(points, ranges, angles, valid, fp, ip):
             io[i + c] = leg_i[j, c]
         f += LEG_F
         i += LEG_I
-    for j in range(n_p):
+    for j in range(n_circles):
         for c in range(CIRCLE_F):
             fo[f + c] = circle_f[j, c]
         for c in range(CIRCLE_I):
             io[i + c] = circle_i[j, c]
         f += CIRCLE_F
         i += CIRCLE_I
-    return lab, rest, cxy, fo, io
+    return lab, rest, fo, io
+
+
+@jit
+def _refused(lab):
+    io = np.zeros(N_S, np.int64)
+    io[S_STATUS] = 1
+    return lab, lab, np.zeros(N_T), io
 
 
 @jit_inline

@@ -8,18 +8,22 @@ parameters turned into keyword arguments and the tests' records built -- some tw
 calls per scan, which on a 180-beam scan cost more than the compiled work itself.
 
 Here the same stages run on the same arrays with the scan-level quantities worked out once: the
-parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`), the scan's points,
-validity, full-circle flag and noise once per scan, the segmentation and each stage's segments in
-one compiled pass each (:func:`labkit._segmentation_engine.runs`: the segments left after the legs
-or circles, laid end to end, their points gathered), and the detectors' compiled tests are called directly
-(:mod:`labkit._iav_engine`, :mod:`labkit.lines._split_merge_engine`). Each stage is one compiled
-call that hands back few arrays (:func:`labkit._iav_engine.leg_pass` and ``circle_pass``: the runs
-and their tests; :func:`labkit.lines._split_merge_engine.lines_pass`: the lines, their covariances
-and placing; ``corners_pass``: the corners of the lines kept): a call costs a few microseconds and
-each array numba hands back to Python about one, which at 180 beams is a good part of the scan.
-What a test accepts is made into records as the detectors make them (the same arithmetic). So the
-features are the stages' own, bit for bit: ``tests/test_engine.py`` compares the two paths on random
-scans, the simulated worlds and real recordings.
+parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`, which also packs their
+numbers into the two arrays the passes take: :mod:`labkit._fused_layout`), the scan's points,
+validity, full-circle flag and noise once per scan, and then two compiled passes do the rest:
+:func:`labkit._iav_engine.stage_pass` (the segmentation; the legs' tests, occlusion and centres;
+the circles' tests, centres and noise test on the segments the legs left) and
+:func:`labkit.lines._split_merge_engine.line_pass` (the lines, their covariances and placing, and
+their corners). Each hands back one float and one integer array (a call costs a few microseconds
+and each array numba hands back to Python about one); the records are made from their rows, the
+few floats Python computes itself (a circle's confidence) in the same Python arithmetic. Where
+Python computes ``math.hypot``, the passes compute it as CPython does
+(:func:`labkit._kernels.py_hypot`: the C library's ``hypot`` differs in the last bit now and
+then). So the features are the stages' own, bit for bit: ``tests/test_engine.py`` compares the
+two paths on random scans, the simulated worlds and real recordings. Configurations the passes do
+not cover (another leg or circle centre, a test of the legs' angles, arc-like circles, the arcs)
+run the stages one compiled call or two each (:func:`_staged`), as do the rare scans the passes
+hand back (a circle fit that needs numpy's least squares, a placing too close to call).
 
 A configuration the engines do not cover (another line method, the chi-square merge) runs the
 stages as :mod:`labkit.pipeline` reads them, and so does ``LABKIT_NO_JIT=1`` (with their readable
@@ -49,6 +53,7 @@ from ._fused_layout import (
     F_C_SIGMA,
     F_C_STD,
     F_C_STD_SQ,
+    F_EARLY_FACTOR,
     F_INCREMENT,
     F_K_ANGLE,
     F_K_EXT,
@@ -80,6 +85,7 @@ from ._fused_layout import (
     I_C_MIN,
     I_CIRCLES,
     I_CORNERS,
+    I_EARLY_STEPS,
     I_FIT,
     I_FULL,
     I_FUSED,
@@ -99,6 +105,7 @@ from ._fused_layout import (
     N_F,
     N_H,
     N_I,
+    N_S,
     N_T,
 )
 from ._iav_batch import (
@@ -117,8 +124,8 @@ from ._iav_batch import (
     occluded,
 )
 from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass, stage_pass
-from ._iav_noise import wider_than_noise
-from ._kernels import FUSED_DOT, MONOTONIC_CLOCK
+from ._iav_noise import EARLY_FACTOR, EARLY_STEPS
+from ._kernels import FUSED_DOT, MONOTONIC_CLOCK, py_hypot_is_pythons
 from ._segmentation_engine import beams, runs, without
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import detect_arcs
@@ -187,12 +194,23 @@ class Plan(NamedTuple):
     packed: tuple | None = None  # (floats, integers) of stage_pass and line_pass, where they cover the Config
 
 
+def _py_hypot_ok() -> bool:
+    """Whether the passes' ``math.hypot`` is this Python's (:func:`labkit._kernels.py_hypot_is_pythons`,
+    asked once)."""
+    if not _PY_HYPOT:
+        _PY_HYPOT.append(py_hypot_is_pythons())
+    return _PY_HYPOT[0]
+
+
+_PY_HYPOT: list[bool] = []
+
+
 def _pack(plan: Plan) -> tuple | None:
     """``plan``'s numbers as the passes take them (:mod:`labkit._fused_layout`; a scan's own left
     NaN or 0, written in a copy per scan), or None where the passes do not cover the plan: an arc
     detector, a leg or circle test or centre the compiled tests do not run, no clock to time the
     stages by."""
-    if not MONOTONIC_CLOCK or plan.lines is None or plan.arcs is not None:
+    if not (MONOTONIC_CLOCK and _py_hypot_ok()) or plan.lines is None or plan.arcs is not None:
         return None
     t_legs, t_circles = plan.legs, plan.circles
     if t_legs is not None and not (plan.legs_fast and t_legs.center_method == "ray"):
@@ -218,6 +236,7 @@ def _pack(plan: Plan) -> tuple | None:
      lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = plan.lines
     ip[I_FIT], ip[I_L_MIN], ip[I_MERGE], ip[I_UNIFORM] = fit, min_points, merge_on, uniform
     ip[I_SKIP_ROUND], ip[I_PLACE], ip[I_FUSED] = plan.lines_skip_round, place_confidence > 0, bool(FUSED_DOT)
+    ip[I_EARLY_STEPS], fp[F_EARLY_FACTOR] = int(EARLY_STEPS), float(EARLY_FACTOR)
     fp[F_L_GAP], fp[F_L_MERGE_DR], fp[F_L_MERGE_DA], fp[F_L_MIN_LEN] = max_gap_m, merge_dr_m, merge_dalpha, min_length_m
     fp[F_L_FLOOR], fp[F_L_LAM_CUT], fp[F_L_LAM_GRAZE] = floor_m, lam_cut, lam_graze
     fp[F_L_PLACE_DR], fp[F_L_PLACE_DA] = float(place_dr_m), math.radians(place_dalpha_deg)
@@ -439,24 +458,24 @@ def _fused(scan, plan: Plan) -> Features | None:
     else:
         noise, threshold = 0.0, split_threshold_m
     fp[F_L_THRESHOLD], fp[F_L_NOISE], fp[F_L_ABSORB], fp[F_L_SIGMA] = threshold, noise, min(threshold, 3 * s), s
-    labels, rest, cxy, fo, io = stage_pass(points, ranges, angles, valid, fp, ip)
+    labels, rest, fo, io = stage_pass(points, ranges, angles, valid, fp, ip)
+    status, n_legs, n_circles = io[:N_S].tolist()
+    if status:
+        return None
+    fo.setflags(write=False)
     clock = [t * 1e-9 for t in fo[:N_T].tolist()]
     timings: dict[str, float] = {"segmentation": clock[0] - t_start}
 
     t = perf_counter()
-    n_legs, n_runs = io[:2].tolist()
-    f, i = N_T, 2
+    f, i = N_T, N_S
     legs: list = []
     people: list = []
-    if n_legs:  # (their centres as _legs: "ray", in Python floats)
-        leg_i = io[i:i + LEG_I * n_legs].tolist()
-        middles = fo[f:f + LEG_F * n_legs].reshape(n_legs, LEG_F)[:, :2].copy()
-        middles.setflags(write=False)
-        for j, (mx, my, chord, m, sd) in enumerate(fo[f:f + LEG_F * n_legs].reshape(n_legs, LEG_F).tolist()):
-            h, half = math.hypot(mx, my), 0.5 * chord
-            center = np.array([mx + half * mx / h, my + half * my / h])
-            center.setflags(write=False)
-            legs.append(Leg(center, chord, middles[j], leg_i[3 * j], leg_i[3 * j + 1], leg_i[3 * j + 2], m, sd))
+    if n_legs:
+        rows = fo[f:f + LEG_F * n_legs].reshape(n_legs, LEG_F)
+        ints = io[i:i + LEG_I * n_legs].tolist()
+        for j, (_, _, diameter, _, _, m, sd) in enumerate(rows.tolist()):
+            legs.append(Leg(rows[j, 0:2], diameter, rows[j, 3:5], ints[3 * j], ints[3 * j + 1], ints[3 * j + 2], m,
+                            sd))
         f += LEG_F * n_legs
         i += LEG_I * n_legs
         people = pair_legs(legs, plan.pair_m) if n_legs > 1 else []
@@ -465,19 +484,17 @@ def _fused(scan, plan: Plan) -> Features | None:
     t = now
 
     circles: list = []
-    if n_runs:  # (their centres as _iav_circles, and the noise test as _circles)
-        rows = fo[f:f + CIRCLE_F * n_runs].reshape(n_runs, CIRCLE_F).tolist()
-        run_i = io[i:i + CIRCLE_I * n_runs].reshape(n_runs, CIRCLE_I)
-        made = _iav_circle_rows(rows, run_i.tolist())
-        if fp[F_C_SIGMA] > 0.0:
-            centers = np.array([c.center if c is not None else (np.nan, np.nan) for c in made]).reshape(-1, 2)
-            radii = np.array([c.radius if c is not None else np.nan for c in made])
-            wider = wider_than_noise(np.ascontiguousarray(cxy.T), run_i[:, 0], run_i[:, 1], fp.item(F_C_SIGMA),
-                                     centers, radii).tolist()
-            made = [None if w else c for w, c in zip(wider, made, strict=True)]
-        circles = [c for c in made if c is not None]
-        if circles:
-            rest = without(rest, np.array([c.first for c in circles], dtype=np.int64))
+    if n_circles:
+        rows = fo[f:f + CIRCLE_F * n_circles].reshape(n_circles, CIRCLE_F)
+        ints = io[i:i + CIRCLE_I * n_circles].tolist()
+        for j, (_, _, radius, m, sd, high, std_max) in enumerate(rows.tolist()):
+            size = ints[3 * j + 2]  # (the confidence as labkit.iav.circle_confidence, as _iav_circles)
+            f_n = 1.0 - math.exp(-max(size - 2, 0) / 5.0)
+            f_std = 1.0 - 0.5 * min(abs(sd) / std_max, 1.0)
+            f_mean = 1.0 - 0.5 * min(abs(m - _HALF_PI) / max(high - _HALF_PI, 1e-12), 1.0)
+            confidence = float(min(max(f_n * f_std * f_mean, 0.0), 1.0))
+            circles.append(Circle(rows[j, 0:2], radius, m, sd, confidence, ints[3 * j], ints[3 * j + 1], size,
+                                  "circle"))
     now = perf_counter()
     timings["circles"] = clock[2] - clock[1] + now - t
     t = now
@@ -525,33 +542,6 @@ def _fused(scan, plan: Plan) -> Features | None:
                              corners=tuple(corners), circles=tuple(circles), arcs=(), legs=tuple(legs),
                              people=tuple(people), timings=timings)
     return features
-
-
-def _iav_circle_rows(rows: list, runs: list) -> list:
-    """:func:`_iav_circles` of the circle runs :func:`stage_pass` accepted (``rows``: their floats,
-    ``runs``: their integers): a :class:`labkit.Circle` or None per run, in the same Python floats."""
-    made: list = []
-    for j, (x1, y1, x2, y2, m, sd, sd_side, high, std_max) in enumerate(rows):
-        start, end, first, last = runs[j]
-        if sd_side == 0:
-            sd_side = 1.0
-        dx, dy = x2 - x1, y2 - y1
-        chord = math.hypot(dx, dy)
-        if not (0 < m < math.pi) or not math.isfinite(sd_side) or chord == 0:
-            made.append(None)  # (circle_from_iav raises)
-            continue
-        theta = m - _HALF_PI
-        h = -math.copysign(1.0, sd_side) * 0.5 * math.tan(theta)
-        center = np.array([x1 + 0.5 * dx - h * dy, y1 + 0.5 * dy + h * dx])
-        radius = 0.5 * chord / math.cos(theta)
-        center.setflags(write=False)
-        n = end - start
-        f_n = 1.0 - math.exp(-max(n - 2, 0) / 5.0)
-        f_std = 1.0 - 0.5 * min(abs(sd) / std_max, 1.0)
-        f_mean = 1.0 - 0.5 * min(abs(m - _HALF_PI) / max(high - _HALF_PI, 1e-12), 1.0)
-        confidence = float(min(max(f_n * f_std * f_mean, 0.0), 1.0))
-        made.append(Circle(center, float(radius), m, sd, confidence, first, last, n, "circle"))
-    return made
 
 
 def _firsts(features) -> np.ndarray:
