@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -404,14 +405,23 @@ def test_the_fused_path_equals_the_stages_on_real_scans(shared_datasets):
 @given(st.lists(st.sampled_from([0.0, -1.0, 0.05, 0.5, 1.0, 3.0, 29.999, 30.0, 31.0, math.inf, -math.inf, math.nan]),
                 min_size=0, max_size=40), st.floats(0.0, 1.0))
 def test_the_scans_beams_are_the_scans_own(ranges, range_min):
-    """valid and points of the fused pass: Scan.valid and Scan.points, by their bits."""
+    """valid and points of the compiled pass (the fused path's, and Scan.valid and Scan.points'
+    once the engines are loaded): numpy's mask and ``polar_to_cartesian``, by their bits."""
+    from labkit.scan import polar_to_cartesian
+
     rng = np.random.default_rng(len(ranges))
     r = np.array(ranges) * rng.uniform(0.5, 1.5, len(ranges))
     angles = -3.0 + np.cumsum(rng.uniform(0.01, 6.0 / max(len(r), 1), len(r)))
     scan = Scan(ranges=r, angles=angles, range_min=range_min, range_max=30.0)
+    with np.errstate(invalid="ignore"):
+        want_valid = np.isfinite(r) & (r > 0) & (r >= range_min) & (r < 30.0)
+    want_points = polar_to_cartesian(r, angles)
+    want_points[~want_valid] = np.nan
     valid, points = fused._scan_beams(fresh(scan))
-    assert _canon((valid, points)) == _canon((scan.valid, scan.points))
-    assert not valid.flags.writeable and not points.flags.writeable
+    assert "labkit._segmentation_engine" in sys.modules
+    for v, p in ((valid, points), (scan.valid, scan.points)):
+        assert _canon((v, p)) == _canon((want_valid, want_points))
+        assert not v.flags.writeable and not p.flags.writeable
 
 
 @settings(max_examples=80, deadline=None)
