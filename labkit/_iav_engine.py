@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ._fused_layout import (
+from ._kernels import (
     CIRCLE_F,
     CIRCLE_I,
     F_C_C_HI,
@@ -70,8 +70,15 @@ from ._fused_layout import (
     S_CIRCLES,
     S_LEGS,
     S_STATUS,
+    fma,
+    jit,
+    jit_inline,
+    monotonic_ns,
+    py_hypot,
+    py_hypot_in_range,
+    segment_sum,
+    sum_at,
 )
-from ._kernels import fma, jit, jit_inline, monotonic_ns, py_hypot, py_hypot_in_range, segment_sum, sum_at
 from ._segmentation_engine import labels as _labels
 from ._segmentation_engine import runs as _runs
 from ._segmentation_engine import without as _without
@@ -861,7 +868,7 @@ def compile_all() -> None:
     leg_tests(pts, np.array([0]), np.array([5]), False, 3, (0.1, 0.25), (0.1, 0.7), 0.01, 0.01)
     wider_than_noise(pts, np.array([0]), np.array([5]), 0.01, np.array([[0.0, 0.0]]), np.array([1.0]), 5, 16.0)
     # stage_pass as labkit._pipeline_engine hands it a scan's arrays (read-only) and the plan's (copies)
-    from ._fused_layout import N_F, N_I
+    from ._kernels import N_F, N_I
     from ._segmentation_engine import beams
 
     angles = np.radians(np.arange(-90.0, 91.0, 10.0))

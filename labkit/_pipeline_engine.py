@@ -9,7 +9,7 @@ calls per scan, which on a 180-beam scan cost more than the compiled work itself
 
 Here the same stages run on the same arrays with the scan-level quantities worked out once: the
 parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`, which also packs their
-numbers into the two arrays the passes take: :mod:`labkit._fused_layout`), the scan's points,
+numbers into the two arrays the passes take: ``labkit._kernels``' layout), the scan's points,
 validity, full-circle flag and noise once per scan, and then two compiled passes do the rest:
 :func:`labkit._iav_engine.stage_pass` (the segmentation; the legs' tests, occlusion and centres;
 the circles' tests, centres and noise test on the segments the legs left) and
@@ -39,7 +39,24 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._fused_layout import (
+from ._iav_batch import (
+    ACCEPTED,
+    FIT,
+    Angles,
+    CircleTest,
+    Geometry,
+    LegTest,
+    Runs,
+    circle_engine,
+    drop_wider,
+    leg_center,
+    leg_engine,
+    make_circle,
+    occluded,
+)
+from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass, stage_pass
+from ._iav_noise import EARLY_FACTOR, EARLY_STEPS
+from ._kernels import (
     CIRCLE_F,
     CIRCLE_I,
     CORNER_F,
@@ -81,6 +98,7 @@ from ._fused_layout import (
     F_LEG_SIGMA,
     F_SEG_M,
     F_SEG_SIGMA,
+    FUSED_DOT,
     I_ADAPTIVE,
     I_C_MIN,
     I_CIRCLES,
@@ -102,30 +120,14 @@ from ._fused_layout import (
     LEG_I,
     LINE_F,
     LINE_I,
+    MONOTONIC_CLOCK,
     N_F,
     N_H,
     N_I,
     N_S,
     N_T,
+    py_hypot_is_pythons,
 )
-from ._iav_batch import (
-    ACCEPTED,
-    FIT,
-    Angles,
-    CircleTest,
-    Geometry,
-    LegTest,
-    Runs,
-    circle_engine,
-    drop_wider,
-    leg_center,
-    leg_engine,
-    make_circle,
-    occluded,
-)
-from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass, stage_pass
-from ._iav_noise import EARLY_FACTOR, EARLY_STEPS
-from ._kernels import FUSED_DOT, MONOTONIC_CLOCK, py_hypot_is_pythons
 from ._segmentation_engine import beams, runs, without
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import detect_arcs
@@ -206,7 +208,7 @@ _PY_HYPOT: list[bool] = []
 
 
 def _pack(plan: Plan) -> tuple | None:
-    """``plan``'s numbers as the passes take them (:mod:`labkit._fused_layout`; a scan's own left
+    """``plan``'s numbers as the passes take them (``labkit._kernels``' layout; a scan's own left
     NaN or 0, written in a copy per scan), or None where the passes do not cover the plan: an arc
     detector, a leg or circle test or centre the compiled tests do not run, no clock to time the
     stages by."""

@@ -325,7 +325,7 @@ from labkit import Config, pipeline  # noqa: E402
 from labkit import _noise_engine as NE  # noqa: E402
 from labkit import _pipeline_engine as fused  # noqa: E402
 from labkit import _segmentation_engine as SE  # noqa: E402
-from labkit._fused_layout import H_STATUS, S_STATUS  # noqa: E402
+from labkit._kernels import H_STATUS, S_STATUS  # noqa: E402
 from labkit.noise import FIXED_CONFIG  # noqa: E402
 from labkit.segmentation import segment_order  # noqa: E402
 from tests.test_iav_reference import _canon, _random_scan  # noqa: E402

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from .._fused_layout import (
+from .._kernels import (
     CORNER_F,
     CORNER_I,
     F_K_ANGLE,
@@ -48,10 +48,12 @@ from .._fused_layout import (
     F_L_PLACE_P,
     F_L_SIGMA,
     F_L_THRESHOLD,
+    FUSED_DOT,
     H_BEAMS,
     H_CORNERS,
     H_LINES,
     H_STATUS,
+    HALF_PI,
     I_CORNERS,
     I_FIT,
     I_FULL,
@@ -63,10 +65,6 @@ from .._fused_layout import (
     LINE_F,
     LINE_I,
     N_H,
-)
-from .._kernels import (
-    FUSED_DOT,
-    HALF_PI,
     PI,
     TWO_PI,
     dot2,
@@ -1066,7 +1064,7 @@ def compile_all() -> None:
                               True, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     out.setflags(write=False)  # (as placed_records hands it over)
     corners_pass(out, ints, np.arange(len(out)), math.radians(30.0), 0.3, 0.1, False)
-    from .._fused_layout import N_F, N_I
+    from .._kernels import N_F, N_I
 
     line_pass(p, r, a, v, labels, np.zeros(N_F), np.zeros(N_I, np.int64))
     compile_circles()
