@@ -1046,7 +1046,7 @@ def compile_all() -> None:
     The Makefile's set-up runs it, so that no notebook, test or command pays the compilation on
     its first scan."""
     from .._iav_engine import compile_all as compile_circles
-    from .._noise_engine import residuals
+    from .._noise_engine import residuals, robust_start
     from .._segmentation_engine import compile_all as compile_scan_kernels
     from .._segmentation_engine import labels as segment
 
@@ -1058,15 +1058,17 @@ def compile_all() -> None:
     # argument (a writable array is another kind), and only this kind is worth compiling ahead
     r, a, v, p = (_read_only(x) for x in (ranges, angles, valid, points))
     residuals(r, a, v, False)
+    robust_start(r, a, v, False, 10, 1.4826, 3.5)  # (as labkit.noise.estimate_range_noise calls it)
     labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
     out, ints, _ = lines_pass(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15,
                               False, 0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, FUSED_DOT, 0.01,
                               True, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     out.setflags(write=False)  # (as placed_records hands it over)
     corners_pass(out, ints, np.arange(len(out)), math.radians(30.0), 0.3, 0.1, False)
-    from .._kernels import N_F, N_I
+    from .._kernels import N_F, N_I, py_hypot_is_pythons
 
     line_pass(p, r, a, v, labels, np.zeros(N_F), np.zeros(N_I, np.int64))
+    py_hypot_is_pythons()  # (its kernel: the fused path asks it once per process)
     compile_circles()
     compile_scan_kernels()
 
