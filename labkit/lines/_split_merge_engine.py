@@ -73,6 +73,7 @@ from .._kernels import (
     line_from_sums,
     monotonic_ns,
     pairwise_sum,
+    py_hypot,
     remainder_2pi,
     segment_sum,
     sum_at,
@@ -918,8 +919,8 @@ def _wrap1(angle):
 def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
     """:func:`labkit.find_corners` of the lines ``keep`` (rows of :func:`lines_pass`'s ``out`` and
     ``ints``), in the same float arithmetic (``labkit._plainfloat``'s ``wrap1`` and ``intersect1``,
-    Python's ``min`` and ``max``): per corner a row ``x, y, angle, concave, extrapolated, i, j``
-    (``i, j`` the lines' places in ``keep``)."""
+    Python's ``min``, ``max`` and ``math.hypot``: :func:`labkit._kernels.py_hypot`): per corner a
+    row ``x, y, angle, concave, extrapolated, i, j`` (``i, j`` the lines' places in ``keep``)."""
     n = len(keep)
     n_pairs = max(n - 1, 0) + (1 if wrap and n > 2 else 0)
     rows = np.empty((n_pairs, 7))
@@ -934,7 +935,7 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
             continue
         asx, asy, aex, aey = out[a, 3], out[a, 4], out[a, 5], out[a, 6]
         bsx, bsy, bex, bey = out[b, 3], out[b, 4], out[b, 5], out[b, 6]
-        gap = math.hypot(bsx - aex, bsy - aey)
+        gap = py_hypot(bsx - aex, bsy - aey)
         if gap > max_gap_m:
             continue
         r1, r2 = out[a, 0], out[b, 0]
@@ -947,7 +948,7 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
             continue
         y = (r2 - f * r1) / u
         x = (r1 - s1 * y) / c1
-        e1, e2 = math.hypot(x - aex, y - aey), math.hypot(x - bsx, y - bsy)
+        e1, e2 = py_hypot(x - aex, y - aey), py_hypot(x - bsx, y - bsy)
         extension = e2 if e2 > e1 else e1
         allowed = max_extension_m
         if ints[b, 0] - ints[a, 1] == 1 and gap > allowed:
