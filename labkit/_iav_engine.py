@@ -31,17 +31,67 @@ import math
 
 import numpy as np
 
-from ._kernels import fma, jit, jit_inline, segment_sum, sum_at
+from ._kernels import (
+    CIRCLE_F,
+    CIRCLE_I,
+    F_C_C_HI,
+    F_C_C_LO,
+    F_C_HI,
+    F_C_LO,
+    F_C_MEAN_HI,
+    F_C_MEAN_LO,
+    F_C_SIGMA,
+    F_C_STD,
+    F_C_STD_SQ,
+    F_EARLY_FACTOR,
+    F_INCREMENT,
+    F_LAM,
+    F_LEG_C_HI,
+    F_LEG_C_LO,
+    F_LEG_HI,
+    F_LEG_LO,
+    F_LEG_PAD,
+    F_LEG_SIGMA,
+    F_SEG_M,
+    F_SEG_SIGMA,
+    I_ADAPTIVE,
+    I_C_MIN,
+    I_CIRCLES,
+    I_EARLY_STEPS,
+    I_FULL,
+    I_LEG_MIN,
+    I_LEGS,
+    I_OCCLUDED,
+    I_SEG_MIN,
+    LEG_F,
+    LEG_I,
+    N_S,
+    N_T,
+    S_CIRCLES,
+    S_LEGS,
+    S_STATUS,
+    fma,
+    jit,
+    jit_inline,
+    monotonic_ns,
+    py_hypot,
+    py_hypot_in_range,
+    segment_sum,
+    sum_at,
+)
+from ._segmentation_engine import labels as _labels
 from ._segmentation_engine import runs as _runs
+from ._segmentation_engine import without as _without
 
 __all__ = ["fit_circles", "angle_noise_runs", "circle_tests", "leg_tests", "wider_than_noise", "COMPLEX_FMA",
-           "leg_pass", "circle_pass"]
+           "leg_pass", "circle_pass", "stage_pass"]
 
 NOISE_Z = 2.0  # (= labkit.iav.NOISE_Z, LINE_Z, ARC_LIKE_STD_MAX and labkit._iav_batch's verdicts:
 LINE_Z = 3.0  # the engine cannot import the modules it serves; tests/test_engine.py checks they agree)
 ARC_LIKE_STD_MAX = math.radians(23.0)
 ACCEPTED, FEW, SHORT, LONG, PREREQ, DEGENERATE, MEAN, STD = range(8)
 _PI = math.pi
+_HALF_PI = math.pi / 2
 _TWO_PI = 2 * math.pi
 
 
@@ -553,6 +603,153 @@ def circle_pass(labels, drop, points, min_points, c_lo, c_hi, lo, hi, mean_lo, m
     return rest, idx, xy, bounds, floats, _accepted(verdict)
 
 
+@jit
+def stage_pass(points, ranges, angles, valid, fp, ip):
+    """The segmentation, legs and circles of :func:`labkit._pipeline_engine.extract` up to their
+    records, in one compiled call: the labels (:func:`labkit._segmentation_engine.labels`); the
+    legs' tests, occlusion and ``"ray"`` centres (as ``labkit._pipeline_engine._legs``); the
+    circles' tests on the segments the legs left, their ``"iav"`` centres and the noise test (as
+    ``_circles``), with :func:`labkit._kernels.py_hypot` where Python computes ``math.hypot``.
+    Returns the labels, the labels the legs and circles left, and one float and one integer
+    array: the clock at the end of each stage (ns), then per leg ``cx, cy, diameter, mx, my, mean,
+    std`` and per circle ``cx, cy, radius, mean, std, high, std_max`` (the limits held to); the
+    integers: a status (0; 1 where only Python can finish the scan: a fit by numpy's least
+    squares, a subnormal distance), the counts, per leg and circle ``first, last, n``."""
+    n = len(ranges)
+    none = np.empty(0, np.int64)
+    full = ip[I_FULL] != 0
+    lab = _labels(points, ranges, angles, valid, fp[F_SEG_M], ip[I_SEG_MIN], ip[I_ADAPTIVE] != 0, fp[F_LAM],
+                  fp[F_SEG_SIGMA], full, fp[F_INCREMENT])
+    t_seg = monotonic_ns()
+    n_legs = 0
+    leg_f = np.empty((0, LEG_F))
+    leg_i = np.empty((0, LEG_I), np.int64)
+    if ip[I_LEGS]:
+        _, idx, xy, starts, ends = _runs(lab, none, points)
+        verdict, chord, mean, std, _ = _leg_tests(xy[0], xy[1], starts, ends, False, ip[I_LEG_MIN], fp[F_LEG_C_LO],
+                                                  fp[F_LEG_C_HI], fp[F_LEG_LO], fp[F_LEG_HI], fp[F_LEG_PAD],
+                                                  fp[F_LEG_SIGMA])
+        passed = _accepted(verdict)
+        leg_f = np.empty((len(passed), LEG_F))
+        leg_i = np.empty((len(passed), LEG_I), np.int64)
+        for k in passed:
+            a, b = starts[k], ends[k]
+            first, last = idx[a], idx[b - 1]
+            if ip[I_OCCLUDED] and _occluded(ranges, valid, n, full, first, last):
+                continue
+            mid = a + (b - a) // 2
+            mx, my = xy[0, mid], xy[1, mid]
+            if not py_hypot_in_range(mx, my):
+                return _refused(lab)
+            h, half = py_hypot(mx, my), 0.5 * chord[k]
+            leg_f[n_legs, 0], leg_f[n_legs, 1] = mx + half * mx / h, my + half * my / h
+            leg_f[n_legs, 2], leg_f[n_legs, 3], leg_f[n_legs, 4] = chord[k], mx, my
+            leg_f[n_legs, 5], leg_f[n_legs, 6] = mean[k], std[k]
+            leg_i[n_legs, 0], leg_i[n_legs, 1], leg_i[n_legs, 2] = first, last, b - a
+            n_legs += 1
+    drop = np.empty(n_legs, np.int64)
+    for j in range(n_legs):
+        drop[j] = leg_i[j, 0]
+    t_legs = monotonic_ns()
+    rest = lab
+    n_circles = 0
+    circle_f = np.empty((0, CIRCLE_F))
+    circle_i = np.empty((0, CIRCLE_I), np.int64)
+    if ip[I_CIRCLES]:
+        rest, idx, xy, starts, ends = _runs(lab, drop, points)
+        sigma = fp[F_C_SIGMA]
+        verdict, _, mean, std, side, lim = _circle_tests(
+            xy[0], xy[1], starts, ends, False, ip[I_C_MIN], fp[F_C_C_LO], fp[F_C_C_HI], fp[F_C_LO], fp[F_C_HI],
+            fp[F_C_MEAN_LO], fp[F_C_MEAN_HI], fp[F_C_STD], fp[F_C_STD_SQ], sigma)
+        passed = _accepted(verdict)
+        n_p = len(passed)
+        cx, cy, radii = np.full(n_p, math.nan), np.full(n_p, math.nan), np.full(n_p, math.nan)
+        for j in range(n_p):  # (labkit.iav.circle_from_iav's arithmetic, as _pipeline_engine._iav_circles)
+            k = passed[j]
+            m, sd_side = mean[k], side[k]
+            if sd_side == 0:
+                sd_side = 1.0
+            a, e = starts[k], ends[k]
+            x1, y1 = xy[0, a], xy[1, a]
+            dx, dy = xy[0, e - 1] - x1, xy[1, e - 1] - y1
+            if not py_hypot_in_range(dx, dy):
+                return _refused(lab)
+            c = py_hypot(dx, dy)
+            if not (0 < m < _PI) or not math.isfinite(sd_side) or c == 0:
+                continue
+            theta = m - _HALF_PI
+            hh = -math.copysign(1.0, sd_side) * 0.5 * math.tan(theta)
+            cx[j], cy[j] = x1 + 0.5 * dx - hh * dy, y1 + 0.5 * dy + hh * dx
+            radii[j] = 0.5 * c / math.cos(theta)
+        wide = np.zeros(n_p, np.bool_)
+        if sigma > 0.0 and n_p:  # and their points must lie on a circle within the noise
+            s_p, e_p = np.empty(n_p, np.int64), np.empty(n_p, np.int64)
+            for j in range(n_p):
+                s_p[j], e_p[j] = starts[passed[j]], ends[passed[j]]
+            wide, ok = _wider(xy[0], xy[1], s_p, e_p, sigma, cx, cy, radii, True, ip[I_EARLY_STEPS],
+                              fp[F_EARLY_FACTOR])
+            if not ok:
+                return _refused(lab)
+        circle_f = np.empty((n_p, CIRCLE_F))
+        circle_i = np.empty((n_p, CIRCLE_I), np.int64)
+        for j in range(n_p):
+            if math.isnan(radii[j]) or wide[j]:
+                continue
+            k = passed[j]
+            a, e = starts[k], ends[k]
+            circle_f[n_circles, 0], circle_f[n_circles, 1], circle_f[n_circles, 2] = cx[j], cy[j], radii[j]
+            circle_f[n_circles, 3], circle_f[n_circles, 4] = mean[k], std[k]
+            circle_f[n_circles, 5], circle_f[n_circles, 6] = lim[k, 1], lim[k, 2]
+            circle_i[n_circles, 0], circle_i[n_circles, 1], circle_i[n_circles, 2] = idx[a], idx[e - 1], e - a
+            n_circles += 1
+        drop = np.empty(n_circles, np.int64)
+        for j in range(n_circles):
+            drop[j] = circle_i[j, 0]
+    rest = _without(rest, drop)
+    t_circles = monotonic_ns()
+    fo = np.empty(N_T + LEG_F * n_legs + CIRCLE_F * n_circles)
+    io = np.empty(N_S + LEG_I * n_legs + CIRCLE_I * n_circles, np.int64)
+    fo[0], fo[1], fo[2] = t_seg, t_legs, t_circles
+    io[S_STATUS], io[S_LEGS], io[S_CIRCLES] = 0, n_legs, n_circles
+    f, i = N_T, N_S
+    for j in range(n_legs):
+        for c in range(LEG_F):
+            fo[f + c] = leg_f[j, c]
+        for c in range(LEG_I):
+            io[i + c] = leg_i[j, c]
+        f += LEG_F
+        i += LEG_I
+    for j in range(n_circles):
+        for c in range(CIRCLE_F):
+            fo[f + c] = circle_f[j, c]
+        for c in range(CIRCLE_I):
+            io[i + c] = circle_i[j, c]
+        f += CIRCLE_F
+        i += CIRCLE_I
+    return lab, rest, fo, io
+
+
+@jit
+def _refused(lab):
+    io = np.zeros(N_S, np.int64)
+    io[S_STATUS] = 1
+    return lab, lab, np.zeros(N_T), io
+
+
+@jit_inline
+def _occluded(ranges, valid, n, full, first, last):
+    """:func:`labkit._iav_batch.occluded`."""
+    for q in range(2):
+        end, nb = (first, first - 1) if q == 0 else (last, last + 1)
+        if not 0 <= nb < n:
+            if not full:
+                return True  # cut by the edge of the field of view
+            nb %= n
+        if valid[nb] and ranges[nb] < ranges[end]:
+            return True
+    return False
+
+
 def circle_tests(pts: np.ndarray, starts: np.ndarray, ends: np.ndarray, check_finite: bool, min_points: int,
                  chord_range: tuple[float, float], middle_range: tuple[float, float],
                  mean_range: tuple[float, float], std_max: float, sigma: float):
@@ -670,3 +867,13 @@ def compile_all() -> None:
     circle_tests(pts, np.array([0]), np.array([5]), False, 4, (0.15, math.inf), (0.1, 0.7), (1.6, 2.4), 0.15, 0.01)
     leg_tests(pts, np.array([0]), np.array([5]), False, 3, (0.1, 0.25), (0.1, 0.7), 0.01, 0.01)
     wider_than_noise(pts, np.array([0]), np.array([5]), 0.01, np.array([[0.0, 0.0]]), np.array([1.0]), 5, 16.0)
+    # stage_pass as labkit._pipeline_engine hands it a scan's arrays (read-only) and the plan's (copies)
+    from ._kernels import N_F, N_I
+    from ._segmentation_engine import beams
+
+    angles = np.radians(np.arange(-90.0, 91.0, 10.0))
+    ranges = 2.0 + 0.1 * np.cos(3 * angles)
+    valid, points = beams(ranges, angles, 0.0, 10.0)
+    for a in (angles, ranges, valid, points):
+        a.setflags(write=False)
+    stage_pass(points, ranges, angles, valid, np.zeros(N_F), np.zeros(N_I, np.int64))

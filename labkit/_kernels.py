@@ -28,6 +28,8 @@ checks that on this machine.
 from __future__ import annotations
 
 import math
+import sys
+import time
 import warnings
 from fractions import Fraction
 
@@ -38,7 +40,8 @@ from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 __all__ = ["jit", "jit_inline", "fma", "pairwise_sum", "sum_at", "segment_sum", "remainder_2pi", "line_from_sums",
-           "dot2", "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
+           "dot2", "monotonic_ns", "MONOTONIC_CLOCK", "py_hypot", "py_hypot_in_range",
+           "py_hypot_is_pythons", "blas_dot_rounding", "FUSED_DOT", "PI", "TWO_PI", "HALF_PI"]
 
 PI = math.pi
 TWO_PI = 2 * math.pi
@@ -201,6 +204,106 @@ def fma(typingctx, a, b, c):
     return sig, codegen
 
 
+@intrinsic
+def monotonic_ns(typingctx):
+    """The clock :func:`time.perf_counter` reads on Linux (``clock_gettime(CLOCK_MONOTONIC)``), in
+    nanoseconds: a compiled pass of several stages times each as Python would (the C library's
+    function, found by name when the machine code is loaded, so a cached kernel keeps working)."""
+    sig = types.int64()
+
+    def codegen(context, builder, signature, args):
+        i64, i32 = ir.IntType(64), ir.IntType(32)
+        timespec = ir.LiteralStructType([i64, i64])
+        fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(i32, [i32, timespec.as_pointer()]),
+                                            "clock_gettime")
+        ts = cgutils.alloca_once(builder, timespec)
+        builder.call(fn, [ir.Constant(i32, _CLOCK_MONOTONIC), ts])
+        sec = builder.load(cgutils.gep_inbounds(builder, ts, 0, 0))
+        nsec = builder.load(cgutils.gep_inbounds(builder, ts, 0, 1))
+        return builder.add(builder.mul(sec, ir.Constant(i64, 1_000_000_000)), nsec)
+
+    return sig, codegen
+
+
+_CLOCK_MONOTONIC = 1  # (Linux's clockid; monotonic_ns is used only where perf_counter reads it: MONOTONIC_CLOCK)
+
+#: Whether :func:`monotonic_ns` reads :func:`time.perf_counter`'s clock here (Linux).
+MONOTONIC_CLOCK = sys.platform.startswith("linux") and \
+    time.get_clock_info("perf_counter").implementation == "clock_gettime(CLOCK_MONOTONIC)"
+
+
+DBL_MIN = 2.2250738585072014e-308  # the least positive normal float
+
+
+@jit_inline
+def _two_product(x, y):
+    """``x * y`` and its rounding error, exactly (a fused multiply-add)."""
+    p = x * y
+    return p, fma(x, y, -p)
+
+
+@jit_inline
+def py_hypot(x, y):
+    """:func:`math.hypot` of two floats as CPython computes it (its ``vector_norm``: scaled by a power
+    of two, the squares summed exactly, a differential correction of the square root), not the C
+    library's ``hypot``, which numba calls and which differs in the last bit now and then. Proven
+    on this Python by :func:`py_hypot_is_pythons` and ``tests/test_engine.py``; not for subnormal
+    arguments (the callers hand those to Python: :func:`py_hypot_in_range`)."""
+    ax, ay = abs(x), abs(y)
+    if math.isinf(ax) or math.isinf(ay):
+        return math.inf
+    if math.isnan(ax) or math.isnan(ay):
+        return math.nan
+    top = ax if ax > ay else ay
+    if top == 0.0:
+        return top
+    _, e = math.frexp(top)
+    scale = math.ldexp(1.0, -e)
+    csum, frac1, frac2 = 1.0, 0.0, 0.0
+    for v in (ax, ay):
+        u = v * scale
+        hi, lo = _two_product(u, u)
+        total = csum + hi
+        frac2 += (csum - total) + hi
+        csum = total
+        frac1 += lo
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
+    hi, lo = _two_product(-h, h)
+    total = csum + hi
+    frac2 += (csum - total) + hi
+    csum = total
+    frac1 += lo
+    h += (csum - 1.0 + (frac1 + frac2)) / (2.0 * h)
+    return h / scale
+
+
+@jit_inline
+def py_hypot_in_range(x, y):
+    """Whether :func:`py_hypot` covers ``(x, y)``: not both subnormal (or one subnormal, one zero)."""
+    return not (abs(x) < DBL_MIN and abs(y) < DBL_MIN and (x != 0.0 or y != 0.0))
+
+
+@jit
+def _py_hypots(x, y):
+    out = np.empty(len(x))
+    for i in range(len(x)):
+        out[i] = py_hypot(x[i], y[i])
+    return out
+
+
+def py_hypot_is_pythons(n: int = 4000) -> bool:
+    """Whether :func:`py_hypot` gives this Python's :func:`math.hypot` on ``n`` pairs of every scale a
+    scan has (and zeros, infinities, NaN)."""
+    rng = np.random.default_rng(20261129)
+    x = rng.normal(size=n) * 10.0 ** rng.integers(-6, 4, n)
+    y = rng.normal(size=n) * 10.0 ** rng.integers(-6, 4, n)
+    x[:8] = [0.0, -0.0, 3.0, math.inf, math.nan, 1e300, 5.0, 0.0]
+    y[:8] = [0.0, 2.0, 4.0, 1.0, 1.0, 1e300, -math.inf, 1e-300]
+    got = _py_hypots(x, y).tolist()
+    want = [math.hypot(a, b) for a, b in zip(x.tolist(), y.tolist(), strict=True)]
+    return all(g == w or (g != g and w != w) for g, w in zip(got, want, strict=True))
+
+
 @jit_inline
 def dot2(x, y, c, s, fused):
     """``x c + y s`` as ``numpy.dot`` of the point ``(x, y)`` and ``(c, s)`` rounds it on this
@@ -230,3 +333,37 @@ def blas_dot_rounding() -> bool | None:
 
 #: :func:`blas_dot_rounding` of this machine.
 FUSED_DOT = blas_dot_rounding()
+
+
+# ---------------------------------------------------------------------------- the fused passes' arrays
+# Where the fused passes of :func:`labkit.extract_features` keep what they take and hand back.
+# A :class:`labkit.Config`'s numbers go to the passes (:func:`labkit._iav_engine.stage_pass`,
+# :func:`labkit.lines._split_merge_engine.line_pass`) as two arrays, built once per Config
+# (:func:`labkit._pipeline_engine.plan_for`) with a scan's own written into a copy: a numba dispatch
+# checks the type of every argument, some 0.2 µs each, and a pass of thirty arguments paid 5 µs a
+# call for it. The floats' places are the ``F_*`` names, the integers' (and flags') the ``I_*``.
+# What the passes hand back is one float and one integer array each, rows of a fixed width per
+# feature (the ``*_F`` and ``*_I`` names): each array numba hands back to Python costs about a
+# microsecond.
+F_SEG_M, F_LAM, F_SEG_SIGMA, F_INCREMENT = 0, 1, 2, 3
+F_LEG_C_LO, F_LEG_C_HI, F_LEG_LO, F_LEG_HI, F_LEG_PAD, F_LEG_SIGMA = 4, 5, 6, 7, 8, 9
+F_C_C_LO, F_C_C_HI, F_C_LO, F_C_HI, F_C_MEAN_LO, F_C_MEAN_HI, F_C_STD, F_C_STD_SQ, F_C_SIGMA = range(10, 19)
+F_L_THRESHOLD, F_L_NOISE, F_L_ABSORB, F_L_GAP, F_L_MERGE_DR, F_L_MERGE_DA, F_L_MIN_LEN = range(19, 26)
+F_L_FLOOR, F_L_LAM_CUT, F_L_LAM_GRAZE, F_L_SIGMA, F_L_PLACE_DR, F_L_PLACE_DA, F_L_PLACE_P = range(26, 33)
+F_K_ANGLE, F_K_GAP, F_K_EXT, F_EARLY_FACTOR = range(33, 37)
+N_F = 37
+I_SEG_MIN, I_ADAPTIVE, I_FULL, I_LEGS, I_LEG_MIN, I_OCCLUDED, I_CIRCLES, I_C_MIN = range(8)
+I_FIT, I_L_MIN, I_MERGE, I_UNIFORM, I_SKIP_ROUND, I_PLACE, I_CORNERS, I_FUSED, I_EARLY_STEPS = range(8, 17)
+N_I = 17
+LEG_F, LEG_I, CIRCLE_F, CIRCLE_I, LINE_F, LINE_I, CORNER_F, CORNER_I = 7, 3, 7, 3, 11, 5, 5, 2
+N_T = 3  # stage_pass's floats start with the clock at the end of the segmentation, legs, circles (ns)
+# the head of stage_pass's integer output: a status (0: done; 1: a case only Python computes, which the
+# staged path hands to it), the legs and circles it holds
+S_STATUS, S_LEGS, S_CIRCLES = range(3)
+N_S = 3
+
+
+# the head of line_pass's integer output: a status (0: done; 2: a placing too close to call, which
+# the staged path hands to Python), the lines, corners and line beams it holds
+H_STATUS, H_LINES, H_CORNERS, H_BEAMS = range(4)
+N_H = 4

@@ -8,18 +8,22 @@ parameters turned into keyword arguments and the tests' records built -- some tw
 calls per scan, which on a 180-beam scan cost more than the compiled work itself.
 
 Here the same stages run on the same arrays with the scan-level quantities worked out once: the
-parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`), the scan's points,
-validity, full-circle flag and noise once per scan, the segmentation and each stage's segments in
-one compiled pass each (:func:`labkit._segmentation_engine.runs`: the segments left after the legs
-or circles, laid end to end, their points gathered), and the detectors' compiled tests are called directly
-(:mod:`labkit._iav_engine`, :mod:`labkit.lines._split_merge_engine`). Each stage is one compiled
-call that hands back few arrays (:func:`labkit._iav_engine.leg_pass` and ``circle_pass``: the runs
-and their tests; :func:`labkit.lines._split_merge_engine.lines_pass`: the lines, their covariances
-and placing; ``corners_pass``: the corners of the lines kept): a call costs a few microseconds and
-each array numba hands back to Python about one, which at 180 beams is a good part of the scan.
-What a test accepts is made into records as the detectors make them (the same arithmetic). So the
-features are the stages' own, bit for bit: ``tests/test_engine.py`` compares the two paths on random
-scans, the simulated worlds and real recordings.
+parameters are resolved once per :class:`labkit.Config` (:func:`plan_for`, which also packs their
+numbers into the two arrays the passes take: ``labkit._kernels``' layout), the scan's points,
+validity, full-circle flag and noise once per scan, and then two compiled passes do the rest:
+:func:`labkit._iav_engine.stage_pass` (the segmentation; the legs' tests, occlusion and centres;
+the circles' tests, centres and noise test on the segments the legs left) and
+:func:`labkit.lines._split_merge_engine.line_pass` (the lines, their covariances and placing, and
+their corners). Each hands back one float and one integer array (a call costs a few microseconds
+and each array numba hands back to Python about one); the records are made from their rows, the
+few floats Python computes itself (a circle's confidence) in the same Python arithmetic. Where
+Python computes ``math.hypot``, the passes compute it as CPython does
+(:func:`labkit._kernels.py_hypot`: the C library's ``hypot`` differs in the last bit now and
+then). So the features are the stages' own, bit for bit: ``tests/test_engine.py`` compares the
+two paths on random scans, the simulated worlds and real recordings. Configurations the passes do
+not cover (another leg or circle centre, a test of the legs' angles, arc-like circles, the arcs)
+run the stages one compiled call or two each (:func:`_staged`), as do the rare scans the passes
+hand back (a circle fit that needs numpy's least squares, a placing too close to call).
 
 A configuration the engines do not cover (another line method, the chi-square merge) runs the
 stages as :mod:`labkit.pipeline` reads them, and so does ``LABKIT_NO_JIT=1`` (with their readable
@@ -50,14 +54,93 @@ from ._iav_batch import (
     make_circle,
     occluded,
 )
-from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass
-from ._kernels import FUSED_DOT
+from ._iav_engine import COMPLEX_FMA, circle_pass, leg_pass, stage_pass
+from ._iav_noise import EARLY_FACTOR, EARLY_STEPS
+from ._kernels import (
+    CIRCLE_F,
+    CIRCLE_I,
+    CORNER_F,
+    CORNER_I,
+    F_C_C_HI,
+    F_C_C_LO,
+    F_C_HI,
+    F_C_LO,
+    F_C_MEAN_HI,
+    F_C_MEAN_LO,
+    F_C_SIGMA,
+    F_C_STD,
+    F_C_STD_SQ,
+    F_EARLY_FACTOR,
+    F_INCREMENT,
+    F_K_ANGLE,
+    F_K_EXT,
+    F_K_GAP,
+    F_L_ABSORB,
+    F_L_FLOOR,
+    F_L_GAP,
+    F_L_LAM_CUT,
+    F_L_LAM_GRAZE,
+    F_L_MERGE_DA,
+    F_L_MERGE_DR,
+    F_L_MIN_LEN,
+    F_L_NOISE,
+    F_L_PLACE_DA,
+    F_L_PLACE_DR,
+    F_L_PLACE_P,
+    F_L_SIGMA,
+    F_L_THRESHOLD,
+    F_LAM,
+    F_LEG_C_HI,
+    F_LEG_C_LO,
+    F_LEG_HI,
+    F_LEG_LO,
+    F_LEG_PAD,
+    F_LEG_SIGMA,
+    F_SEG_M,
+    F_SEG_SIGMA,
+    FUSED_DOT,
+    I_ADAPTIVE,
+    I_C_MIN,
+    I_CIRCLES,
+    I_CORNERS,
+    I_EARLY_STEPS,
+    I_FIT,
+    I_FULL,
+    I_FUSED,
+    I_L_MIN,
+    I_LEG_MIN,
+    I_LEGS,
+    I_MERGE,
+    I_OCCLUDED,
+    I_PLACE,
+    I_SEG_MIN,
+    I_SKIP_ROUND,
+    I_UNIFORM,
+    LEG_F,
+    LEG_I,
+    LINE_F,
+    LINE_I,
+    MONOTONIC_CLOCK,
+    N_F,
+    N_H,
+    N_I,
+    N_S,
+    N_T,
+    py_hypot_is_pythons,
+)
 from ._segmentation_engine import beams, runs, without
 from ._segmentation_engine import labels as _segment
 from .circles.iav_circles import detect_arcs
 from .circles.legs import pair_legs
-from .features import Circle, Corner, Features, Leg
-from .lines._split_merge_engine import PLACING_NODES, PLACING_WEIGHTS, corners_pass, lines_pass, placed_records
+from .features import Circle, Corner, Features, Leg, LineSegment
+from .lines._split_merge_engine import (
+    PLACING_NODES,
+    PLACING_WEIGHTS,
+    corners_pass,
+    line_pass,
+    lines_pass,
+    placed_records,
+)
 from .lines._split_merge_engine import READY as LINES_READY
 from .lines._split_merge_fast import GRAZING_DEG
 from .noise import AUTO, auto_split_threshold, check_nonneg, scan_sigma
@@ -110,6 +193,64 @@ class Plan(NamedTuple):
     lines_skip_round: bool
     corners: dict | None
     arcs: dict | None
+    packed: tuple | None = None  # (floats, integers) of stage_pass and line_pass, where they cover the Config
+
+
+def _py_hypot_ok() -> bool:
+    """Whether the passes' ``math.hypot`` is this Python's (:func:`labkit._kernels.py_hypot_is_pythons`,
+    asked once)."""
+    if not _PY_HYPOT:
+        _PY_HYPOT.append(py_hypot_is_pythons())
+    return _PY_HYPOT[0]
+
+
+_PY_HYPOT: list[bool] = []
+
+
+def _pack(plan: Plan) -> tuple | None:
+    """``plan``'s numbers as the passes take them (``labkit._kernels``' layout; a scan's own left
+    NaN or 0, written in a copy per scan), or None where the passes do not cover the plan: an arc
+    detector, a leg or circle test or centre the compiled tests do not run, no clock to time the
+    stages by."""
+    if not (MONOTONIC_CLOCK and _py_hypot_ok()) or plan.lines is None or plan.arcs is not None:
+        return None
+    t_legs, t_circles = plan.legs, plan.circles
+    if t_legs is not None and not (plan.legs_fast and t_legs.center_method == "ray"):
+        return None
+    if t_circles is not None and not (plan.circles_fast and t_circles.center_method == "iav"
+                                      and t_circles.kind == "circle"):
+        return None
+    fp = np.full(N_F, math.nan)
+    ip = np.zeros(N_I, np.int64)
+    threshold_m, min_points, adaptive, lam, _ = plan.seg
+    fp[F_SEG_M], fp[F_LAM], ip[I_SEG_MIN], ip[I_ADAPTIVE] = threshold_m, lam, min_points, adaptive
+    if t_legs is not None:
+        ip[I_LEGS], ip[I_LEG_MIN], ip[I_OCCLUDED] = 1, int(t_legs.min_points), bool(t_legs.reject_occluded)
+        fp[F_LEG_C_LO], fp[F_LEG_C_HI] = float(t_legs.chord_range[0]), float(t_legs.chord_range[1])
+        fp[F_LEG_LO], fp[F_LEG_HI] = float(t_legs.middle_range[0]), float(t_legs.middle_range[1])
+    if t_circles is not None:
+        ip[I_CIRCLES], ip[I_C_MIN] = 1, int(max(t_circles.min_points, 3))
+        fp[F_C_C_LO], fp[F_C_C_HI] = float(t_circles.chord_range[0]), float(t_circles.chord_range[1])
+        fp[F_C_LO], fp[F_C_HI] = float(t_circles.middle_range[0]), float(t_circles.middle_range[1])
+        fp[F_C_MEAN_LO], fp[F_C_MEAN_HI] = float(t_circles.mean_range[0]), float(t_circles.mean_range[1])
+        fp[F_C_STD], fp[F_C_STD_SQ] = float(t_circles.std_max), float(t_circles.std_max) ** 2
+    (fit, _, _, min_points, max_gap_m, merge_on, merge_dr_m, merge_dalpha, min_length_m, uniform, _, floor_m, lam_cut,
+     lam_graze, place_dr_m, place_dalpha_deg, place_confidence) = plan.lines
+    ip[I_FIT], ip[I_L_MIN], ip[I_MERGE], ip[I_UNIFORM] = fit, min_points, merge_on, uniform
+    ip[I_SKIP_ROUND], ip[I_PLACE], ip[I_FUSED] = plan.lines_skip_round, place_confidence > 0, bool(FUSED_DOT)
+    ip[I_EARLY_STEPS], fp[F_EARLY_FACTOR] = int(EARLY_STEPS), float(EARLY_FACTOR)
+    fp[F_L_GAP], fp[F_L_MERGE_DR], fp[F_L_MERGE_DA], fp[F_L_MIN_LEN] = max_gap_m, merge_dr_m, merge_dalpha, min_length_m
+    fp[F_L_FLOOR], fp[F_L_LAM_CUT], fp[F_L_LAM_GRAZE] = floor_m, lam_cut, lam_graze
+    fp[F_L_PLACE_DR], fp[F_L_PLACE_DA] = float(place_dr_m), math.radians(place_dalpha_deg)
+    fp[F_L_PLACE_P] = float(place_confidence)
+    if plan.corners is not None:
+        p = plan.corners
+        ip[I_CORNERS] = 1
+        fp[F_K_ANGLE], fp[F_K_GAP] = math.radians(p["min_angle_deg"]), float(p["max_gap_m"])
+        fp[F_K_EXT] = float(p["max_extension_m"])
+    fp.setflags(write=False)
+    ip.setflags(write=False)
+    return fp, ip
 
 
 def plan_for(cfg) -> Plan | None:
@@ -161,7 +302,7 @@ def _plan(cfg) -> Plan | None:
                  lc.weights == "uniform", lc.weights, float(SegmentationParams.threshold_m),
                  math.radians(SegmentationParams.incidence_deg), math.radians(GRAZING_DEG), lc.place_dr_m,
                  lc.place_dalpha_deg, lc.place_confidence)
-    return Plan(
+    plan = Plan(
         seg=(float(seg.threshold_m), int(seg.min_points), bool(seg.adaptive), math.radians(seg.incidence_deg),
              seg.range_sigma_m),
         legs=legs, legs_sigma=_sigma_of(lg.range_sigma_m),
@@ -172,6 +313,7 @@ def _plan(cfg) -> Plan | None:
         lines=lines, lines_skip_round=bool(lc.skip_round),
         corners=cfg.corners.kwargs() if cfg.corners.enabled else None,
         arcs=cfg.arcs.kwargs() if cfg.arcs.enabled else None)
+    return plan._replace(packed=_pack(plan))
 
 
 # ---------------------------------------------------------------------------- one scan
@@ -179,7 +321,18 @@ _NONE = np.zeros(0, np.int64)
 
 
 def extract(scan, plan: Plan) -> Features:
-    """:func:`labkit.extract_features` of ``scan`` with the configuration ``plan`` resolves."""
+    """:func:`labkit.extract_features` of ``scan`` with the configuration ``plan`` resolves: in one
+    two compiled passes (:func:`stage_pass`, :func:`line_pass`) where they cover the plan and the
+    scan, else stage by stage."""
+    if plan.packed is not None:
+        features = _fused(scan, plan)
+        if features is not None:
+            return features
+    return _staged(scan, plan)
+
+
+def _staged(scan, plan: Plan) -> Features:
+    """:func:`extract` stage by stage (a compiled call or two each)."""
     timings: dict[str, float] = {}
     t_start = perf_counter()
     ranges, angles = scan.ranges, scan.angles
@@ -270,6 +423,127 @@ def extract(scan, plan: Plan) -> Features:
 
 
 _new_features = object.__new__
+
+
+def _fused(scan, plan: Plan) -> Features | None:
+    """:func:`extract` by two compiled passes (:func:`stage_pass`, :func:`line_pass`), what lies
+    between them in Python's own arithmetic, and the records (None where the scan needs the staged
+    path). Each stage's time is its part of a pass (the passes read the clock
+    :func:`time.perf_counter` reads at the end of each stage) and the building of its records."""
+    t_start = perf_counter()
+    ranges, angles = scan.ranges, scan.angles
+    valid, points = _scan_beams(scan)
+    n = ranges.size
+    if n >= 2:  # (scan.angle_increment and scan.is_full_circle, in the same float arithmetic)
+        a0, a1 = angles.item(0), angles.item(n - 1)
+        increment = (a1 - a0) / (n - 1)
+        full = n >= 3 and (a1 - a0) + 1.5 * increment >= 2 * math.pi
+    else:
+        increment, full = math.nan, False
+    fp0, ip0 = plan.packed  # type: ignore[misc]
+    fp, ip = fp0.copy(), ip0.copy()
+    fp[F_INCREMENT], ip[I_FULL] = increment, full
+    seg_sigma = plan.seg[4]
+    fp[F_SEG_SIGMA] = (scan_sigma(scan) if seg_sigma == AUTO else float(seg_sigma)) if plan.seg[2] else 0.0
+    t_legs = plan.legs
+    if t_legs is not None:
+        s = plan.legs_sigma
+        fp[F_LEG_SIGMA] = scan_sigma(scan) if s == AUTO else float(s)
+        fp[F_LEG_PAD] = float(t_legs.chord_padding_beams * (abs(increment) if n > 1 else 0.0))
+    if plan.circles is not None:
+        s = plan.circles_sigma
+        fp[F_C_SIGMA] = scan_sigma(scan) if s == AUTO else float(s)
+    split_threshold_m, range_sigma_m = plan.lines[1], plan.lines[2]  # type: ignore[index]
+    s = scan_sigma(scan) if range_sigma_m == AUTO else range_sigma_m
+    if split_threshold_m == AUTO:  # (lines.split_merge._SplitTest)
+        noise, threshold = s, auto_split_threshold(s)
+    else:
+        noise, threshold = 0.0, split_threshold_m
+    fp[F_L_THRESHOLD], fp[F_L_NOISE], fp[F_L_ABSORB], fp[F_L_SIGMA] = threshold, noise, min(threshold, 3 * s), s
+    labels, rest, fo, io = stage_pass(points, ranges, angles, valid, fp, ip)
+    status, n_legs, n_circles = io[:N_S].tolist()
+    if status:
+        return None
+    fo.setflags(write=False)
+    clock = [t * 1e-9 for t in fo[:N_T].tolist()]
+    timings: dict[str, float] = {"segmentation": clock[0] - t_start}
+
+    t = perf_counter()
+    f, i = N_T, N_S
+    legs: list = []
+    people: list = []
+    if n_legs:
+        rows = fo[f:f + LEG_F * n_legs].reshape(n_legs, LEG_F)
+        ints = io[i:i + LEG_I * n_legs].tolist()
+        for j, (_, _, diameter, _, _, m, sd) in enumerate(rows.tolist()):
+            legs.append(Leg(rows[j, 0:2], diameter, rows[j, 3:5], ints[3 * j], ints[3 * j + 1], ints[3 * j + 2], m,
+                            sd))
+        f += LEG_F * n_legs
+        i += LEG_I * n_legs
+        people = pair_legs(legs, plan.pair_m) if n_legs > 1 else []
+    now = perf_counter()
+    timings["legs"] = clock[1] - clock[0] + now - t
+    t = now
+
+    circles: list = []
+    if n_circles:
+        rows = fo[f:f + CIRCLE_F * n_circles].reshape(n_circles, CIRCLE_F)
+        ints = io[i:i + CIRCLE_I * n_circles].tolist()
+        for j, (_, _, radius, m, sd, high, std_max) in enumerate(rows.tolist()):
+            size = ints[3 * j + 2]  # (the confidence as labkit.iav.circle_confidence, as _iav_circles)
+            f_n = 1.0 - math.exp(-max(size - 2, 0) / 5.0)
+            f_std = 1.0 - 0.5 * min(abs(sd) / std_max, 1.0)
+            f_mean = 1.0 - 0.5 * min(abs(m - _HALF_PI) / max(high - _HALF_PI, 1e-12), 1.0)
+            confidence = float(min(max(f_n * f_std * f_mean, 0.0), 1.0))
+            circles.append(Circle(rows[j, 0:2], radius, m, sd, confidence, ints[3 * j], ints[3 * j + 1], size,
+                                  "circle"))
+    now = perf_counter()
+    timings["circles"] = clock[2] - clock[1] + now - t
+    t = now
+
+    fo, io = line_pass(points, ranges, angles, valid, rest if plan.lines_skip_round else labels, fp, ip)
+    t_back = perf_counter()
+    status, n_lines, n_corners, n_beams = io[:N_H].tolist()
+    if status:
+        return None
+    fo.setflags(write=False)
+    io.setflags(write=False)
+    clock += [t * 1e-9 for t in fo[:2].tolist()]
+    f, i = 2, N_H
+    lines: list = []
+    if n_lines:
+        out = fo[f:f + LINE_F * n_lines].reshape(n_lines, LINE_F)
+        irows = io[i:i + LINE_I * n_lines].reshape(n_lines, LINE_I).tolist()
+        f += LINE_F * n_lines
+        i += LINE_I * n_lines
+        beams = io[io.size - n_beams:]
+        cov = out[:, 7:].reshape(-1, 2, 2)  # (as placed_records builds them)
+        starts, ends = out[:, 3:5], out[:, 5:7]
+        for k, row in enumerate(out.tolist()):
+            g = irows[k]
+            lines.append(LineSegment(row[0], row[1], cov[k], starts[k], ends[k], g[0], g[1], g[3] - g[2], row[2],
+                                     beams[g[2]:g[3]]))
+    now = perf_counter()
+    timings["lines"] = t_back - t - (clock[4] - clock[3]) + now - t_back  # (the corners' part of the pass: theirs)
+    t = now
+
+    corners: list = []
+    if n_corners:
+        kf = fo[f:f + CORNER_F * n_corners].reshape(n_corners, CORNER_F)
+        ki = io[i:i + CORNER_I * n_corners].reshape(n_corners, CORNER_I).tolist()
+        for c, (_, _, angle, concave, extrapolated) in enumerate(kf.tolist()):
+            a, b = ki[c]
+            corners.append(Corner(kf[c, 0:2], angle, "concave" if concave else "convex", bool(extrapolated), (a, b),
+                                  lines[a].last, lines[b].first))
+    now = perf_counter()
+    timings["corners"] = clock[4] - clock[3] + now - t
+    timings["arcs"] = 0.0
+    timings["total"] = now - t_start
+    features = _new_features(Features)
+    features.__dict__.update(stamp_ns=scan.stamp_ns, n_beams=n, labels=labels, lines=tuple(lines),
+                             corners=tuple(corners), circles=tuple(circles), arcs=(), legs=tuple(legs),
+                             people=tuple(people), timings=timings)
+    return features
 
 
 def _firsts(features) -> np.ndarray:

@@ -11,6 +11,7 @@ angles that do not increase, negative limits) is an error.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -288,6 +289,8 @@ class Scan:
     @cached_property
     def valid(self) -> np.ndarray:
         """Boolean mask of shape (N,): finite, > 0 and ``range_min <= r < range_max``."""
+        if (fast := _engine_beams(self)) is not None:
+            return fast[0]
         r = self.ranges
         with np.errstate(invalid="ignore"):
             mask = np.isfinite(r) & (r > 0) & (r >= self.range_min) & (r < self.range_max)
@@ -316,6 +319,8 @@ class Scan:
 
         Row ``i`` is beam ``i``, which keeps neighbourhoods in beam order.
         """
+        if (fast := _engine_beams(self)) is not None:
+            return fast[1]
         pts = polar_to_cartesian(self.ranges, self.angles)
         pts[~self.valid] = np.nan
         pts.setflags(write=False)
@@ -365,3 +370,21 @@ class Scan:
             f"range {self.range_min:g}..{self.range_max:g} m, stamp_ns={self.stamp_ns}, "
             f"frame_id={self.frame_id!r})"
         )
+
+
+def _engine_beams(scan: Scan) -> tuple[np.ndarray, np.ndarray] | None:
+    """:attr:`Scan.valid` and :attr:`Scan.points` in one compiled pass
+    (``labkit._segmentation_engine.beams``: the same comparisons, the same C library ``cos`` and
+    ``sin`` as numpy's, bit for bit, ``tests/test_engine.py``), both kept in the scan's cache; once
+    a first extraction has loaded the engines (a process that only reads scans never imports
+    numba for this). None before that, under ``LABKIT_NO_JIT=1``, and for arrays a Scan did not make
+    read-only (an unpickled one's)."""
+    engine = sys.modules.get("labkit._segmentation_engine")
+    r, a = scan.ranges, scan.angles
+    if engine is None or r.flags.writeable or a.flags.writeable:  # (the kind of array compiled for: a Scan's own)
+        return None
+    valid, points = engine.beams(scan.ranges, scan.angles, float(scan.range_min), float(scan.range_max))
+    valid.setflags(write=False)
+    points.setflags(write=False)
+    cache = scan.__dict__
+    return cache.setdefault("valid", valid), cache.setdefault("points", points)

@@ -29,15 +29,51 @@ import math
 import numpy as np
 
 from .._kernels import (
+    CORNER_F,
+    CORNER_I,
+    F_K_ANGLE,
+    F_K_EXT,
+    F_K_GAP,
+    F_L_ABSORB,
+    F_L_FLOOR,
+    F_L_GAP,
+    F_L_LAM_CUT,
+    F_L_LAM_GRAZE,
+    F_L_MERGE_DA,
+    F_L_MERGE_DR,
+    F_L_MIN_LEN,
+    F_L_NOISE,
+    F_L_PLACE_DA,
+    F_L_PLACE_DR,
+    F_L_PLACE_P,
+    F_L_SIGMA,
+    F_L_THRESHOLD,
     FUSED_DOT,
+    H_BEAMS,
+    H_CORNERS,
+    H_LINES,
+    H_STATUS,
     HALF_PI,
+    I_CORNERS,
+    I_FIT,
+    I_FULL,
+    I_FUSED,
+    I_L_MIN,
+    I_MERGE,
+    I_PLACE,
+    I_UNIFORM,
+    LINE_F,
+    LINE_I,
+    N_H,
     PI,
     TWO_PI,
     dot2,
     jit,
     jit_inline,
     line_from_sums,
+    monotonic_ns,
     pairwise_sum,
+    py_hypot,
     remainder_2pi,
     segment_sum,
     sum_at,
@@ -50,7 +86,7 @@ from ..noise import MIN_SPLIT_M, SPLIT_SIGMAS
 from ..segmentation import SegmentationParams
 from ._split_merge_fast import GRAZING_DEG
 
-__all__ = ["extract", "split_and_merge", "READY"]
+__all__ = ["extract", "split_and_merge", "line_pass", "READY"]
 
 #: Whether the engine gives the reference's lines on this machine (its BLAS rounds a dot product in
 #: a way :func:`labkit._kernels.dot2` reproduces); if not, split_and_merge runs its readable steps.
@@ -883,8 +919,8 @@ def _wrap1(angle):
 def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
     """:func:`labkit.find_corners` of the lines ``keep`` (rows of :func:`lines_pass`'s ``out`` and
     ``ints``), in the same float arithmetic (``labkit._plainfloat``'s ``wrap1`` and ``intersect1``,
-    Python's ``min`` and ``max``): per corner a row ``x, y, angle, concave, extrapolated, i, j``
-    (``i, j`` the lines' places in ``keep``)."""
+    Python's ``min``, ``max`` and ``math.hypot``: :func:`labkit._kernels.py_hypot`): per corner a
+    row ``x, y, angle, concave, extrapolated, i, j`` (``i, j`` the lines' places in ``keep``)."""
     n = len(keep)
     n_pairs = max(n - 1, 0) + (1 if wrap and n > 2 else 0)
     rows = np.empty((n_pairs, 7))
@@ -899,7 +935,7 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
             continue
         asx, asy, aex, aey = out[a, 3], out[a, 4], out[a, 5], out[a, 6]
         bsx, bsy, bex, bey = out[b, 3], out[b, 4], out[b, 5], out[b, 6]
-        gap = math.hypot(bsx - aex, bsy - aey)
+        gap = py_hypot(bsx - aex, bsy - aey)
         if gap > max_gap_m:
             continue
         r1, r2 = out[a, 0], out[b, 0]
@@ -912,7 +948,7 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
             continue
         y = (r2 - f * r1) / u
         x = (r1 - s1 * y) / c1
-        e1, e2 = math.hypot(x - aex, y - aey), math.hypot(x - bsx, y - bsy)
+        e1, e2 = py_hypot(x - aex, y - aey), py_hypot(x - bsx, y - bsy)
         extension = e2 if e2 > e1 else e1
         allowed = max_extension_m
         if ints[b, 0] - ints[a, 1] == 1 and gap > allowed:
@@ -925,6 +961,69 @@ def corners_pass(out, ints, keep, min_angle, max_gap_m, max_extension_m, wrap):
         rows[m, 5], rows[m, 6] = i, j
         m += 1
     return rows[:m]
+
+
+@jit
+def line_pass(points, ranges, angles, valid, labels, fp, ip):
+    """The lines of :func:`labkit._pipeline_engine.extract` (:func:`lines_pass`, the lines
+    placed kept) and their corners (``corners_pass``) in one compiled call: one float array (the
+    clock at the end of the lines and of the corners, ns; per line ``r, alpha, rms, sx, sy, ex, ey,
+    cov (4)``; per corner ``x, y, angle, concave, extrapolated``) and one integer array (the head
+    ``H_*``; per line ``first, last, offset, next offset, placed``; per corner its lines' places;
+    the lines' beams)."""
+    full = ip[I_FULL] != 0
+    out, ints, beams = lines_pass(
+        points, ranges, angles, valid, labels, ip[I_FIT] != 0, fp[F_L_THRESHOLD], fp[F_L_NOISE], fp[F_L_ABSORB],
+        ip[I_L_MIN], fp[F_L_GAP], ip[I_MERGE] != 0, fp[F_L_MERGE_DR], fp[F_L_MERGE_DA], fp[F_L_MIN_LEN],
+        ip[I_UNIFORM] != 0, fp[F_L_FLOOR], fp[F_L_LAM_CUT], fp[F_L_LAM_GRAZE], full, ip[I_FUSED] != 0,
+        fp[F_L_SIGMA], ip[I_PLACE] != 0, fp[F_L_PLACE_DR], fp[F_L_PLACE_DA], fp[F_L_PLACE_P], _GL_U, _GL_W)
+    n_kept = 0
+    for k in range(len(out)):
+        if ints[k, 4] == 2:  # a near tie: the reference's own sum decides (in Python)
+            io = np.zeros(N_H, np.int64)
+            io[H_STATUS] = 2
+            return np.zeros(2), io
+        n_kept += ints[k, 4]
+    keep = np.empty(n_kept, np.int64)
+    n_kept = 0
+    n_beams = 0
+    for k in range(len(out)):
+        if ints[k, 4]:
+            keep[n_kept] = k
+            n_kept += 1
+            n_beams += ints[k, 3] - ints[k, 2]
+    t_lines = monotonic_ns()
+    corners = np.empty((0, 7))
+    if ip[I_CORNERS] and n_kept > 1:
+        corners = corners_pass(out, ints, keep, fp[F_K_ANGLE], fp[F_K_GAP], fp[F_K_EXT], full)
+    n_corners = len(corners)
+    t_corners = monotonic_ns()
+    fo = np.empty(2 + LINE_F * n_kept + CORNER_F * n_corners)
+    io = np.empty(N_H + LINE_I * n_kept + CORNER_I * n_corners + n_beams, np.int64)
+    fo[0], fo[1] = t_lines, t_corners
+    io[H_STATUS], io[H_LINES], io[H_CORNERS], io[H_BEAMS] = 0, n_kept, n_corners, n_beams
+    f, i = 2, N_H
+    offset = 0
+    for k in keep:
+        for c in range(LINE_F):
+            fo[f + c] = out[k, c]
+        f += LINE_F
+        io[i], io[i + 1], io[i + 2] = ints[k, 0], ints[k, 1], offset
+        io[i + 3] = offset + ints[k, 3] - ints[k, 2]
+        io[i + 4] = ints[k, 4]
+        offset = io[i + 3]
+        i += LINE_I
+    for q in range(n_corners):
+        for c in range(CORNER_F):
+            fo[f + c] = corners[q, c]
+        io[i], io[i + 1] = int(corners[q, 5]), int(corners[q, 6])
+        f += CORNER_F
+        i += CORNER_I
+    for k in keep:
+        for b in range(ints[k, 2], ints[k, 3]):
+            io[i] = beams[b]
+            i += 1
+    return fo, io
 
 
 def split_and_merge(scan, labels, *, fit: bool, threshold_m: float, noise_sigma: float, absorb_m: float, sigma: float,
@@ -948,7 +1047,7 @@ def compile_all() -> None:
     The Makefile's set-up runs it, so that no notebook, test or command pays the compilation on
     its first scan."""
     from .._iav_engine import compile_all as compile_circles
-    from .._noise_engine import residuals
+    from .._noise_engine import residuals, robust_start
     from .._segmentation_engine import compile_all as compile_scan_kernels
     from .._segmentation_engine import labels as segment
 
@@ -960,12 +1059,17 @@ def compile_all() -> None:
     # argument (a writable array is another kind), and only this kind is worth compiling ahead
     r, a, v, p = (_read_only(x) for x in (ranges, angles, valid, points))
     residuals(r, a, v, False)
+    robust_start(r, a, v, False, 10, 1.4826, 3.5)  # (as labkit.noise.estimate_range_noise calls it)
     labels = segment(p, r, a, v, 0.08, 2, True, math.radians(10.0), 0.01, False, math.radians(1.0))
     out, ints, _ = lines_pass(p, r, a, v, labels, False, 0.05, 0.01, 0.03, 5, 0.3, True, 0.2, math.radians(10.0), 0.15,
                               False, 0.08, math.radians(10.0), math.radians(GRAZING_DEG), False, FUSED_DOT, 0.01,
                               True, 0.05, math.radians(3.0), 0.8, _GL_U, _GL_W)
     out.setflags(write=False)  # (as placed_records hands it over)
     corners_pass(out, ints, np.arange(len(out)), math.radians(30.0), 0.3, 0.1, False)
+    from .._kernels import N_F, N_I, py_hypot_is_pythons
+
+    line_pass(p, r, a, v, labels, np.zeros(N_F), np.zeros(N_I, np.int64))
+    py_hypot_is_pythons()  # (its kernel: the fused path asks it once per process)
     compile_circles()
     compile_scan_kernels()
 
