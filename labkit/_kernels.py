@@ -20,9 +20,14 @@ compute in a way of their own:
   arithmetic on a few numbers, which rounding this machine's BLAS uses; where it is neither, the
   engines are not used (:data:`FUSED_DOT` is None) and the readable code runs.
 
-The transcendental functions (``math.cos``, ``sin``, ``atan2``, ``hypot``, ``pow``) are the C
-library's in numba, in numpy's float64 loops and in Python alike; ``tests/test_engine.py``
-checks that on this machine.
+* :func:`py_hypot` -- :func:`math.hypot` as CPython computes it (its own algorithm, not the C
+  library's ``hypot``, which numba calls and which differs in the last bit about once in 170 pairs);
+  :func:`py_hypot_is_pythons` checks it once per process;
+* :func:`monotonic_ns` -- the clock :func:`time.perf_counter` reads, for the stage times of a pass.
+
+The other transcendental functions (``math.cos``, ``sin``, ``atan2``, ``pow``) are the C library's
+in numba, in numpy's float64 loops and in Python alike; ``tests/test_engine.py`` checks that on
+this machine.
 """
 
 from __future__ import annotations
