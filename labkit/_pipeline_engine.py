@@ -331,19 +331,25 @@ def extract(scan, plan: Plan) -> Features:
     return _staged(scan, plan)
 
 
+def _scan_geometry(scan):
+    """A scan's ranges, angles, validity, points, ``angle_increment`` and ``is_full_circle`` (the last two
+    in the Scan's own float arithmetic, without its properties' calls)."""
+    ranges, angles = scan.ranges, scan.angles
+    valid, points = _scan_beams(scan)
+    n = ranges.size
+    if n < 2:
+        return ranges, angles, valid, points, math.nan, False
+    a0, a1 = angles.item(0), angles.item(n - 1)
+    increment = (a1 - a0) / (n - 1)
+    return ranges, angles, valid, points, increment, n >= 3 and (a1 - a0) + 1.5 * increment >= 2 * math.pi
+
+
 def _staged(scan, plan: Plan) -> Features:
     """:func:`extract` stage by stage (a compiled call or two each)."""
     timings: dict[str, float] = {}
     t_start = perf_counter()
-    ranges, angles = scan.ranges, scan.angles
-    valid, points = _scan_beams(scan)
+    ranges, angles, valid, points, increment, full = _scan_geometry(scan)
     n = ranges.size
-    if n >= 2:  # (scan.angle_increment and scan.is_full_circle, in the same float arithmetic)
-        a0, a1 = angles.item(0), angles.item(n - 1)
-        increment = (a1 - a0) / (n - 1)
-        full = n >= 3 and (a1 - a0) + 1.5 * increment >= 2 * math.pi
-    else:
-        increment, full = math.nan, False
     threshold_m, min_points, adaptive, lam, seg_sigma = plan.seg
     if adaptive:  # (the scan's noise: worked out once, when a stage asks for it; scan_sigma keeps it on the scan)
         if seg_sigma == AUTO:
@@ -431,15 +437,8 @@ def _fused(scan, plan: Plan) -> Features | None:
     path). Each stage's time is its part of a pass (the passes read the clock
     :func:`time.perf_counter` reads at the end of each stage) and the building of its records."""
     t_start = perf_counter()
-    ranges, angles = scan.ranges, scan.angles
-    valid, points = _scan_beams(scan)
+    ranges, angles, valid, points, increment, full = _scan_geometry(scan)
     n = ranges.size
-    if n >= 2:  # (scan.angle_increment and scan.is_full_circle, in the same float arithmetic)
-        a0, a1 = angles.item(0), angles.item(n - 1)
-        increment = (a1 - a0) / (n - 1)
-        full = n >= 3 and (a1 - a0) + 1.5 * increment >= 2 * math.pi
-    else:
-        increment, full = math.nan, False
     fp0, ip0 = plan.packed  # type: ignore[misc]
     fp, ip = fp0.copy(), ip0.copy()
     fp[F_INCREMENT], ip[I_FULL] = increment, full
