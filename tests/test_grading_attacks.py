@@ -43,10 +43,7 @@ from tests.grading_course import (
     submit,
 )
 
-# One worker runs this module (make test's --dist loadgroup): the class is graded once for all its tests, a run
-# that keeps about half a core busy (its students' time limits are wall-clock), and the other worker goes on with
-# other tests instead of waiting for it (tests/grading_course.py's once_per_session)
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("grading-attacks")]
+pytestmark = pytest.mark.slow
 
 EX0, EX1, EX2, EX4 = "ex00_polar_to_cartesian", "ex01_range_segmentation", "ex02_weighted_line_fit", "ex06_dbscan1d"
 FULL = 10.0

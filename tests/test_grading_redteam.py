@@ -57,9 +57,6 @@ from tests.grading_course import (
 pytestmark = [
     pytest.mark.slow,
     pytest.mark.skipif(sys.platform != "linux", reason="the sandbox is Linux namespaces"),
-    # one worker runs this module (make test's --dist loadgroup) and grades its classes one after the other;
-    # the other worker goes on with other tests instead of waiting for a class the first one grades
-    pytest.mark.xdist_group("grading-redteam"),
 ]
 
 EX0, EX1 = "ex00_polar_to_cartesian", "ex01_range_segmentation"
@@ -827,7 +824,9 @@ def second_class(tmp_path_factory) -> Graded:
 
 
 # ---------------------------------------------------------------------------- the tests
-# The main class's run first, the independent runs and probes next (one worker runs them all: pytestmark).
+# In the order pytest-xdist hands them out (the first chunk to one process, the next to the other):
+# the main class's run first, the independent runs and probes next, so that neither process waits
+# for a run the other builds.
 
 
 def test_the_main_run_finished_with_the_honest_student_at_full_marks(main_class):
