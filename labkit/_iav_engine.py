@@ -711,22 +711,23 @@ def stage_pass(points, ranges, angles, valid, fp, ip):
     io = np.empty(N_S + LEG_I * n_legs + CIRCLE_I * n_circles, np.int64)
     fo[0], fo[1], fo[2] = t_seg, t_legs, t_circles
     io[S_STATUS], io[S_LEGS], io[S_CIRCLES] = 0, n_legs, n_circles
-    f, i = N_T, N_S
-    for j in range(n_legs):
-        for c in range(LEG_F):
-            fo[f + c] = leg_f[j, c]
-        for c in range(LEG_I):
-            io[i + c] = leg_i[j, c]
-        f += LEG_F
-        i += LEG_I
-    for j in range(n_circles):
-        for c in range(CIRCLE_F):
-            fo[f + c] = circle_f[j, c]
-        for c in range(CIRCLE_I):
-            io[i + c] = circle_i[j, c]
-        f += CIRCLE_F
-        i += CIRCLE_I
+    f, i = _put_rows(fo, io, N_T, N_S, leg_f, leg_i, n_legs)
+    _put_rows(fo, io, f, i, circle_f, circle_i, n_circles)
     return lab, rest, fo, io
+
+
+@jit_inline
+def _put_rows(fo, io, f, i, rows_f, rows_i, n):
+    """The first ``n`` rows of ``rows_f`` and ``rows_i`` laid end to end into ``fo`` from ``f`` and ``io``
+    from ``i``; the places after them."""
+    for j in range(n):
+        for c in range(rows_f.shape[1]):
+            fo[f + c] = rows_f[j, c]
+        for c in range(rows_i.shape[1]):
+            io[i + c] = rows_i[j, c]
+        f += rows_f.shape[1]
+        i += rows_i.shape[1]
+    return f, i
 
 
 @jit
